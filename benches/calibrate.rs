@@ -1,0 +1,2 @@
+//! Benchmark: calibrate (placeholder until its stage lands).
+fn main() {}

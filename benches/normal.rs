@@ -1,0 +1,2 @@
+//! Benchmark: normal (placeholder until its stage lands).
+fn main() {}

@@ -1,0 +1,2 @@
+//! Benchmark: surface (placeholder until its stage lands).
+fn main() {}

@@ -1,0 +1,2 @@
+//! Benchmark: tangential (placeholder until its stage lands).
+fn main() {}

@@ -1,0 +1,3 @@
+//! Contact solvers on the elastic half-space: normal (Polonsky–Keer) and tangential (Coulomb
+//! partial slip with history), and pressure sweeps.
+pub mod analytic;

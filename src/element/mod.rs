@@ -1,0 +1,1 @@
+//! Contact elements for nonlinear dynamic solvers: Valanis microslip, Gaul–Lenz, Jenkins.

@@ -1,0 +1,91 @@
+//! One error type for the whole pipeline.
+//!
+//! Every variant names what the user has to fix: the file and line, the parameter, or the solver
+//! that failed to converge (with its iteration count and residual). The CLI prints the message and
+//! exits non-zero; no stage writes partial output when it returns an error (see [`crate::output`]).
+
+use std::path::PathBuf;
+
+/// Errors raised by any stage of `asperity`.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The operating system refused to read or write a file.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file was read but its content is malformed. `line` is 1-based; 0 means "whole file".
+    #[error("{path}{}: {message}", if *.line > 0 { format!(":{}", .line) } else { String::new() })]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// A parameter (CLI flag, config key, function argument) has an impossible value.
+    #[error("invalid parameter `{name}`: {message}")]
+    InvalidParameter { name: String, message: String },
+    /// An iterative solver hit its iteration cap before meeting its tolerance.
+    #[error("{solver} did not converge: {iterations} iterations, residual {residual:.3e} > tolerance {tolerance:.3e}")]
+    NonConvergence {
+        solver: String,
+        iterations: usize,
+        residual: f64,
+        tolerance: f64,
+    },
+    /// Input data that is well formed but cannot be used (no contact, no complete cycle, ...).
+    #[error("{0}")]
+    Data(String),
+}
+
+/// Result alias used across the crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn param(name: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Parse`].
+    pub fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.into(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Io`].
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+/// Check that a parameter is finite and strictly positive.
+pub fn require_positive(name: &str, value: f64) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::param(
+            name,
+            format!("must be finite and > 0, got {value}"),
+        ))
+    }
+}
+
+/// Check that a parameter is finite.
+pub fn require_finite(name: &str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::param(name, format!("must be finite, got {value}")))
+    }
+}

@@ -1,0 +1,1 @@
+//! Pressure-measurement film: colour to pressure, smooth polynomial fit, preload per node.

@@ -1,0 +1,391 @@
+//! FFT convolution of surface tractions with half-space influence coefficients.
+//!
+//! Two modes ([`Boundary`]):
+//! - **Periodic**: the patch is one period of an infinite surface; the convolution is circular
+//!   on the `nx × ny` grid (FFT size = grid size).
+//! - **Zero-padded** (DC-FFT, Liu, Wang & Liu, Wear 243 (2000) 101–111): a finite contact on an
+//!   infinite half-space; tractions are zero outside the grid, the grid is padded to
+//!   `2nx × 2ny` and the kernel is laid out over the signed offsets `-(n-1)..=(n-1)`, which
+//!   makes the circular convolution equal the linear one on the original grid.
+//!
+//! [`FftPlan`] holds the FFT plans (built once); [`KernelSpectrum`] holds a transformed kernel
+//! (built once per influence function). Solvers apply them in their iterations without
+//! re-planning. Real-to-complex transforms along y (contiguous axis) use `realfft`, complex
+//! transforms along x use `rustfft`; rows are processed in parallel with rayon. Results are
+//! bit-identical whatever the thread count (each row is transformed independently).
+
+use ndarray::{Array2, Axis};
+use rayon::prelude::*;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::{num_complex::Complex64, Fft, FftPlanner};
+use std::sync::Arc;
+
+/// Boundary treatment of the convolution.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Boundary {
+    /// Circular convolution: the grid is one period of the surface.
+    Periodic,
+    /// Linear convolution by zero padding to twice the size (DC-FFT).
+    ZeroPadded,
+}
+
+/// FFT plans for one grid size and boundary mode.
+///
+/// Spectra are stored transposed, shape `(nfy/2 + 1, nfx)`: row `m` holds the x-transform of
+/// the y-frequency `m`. Kernels and fields must be transformed with the same plan.
+#[derive(Clone)]
+pub struct FftPlan {
+    nx: usize,
+    ny: usize,
+    nfx: usize,
+    nfy: usize,
+    boundary: Boundary,
+    r2c: Arc<dyn RealToComplex<f64>>,
+    c2r: Arc<dyn ComplexToReal<f64>>,
+    fwd: Arc<dyn Fft<f64>>,
+    inv: Arc<dyn Fft<f64>>,
+}
+
+impl std::fmt::Debug for FftPlan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FftPlan")
+            .field("grid", &(self.nx, self.ny))
+            .field("fft", &(self.nfx, self.nfy))
+            .field("boundary", &self.boundary)
+            .finish()
+    }
+}
+
+/// The Fourier transform of an influence-coefficient kernel, ready to multiply field spectra.
+#[derive(Debug, Clone)]
+pub struct KernelSpectrum {
+    /// Transposed layout `(nfy/2 + 1, nfx)`, see [`FftPlan`].
+    pub values: Array2<Complex64>,
+}
+
+impl FftPlan {
+    /// Plan transforms for an `nx × ny` grid.
+    pub fn new(nx: usize, ny: usize, boundary: Boundary) -> Self {
+        assert!(nx > 0 && ny > 0, "FftPlan: empty grid");
+        let (nfx, nfy) = match boundary {
+            Boundary::Periodic => (nx, ny),
+            Boundary::ZeroPadded => (2 * nx, 2 * ny),
+        };
+        let mut rp = RealFftPlanner::<f64>::new();
+        let mut cp = FftPlanner::<f64>::new();
+        Self {
+            nx,
+            ny,
+            nfx,
+            nfy,
+            boundary,
+            r2c: rp.plan_fft_forward(nfy),
+            c2r: rp.plan_fft_inverse(nfy),
+            fwd: cp.plan_fft_forward(nfx),
+            inv: cp.plan_fft_inverse(nfx),
+        }
+    }
+
+    /// Grid size `(nx, ny)` of the fields this plan transforms.
+    pub fn grid_shape(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// FFT size `(nfx, nfy)` (equal to the grid, or twice it when zero-padded).
+    pub fn fft_shape(&self) -> (usize, usize) {
+        (self.nfx, self.nfy)
+    }
+
+    /// Boundary mode of this plan.
+    pub fn boundary(&self) -> Boundary {
+        self.boundary
+    }
+
+    /// Shape of a spectrum, `(nfy/2 + 1, nfx)`.
+    pub fn spectrum_shape(&self) -> (usize, usize) {
+        (self.nfy / 2 + 1, self.nfx)
+    }
+
+    /// Forward transform of an `(nfx, nfy)` real array (already padded).
+    fn forward_full(&self, mut buf: Array2<f64>) -> Array2<Complex64> {
+        let nh = self.nfy / 2 + 1;
+        let mut rows = Array2::<Complex64>::zeros((self.nfx, nh));
+        buf.axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .zip(rows.axis_iter_mut(Axis(0)).into_par_iter())
+            .for_each_init(
+                || self.r2c.make_scratch_vec(),
+                |scratch, (mut inp, mut out)| {
+                    let inp = inp.as_slice_mut().expect("contiguous row");
+                    let out = out.as_slice_mut().expect("contiguous row");
+                    self.r2c
+                        .process_with_scratch(inp, out, scratch)
+                        .expect("r2c sizes match the plan");
+                },
+            );
+        let mut spec = rows.reversed_axes().as_standard_layout().into_owned();
+        spec.axis_iter_mut(Axis(0)).into_par_iter().for_each_init(
+            || vec![Complex64::default(); self.fwd.get_inplace_scratch_len()],
+            |scratch, mut row| {
+                self.fwd
+                    .process_with_scratch(row.as_slice_mut().expect("contiguous row"), scratch);
+            },
+        );
+        spec
+    }
+
+    /// Forward transform of a grid field (`nx × ny`); zero-padded when the plan is.
+    pub fn forward(&self, field: &Array2<f64>) -> Array2<Complex64> {
+        assert_eq!(
+            field.dim(),
+            (self.nx, self.ny),
+            "FftPlan::forward: field shape does not match the plan"
+        );
+        let buf = if self.boundary == Boundary::Periodic {
+            field.as_standard_layout().into_owned()
+        } else {
+            let mut b = Array2::<f64>::zeros((self.nfx, self.nfy));
+            b.slice_mut(ndarray::s![..self.nx, ..self.ny]).assign(field);
+            b
+        };
+        self.forward_full(buf)
+    }
+
+    /// Inverse transform of a spectrum, normalised, cropped to the grid (`nx × ny`).
+    /// The spectrum is consumed (used as work space).
+    pub fn inverse(&self, mut spec: Array2<Complex64>) -> Array2<f64> {
+        assert_eq!(
+            spec.dim(),
+            self.spectrum_shape(),
+            "FftPlan::inverse: bad shape"
+        );
+        spec.axis_iter_mut(Axis(0)).into_par_iter().for_each_init(
+            || vec![Complex64::default(); self.inv.get_inplace_scratch_len()],
+            |scratch, mut row| {
+                self.inv
+                    .process_with_scratch(row.as_slice_mut().expect("contiguous row"), scratch);
+            },
+        );
+        let mut rows = spec.reversed_axes().as_standard_layout().into_owned();
+        let scale = 1.0 / (self.nfx * self.nfy) as f64;
+        let mut out = Array2::<f64>::zeros((self.nx, self.ny));
+        let nfy = self.nfy;
+        let ny = self.ny;
+        rows.axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .take(self.nx)
+            .zip(out.axis_iter_mut(Axis(0)).into_par_iter())
+            .for_each_init(
+                || (self.c2r.make_scratch_vec(), vec![0.0; nfy]),
+                |(scratch, full), (mut inp, mut o)| {
+                    let inp = inp.as_slice_mut().expect("contiguous row");
+                    // The imaginary parts of the DC (and Nyquist) terms of a real signal are
+                    // round-off; realfft insists they are zero.
+                    inp[0].im = 0.0;
+                    if nfy.is_multiple_of(2) {
+                        inp[nfy / 2].im = 0.0;
+                    }
+                    self.c2r
+                        .process_with_scratch(inp, full, scratch)
+                        .expect("c2r sizes match the plan");
+                    for (dst, src) in o.iter_mut().zip(full[..ny].iter()) {
+                        *dst = src * scale;
+                    }
+                },
+            );
+        out
+    }
+
+    /// Spectrum of a real-space kernel given as a function of the signed grid offset
+    /// `(di, dj)` between the field point and the source element.
+    ///
+    /// Periodic plans sample offsets in `[-n/2, n/2)` (nearest image); for an exactly periodic
+    /// kernel supply the spectrum directly with [`FftPlan::spectrum_from_wavenumbers`].
+    /// Zero-padded plans sample `-(n-1)..=(n-1)` and put zero at the unused offset `±n`.
+    pub fn kernel_spectrum<F>(&self, kernel: F) -> KernelSpectrum
+    where
+        F: Fn(isize, isize) -> f64 + Sync,
+    {
+        let (nfx, nfy) = (self.nfx, self.nfy);
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
+        let padded = self.boundary == Boundary::ZeroPadded;
+        let offset = |k: usize, nf: usize, n: isize| -> Option<isize> {
+            let k = k as isize;
+            let nf = nf as isize;
+            let d = if k < nf - k { k } else { k - nf };
+            if padded && d.abs() >= n {
+                None
+            } else {
+                Some(d)
+            }
+        };
+        let mut buf = Array2::<f64>::zeros((nfx, nfy));
+        buf.axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(i, mut row)| {
+                if let Some(di) = offset(i, nfx, nx) {
+                    for (j, v) in row.iter_mut().enumerate() {
+                        if let Some(dj) = offset(j, nfy, ny) {
+                            *v = kernel(di, dj);
+                        }
+                    }
+                }
+            });
+        KernelSpectrum {
+            values: self.forward_full(buf),
+        }
+    }
+
+    /// Angular wavenumbers `(qx, qy)` (rad/m) of the spectrum layout for spacings `dx`, `dy`:
+    /// `qx` has `nfx` entries (signed), `qy` has `nfy/2 + 1` (non-negative).
+    pub fn wavenumbers(&self, dx: f64, dy: f64) -> (Vec<f64>, Vec<f64>) {
+        let lx = self.nfx as f64 * dx;
+        let ly = self.nfy as f64 * dy;
+        let qx = (0..self.nfx)
+            .map(|k| {
+                let k = if k <= self.nfx / 2 {
+                    k as f64
+                } else {
+                    k as f64 - self.nfx as f64
+                };
+                2.0 * std::f64::consts::PI * k / lx
+            })
+            .collect();
+        let qy = (0..self.nfy / 2 + 1)
+            .map(|m| 2.0 * std::f64::consts::PI * m as f64 / ly)
+            .collect();
+        (qx, qy)
+    }
+
+    /// Kernel spectrum given directly in Fourier space as a function of `(qx, qy)` (rad/m),
+    /// e.g. the exact periodic half-space compliance `2/(E*|q|)`.
+    pub fn spectrum_from_wavenumbers<F>(&self, dx: f64, dy: f64, f: F) -> KernelSpectrum
+    where
+        F: Fn(f64, f64) -> Complex64 + Sync,
+    {
+        let (qx, qy) = self.wavenumbers(dx, dy);
+        let mut values = Array2::<Complex64>::zeros(self.spectrum_shape());
+        values
+            .axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(m, mut row)| {
+                for (k, v) in row.iter_mut().enumerate() {
+                    *v = f(qx[k], qy[m]);
+                }
+            });
+        KernelSpectrum { values }
+    }
+
+    /// `out = kernel ⊛ field` on the grid.
+    pub fn convolve(&self, kernel: &KernelSpectrum, field: &Array2<f64>) -> Array2<f64> {
+        let mut spec = self.forward(field);
+        multiply_in_place(&mut spec, &kernel.values);
+        self.inverse(spec)
+    }
+}
+
+/// `spec *= kernel` element-wise (parallel).
+pub fn multiply_in_place(spec: &mut Array2<Complex64>, kernel: &Array2<Complex64>) {
+    assert_eq!(
+        spec.dim(),
+        kernel.dim(),
+        "spectrum and kernel shapes differ"
+    );
+    spec.as_slice_mut()
+        .expect("standard layout")
+        .par_iter_mut()
+        .zip(kernel.as_slice().expect("standard layout").par_iter())
+        .for_each(|(s, k)| *s *= k);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Direct O(N²) convolution, for checking the FFT paths.
+    fn direct(field: &Array2<f64>, k: impl Fn(isize, isize) -> f64, periodic: bool) -> Array2<f64> {
+        let (nx, ny) = field.dim();
+        let mut out = Array2::zeros((nx, ny));
+        for i in 0..nx {
+            for j in 0..ny {
+                let mut s = 0.0;
+                for a in 0..nx {
+                    for b in 0..ny {
+                        let (mut di, mut dj) = (i as isize - a as isize, j as isize - b as isize);
+                        if periodic {
+                            let (n, m) = (nx as isize, ny as isize);
+                            di = di.rem_euclid(n);
+                            dj = dj.rem_euclid(m);
+                            if di >= n - di {
+                                di -= n;
+                            }
+                            if dj >= m - dj {
+                                dj -= m;
+                            }
+                        }
+                        s += k(di, dj) * field[[a, b]];
+                    }
+                }
+                out[[i, j]] = s;
+            }
+        }
+        out
+    }
+
+    fn test_field(nx: usize, ny: usize) -> Array2<f64> {
+        Array2::from_shape_fn((nx, ny), |(i, j)| {
+            ((i * 7 + j * 3) % 11) as f64 - 4.0 + 0.1 * i as f64
+        })
+    }
+
+    fn kernel(di: isize, dj: isize) -> f64 {
+        1.0 / (1.0 + (di as f64 + 0.3).powi(2) + 2.0 * (dj as f64).powi(2))
+    }
+
+    #[test]
+    fn zero_padded_equals_direct_linear_convolution() {
+        for (nx, ny) in [(6, 5), (7, 8)] {
+            let f = test_field(nx, ny);
+            let plan = FftPlan::new(nx, ny, Boundary::ZeroPadded);
+            let ks = plan.kernel_spectrum(kernel);
+            let got = plan.convolve(&ks, &f);
+            let want = direct(&f, kernel, false);
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert!((g - w).abs() < 1e-12 * (1.0 + w.abs()), "{g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn periodic_equals_direct_circular_convolution() {
+        for (nx, ny) in [(6, 5), (8, 8)] {
+            let f = test_field(nx, ny);
+            let plan = FftPlan::new(nx, ny, Boundary::Periodic);
+            let ks = plan.kernel_spectrum(kernel);
+            let got = plan.convolve(&ks, &f);
+            let want = direct(&f, kernel, true);
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert!((g - w).abs() < 1e-12 * (1.0 + w.abs()), "{g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn wavenumber_kernel_differentiates_a_cosine() {
+        // Multiplying by -qx² is the second x-derivative: cos(2πx/L)·(-(2π/L)²).
+        let (nx, ny, dx, dy) = (16, 8, 0.5, 0.25);
+        let plan = FftPlan::new(nx, ny, Boundary::Periodic);
+        let lx = nx as f64 * dx;
+        let k = 2.0 * std::f64::consts::PI / lx;
+        let f = Array2::from_shape_fn((nx, ny), |(i, _)| (k * i as f64 * dx).cos());
+        let ks = plan.spectrum_from_wavenumbers(dx, dy, |qx, _| Complex64::new(-qx * qx, 0.0));
+        let got = plan.convolve(&ks, &f);
+        for ((i, _), g) in got.indexed_iter() {
+            let want = -k * k * (k * i as f64 * dx).cos();
+            assert!((g - want).abs() < 1e-12, "{g} vs {want}");
+        }
+    }
+}

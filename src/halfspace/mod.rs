@@ -1,0 +1,7 @@
+//! The elastic half-space: influence coefficients (Boussinesq, Cerruti) and their FFT
+//! convolution with surface tractions (periodic or zero-padded).
+
+pub mod convolution;
+pub mod influence;
+
+pub use convolution::{Boundary, FftPlan, KernelSpectrum};

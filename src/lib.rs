@@ -1,0 +1,33 @@
+//! # asperity
+//!
+//! Contact parameters for microslip elements, computed from the rough surface.
+//!
+//! The data flows one way and the modules follow it:
+//!
+//! ```text
+//! surface  ──►  halfspace (Boussinesq, Cerruti, FFT convolution)
+//!          ──►  contact::normal (Polonsky–Keer) ──► contact::tangential (partial slip loops)
+//!          ──►  element (Valanis, Jenkins) + calibrate (kn, E0, k vs pressure)
+//!          ──►  film (preload map) ──► elements (one row per contact element)
+//!          ◄──  diagnose (measured loops: residual, missing effect, error before/after)
+//! ```
+//!
+//! Units: SI throughout (m, Pa, N). File headers, CSV columns and CLI flags name their units.
+//! Grids follow the [`grid::Grid2`] convention: shape `(nx, ny)`, `[[i, j]]` at `(i·dx, j·dy)`.
+
+pub mod calibrate;
+pub mod contact;
+pub mod diagnose;
+pub mod element;
+pub mod elements;
+pub mod error;
+pub mod film;
+pub mod grid;
+pub mod halfspace;
+pub mod output;
+pub mod plot;
+pub mod surface;
+pub mod testdata;
+
+pub use error::{Error, Result};
+pub use grid::Grid2;

@@ -1,0 +1,48 @@
+//! `asperity` command-line tool: a thin layer over the library, one function per subcommand.
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+
+/// Contact parameters for microslip elements, computed from the rough surface.
+/// SI units throughout (m, Pa, N); every flag names its unit.
+#[derive(Parser)]
+#[command(name = "asperity", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Generate, analyse, convert and combine rough surfaces.
+    #[command(subcommand)]
+    Surface(cli::surface::SurfaceCommand),
+    /// Normal and tangential contact of a rough patch on the elastic half-space.
+    #[command(subcommand)]
+    Contact(cli::contact::ContactCommand),
+    /// Whole chain surface → normal sweep → loops → Valanis fits → table (reference case by default).
+    Calibrate(cli::calibrate::CalibrateArgs),
+    /// Pressure-measurement film image → pressure map, polynomial fit, preload per node.
+    Film(cli::film::FilmArgs),
+    /// Join a preload map with a calibration table: one row per contact element.
+    Elements(cli::elements::ElementsArgs),
+    /// Compare a model with a measured hysteresis record; find and add the missing effect.
+    Diagnose(cli::diagnose::DiagnoseArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Surface(c) => cli::surface::run(c),
+        Command::Contact(c) => cli::contact::run(c),
+        Command::Calibrate(a) => cli::calibrate::run(a),
+        Command::Film(a) => cli::film::run(a),
+        Command::Elements(a) => cli::elements::run(a),
+        Command::Diagnose(a) => cli::diagnose::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,3 @@
+//! Rough surfaces: generation from profilometer statistics, statistics of measured or generated
+//! topographies, file readers and writers, and the reduction of two rough bodies to one.
+pub mod combine;
