@@ -25,7 +25,22 @@ where
         fill(&mut buf)?;
         buf.flush().map_err(|e| Error::io(path, e))?;
     }
+    make_readable(tmp.path())?;
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    Ok(())
+}
+
+/// Temporary files are created private (0600); results are ordinary files (0644), as any
+/// other tool would write them.
+fn make_readable(path: &Path) -> Result<()> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| Error::io(path, e))?;
+    }
+    #[cfg(not(unix))]
+    let _ = path;
     Ok(())
 }
 
@@ -86,5 +101,11 @@ mod tests {
         let p = dir.path().join("sub").join("out.txt");
         write_string_atomic(&p, "hello").unwrap();
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "hello");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+            assert_eq!(mode & 0o777, 0o644);
+        }
     }
 }
