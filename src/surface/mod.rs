@@ -3,7 +3,9 @@
 pub mod combine;
 pub mod generate;
 pub mod io;
+pub mod stats;
 pub mod topography;
 
 pub use generate::{generate, GaussianSurfaceSpec};
+pub use stats::{stats, Detrend, SurfaceStats};
 pub use topography::{Profile, Topography};

@@ -3,14 +3,18 @@
 use crate::error::{require_positive, Error, Result};
 use crate::grid::Grid2;
 
-/// A line scan: heights (m) at `x = i·dx`, uniformly spaced.
+/// A line scan: heights (m) at `x = i·dx` (uniform) or at measured positions (nonuniform, e.g.
+/// a stylus profiler that writes rounded lateral positions).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Profile {
     /// Heights (m).
     pub heights: Vec<f64>,
-    /// Sample spacing (m).
+    /// Sample spacing (m); for a nonuniform profile the mean spacing `(x_last - x_first)/(n-1)`.
     pub dx: f64,
-    /// True when the profile is one period of a periodic line.
+    /// Measured positions (m, strictly increasing, starting at 0) when the profile is
+    /// nonuniform; `None` for a uniform profile.
+    pub positions: Option<Vec<f64>>,
+    /// True when the profile is one period of a periodic line (uniform profiles only).
     pub periodic: bool,
 }
 
@@ -34,8 +38,56 @@ impl Profile {
         Ok(Self {
             heights,
             dx,
+            positions: None,
             periodic,
         })
+    }
+
+    /// Build a nonuniform profile from positions and heights (m). Positions are shifted to start
+    /// at 0 and must increase strictly (the error names the 0-based sample index).
+    pub fn nonuniform(positions: Vec<f64>, heights: Vec<f64>) -> Result<Self> {
+        if positions.len() != heights.len() {
+            return Err(Error::param(
+                "positions",
+                format!(
+                    "{} positions for {} heights",
+                    positions.len(),
+                    heights.len()
+                ),
+            ));
+        }
+        if let Some((i, v)) = positions.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::param(
+                "positions",
+                format!("non-finite position {v} at sample {i}"),
+            ));
+        }
+        if let Some(i) = (1..positions.len()).find(|&i| positions[i] <= positions[i - 1]) {
+            return Err(Error::param(
+                "positions",
+                format!(
+                    "positions must increase strictly: sample {i} at {} follows {}",
+                    positions[i],
+                    positions[i - 1]
+                ),
+            ));
+        }
+        let n = heights.len();
+        let x0 = positions.first().copied().unwrap_or(0.0);
+        let positions: Vec<f64> = positions.iter().map(|x| x - x0).collect();
+        let dx = if n >= 2 {
+            positions[n - 1] / (n - 1) as f64
+        } else {
+            0.0
+        };
+        let mut p = Self::new(heights, dx, false)?;
+        p.positions = Some(positions);
+        Ok(p)
+    }
+
+    /// True for a uniformly spaced profile.
+    pub fn is_uniform(&self) -> bool {
+        self.positions.is_none()
     }
 
     /// Number of samples.
@@ -48,9 +100,13 @@ impl Profile {
         self.heights.is_empty()
     }
 
-    /// Physical length (m): `n·dx`.
+    /// Physical length (m): `n·dx` for a uniform profile (SurfaceTopography's convention), the
+    /// span `x_last - x_first` for a nonuniform one.
     pub fn length(&self) -> f64 {
-        self.len() as f64 * self.dx
+        match &self.positions {
+            None => self.len() as f64 * self.dx,
+            Some(x) => x[x.len() - 1] - x[0],
+        }
     }
 }
 
