@@ -32,8 +32,8 @@ pub fn metres_per_unit(word: &str) -> Option<f64> {
 pub fn unit_in_header(name: &str) -> Option<(f64, String)> {
     name.split(|c: char| !(c.is_alphabetic()))
         .filter(|w| !w.is_empty())
-        .filter_map(|w| metres_per_unit(w).map(|f| (f, w.to_string())))
-        .last()
+        .rev()
+        .find_map(|w| metres_per_unit(w).map(|f| (f, w.to_string())))
 }
 
 #[cfg(test)]

@@ -53,13 +53,11 @@ fn xml_texts(path: &Path, xml: &str) -> Result<HashMap<String, String>> {
             Event::End(_) => {
                 stack.pop();
             }
-            Event::Text(t) => {
-                if stack.len() > 1 {
-                    let text = t
-                        .unescape()
-                        .map_err(|e| Error::parse(path, 0, format!("main.xml: {e}")))?;
-                    out.insert(stack[1..].join("/"), text.trim().to_string());
-                }
+            Event::Text(t) if stack.len() > 1 => {
+                let text = t
+                    .unescape()
+                    .map_err(|e| Error::parse(path, 0, format!("main.xml: {e}")))?;
+                out.insert(stack[1..].join("/"), text.trim().to_string());
             }
             Event::Eof => break,
             _ => {}
