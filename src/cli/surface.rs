@@ -15,6 +15,45 @@ pub enum SurfaceCommand {
     /// Statistics of a measured or generated topography (Ra, Rq, Rsk, Rku, rms slope/gradient,
     /// correlation lengths) and its power spectral density (CSV + PNG).
     Stats(StatsArgs),
+    /// Two rough bodies reduced to one: equivalent surface (h1 - h2 on a common grid), equivalent
+    /// statistics (Rq = √(Rq1² + Rq2²)) and composite modulus 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2.
+    Combine(CombineArgs),
+}
+
+#[derive(clap::Args)]
+pub struct CombineArgs {
+    /// Height map of body 1 (any readable area format).
+    #[arg(requires_all = ["surface2", "out"])]
+    surface1: Option<PathBuf>,
+    /// Height map of body 2 in the same frame (z from body 1 towards body 2), same grid.
+    surface2: Option<PathBuf>,
+    /// Output file(s) for the equivalent surface (.npy, .x3p, .csv, .png). Repeatable.
+    #[arg(long = "out", short = 'o')]
+    out: Vec<PathBuf>,
+    /// RMS height of body 1 (m), for the equivalent statistics.
+    #[arg(long, allow_hyphen_values = true, requires = "rq2_m")]
+    rq1_m: Option<f64>,
+    /// RMS height of body 2 (m).
+    #[arg(long, allow_hyphen_values = true, requires = "rq1_m")]
+    rq2_m: Option<f64>,
+    /// RMS slope of body 1.
+    #[arg(long, allow_hyphen_values = true, requires = "slope2")]
+    slope1: Option<f64>,
+    /// RMS slope of body 2.
+    #[arg(long, allow_hyphen_values = true, requires = "slope1")]
+    slope2: Option<f64>,
+    /// Young's modulus of body 1 (Pa).
+    #[arg(long, allow_hyphen_values = true, requires_all = ["nu1", "e2_pa", "nu2"])]
+    e1_pa: Option<f64>,
+    /// Poisson's ratio of body 1.
+    #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
+    nu1: Option<f64>,
+    /// Young's modulus of body 2 (Pa).
+    #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
+    e2_pa: Option<f64>,
+    /// Poisson's ratio of body 2.
+    #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
+    nu2: Option<f64>,
 }
 
 #[derive(clap::Args)]
@@ -124,6 +163,7 @@ pub fn run(cmd: SurfaceCommand) -> Result<()> {
     match cmd {
         SurfaceCommand::Generate(a) => generate(*a),
         SurfaceCommand::Stats(a) => stats(a),
+        SurfaceCommand::Combine(a) => combine(a),
     }
 }
 
@@ -317,4 +357,76 @@ fn write_psd(csv: &Path, png: &Path, source: &Path, psd: &Psd, detrend: Detrend)
         },
         &[Series::line("PSD", points)],
     )
+}
+
+fn combine(a: CombineArgs) -> Result<()> {
+    use asperity::surface::combine::{
+        composite_modulus, equivalent_rms_slope, equivalent_rq, equivalent_surface, Material,
+    };
+    if a.surface1.is_none() && a.rq1_m.is_none() && a.slope1.is_none() && a.e1_pa.is_none() {
+        return Err(Error::param(
+            "combine",
+            "give two surfaces (SURFACE1 SURFACE2 --out FILE), or --rq1-m/--rq2-m, \
+             --slope1/--slope2, --e1-pa/--nu1/--e2-pa/--nu2",
+        ));
+    }
+    // Everything is computed and checked before any file is written.
+    let rq = match (a.rq1_m, a.rq2_m) {
+        (Some(r1), Some(r2)) => Some(equivalent_rq(r1, r2)?),
+        _ => None,
+    };
+    let slope = match (a.slope1, a.slope2) {
+        (Some(m1), Some(m2)) => Some(equivalent_rms_slope(m1, m2)?),
+        _ => None,
+    };
+    let e_star = match (a.e1_pa, a.nu1, a.e2_pa, a.nu2) {
+        (Some(e1), Some(nu1), Some(e2), Some(nu2)) => Some(composite_modulus(
+            Material {
+                youngs_modulus_pa: e1,
+                poisson_ratio: nu1,
+            },
+            Material {
+                youngs_modulus_pa: e2,
+                poisson_ratio: nu2,
+            },
+        )?),
+        _ => None,
+    };
+    let eq = match (&a.surface1, &a.surface2) {
+        (Some(p1), Some(p2)) => {
+            for p in &a.out {
+                surface::io::check_writable_format(p)?;
+            }
+            let g1 = surface::io::read(p1)?.into_area(&p1.display().to_string())?;
+            let g2 = surface::io::read(p2)?.into_area(&p2.display().to_string())?;
+            Some(equivalent_surface(&g1, &g2)?)
+        }
+        _ => None,
+    };
+    if let Some(v) = rq {
+        println!("equivalent Rq          {v:.6e} m");
+    }
+    if let Some(v) = slope {
+        println!("equivalent rms slope   {v:.6e}");
+    }
+    if let Some(v) = e_star {
+        println!("composite modulus E*   {v:.6e} Pa");
+    }
+    if let Some(g) = eq {
+        let s = surface::stats(&surface::Topography::Area(g.clone()), Detrend::Mean)?;
+        for p in &a.out {
+            surface::io::write(p, &g)?;
+        }
+        println!(
+            "equivalent surface {}×{}: Rq {:.6e} m, rms gradient {:.6e}",
+            g.nx(),
+            g.ny(),
+            s.rq_m,
+            s.rms_gradient.unwrap_or(f64::NAN)
+        );
+        for p in &a.out {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
 }
