@@ -159,6 +159,14 @@ fn read_spec(path: &Path) -> Result<GaussianSurfaceSpec> {
     })
 }
 
+/// A spinner on stderr for work that can take seconds (hidden when stderr is not a terminal).
+fn spinner(msg: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}
+
 pub fn run(cmd: SurfaceCommand) -> Result<()> {
     match cmd {
         SurfaceCommand::Generate(a) => generate(*a),
@@ -172,12 +180,15 @@ fn generate(a: GenerateArgs) -> Result<()> {
     for p in &a.out {
         surface::io::check_writable_format(p)?;
     }
+    let pb = spinner(&format!("generating {}×{} patch", spec.nx, spec.ny));
     let t0 = Instant::now();
     let grid = surface::generate(&spec)?;
     let t_gen = t0.elapsed().as_secs_f64();
+    pb.set_message("writing");
     for p in &a.out {
         surface::io::write(p, &grid)?;
     }
+    pb.finish_and_clear();
     println!(
         "generated {}×{} patch {:.4e} m × {:.4e} m (dx {:.4e} m, dy {:.4e} m), Rq {:.6e} m, \
          clx {:.4e} m, cly {:.4e} m, seed {}, periodic, in {:.3} s",
@@ -216,14 +227,17 @@ fn stats(a: StatsArgs) -> Result<()> {
         ));
     }
     let psd_png = psd_csv.with_extension("png");
+    let pb = spinner(&format!("reading {}", a.file.display()));
     let t0 = Instant::now();
     let topo = surface::io::read(&a.file)?;
     let t_read = t0.elapsed().as_secs_f64();
+    pb.set_message("statistics and PSD");
     let t1 = Instant::now();
     let s = surface::stats(&topo, detrend)?;
     let psd = surface::stats::power_spectrum(&topo, detrend)?;
     let t_stats = t1.elapsed().as_secs_f64();
     write_psd(&psd_csv, &psd_png, &a.file, &psd, detrend)?;
+    pb.finish_and_clear();
     if a.json {
         let mut v = serde_json::to_value(&s).map_err(|e| Error::Data(e.to_string()))?;
         if let Some(o) = v.as_object_mut() {
