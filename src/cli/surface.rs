@@ -185,8 +185,19 @@ fn generate(a: GenerateArgs) -> Result<()> {
     let grid = surface::generate(&spec)?;
     let t_gen = t0.elapsed().as_secs_f64();
     pb.set_message("writing");
+    let title = format!(
+        "generated: Rq {:.3} µm, cl {:.2} × {:.2} µm, seed {}",
+        spec.rq_m * 1e6,
+        spec.clx_m * 1e6,
+        spec.cly_m * 1e6,
+        spec.seed
+    );
     for p in &a.out {
-        surface::io::write(p, &grid)?;
+        if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            surface::io::png::write(p, &grid, &title)?;
+        } else {
+            surface::io::write(p, &grid)?;
+        }
     }
     pb.finish_and_clear();
     println!(
