@@ -91,6 +91,14 @@ fn generate_rejects_bad_parameters() {
         args.extend_from_slice(extra);
         assert_fails_without_output(&args, &out, want);
     }
+    // A malformed config names file and line.
+    let cfg = dir.path().join("bad.toml");
+    std::fs::write(&cfg, "rq_m = 1e-7\nclx_m = \"a\"\n").unwrap();
+    assert_fails_without_output(
+        &["surface", "generate", "--config", cfg.to_str().unwrap(), "--out", o],
+        &out,
+        "bad.toml:2",
+    );
     // An unknown output format is refused before anything is computed or written.
     let bad = dir.path().join("bad.xyz");
     assert_fails_without_output(
