@@ -18,6 +18,17 @@ pub enum SurfaceCommand {
     /// Two rough bodies reduced to one: equivalent surface (h1 - h2 on a common grid), equivalent
     /// statistics (Rq = √(Rq1² + Rq2²)) and composite modulus 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2.
     Combine(CombineArgs),
+    /// Convert a height map between formats (.npy, .x3p, .csv/.txt/.asc matrix, .png image).
+    Convert(ConvertArgs),
+}
+
+#[derive(clap::Args)]
+pub struct ConvertArgs {
+    /// Input height map (any readable area format).
+    input: PathBuf,
+    /// Output file(s); the format follows the extension. Repeatable.
+    #[arg(long = "out", short = 'o', required = true)]
+    out: Vec<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -172,6 +183,7 @@ pub fn run(cmd: SurfaceCommand) -> Result<()> {
         SurfaceCommand::Generate(a) => generate(*a),
         SurfaceCommand::Stats(a) => stats(a),
         SurfaceCommand::Combine(a) => combine(a),
+        SurfaceCommand::Convert(a) => convert(a),
     }
 }
 
@@ -452,6 +464,27 @@ fn combine(a: CombineArgs) -> Result<()> {
         for p in &a.out {
             println!("wrote {}", p.display());
         }
+    }
+    Ok(())
+}
+
+fn convert(a: ConvertArgs) -> Result<()> {
+    for p in &a.out {
+        surface::io::check_writable_format(p)?;
+    }
+    let g = surface::io::read(&a.input)?.into_area(&a.input.display().to_string())?;
+    let title = a
+        .input
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    for p in &a.out {
+        if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            surface::io::png::write(p, &g, &title)?;
+        } else {
+            surface::io::write(p, &g)?;
+        }
+        println!("wrote {}", p.display());
     }
     Ok(())
 }
