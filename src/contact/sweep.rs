@@ -1,0 +1,1 @@
+//! Pressure sweeps of the normal contact solver (placeholder).
