@@ -201,7 +201,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
             .map(|p| (p.pressure_pa / 1e6, f(p)))
             .collect()
     };
-    let plots: [(&str, &str, &str, Vec<(f64, f64)>); 3] = [
+    type Plot<'a> = (&'a str, &'a str, &'a str, Vec<(f64, f64)>);
+    let plots: [Plot; 3] = [
         (
             "area_ratio.png",
             "Real contact area ratio",
