@@ -194,7 +194,7 @@ fn compare(sizes: &[usize]) {
             let o = &ours[k];
             let (ta, tg, da, dg) = match peer {
                 Some(t) => (
-                    format!("{:.5}", t[k].area),
+                    format!("{:.6e}", t[k].area),
                     format!("{:.6}", t[k].mean_gap * 1e6),
                     format!("{:+.3}%", 100.0 * (o.area / t[k].area - 1.0)),
                     format!("{:+.3}%", 100.0 * (o.mean_gap / t[k].mean_gap - 1.0)),
@@ -202,7 +202,7 @@ fn compare(sizes: &[usize]) {
                 None => ("-".into(), "-".into(), "-".into(), "-".into()),
             };
             println!(
-                "| {n}² | {} | {:.5} | {ta} | {da} | {:.6} | {tg} | {dg} | {} |",
+                "| {n}² | {} | {:.6e} | {ta} | {da} | {:.6} | {tg} | {dg} | {} |",
                 p / 1e6,
                 o.area,
                 o.mean_gap * 1e6,
