@@ -125,6 +125,12 @@ fn westergaard_partial_contact_half_width() {
         assert_eq!(sol.contact_spots, 1);
         warm = Some(sol);
     }
+    // Displacement control on the periodic patch: imposing the approach of a load-controlled
+    // solution recovers its load.
+    let sol = warm.unwrap();
+    let dc = s.solve_approach(sol.approach_m, None).unwrap();
+    assert!((dc.mean_pressure_pa / sol.mean_pressure_pa - 1.0).abs() < 1e-5);
+    assert!((dc.approach_m / sol.approach_m - 1.0).abs() < 1e-6);
 }
 
 /// Reference statistics (Rq 0.177 µm, cl 6.6 µm, 250 µm, steel/steel) on a coarser 256² grid:
