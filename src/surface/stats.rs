@@ -37,10 +37,11 @@ use ndarray::{Array2, Axis};
 use std::f64::consts::PI;
 
 /// What is removed before the statistics are computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Detrend {
     /// Remove the mean height only (default).
+    #[default]
     Mean,
     /// Remove the least-squares plane (area) or line (profile).
     Plane,
