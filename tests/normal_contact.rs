@@ -126,3 +126,38 @@ fn westergaard_partial_contact_half_width() {
         warm = Some(sol);
     }
 }
+
+/// Reference statistics (Rq 0.177 µm, cl 6.6 µm, 250 µm, steel/steel) on a coarser 256² grid:
+/// kn = −dp̄/dḡ rises monotonically over the reference sweep 0.1–10 MPa, the contact area grows
+/// and the mean gap closes. (The 1024² reference case runs in `cargo bench --bench normal --
+/// --reference` and `asperity contact normal`.)
+#[test]
+fn reference_statistics_kn_monotone() {
+    use asperity::contact::sweep;
+    use asperity::surface::combine::{composite_modulus, Material};
+    use asperity::surface::generate::{generate, GaussianSurfaceSpec};
+    let spec = GaussianSurfaceSpec {
+        nx: 256,
+        ny: 256,
+        ..GaussianSurfaceSpec::reference()
+    };
+    let surface = generate(&spec).unwrap();
+    let e_star = composite_modulus(Material::STEEL, Material::STEEL).unwrap();
+    let mut s = solver(&surface, e_star);
+    let sw = sweep::run(
+        &mut s,
+        &sweep::REFERENCE_PRESSURES_PA,
+        sweep::SweepOptions::default(),
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(sw.points.len(), 6);
+    for w in sw.points.windows(2) {
+        assert!(w[1].kn_n_per_m3 > w[0].kn_n_per_m3, "{w:?}");
+        assert!(w[1].contact_area_ratio >= w[0].contact_area_ratio);
+        assert!(w[1].mean_gap_m < w[0].mean_gap_m);
+    }
+    let (beta, _) = sweep::power_law_fit(&sw.points).unwrap();
+    eprintln!("256² reference statistics: β = {beta:.3}");
+    assert!(beta > 0.0 && beta < 1.5, "β = {beta}");
+}

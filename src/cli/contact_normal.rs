@@ -45,9 +45,26 @@ pub struct NormalArgs {
 
 /// Load the surface: a file, or the reference generated surface.
 fn load_surface(path: Option<&Path>) -> Result<(Grid2, String)> {
-    // TEMPORARY until the surface stage (generate, io) is merged.
-    let _ = path;
-    Err(Error::Data("surface input needs the surface stage (not merged yet)".into()))
+    match path {
+        // TEMPORARY until the surface readers (surface::io) are merged.
+        Some(p) => Err(Error::param(
+            "--surface",
+            format!(
+                "{}: reading surface files needs surface::io (not merged yet)",
+                p.display()
+            ),
+        )),
+        None => {
+            let spec = asperity::surface::generate::GaussianSurfaceSpec::reference();
+            Ok((
+                asperity::surface::generate::generate(&spec)?,
+                format!(
+                    "reference generated surface (Rq {} m, correlation length {} m, {} m, {}², seed {})",
+                    spec.rq_m, spec.clx_m, spec.lx_m, spec.nx, spec.seed
+                ),
+            ))
+        }
+    }
 }
 
 pub fn run(args: NormalArgs) -> Result<()> {
@@ -83,6 +100,15 @@ pub fn run(args: NormalArgs) -> Result<()> {
         derivative_step: args.derivative_step,
         keep_solutions: args.pressure_maps,
     };
+    options.validate().map_err(|e| match e {
+        Error::InvalidParameter { name, message } => {
+            Error::param(format!("--{}", name.replace('_', "-")), message)
+        }
+        other => other,
+    })?;
+    sweep_options
+        .validate()
+        .map_err(|e| rename_param(e, "--derivative-step"))?;
     let (surface, source) = load_surface(args.surface.as_deref())?;
     let mut solver = NormalSolver::new(
         &NormalProblem {
@@ -120,7 +146,10 @@ pub fn run(args: NormalArgs) -> Result<()> {
 
     // CSV with a provenance header.
     let mut csv = String::new();
-    let _ = writeln!(csv, "# asperity contact normal: Polonsky–Keer pressure sweep");
+    let _ = writeln!(
+        csv,
+        "# asperity contact normal: Polonsky–Keer pressure sweep"
+    );
     let _ = writeln!(csv, "# surface: {source}");
     let _ = writeln!(
         csv,
@@ -172,7 +201,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
             .map(|p| (p.pressure_pa / 1e6, f(p)))
             .collect()
     };
-    let plots: [(&str, &str, &str, Vec<(f64, f64)>); 3] = [
+    type Plot<'a> = (&'a str, &'a str, &'a str, Vec<(f64, f64)>);
+    let plots: [Plot; 3] = [
         (
             "area_ratio.png",
             "Real contact area ratio",
@@ -188,8 +218,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
         (
             "kn.png",
             "Normal contact stiffness per unit area",
-            "kn (N/m³)",
-            mpa(|p| p.kn_n_per_m3),
+            "kn (10¹² N/m³)",
+            mpa(|p| p.kn_n_per_m3 * 1e-12),
         ),
     ];
     for (file, title, y_label, pts) in plots {
@@ -202,7 +232,10 @@ pub fn run(args: NormalArgs) -> Result<()> {
                 x_scale: Scale::Log,
                 y_scale: Scale::Log,
             },
-            &[Series::line("", pts.clone()), Series::markers("", pts)],
+            &[
+                Series::line("sweep", pts.clone()),
+                Series::markers("solved pressures", pts),
+            ],
         )?;
     }
     for sol in &result.solutions {

@@ -89,6 +89,16 @@ pub struct NormalOptions {
 impl NormalOptions {
     /// Default tolerance on ε: well below the discretisation error of any practical grid.
     pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+
+    /// Check the settings: tolerances finite and > 0, at least one iteration.
+    pub fn validate(&self) -> Result<()> {
+        require_positive("tolerance", self.tolerance)?;
+        require_positive("approach_tolerance", self.approach_tolerance)?;
+        if self.max_iterations == 0 {
+            return Err(Error::param("max_iterations", "must be at least 1"));
+        }
+        Ok(())
+    }
 }
 
 impl Default for NormalOptions {
@@ -226,11 +236,7 @@ impl NormalSolver {
         let e_star = require_positive("e_star_pa", problem.e_star_pa)?;
         require_positive("dx", s.dx)?;
         require_positive("dy", s.dy)?;
-        require_positive("tolerance", options.tolerance)?;
-        require_positive("approach_tolerance", options.approach_tolerance)?;
-        if options.max_iterations == 0 {
-            return Err(Error::param("max_iterations", "must be at least 1"));
-        }
+        options.validate()?;
         let (nx, ny) = s.heights.dim();
         if nx < 2 || ny < 1 || nx * ny < 4 {
             return Err(Error::param(
@@ -309,11 +315,7 @@ impl NormalSolver {
 
     /// Change the settings (e.g. the tolerance) without re-planning.
     pub fn set_options(&mut self, options: NormalOptions) -> Result<()> {
-        require_positive("tolerance", options.tolerance)?;
-        require_positive("approach_tolerance", options.approach_tolerance)?;
-        if options.max_iterations == 0 {
-            return Err(Error::param("max_iterations", "must be at least 1"));
-        }
+        options.validate()?;
         self.options = options;
         Ok(())
     }

@@ -41,6 +41,20 @@ pub struct SweepOptions {
     pub keep_solutions: bool,
 }
 
+impl SweepOptions {
+    /// Check the settings: 0 < ε < 0.5.
+    pub fn validate(&self) -> Result<()> {
+        let eps = self.derivative_step;
+        if !(eps.is_finite() && eps > 0.0 && eps < 0.5) {
+            return Err(Error::param(
+                "derivative_step",
+                format!("must lie in (0, 0.5), got {eps}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SweepOptions {
     fn default() -> Self {
         Self {
@@ -120,13 +134,8 @@ pub fn run(
     mut progress: impl FnMut(usize),
 ) -> Result<Sweep> {
     let pressures = checked_pressures(pressures_pa)?;
+    options.validate()?;
     let eps = options.derivative_step;
-    if !(eps.is_finite() && eps > 0.0 && eps < 0.5) {
-        return Err(Error::param(
-            "derivative_step",
-            format!("must lie in (0, 0.5), got {eps}"),
-        ));
-    }
     let mut points = Vec::with_capacity(pressures.len());
     let mut solutions = Vec::new();
     let mut warm: Option<NormalSolution> = None;
