@@ -737,6 +737,26 @@ impl TangentialSolver {
         })
     }
 
+    /// Rigid shift at which monotonic loading from the virgin state along the unit direction
+    /// `e` reaches gross slip (m): with every point saturated, `q_i = μ p_i e`, the slip
+    /// `g_i = δ − (C q)_i` must point along `e` everywhere, which first happens at
+    /// `δ_gs = max_i (C q)_i·e`. For a Hertz contact this is Mindlin's `3μP·s/(16a)`.
+    pub fn gross_slip_displacement(&self, direction: [f64; 2]) -> Result<f64> {
+        let m = direction[0].hypot(direction[1]);
+        if !(m.is_finite() && m > 0.0) {
+            return Err(Error::param(
+                "direction",
+                format!("must be a finite non-zero vector, got {direction:?}"),
+            ));
+        }
+        let e = [direction[0] / m, direction[1] / m];
+        let q: Vec<[f64; 2]> = self.limit.iter().map(|&r| [r * e[0], r * e[1]]).collect();
+        let u = self.apply_compliance(&q);
+        Ok(u.iter()
+            .map(|v| v[0] * e[0] + v[1] * e[1])
+            .fold(f64::NEG_INFINITY, f64::max))
+    }
+
     /// Apply `u = C q` on the contact points (for tests and diagnostics).
     pub fn apply_compliance(&self, q: &[[f64; 2]]) -> Vec<[f64; 2]> {
         let mut u = vec![[0.0; 2]; self.points.len()];
@@ -1084,6 +1104,18 @@ mod tests {
         let lim = s.friction_limit_n();
         let e = s.step(Control::Force([lim, 0.0])).unwrap_err();
         assert!(e.to_string().contains("friction limit"), "{e}");
+    }
+
+    #[test]
+    fn gross_slip_displacement_separates_partial_from_gross_slip() {
+        let p = blob(16, 11);
+        let mut s = solver(&p, Boundary::ZeroPadded, Operator::Dense, 0.4).unwrap();
+        let d = s.gross_slip_displacement([1.0, 0.0]).unwrap();
+        let below = s.step(Control::Displacement([0.97 * d, 0.0])).unwrap();
+        assert!(below.stick_fraction > 0.0, "{below:?}");
+        s.reset();
+        let above = s.step(Control::Displacement([1.001 * d, 0.0])).unwrap();
+        assert_eq!(above.stick_fraction, 0.0, "{above:?}");
     }
 
     #[test]
