@@ -70,7 +70,7 @@ use std::time::Instant;
 pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
 coupling neglected (exact for two bodies of the same material); pressure held fixed";
 
-/// Largest dense restricted matrix (three blocks of `n²` f64) that [`Operator::Auto`] builds.
+/// Largest dense restricted matrix (`n²` pairs of three f32) that [`Operator::Auto`] builds.
 pub const DENSE_MEMORY_LIMIT_BYTES: usize = 1 << 30;
 
 /// How the compliance product `u = C q` on the contact points is computed.
@@ -202,44 +202,40 @@ pub struct TangentialMetadata {
 
 /// `u = C q` on the contact points, `q` and `u` as `[x, y]` pairs.
 enum Compliance {
+    /// Row-major `n × n` blocks interleaved as `[K_xx, K_xy, K_yy]` per pair, stored in single
+    /// precision (relative rounding 6e-8, far below the discretisation error) to halve the memory
+    /// traffic that bounds the product; sums are accumulated in double precision.
     Dense {
         n: usize,
-        xx: Vec<f64>,
-        xy: Vec<f64>,
-        yy: Vec<f64>,
+        k: Vec<[f32; 3]>,
     },
-    Fft {
-        plan: FftPlan,
-        spectra: CerrutiSpectra,
-        points: Vec<(usize, usize)>,
-    },
+    Fft(Box<FftCompliance>),
+}
+
+/// The FFT path of [`Compliance`].
+struct FftCompliance {
+    plan: FftPlan,
+    spectra: CerrutiSpectra,
+    points: Vec<(usize, usize)>,
 }
 
 impl Compliance {
     fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
         match self {
-            Compliance::Dense { n, xx, xy, yy } => {
+            Compliance::Dense { n, k } => {
                 let n = *n;
-                u.par_iter_mut().enumerate().for_each(|(i, ui)| {
-                    let (rxx, rxy, ryy) = (
-                        &xx[i * n..(i + 1) * n],
-                        &xy[i * n..(i + 1) * n],
-                        &yy[i * n..(i + 1) * n],
-                    );
+                u.par_iter_mut().zip(k.par_chunks(n)).for_each(|(ui, row)| {
                     let (mut sx, mut sy) = (0.0, 0.0);
-                    for j in 0..n {
-                        let [qx, qy] = q[j];
-                        sx += rxx[j] * qx + rxy[j] * qy;
-                        sy += rxy[j] * qx + ryy[j] * qy;
+                    for (kk, qj) in row.iter().zip(q) {
+                        let (kxx, kxy, kyy) = (kk[0] as f64, kk[1] as f64, kk[2] as f64);
+                        sx += kxx * qj[0] + kxy * qj[1];
+                        sy += kxy * qj[0] + kyy * qj[1];
                     }
                     *ui = [sx, sy];
                 });
             }
-            Compliance::Fft {
-                plan,
-                spectra,
-                points,
-            } => {
+            Compliance::Fft(f) => {
+                let (plan, spectra, points) = (&f.plan, &f.spectra, &f.points);
                 let shape = plan.grid_shape();
                 let mut fx = Array2::<f64>::zeros(shape);
                 let mut fy = Array2::<f64>::zeros(shape);
@@ -331,11 +327,7 @@ impl KernelTable {
                 } else {
                     1.0
                 };
-                (
-                    self.xx[[ai, aj]],
-                    s * self.xy[[ai, aj]],
-                    self.yy[[ai, aj]],
-                )
+                (self.xx[[ai, aj]], s * self.xy[[ai, aj]], self.yy[[ai, aj]])
             }
             Boundary::Periodic => {
                 let (nx, ny) = self.xx.dim();
@@ -448,10 +440,7 @@ impl TangentialSolver {
             Boundary::ZeroPadded => 4 * nx * ny,
         };
         let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
-        let dense_bytes = 3usize
-            .saturating_mul(n)
-            .saturating_mul(n)
-            .saturating_mul(8);
+        let dense_bytes = 12usize.saturating_mul(n).saturating_mul(n);
         let operator = match options.operator {
             Operator::Auto => {
                 if dense_bytes <= DENSE_MEMORY_LIMIT_BYTES && dense_cost <= fft_cost {
@@ -478,33 +467,25 @@ impl TangentialSolver {
                     dy,
                     k,
                 );
-                let mut xx = vec![0.0; n * n];
-                let mut xy = vec![0.0; n * n];
-                let mut yy = vec![0.0; n * n];
-                xx.par_chunks_mut(n)
-                    .zip(xy.par_chunks_mut(n))
-                    .zip(yy.par_chunks_mut(n))
-                    .enumerate()
-                    .for_each(|(r, ((rxx, rxy), ryy))| {
-                        let (i, j) = points[r];
-                        for (c, &(i2, j2)) in points.iter().enumerate() {
-                            let (a, b, d) =
-                                table.get(i as isize - i2 as isize, j as isize - j2 as isize);
-                            rxx[c] = a;
-                            rxy[c] = b;
-                            ryy[c] = d;
-                        }
-                    });
-                Compliance::Dense { n, xx, xy, yy }
+                let mut kmat = vec![[0.0f32; 3]; n * n];
+                kmat.par_chunks_mut(n).enumerate().for_each(|(r, row)| {
+                    let (i, j) = points[r];
+                    for (c, &(i2, j2)) in points.iter().enumerate() {
+                        let (a, b, d) =
+                            table.get(i as isize - i2 as isize, j as isize - j2 as isize);
+                        row[c] = [a as f32, b as f32, d as f32];
+                    }
+                });
+                Compliance::Dense { n, k: kmat }
             }
             _ => {
                 let plan = FftPlan::new(nx, ny, problem.boundary);
                 let spectra = cerruti_spectra(&plan, dx, dy, k);
-                Compliance::Fft {
+                Compliance::Fft(Box::new(FftCompliance {
                     plan,
                     spectra,
                     points: points.clone(),
-                }
+                }))
             }
         };
         let l = largest_eigenvalue(&compliance, n);
@@ -719,7 +700,10 @@ impl TangentialSolver {
         self.q = q_new;
         self.shift = shift;
         self.lambda = lambda;
-        let fsum = self.q.iter().fold([0.0, 0.0], |a, v| [a[0] + v[0], a[1] + v[1]]);
+        let fsum = self
+            .q
+            .iter()
+            .fold([0.0, 0.0], |a, v| [a[0] + v[0], a[1] + v[1]]);
         let force = [fsum[0] * self.element_area, fsum[1] * self.element_area];
         let area = self.metadata.nominal_area_m2;
         let stick = (0..n).filter(|&k| self.sticks(k)).count();
@@ -859,14 +843,23 @@ fn largest_eigenvalue(c: &Compliance, n: usize) -> f64 {
             [1.0 + s, 0.5 - s]
         })
         .collect();
-    let norm = |v: &[[f64; 2]]| v.iter().map(|a| a[0] * a[0] + a[1] * a[1]).sum::<f64>().sqrt();
+    let norm = |v: &[[f64; 2]]| {
+        v.iter()
+            .map(|a| a[0] * a[0] + a[1] * a[1])
+            .sum::<f64>()
+            .sqrt()
+    };
     let mut u = vec![[0.0; 2]; n];
     let mut est = 0.0;
     for _ in 0..60 {
         let nv = norm(&v);
         v.iter_mut().for_each(|a| *a = [a[0] / nv, a[1] / nv]);
         c.apply(&v, &mut u);
-        let rq: f64 = v.iter().zip(&u).map(|(a, b)| a[0] * b[0] + a[1] * b[1]).sum();
+        let rq: f64 = v
+            .iter()
+            .zip(&u)
+            .map(|(a, b)| a[0] * b[0] + a[1] * b[1])
+            .sum();
         let converged = (rq - est).abs() <= 1e-4 * rq;
         est = rq;
         std::mem::swap(&mut v, &mut u);
@@ -1032,7 +1025,12 @@ mod tests {
         })
     }
 
-    fn solver(p: &Array2<f64>, boundary: Boundary, op: Operator, mu: f64) -> Result<TangentialSolver> {
+    fn solver(
+        p: &Array2<f64>,
+        boundary: Boundary,
+        op: Operator,
+        mu: f64,
+    ) -> Result<TangentialSolver> {
         TangentialSolver::new(
             &TangentialProblem {
                 pressure: p,
@@ -1063,19 +1061,32 @@ mod tests {
                 .collect();
             let ud = d.apply_compliance(&q);
             let uf = f.apply_compliance(&q);
-            let scale = ud.iter().map(|u| u[0].abs().max(u[1].abs())).fold(0.0, f64::max);
+            let scale = ud
+                .iter()
+                .map(|u| u[0].abs().max(u[1].abs()))
+                .fold(0.0, f64::max);
             for (a, b) in ud.iter().zip(&uf) {
-                assert!((a[0] - b[0]).abs() < 1e-10 * scale, "{boundary:?} {a:?} {b:?}");
-                assert!((a[1] - b[1]).abs() < 1e-10 * scale, "{boundary:?} {a:?} {b:?}");
+                // The dense matrix is stored in single precision.
+                assert!(
+                    (a[0] - b[0]).abs() < 1e-6 * scale,
+                    "{boundary:?} {a:?} {b:?}"
+                );
+                assert!(
+                    (a[1] - b[1]).abs() < 1e-6 * scale,
+                    "{boundary:?} {a:?} {b:?}"
+                );
             }
             // And the solutions of a step agree.
             let (mut d, mut f) = (d, f);
             let c = Control::Displacement([5e-12, -2e-12]);
             let sd = d.step(c).unwrap();
             let sf = f.step(c).unwrap();
-            assert!(sd.stick_fraction > 0.05 && sd.stick_fraction < 0.95, "{sd:?}");
-            assert!((sd.force_n[0] / sf.force_n[0] - 1.0).abs() < 1e-6);
-            assert!((sd.force_n[1] / sf.force_n[1] - 1.0).abs() < 1e-6);
+            assert!(
+                sd.stick_fraction > 0.05 && sd.stick_fraction < 0.95,
+                "{sd:?}"
+            );
+            assert!((sd.force_n[0] / sf.force_n[0] - 1.0).abs() < 1e-5);
+            assert!((sd.force_n[1] / sf.force_n[1] - 1.0).abs() < 1e-5);
         }
     }
 
@@ -1089,7 +1100,10 @@ mod tests {
         let f = s2.step(Control::Force(d.force_n)).unwrap();
         for c in 0..2 {
             assert!((f.force_n[c] - d.force_n[c]).abs() < 1e-9 * s.friction_limit_n());
-            assert!((f.shift_m[c] - d.shift_m[c]).abs() < 1e-5 * 3e-12, "{f:?} {d:?}");
+            assert!(
+                (f.shift_m[c] - d.shift_m[c]).abs() < 1e-5 * 3e-12,
+                "{f:?} {d:?}"
+            );
         }
     }
 
