@@ -70,7 +70,8 @@ use std::time::Instant;
 pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
 coupling neglected (exact for two bodies of the same material); pressure held fixed";
 
-/// Largest dense restricted matrix (`n²` pairs of three f32) that [`Operator::Auto`] builds.
+/// Largest dense restricted matrix (`n(n+1)/2` pairs of three f32) that [`Operator::Auto`]
+/// builds.
 pub const DENSE_MEMORY_LIMIT_BYTES: usize = 1 << 30;
 
 /// How the compliance product `u = C q` on the contact points is computed.
@@ -202,14 +203,72 @@ pub struct TangentialMetadata {
 
 /// `u = C q` on the contact points, `q` and `u` as `[x, y]` pairs.
 enum Compliance {
-    /// Row-major `n × n` blocks interleaved as `[K_xx, K_xy, K_yy]` per pair, stored in single
-    /// precision (relative rounding 6e-8, far below the discretisation error) to halve the memory
-    /// traffic that bounds the product; sums are accumulated in double precision.
-    Dense {
-        n: usize,
-        k: Vec<[f32; 3]>,
-    },
+    /// The symmetric restricted matrix: the 2×2 block of a pair, `[K_xx, K_xy, K_yy]`, is the
+    /// same for `(i, j)` and `(j, i)` (`K_xx`, `K_yy` even and `K_xy` odd in each offset
+    /// component), so only the upper triangle `j ≥ i` is stored, row by row (row `i` starts at
+    /// `i·n − i(i−1)/2`), in single precision (relative rounding 6e-8, far below the
+    /// discretisation error). Both halve the memory traffic that bounds the product; sums are
+    /// accumulated in double precision.
+    Dense(Box<DenseCompliance>),
     Fft(Box<FftCompliance>),
+}
+
+/// The dense path of [`Compliance`].
+struct DenseCompliance {
+    n: usize,
+    /// Packed upper triangle.
+    k: Vec<[f32; 3]>,
+    /// Row ranges of about equal work, processed in parallel, partial sums added in order.
+    chunks: Vec<std::ops::Range<usize>>,
+}
+
+impl DenseCompliance {
+    fn row_offset(n: usize, i: usize) -> usize {
+        i * n - i * i.saturating_sub(1) / 2
+    }
+
+    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
+        let n = self.n;
+        let partial: Vec<Vec<[f64; 2]>> = self
+            .chunks
+            .par_iter()
+            .map(|rows| {
+                let mut acc = vec![[0.0; 2]; n];
+                for i in rows.clone() {
+                    let off = Self::row_offset(n, i);
+                    let row = &self.k[off..off + (n - i)];
+                    let qi = q[i];
+                    // Diagonal block.
+                    let d = row[0];
+                    let (mut sx, mut sy) = (
+                        d[0] as f64 * qi[0] + d[1] as f64 * qi[1],
+                        d[1] as f64 * qi[0] + d[2] as f64 * qi[1],
+                    );
+                    for ((kk, qj), aj) in row[1..]
+                        .iter()
+                        .zip(&q[i + 1..])
+                        .zip(acc[i + 1..].iter_mut())
+                    {
+                        let (kxx, kxy, kyy) = (kk[0] as f64, kk[1] as f64, kk[2] as f64);
+                        sx += kxx * qj[0] + kxy * qj[1];
+                        sy += kxy * qj[0] + kyy * qj[1];
+                        aj[0] += kxx * qi[0] + kxy * qi[1];
+                        aj[1] += kxy * qi[0] + kyy * qi[1];
+                    }
+                    acc[i][0] += sx;
+                    acc[i][1] += sy;
+                }
+                acc
+            })
+            .collect();
+        u.iter_mut().for_each(|v| *v = [0.0; 2]);
+        for acc in &partial {
+            for (v, a) in u.iter_mut().zip(acc) {
+                v[0] += a[0];
+                v[1] += a[1];
+            }
+        }
+    }
 }
 
 /// The FFT path of [`Compliance`].
@@ -222,18 +281,7 @@ struct FftCompliance {
 impl Compliance {
     fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
         match self {
-            Compliance::Dense { n, k } => {
-                let n = *n;
-                u.par_iter_mut().zip(k.par_chunks(n)).for_each(|(ui, row)| {
-                    let (mut sx, mut sy) = (0.0, 0.0);
-                    for (kk, qj) in row.iter().zip(q) {
-                        let (kxx, kxy, kyy) = (kk[0] as f64, kk[1] as f64, kk[2] as f64);
-                        sx += kxx * qj[0] + kxy * qj[1];
-                        sy += kxy * qj[0] + kyy * qj[1];
-                    }
-                    *ui = [sx, sy];
-                });
-            }
+            Compliance::Dense(d) => d.apply(q, u),
             Compliance::Fft(f) => {
                 let (plan, spectra, points) = (&f.plan, &f.spectra, &f.points);
                 let shape = plan.grid_shape();
@@ -440,7 +488,7 @@ impl TangentialSolver {
             Boundary::ZeroPadded => 4 * nx * ny,
         };
         let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
-        let dense_bytes = 12usize.saturating_mul(n).saturating_mul(n);
+        let dense_bytes = 6usize.saturating_mul(n).saturating_mul(n + 1);
         let operator = match options.operator {
             Operator::Auto => {
                 if dense_bytes <= DENSE_MEMORY_LIMIT_BYTES && dense_cost <= fft_cost {
@@ -467,16 +515,42 @@ impl TangentialSolver {
                     dy,
                     k,
                 );
-                let mut kmat = vec![[0.0f32; 3]; n * n];
-                kmat.par_chunks_mut(n).enumerate().for_each(|(r, row)| {
+                let total = DenseCompliance::row_offset(n, n);
+                let mut kmat = vec![[0.0f32; 3]; total];
+                let mut rows: Vec<&mut [[f32; 3]]> = Vec::with_capacity(n);
+                let mut rest = kmat.as_mut_slice();
+                for r in 0..n {
+                    let (row, tail) = rest.split_at_mut(n - r);
+                    rows.push(row);
+                    rest = tail;
+                }
+                rows.into_par_iter().enumerate().for_each(|(r, row)| {
                     let (i, j) = points[r];
-                    for (c, &(i2, j2)) in points.iter().enumerate() {
+                    for (c, &(i2, j2)) in points[r..].iter().enumerate() {
                         let (a, b, d) =
                             table.get(i as isize - i2 as isize, j as isize - j2 as isize);
                         row[c] = [a as f32, b as f32, d as f32];
                     }
                 });
-                Compliance::Dense { n, k: kmat }
+                // Row chunks of about equal work (8 per thread).
+                let parts = (8 * rayon::current_num_threads()).clamp(1, n);
+                let mut chunks = Vec::with_capacity(parts);
+                let mut start = 0;
+                for p in 1..=parts {
+                    let target = total * p / parts;
+                    let mut end = start;
+                    while end < n && DenseCompliance::row_offset(n, end) < target {
+                        end += 1;
+                    }
+                    if p == parts {
+                        end = n;
+                    }
+                    if end > start {
+                        chunks.push(start..end);
+                        start = end;
+                    }
+                }
+                Compliance::Dense(Box::new(DenseCompliance { n, k: kmat, chunks }))
             }
             _ => {
                 let plan = FftPlan::new(nx, ny, problem.boundary);
