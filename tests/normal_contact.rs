@@ -63,6 +63,21 @@ fn hertz_sphere_on_flat() {
     assert!(err_d.abs() < 0.01, "approach error {err_d}");
     assert!(l2 < 0.02, "pressure L2 error {l2}");
     assert_eq!(sol.contact_spots, 1);
+    // Contact stiffness by the sweep's central difference (warm-started solves at P(1 ± ε)),
+    // applied to the approach: dP/dδ = 2E*a (Johnson 1985 §4.2).
+    let eps = asperity::contact::sweep::DEFAULT_DERIVATIVE_STEP;
+    let p_mean = force / surface.area();
+    let lo = s.solve_load(p_mean * (1.0 - eps), Some(&sol)).unwrap();
+    let hi = s.solve_load(p_mean * (1.0 + eps), Some(&sol)).unwrap();
+    let k_num = asperity::contact::sweep::stiffness_central_difference(
+        p_mean,
+        eps,
+        -lo.approach_m,
+        -hi.approach_m,
+    ) * surface.area();
+    let k_hertz = 2.0 * e_star * hz.radius;
+    eprintln!("Hertz stiffness dP/dδ: {:+.2e}", k_num / k_hertz - 1.0);
+    assert!((k_num / k_hertz - 1.0).abs() < 0.01, "{k_num} vs {k_hertz}");
     // Elastic energy of Hertz contact: W = (2/5)·P·δ (Johnson 1985 §4.2, ∫P dδ with P ∝ δ^{3/2}).
     let w = 0.4 * force * hz.approach;
     assert!((sol.elastic_energy_j / w - 1.0).abs() < 0.02);
@@ -125,6 +140,12 @@ fn westergaard_partial_contact_half_width() {
         assert_eq!(sol.contact_spots, 1);
         warm = Some(sol);
     }
+    // Displacement control on the periodic patch: imposing the approach of a load-controlled
+    // solution recovers its load.
+    let sol = warm.unwrap();
+    let dc = s.solve_approach(sol.approach_m, None).unwrap();
+    assert!((dc.mean_pressure_pa / sol.mean_pressure_pa - 1.0).abs() < 1e-5);
+    assert!((dc.approach_m / sol.approach_m - 1.0).abs() < 1e-6);
 }
 
 /// Reference statistics (Rq 0.177 µm, cl 6.6 µm, 250 µm, steel/steel) on a coarser 256² grid:

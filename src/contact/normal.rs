@@ -36,9 +36,11 @@
 //!
 //! `ε = (Σ_Ic p_i |g_i| + p̄ Σ_{i∉Ic} max(−g_i, 0)) / (Σ_i p_i · h_rms)`,
 //!
-//! i.e. the complementarity error `Σ p·g` of tamaas' Polonsky–Keer–Rey solver (Rey, Anciaux &
-//! Molinari, Comput. Mech. 60 (2017) 69–81) normalised the same way (total load times the rms
-//! height `h_rms` of the surface), plus any remaining penetration outside the contact set. The
+//! i.e. a complementarity error `Σ p·g` made dimensionless by the total load and the rms height
+//! `h_rms` of the surface (the kind of criterion tamaas' Polonsky–Keer–Rey solver uses; Rey,
+//! Anciaux & Molinari, Comput. Mech. 60 (2017) 69–81), plus any remaining penetration outside
+//! the contact set. At equal tolerance (1e-10) both codes give identical contact sets on the
+//! reference surface (BENCHMARKS.md). The
 //! solve stops when `ε ≤ tolerance` (default [`NormalOptions::DEFAULT_TOLERANCE`]), evaluated on
 //! a freshly convolved displacement; reaching `max_iterations` first is an
 //! [`Error::NonConvergence`], never a silent result.
