@@ -387,13 +387,16 @@ impl KernelTable {
     }
 }
 
-/// Estimated cost (arbitrary units, multiply-adds) of one product with each operator.
+/// Estimated cost of one product with each operator, in units of one dense pair.
+///
+/// Calibrated on the 1024² reference patch (BENCHMARKS.md, same run): the packed single-precision
+/// dense product costs ≈ 1.5 ns per pair (`n²` pairs, memory bound), the FFT product (two
+/// forward and two inverse real transforms, six spectral products) ≈ 17 ns per `N log2 N`
+/// (`N` = FFT grid points), i.e. ≈ 11 dense pairs.
 fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
-    let dense = 4.0 * (n as f64).powi(2);
+    let dense = (n as f64).powi(2);
     let nf = plan_points as f64;
-    // Two forward and two inverse real transforms (≈ 2.5 N log2 N each) plus six spectral
-    // products and the scatter/gather.
-    let fft = 4.0 * 2.5 * nf * nf.log2().max(1.0) + 8.0 * nf;
+    let fft = 11.0 * nf * nf.log2().max(1.0);
     (dense, fft)
 }
 
