@@ -3,3 +3,4 @@
 pub mod analytic;
 pub mod normal;
 pub mod sweep;
+pub mod tangential;
