@@ -27,7 +27,8 @@
 //! found by the size of the colour step between consecutive rows: a step longer than
 //! [`MARKER_STEP_FACTOR`] × the median step breaks the curve, and the longest unbroken run of rows
 //! is the graded curve. Rows before it are below-range markers, rows after it above-range markers.
-//! The measuring range is therefore `[first graded pressure, last graded pressure]`.
+//! The measuring range is therefore `[first graded pressure, last graded pressure]`. A marker row
+//! at pressure 0 is the colour of unstained film.
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -45,7 +46,10 @@ pub const DEFAULT_MAX_COLOUR_DISTANCE: f64 = 20.0;
 pub enum PixelClass {
     /// Inside the calibrated range: the pressure is known.
     InRange,
-    /// Below the film's measuring range (no colour, or the below-range mark).
+    /// Unstained film: the colour of a 0-pressure marker row (white paper).
+    Unstained,
+    /// Stained, but below the film's measuring range (the below-range mark, or paler than the
+    /// palest graded colour).
     BelowRange,
     /// At or above the upper end of the measuring range (saturated, or the above-range mark).
     AboveRange,
@@ -58,6 +62,7 @@ impl PixelClass {
     pub fn name(self) -> &'static str {
         match self {
             PixelClass::InRange => "in_range",
+            PixelClass::Unstained => "unstained",
             PixelClass::BelowRange => "below_range",
             PixelClass::AboveRange => "above_range",
             PixelClass::OffCurve => "off_curve",
@@ -329,7 +334,9 @@ impl ColourTable {
             }
             let dm = dist(row.rgb, rgb);
             if dm <= self.max_distance && marker.is_none_or(|m| dm < m.0) {
-                let side = if idx < self.graded.start {
+                let side = if row.pressure_pa == 0.0 {
+                    PixelClass::Unstained
+                } else if idx < self.graded.start {
                     PixelClass::BelowRange
                 } else {
                     PixelClass::AboveRange
@@ -570,12 +577,12 @@ mod tests {
     #[test]
     fn markers_and_off_curve_colours_are_not_mapped() {
         let t = lw();
-        assert_eq!(t.read([255.0; 3]).class, PixelClass::BelowRange);
+        assert_eq!(t.read([255.0; 3]).class, PixelClass::Unstained);
         assert_eq!(t.read([0.0, 255.0, 0.0]).class, PixelClass::BelowRange);
         assert_eq!(t.read([5.0, 250.0, 3.0]).class, PixelClass::BelowRange);
         assert_eq!(t.read([255.0, 255.0, 0.0]).class, PixelClass::AboveRange);
         // Paler than the palest pink: below range, not 2.5 MPa.
-        assert_eq!(t.read([255.0, 245.0, 245.0]).class, PixelClass::BelowRange);
+        assert_eq!(t.read([255.0, 238.0, 238.0]).class, PixelClass::BelowRange);
         // Deeper than the deepest red: above range.
         assert_eq!(t.read([255.0, 5.0, 5.0]).class, PixelClass::AboveRange);
         // Blue ink, black pen: rejected.

@@ -61,7 +61,7 @@ impl FilmMap {
         if width == 0 || height == 0 {
             return Err(Error::Data("film image has no pixels".into()));
         }
-        let mut class = Array2::from_elem((width, height), PixelClass::BelowRange);
+        let mut class = Array2::from_elem((width, height), PixelClass::Unstained);
         let mut pressure = Array2::from_elem((width, height), f64::NAN);
         for j in 0..height {
             let row = height - 1 - j;
@@ -124,6 +124,7 @@ impl FilmMap {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ClassCounts {
     pub in_range: usize,
+    pub unstained: usize,
     pub below_range: usize,
     pub above_range: usize,
     pub off_curve: usize,
@@ -133,6 +134,7 @@ impl ClassCounts {
     fn add(&mut self, k: PixelClass) {
         match k {
             PixelClass::InRange => self.in_range += 1,
+            PixelClass::Unstained => self.unstained += 1,
             PixelClass::BelowRange => self.below_range += 1,
             PixelClass::AboveRange => self.above_range += 1,
             PixelClass::OffCurve => self.off_curve += 1,
@@ -141,7 +143,7 @@ impl ClassCounts {
 
     /// Total pixel count.
     pub fn total(&self) -> usize {
-        self.in_range + self.below_range + self.above_range + self.off_curve
+        self.in_range + self.unstained + self.below_range + self.above_range + self.off_curve
     }
 }
 
@@ -235,10 +237,19 @@ pub struct PatchDetection {
     pub discarded_small: usize,
 }
 
+/// Default width of the below-range rim joined to a patch (pixels).
+pub const DEFAULT_RIM_PIXELS: usize = 3;
+
 /// Find patches: 8-connected components of pressure-bearing pixels (in range or above range),
-/// holes filled, keeping those whose equivalent diameter `√(4A/π)` is at least
-/// `min_diameter_m`.
-pub fn detect_patches(map: &FilmMap, min_diameter_m: f64) -> Result<PatchDetection> {
+/// extended by the stained below-range pixels within `rim_pixels` 8-neighbour steps of them (the
+/// contact edge, where the film is stained but below its range), holes filled, keeping those whose
+/// equivalent diameter `√(4A/π)` is at least `min_diameter_m`. The rim is bounded so that a pen
+/// mark or tape touching a patch is not swallowed whole.
+pub fn detect_patches(
+    map: &FilmMap,
+    min_diameter_m: f64,
+    rim_pixels: usize,
+) -> Result<PatchDetection> {
     crate::error::require_positive("min_patch_diameter_m", min_diameter_m)?;
     let (nx, ny) = map.dim();
     let bearing = |i: usize, j: usize| {
@@ -249,6 +260,7 @@ pub fn detect_patches(map: &FilmMap, min_diameter_m: f64) -> Result<PatchDetecti
     };
     let mut label = Array2::<usize>::zeros((nx, ny));
     let mut comps: Vec<Vec<(usize, usize)>> = Vec::new();
+    // label: 0 = none, k = component k (1-based).
     for i0 in 0..nx {
         for j0 in 0..ny {
             if label[[i0, j0]] != 0 || !bearing(i0, j0) {
@@ -275,6 +287,36 @@ pub fn detect_patches(map: &FilmMap, min_diameter_m: f64) -> Result<PatchDetecti
                 }
             }
             comps.push(pix);
+        }
+    }
+    // Rim: stained below-range pixels within `rim_pixels` steps (8-neighbour) of a component.
+    let mut rim_taken = Array2::from_elem((nx, ny), false);
+    for (k, pix) in comps.iter_mut().enumerate() {
+        let id = k + 1;
+        let mut frontier = pix.clone();
+        for _ in 0..rim_pixels {
+            let mut next = Vec::new();
+            for &(i, j) in &frontier {
+                for di in -1i64..=1 {
+                    for dj in -1i64..=1 {
+                        let (a, b) = (i as i64 + di, j as i64 + dj);
+                        if a < 0 || b < 0 || a >= nx as i64 || b >= ny as i64 {
+                            continue;
+                        }
+                        let (a, b) = (a as usize, b as usize);
+                        if label[[a, b]] == 0
+                            && !rim_taken[[a, b]]
+                            && map.class[[a, b]] == PixelClass::BelowRange
+                        {
+                            rim_taken[[a, b]] = true;
+                            label[[a, b]] = id;
+                            next.push((a, b));
+                        }
+                    }
+                }
+            }
+            pix.extend_from_slice(&next);
+            frontier = next;
         }
     }
     let px_area = map.pixel_size_m * map.pixel_size_m;
@@ -461,12 +503,12 @@ mod tests {
     #[test]
     fn disc_is_found_with_its_hole_filled_and_ink_is_not() {
         let map = synthetic();
-        let d = detect_patches(&map, 5e-4).unwrap();
+        let d = detect_patches(&map, 5e-4, DEFAULT_RIM_PIXELS).unwrap();
         assert_eq!(d.patches.len(), 1);
         let s = summarise(&map, &d.patches[0]).unwrap();
         // Disc of radius 8 px: 197 pixel centres inside; the filled hole counts.
         assert_eq!(d.patches[0].pixels.len(), 197);
-        assert_eq!(s.counts.below_range, 1);
+        assert_eq!(s.counts.unstained, 1);
         assert!((s.centre_x_m - 20e-4).abs() < 1e-9);
         assert!((s.centre_y_m - (39.0 - 15.0) * 1e-4).abs() < 1e-9);
         assert!(
