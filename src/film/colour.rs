@@ -37,6 +37,9 @@ use std::path::Path;
 /// from the graded colour curve.
 pub const MARKER_STEP_FACTOR: f64 = 3.0;
 
+/// Tolerance on the segment parameter at the ends of the colour curve.
+const END_TOLERANCE: f64 = 1e-6;
+
 /// Default off-curve rejection distance in RGB units (0–255 scale, Euclidean): half of one step of
 /// the Prescale LW pink scale (whose steps are ≈ 40 units long).
 pub const DEFAULT_MAX_COLOUR_DISTANCE: f64 = 20.0;
@@ -316,8 +319,10 @@ impl ColourTable {
         }
         let (d, k, t) = best;
         // `t` is the unclamped line parameter: < 0 beyond the first row, > 1 beyond the last.
-        let before_start = k == 0 && t < 0.0;
-        let after_end = k == n - 2 && t > 1.0;
+        // A small tolerance keeps a pixel of exactly the end row's colour (read back from a
+        // 16-bit or float image with rounding) in range.
+        let before_start = k == 0 && t < -END_TOLERANCE;
+        let after_end = k == n - 2 && t > 1.0 + END_TOLERANCE;
         if d <= self.max_distance && !before_start && !after_end {
             let p =
                 g[k].pressure_pa + t.clamp(0.0, 1.0) * (g[k + 1].pressure_pa - g[k].pressure_pa);

@@ -257,3 +257,28 @@ mod tests {
         assert!(fit(&pts, 1, None).is_err());
     }
 }
+
+/// Write fitted coefficients of several regions as CSV
+/// (`region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa`).
+pub fn write_coefficients_csv(path: &std::path::Path, fits: &[(usize, &PolyFit2)]) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(w, "# sigma(x, y) = sum coefficient_Pa * u^a * v^b, u = (x - x_centre_m)/x_half_width_m, v = (y - y_centre_m)/y_half_width_m (film frame, m)").map_err(io)?;
+        writeln!(w, "region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa").map_err(io)?;
+        for (id, f) in fits {
+            for (&(a, b), c) in f.exponents.iter().zip(&f.coefficients_pa) {
+                writeln!(
+                    w,
+                    "{id},{},{:.12e},{:.12e},{:.12e},{:.12e},{a},{b},{c:.12e}",
+                    f.order,
+                    f.frame.x_centre_m,
+                    f.frame.y_centre_m,
+                    f.frame.x_half_width_m,
+                    f.frame.y_half_width_m
+                )
+                .map_err(io)?;
+            }
+        }
+        Ok(())
+    })
+}

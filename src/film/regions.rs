@@ -11,9 +11,10 @@
 //! A region is a set of pixels: a rectangle, a polygon, or a *patch* found automatically as a
 //! connected component (8-neighbour) of pressure-bearing pixels (in range or above range), with
 //! the holes inside it filled (an unstained pixel enclosed by a patch is contact below the film's
-//! range, not background). Components smaller than a minimum equivalent diameter are discarded
-//! and counted. Below-range and off-curve pixels never join a patch, so the green pen marks and
-//! tape of a vendor rendering are not patches.
+//! range, not background), plus a thin rim of stained below-range pixels around it (the edge of
+//! the contact, where the film is coloured but below its range). Components whose core is smaller
+//! than a minimum equivalent diameter are discarded and counted. Below-range and off-curve pixels
+//! never seed a patch, so the green pen marks and tape of a vendor rendering are not patches.
 
 use super::colour::{ColourToPressure, PixelClass};
 use crate::error::{Error, Result};
@@ -91,23 +92,38 @@ impl FilmMap {
             .with_guessed_format()
             .map_err(|e| Error::io(path, e))?
             .decode()
-            .map_err(|e| Error::parse(path, 0, format!("cannot read image: {e}")))?
-            .to_rgb32f();
+            .map_err(|e| Error::parse(path, 0, format!("cannot read image: {e}")))?;
         let (w, h) = (img.width() as usize, img.height() as usize);
-        Self::from_rgb(
-            w,
-            h,
-            |c, r| {
-                let p = img.get_pixel(c as u32, r as u32).0;
-                [
-                    p[0] as f64 * 255.0,
-                    p[1] as f64 * 255.0,
-                    p[2] as f64 * 255.0,
-                ]
-            },
-            reader,
-            pixel_size_m,
-        )
+        // 8-bit images keep their exact integer values; deeper images keep their precision.
+        if img.color().bytes_per_pixel() / img.color().channel_count().max(1) <= 1 {
+            let rgb = img.to_rgb8();
+            Self::from_rgb(
+                w,
+                h,
+                |c, r| {
+                    let p = rgb.get_pixel(c as u32, r as u32).0;
+                    [p[0] as f64, p[1] as f64, p[2] as f64]
+                },
+                reader,
+                pixel_size_m,
+            )
+        } else {
+            let rgb = img.to_rgb32f();
+            Self::from_rgb(
+                w,
+                h,
+                |c, r| {
+                    let p = rgb.get_pixel(c as u32, r as u32).0;
+                    [
+                        p[0] as f64 * 255.0,
+                        p[1] as f64 * 255.0,
+                        p[2] as f64 * 255.0,
+                    ]
+                },
+                reader,
+                pixel_size_m,
+            )
+        }
     }
 
     /// Pixel counts per class over the whole image.
@@ -242,9 +258,10 @@ pub const DEFAULT_RIM_PIXELS: usize = 3;
 
 /// Find patches: 8-connected components of pressure-bearing pixels (in range or above range),
 /// extended by the stained below-range pixels within `rim_pixels` 8-neighbour steps of them (the
-/// contact edge, where the film is stained but below its range), holes filled, keeping those whose
-/// equivalent diameter `√(4A/π)` is at least `min_diameter_m`. The rim is bounded so that a pen
-/// mark or tape touching a patch is not swallowed whole.
+/// contact edge, where the film is stained but below its range), holes filled. Only components
+/// whose pressure-bearing core alone has an equivalent diameter `√(4A/π)` of at least
+/// `min_diameter_m` are kept (specks of faint colour inside pen marks or tape are not). The rim is
+/// bounded so that a pen mark or tape touching a patch is not swallowed whole.
 pub fn detect_patches(
     map: &FilmMap,
     min_diameter_m: f64,
@@ -289,10 +306,26 @@ pub fn detect_patches(
             comps.push(pix);
         }
     }
-    // Rim: stained below-range pixels within `rim_pixels` steps (8-neighbour) of a component.
+    // Cores smaller than the minimum diameter are discarded before the rim is added: a speck of
+    // faint colour inside a pen mark or tape must not grow a rim of the mark into a "patch".
+    let px_area = map.pixel_size_m * map.pixel_size_m;
+    let min_area = std::f64::consts::PI / 4.0 * min_diameter_m * min_diameter_m;
+    let mut discarded_small = 0;
+    let mut kept = Vec::new();
+    for (k, pix) in comps.into_iter().enumerate() {
+        if (pix.len() as f64) * px_area < min_area {
+            discarded_small += 1;
+            for &(i, j) in &pix {
+                label[[i, j]] = usize::MAX;
+            }
+        } else {
+            kept.push((k + 1, pix));
+        }
+    }
+    // Rim: stained below-range pixels within `rim_pixels` steps (8-neighbour) of a core.
     let mut rim_taken = Array2::from_elem((nx, ny), false);
-    for (k, pix) in comps.iter_mut().enumerate() {
-        let id = k + 1;
+    for (id, pix) in kept.iter_mut() {
+        let id = *id;
         let mut frontier = pix.clone();
         for _ in 0..rim_pixels {
             let mut next = Vec::new();
@@ -319,18 +352,10 @@ pub fn detect_patches(
             frontier = next;
         }
     }
-    let px_area = map.pixel_size_m * map.pixel_size_m;
-    let min_area = std::f64::consts::PI / 4.0 * min_diameter_m * min_diameter_m;
-    let mut patches = Vec::new();
-    let mut discarded_small = 0;
-    for (k, pix) in comps.iter().enumerate() {
-        let filled = fill_holes(pix, &label, k + 1);
-        if (filled.len() as f64) * px_area < min_area {
-            discarded_small += 1;
-            continue;
-        }
-        patches.push(filled);
-    }
+    let mut patches: Vec<Vec<(usize, usize)>> = kept
+        .iter()
+        .map(|(id, pix)| fill_holes(pix, &label, *id))
+        .collect();
     // Number from the top of the image (largest y first), then left to right, in rows of patches
     // whose centres differ in y by less than one minimum diameter.
     let centre = |p: &Vec<(usize, usize)>| {
@@ -540,4 +565,80 @@ mod tests {
             r.pixels.len()
         );
     }
+}
+
+/// Write the per-pixel readings of `regions` as CSV (`region_id,x_m,y_m,pressure_Pa,class`),
+/// pressure empty unless in range.
+pub fn write_region_pixels_csv(path: &Path, map: &FilmMap, regions: &[Region]) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(w, "# film pressure map, pixels of the regions of interest; x_m, y_m in m (film frame, y up), pressure_Pa in Pa").map_err(io)?;
+        writeln!(w, "# class: in_range (pressure given), unstained, below_range, above_range, off_curve (rejected colour); pixel size {} m", map.pixel_size_m).map_err(io)?;
+        writeln!(w, "region_id,x_m,y_m,pressure_Pa,class").map_err(io)?;
+        for r in regions {
+            for &(i, j) in &r.pixels {
+                let (x, y) = map.position(i, j);
+                let p = map.pressure_pa[[i, j]];
+                let ps = if p.is_finite() {
+                    format!("{p:.6e}")
+                } else {
+                    String::new()
+                };
+                writeln!(
+                    w,
+                    "{},{x:.6e},{y:.6e},{ps},{}",
+                    r.id,
+                    map.class[[i, j]].name()
+                )
+                .map_err(io)?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Column header of the region summary CSV.
+pub const SUMMARY_COLUMNS: &str = "id,centre_x_m,centre_y_m,equivalent_diameter_m,area_m2,mean_pressure_Pa,max_pressure_Pa,in_range_load_N,n_pixels,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_order,fit_R2,fit_rms_residual_Pa";
+
+/// Write region summaries (with their fit quality, if any) as CSV.
+pub fn write_summary_csv(
+    path: &Path,
+    summaries: &[(RegionSummary, Option<&super::polyfit::PolyFit2>)],
+) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(w, "# film regions: centre in m (film frame, y up), area in m², pressures in Pa, load in N; mean/max over in-range pixels; counts in pixels").map_err(io)?;
+        writeln!(w, "{SUMMARY_COLUMNS}").map_err(io)?;
+        for (s, f) in summaries {
+            let c = s.counts;
+            let (fo, fr, fe) = match f {
+                Some(f) => (
+                    f.order.to_string(),
+                    format!("{:.6}", f.r_squared),
+                    format!("{:.6e}", f.rms_residual_pa),
+                ),
+                None => Default::default(),
+            };
+            writeln!(
+                w,
+                "{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{},{fo},{fr},{fe}",
+                s.id,
+                s.centre_x_m,
+                s.centre_y_m,
+                s.equivalent_diameter_m,
+                s.area_m2,
+                s.mean_pressure_pa,
+                s.max_pressure_pa,
+                s.in_range_load_n,
+                c.total(),
+                c.in_range,
+                c.unstained,
+                c.below_range,
+                c.above_range,
+                c.off_curve
+            )
+            .map_err(io)?;
+        }
+        Ok(())
+    })
 }
