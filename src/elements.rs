@@ -219,7 +219,7 @@ mod tests {
             contact_area_ratio: 0.1,
             kn_n_per_m3: kn,
             e0_n_per_m3: 2.0 * kn,
-            k: 5.0,
+            k: 0.5,
             mu: 0.6,
             et_n_per_m3: 0.01 * kn,
             fit_r2: 0.99,

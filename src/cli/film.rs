@@ -46,12 +46,12 @@ pub struct FilmArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        num_args = 4,
-        conflicts_with = "roi_polygon_mm"
+        conflicts_with = "roi_polygon_mm",
+        allow_hyphen_values = true
     )]
     roi_rect_mm: Option<Vec<f64>>,
     /// Polygonal region of interest `x,y;x,y;...` in mm (film frame, at least 3 vertices).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     roi_polygon_mm: Option<String>,
     /// Smallest equivalent diameter (mm) of an automatically detected patch.
     #[arg(long, default_value_t = 2.0)]
@@ -69,7 +69,7 @@ pub struct FilmArgs {
     #[arg(long)]
     nodes_region: Option<usize>,
     /// Node placement offset `x,y` in mm (mesh frame → film frame).
-    #[arg(long, value_delimiter = ',', num_args = 2, allow_hyphen_values = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     node_offset_mm: Option<Vec<f64>>,
     /// Node placement rotation in degrees (counter-clockwise).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
@@ -178,6 +178,12 @@ pub fn run(args: FilmArgs) -> Result<()> {
 
     // Regions.
     let (regions, discarded) = if let Some(r) = &args.roi_rect_mm {
+        if r.len() != 4 {
+            return Err(Error::param(
+                "--roi-rect-mm",
+                format!("needs 4 values x0,y0,x1,y1, got {}", r.len()),
+            ));
+        }
         let roi = Roi::Rectangle {
             x0: r[0] * 1e-3,
             y0: r[1] * 1e-3,
@@ -355,6 +361,12 @@ pub fn run(args: FilmArgs) -> Result<()> {
         );
         let nodes = read_nodes_csv(nodes_path)?;
         let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
+        if off.len() != 2 {
+            return Err(Error::param(
+                "--node-offset-mm",
+                format!("needs 2 values x,y, got {}", off.len()),
+            ));
+        }
         let placement = Placement {
             offset_x_m: off[0] * 1e-3,
             offset_y_m: off[1] * 1e-3,

@@ -154,7 +154,11 @@ impl ColourTable {
                 )));
             }
         }
-        let graded = graded_run(&rows);
+        let graded = if rows.len() > 1 && rows[0].pressure_pa == 0.0 && rows.len() < 3 {
+            1..1
+        } else {
+            graded_run(&rows)
+        };
         if graded.len() < 2 {
             return Err(Error::Data(format!(
                 "{source}: no graded colour curve of at least 2 rows found (every step is a jump)"
@@ -365,7 +369,13 @@ impl ColourTable {
 
 /// The longest run of consecutive rows whose colour steps are all at most
 /// `MARKER_STEP_FACTOR` × the median step (all rows for tables of fewer than 4 rows).
+/// A leading row at pressure 0 is always a marker (the unstained film colour): no film's graded
+/// scale starts at zero pressure.
 fn graded_run(rows: &[ColourRow]) -> std::ops::Range<usize> {
+    if rows[0].pressure_pa == 0.0 {
+        let r = graded_run(&rows[1..]);
+        return r.start + 1..r.end + 1;
+    }
     if rows.len() < 4 {
         return 0..rows.len();
     }

@@ -315,7 +315,7 @@ pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Resul
         for p in rows {
             writeln!(
                 w,
-                "{},{:.9e},{:.9e},{:.9e},{:.9e},{:.12e}",
+                "{},{:.12e},{:.12e},{:.15e},{:.12e},{:.15e}",
                 p.id, p.x_m, p.y_m, p.area_m2, p.pressure_pa, p.n0_n
             )
             .map_err(io)?;

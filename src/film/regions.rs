@@ -492,6 +492,10 @@ mod tests {
     fn table() -> ColourToPressure {
         let rows = vec![
             ColourRow {
+                pressure_pa: 0.0,
+                rgb: [255.0; 3],
+            },
+            ColourRow {
                 pressure_pa: 1e6,
                 rgb: [255.0, 200.0, 200.0],
             },
@@ -614,7 +618,7 @@ pub fn write_summary_csv(
             let (fo, fr, fe) = match f {
                 Some(f) => (
                     f.order.to_string(),
-                    format!("{:.6}", f.r_squared),
+                    format!("{:.9}", f.r_squared),
                     format!("{:.6e}", f.rms_residual_pa),
                 ),
                 None => Default::default(),
