@@ -4,7 +4,7 @@ use asperity::elements::{provenance_json, InputFile};
 use asperity::film::colour::{
     ColourTable, ColourToPressure, DensityCalibration, DEFAULT_MAX_COLOUR_DISTANCE,
 };
-use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placement};
+use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placement, Preload};
 use asperity::film::polyfit::{self, PolyFit2};
 use asperity::film::reduce::reduce;
 use asperity::film::regions::{
@@ -237,6 +237,135 @@ pub fn run(args: FilmArgs) -> Result<()> {
         summaries.push(s);
     }
 
+    // Nodes.
+    let mut inputs = vec![
+        InputFile::new("image", &args.image)?,
+        InputFile::new("colour_calibration", &table_path)?,
+    ];
+    let mut node_summary = serde_json::Value::Null;
+    type NodeOutputs = (Vec<Preload>, String, Option<(Vec<Preload>, String)>);
+    let mut node_outputs: Option<NodeOutputs> = None;
+    if let Some(nodes_path) = &args.nodes {
+        inputs.push(InputFile::new("nodes", nodes_path)?);
+        let region_idx = match args.nodes_region {
+            Some(id) => regions.iter().position(|r| r.id == id).ok_or_else(|| {
+                Error::param(
+                    "--nodes-region",
+                    format!("no region {id} (found {})", regions.len()),
+                )
+            })?,
+            None if regions.len() == 1 => 0,
+            None => {
+                return Err(Error::param(
+                    "--nodes-region",
+                    format!(
+                        "{} regions were found: name the one the nodes sit on",
+                        regions.len()
+                    ),
+                ))
+            }
+        };
+        let region = &regions[region_idx];
+        let fit = fits[region_idx].as_ref().expect("every region is fitted");
+        let (ri0, ri1, rj0, rj1) = (
+            region.pixels.iter().map(|p| p.0).min().unwrap_or(0),
+            region.pixels.iter().map(|p| p.0).max().unwrap_or(0),
+            region.pixels.iter().map(|p| p.1).min().unwrap_or(0),
+            region.pixels.iter().map(|p| p.1).max().unwrap_or(0),
+        );
+        let s = pixel_size_m;
+        let (bx0, bx1, by0, by1) = (
+            (ri0 as f64 - 0.5) * s,
+            (ri1 as f64 + 0.5) * s,
+            (rj0 as f64 - 0.5) * s,
+            (rj1 as f64 + 0.5) * s,
+        );
+        let nodes = read_nodes_csv(nodes_path)?;
+        let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
+        if off.len() != 2 {
+            return Err(Error::param(
+                "--node-offset-mm",
+                format!("needs 2 values x,y, got {}", off.len()),
+            ));
+        }
+        let placement = Placement {
+            offset_x_m: off[0] * 1e-3,
+            offset_y_m: off[1] * 1e-3,
+            rotation_rad: args.node_rotation_deg.to_radians(),
+            scale: args.node_scale,
+        };
+        let pressure_at = |x: f64, y: f64| -> Result<f64> {
+            if !map.contains(x, y) {
+                return Err(Error::Data(format!(
+                    "lies at ({:.3}, {:.3}) mm, outside the film map (0–{:.3} × 0–{:.3} mm): check the node placement",
+                    x * 1e3,
+                    y * 1e3,
+                    nx as f64 * s * 1e3,
+                    ny as f64 * s * 1e3
+                )));
+            }
+            if x < bx0 || x > bx1 || y < by0 || y > by1 {
+                return Err(Error::Data(format!(
+                    "lies at ({:.3}, {:.3}) mm, outside region {} ({:.3}–{:.3} × {:.3}–{:.3} mm), where the fit would extrapolate",
+                    x * 1e3, y * 1e3, region.id, bx0 * 1e3, bx1 * 1e3, by0 * 1e3, by1 * 1e3
+                )));
+            }
+            Ok(fit.eval(x, y))
+        };
+        let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)?;
+        let pre_comment = format!(
+            "asperity {} node preloads N0 = sigma_fit(x, y) * area from {} (region {}, order-{} fit)",
+            env!("CARGO_PKG_VERSION"),
+            args.image.display(),
+            region.id,
+            fit.order
+        );
+        eprintln!(
+            "{} nodes on region {}: total area {:.4} mm², total load {:.6} N (scale {:.6}), {} negative fitted pressures set to 0",
+            psum.n_nodes,
+            region.id,
+            psum.total_area_m2 * 1e6,
+            psum.total_load_n,
+            psum.load_scale,
+            psum.clamped_negative
+        );
+        let mut reduced = serde_json::Value::Null;
+        let mut reduced_rows = None;
+        if let Some(h) = args.reduce_mesh_size_mm {
+            let r = reduce(
+                &pre,
+                asperity::error::require_positive("--reduce-mesh-size-mm", h)? * 1e-3,
+            )?;
+            let red_comment = format!(
+                "asperity {} reduced node preloads: {} of {} nodes kept on a {} mm triangular mesh; area and load are sums over each triangle",
+                env!("CARGO_PKG_VERSION"),
+                r.nodes.len(),
+                r.n_fine,
+                h
+            );
+            eprintln!(
+                "reduced {} nodes to {} on a {h} mm mesh",
+                r.n_fine,
+                r.nodes.len()
+            );
+            reduced_rows = Some((r.nodes.clone(), red_comment));
+            reduced = serde_json::json!({
+                "mesh_size_m": r.mesh_size_m,
+                "n_kept": r.nodes.len(),
+                "total_area_m2": r.nodes.iter().map(|p| p.area_m2).sum::<f64>(),
+                "total_load_n": r.nodes.iter().map(|p| p.n0_n).sum::<f64>(),
+            });
+        }
+        node_outputs = Some((pre, pre_comment, reduced_rows));
+        node_summary = serde_json::json!({
+            "region": region.id,
+            "placement": placement,
+            "preloads": psum,
+            "reduction": reduced,
+        });
+    }
+
+    // Every input is checked: write the outputs.
     let out = &args.out_dir;
     let pairs: Vec<_> = summaries
         .iter()
@@ -318,135 +447,11 @@ pub fn run(args: FilmArgs) -> Result<()> {
         );
     }
 
-    // Nodes.
-    let mut inputs = vec![
-        InputFile::new("image", &args.image)?,
-        InputFile::new("colour_calibration", &table_path)?,
-    ];
-    let mut node_summary = serde_json::Value::Null;
-    if let Some(nodes_path) = &args.nodes {
-        inputs.push(InputFile::new("nodes", nodes_path)?);
-        let region_idx = match args.nodes_region {
-            Some(id) => regions.iter().position(|r| r.id == id).ok_or_else(|| {
-                Error::param(
-                    "--nodes-region",
-                    format!("no region {id} (found {})", regions.len()),
-                )
-            })?,
-            None if regions.len() == 1 => 0,
-            None => {
-                return Err(Error::param(
-                    "--nodes-region",
-                    format!(
-                        "{} regions were found: name the one the nodes sit on",
-                        regions.len()
-                    ),
-                ))
-            }
-        };
-        let region = &regions[region_idx];
-        let fit = fits[region_idx].as_ref().expect("every region is fitted");
-        let (ri0, ri1, rj0, rj1) = (
-            region.pixels.iter().map(|p| p.0).min().unwrap_or(0),
-            region.pixels.iter().map(|p| p.0).max().unwrap_or(0),
-            region.pixels.iter().map(|p| p.1).min().unwrap_or(0),
-            region.pixels.iter().map(|p| p.1).max().unwrap_or(0),
-        );
-        let s = pixel_size_m;
-        let (bx0, bx1, by0, by1) = (
-            (ri0 as f64 - 0.5) * s,
-            (ri1 as f64 + 0.5) * s,
-            (rj0 as f64 - 0.5) * s,
-            (rj1 as f64 + 0.5) * s,
-        );
-        let nodes = read_nodes_csv(nodes_path)?;
-        let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
-        if off.len() != 2 {
-            return Err(Error::param(
-                "--node-offset-mm",
-                format!("needs 2 values x,y, got {}", off.len()),
-            ));
+    if let Some((pre, pre_comment, reduced_rows)) = &node_outputs {
+        write_preloads_csv(&out.join("preload.csv"), pre, pre_comment)?;
+        if let Some((rows, comment)) = reduced_rows {
+            write_preloads_csv(&out.join("preload_reduced.csv"), rows, comment)?;
         }
-        let placement = Placement {
-            offset_x_m: off[0] * 1e-3,
-            offset_y_m: off[1] * 1e-3,
-            rotation_rad: args.node_rotation_deg.to_radians(),
-            scale: args.node_scale,
-        };
-        let pressure_at = |x: f64, y: f64| -> Result<f64> {
-            if !map.contains(x, y) {
-                return Err(Error::Data(format!(
-                    "lies at ({:.3}, {:.3}) mm, outside the film map (0–{:.3} × 0–{:.3} mm): check the node placement",
-                    x * 1e3,
-                    y * 1e3,
-                    nx as f64 * s * 1e3,
-                    ny as f64 * s * 1e3
-                )));
-            }
-            if x < bx0 || x > bx1 || y < by0 || y > by1 {
-                return Err(Error::Data(format!(
-                    "lies at ({:.3}, {:.3}) mm, outside region {} ({:.3}–{:.3} × {:.3}–{:.3} mm), where the fit would extrapolate",
-                    x * 1e3, y * 1e3, region.id, bx0 * 1e3, bx1 * 1e3, by0 * 1e3, by1 * 1e3
-                )));
-            }
-            Ok(fit.eval(x, y))
-        };
-        let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)?;
-        write_preloads_csv(
-            &out.join("preload.csv"),
-            &pre,
-            &format!(
-                "asperity {} node preloads N0 = sigma_fit(x, y) * area from {} (region {}, order-{} fit)",
-                env!("CARGO_PKG_VERSION"),
-                args.image.display(),
-                region.id,
-                fit.order
-            ),
-        )?;
-        eprintln!(
-            "{} nodes on region {}: total area {:.4} mm², total load {:.6} N (scale {:.6}), {} negative fitted pressures set to 0",
-            psum.n_nodes,
-            region.id,
-            psum.total_area_m2 * 1e6,
-            psum.total_load_n,
-            psum.load_scale,
-            psum.clamped_negative
-        );
-        let mut reduced = serde_json::Value::Null;
-        if let Some(h) = args.reduce_mesh_size_mm {
-            let r = reduce(
-                &pre,
-                asperity::error::require_positive("--reduce-mesh-size-mm", h)? * 1e-3,
-            )?;
-            write_preloads_csv(
-                &out.join("preload_reduced.csv"),
-                &r.nodes,
-                &format!(
-                    "asperity {} reduced node preloads: {} of {} nodes kept on a {} mm triangular mesh; area and load are sums over each triangle",
-                    env!("CARGO_PKG_VERSION"),
-                    r.nodes.len(),
-                    r.n_fine,
-                    h
-                ),
-            )?;
-            eprintln!(
-                "reduced {} nodes to {} on a {h} mm mesh",
-                r.n_fine,
-                r.nodes.len()
-            );
-            reduced = serde_json::json!({
-                "mesh_size_m": r.mesh_size_m,
-                "n_kept": r.nodes.len(),
-                "total_area_m2": r.nodes.iter().map(|p| p.area_m2).sum::<f64>(),
-                "total_load_n": r.nodes.iter().map(|p| p.n0_n).sum::<f64>(),
-            });
-        }
-        node_summary = serde_json::json!({
-            "region": region.id,
-            "placement": placement,
-            "preloads": psum,
-            "reduction": reduced,
-        });
     }
 
     let params = serde_json::json!({
