@@ -24,7 +24,7 @@ fn sigma(u: f64, v: f64) -> f64 {
     let mut s = 0.0;
     for d in 0..=4 {
         for b in 0..=d {
-            s += TRUTH[k] * u.powi((d - b) as i32) * v.powi(b as i32);
+            s += TRUTH[k] * u.powi(d - b) * v.powi(b);
             k += 1;
         }
     }

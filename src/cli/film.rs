@@ -23,6 +23,13 @@ use std::path::{Path, PathBuf};
 /// pixel. Without --roi-rect-mm / --roi-polygon-mm, round patches are detected automatically.
 #[derive(clap::Args)]
 pub struct FilmArgs {
+    #[command(flatten)]
+    opts: Box<FilmOptions>,
+}
+
+/// The flags of `asperity film` (boxed in [`FilmArgs`] to keep the CLI's command enum small).
+#[derive(clap::Args)]
+pub struct FilmOptions {
     /// Film image (PNG, JPEG or TIFF; 8 or 16 bit).
     #[arg(long)]
     image: PathBuf,
@@ -141,6 +148,7 @@ fn plot_region(
 }
 
 pub fn run(args: FilmArgs) -> Result<()> {
+    let args = *args.opts;
     let pixel_size_m =
         asperity::error::require_positive("--pixel-size-mm", args.pixel_size_mm)? * 1e-3;
     let (reader, table_path) = match (&args.colour_table, &args.density_calibration) {

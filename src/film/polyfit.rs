@@ -212,6 +212,31 @@ fn householder_least_squares(a: &mut [f64], n: usize, m: usize, y: &mut [f64]) -
     Ok(c)
 }
 
+/// Write fitted coefficients of several regions as CSV
+/// (`region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa`).
+pub fn write_coefficients_csv(path: &std::path::Path, fits: &[(usize, &PolyFit2)]) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(w, "# sigma(x, y) = sum coefficient_Pa * u^a * v^b, u = (x - x_centre_m)/x_half_width_m, v = (y - y_centre_m)/y_half_width_m (film frame, m)").map_err(io)?;
+        writeln!(w, "region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa").map_err(io)?;
+        for (id, f) in fits {
+            for (&(a, b), c) in f.exponents.iter().zip(&f.coefficients_pa) {
+                writeln!(
+                    w,
+                    "{id},{},{:.12e},{:.12e},{:.12e},{:.12e},{a},{b},{c:.12e}",
+                    f.order,
+                    f.frame.x_centre_m,
+                    f.frame.y_centre_m,
+                    f.frame.x_half_width_m,
+                    f.frame.y_half_width_m
+                )
+                .map_err(io)?;
+            }
+        }
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -256,29 +281,4 @@ mod tests {
         let pts: Vec<_> = (0..50).map(|i| (i as f64, 0.0, 1.0)).collect();
         assert!(fit(&pts, 1, None).is_err());
     }
-}
-
-/// Write fitted coefficients of several regions as CSV
-/// (`region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa`).
-pub fn write_coefficients_csv(path: &std::path::Path, fits: &[(usize, &PolyFit2)]) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
-        let io = |e: std::io::Error| Error::io(path, e);
-        writeln!(w, "# sigma(x, y) = sum coefficient_Pa * u^a * v^b, u = (x - x_centre_m)/x_half_width_m, v = (y - y_centre_m)/y_half_width_m (film frame, m)").map_err(io)?;
-        writeln!(w, "region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa").map_err(io)?;
-        for (id, f) in fits {
-            for (&(a, b), c) in f.exponents.iter().zip(&f.coefficients_pa) {
-                writeln!(
-                    w,
-                    "{id},{},{:.12e},{:.12e},{:.12e},{:.12e},{a},{b},{c:.12e}",
-                    f.order,
-                    f.frame.x_centre_m,
-                    f.frame.y_centre_m,
-                    f.frame.x_half_width_m,
-                    f.frame.y_half_width_m
-                )
-                .map_err(io)?;
-            }
-        }
-        Ok(())
-    })
 }

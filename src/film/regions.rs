@@ -484,6 +484,82 @@ pub fn summarise(map: &FilmMap, region: &Region) -> Result<RegionSummary> {
     })
 }
 
+/// Write the per-pixel readings of `regions` as CSV (`region_id,x_m,y_m,pressure_Pa,class`),
+/// pressure empty unless in range.
+pub fn write_region_pixels_csv(path: &Path, map: &FilmMap, regions: &[Region]) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(w, "# film pressure map, pixels of the regions of interest; x_m, y_m in m (film frame, y up), pressure_Pa in Pa").map_err(io)?;
+        writeln!(w, "# class: in_range (pressure given), unstained, below_range, above_range, off_curve (rejected colour); pixel size {} m", map.pixel_size_m).map_err(io)?;
+        writeln!(w, "region_id,x_m,y_m,pressure_Pa,class").map_err(io)?;
+        for r in regions {
+            for &(i, j) in &r.pixels {
+                let (x, y) = map.position(i, j);
+                let p = map.pressure_pa[[i, j]];
+                let ps = if p.is_finite() {
+                    format!("{p:.6e}")
+                } else {
+                    String::new()
+                };
+                writeln!(
+                    w,
+                    "{},{x:.6e},{y:.6e},{ps},{}",
+                    r.id,
+                    map.class[[i, j]].name()
+                )
+                .map_err(io)?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Column header of the region summary CSV.
+pub const SUMMARY_COLUMNS: &str = "id,centre_x_m,centre_y_m,equivalent_diameter_m,area_m2,mean_pressure_Pa,max_pressure_Pa,in_range_load_N,n_pixels,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_order,fit_R2,fit_rms_residual_Pa";
+
+/// Write region summaries (with their fit quality, if any) as CSV.
+pub fn write_summary_csv(
+    path: &Path,
+    summaries: &[(RegionSummary, Option<&super::polyfit::PolyFit2>)],
+) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(w, "# film regions: centre in m (film frame, y up), area in m², pressures in Pa, load in N; mean/max over in-range pixels; counts in pixels").map_err(io)?;
+        writeln!(w, "{SUMMARY_COLUMNS}").map_err(io)?;
+        for (s, f) in summaries {
+            let c = s.counts;
+            let (fo, fr, fe) = match f {
+                Some(f) => (
+                    f.order.to_string(),
+                    format!("{:.9}", f.r_squared),
+                    format!("{:.6e}", f.rms_residual_pa),
+                ),
+                None => Default::default(),
+            };
+            writeln!(
+                w,
+                "{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{},{fo},{fr},{fe}",
+                s.id,
+                s.centre_x_m,
+                s.centre_y_m,
+                s.equivalent_diameter_m,
+                s.area_m2,
+                s.mean_pressure_pa,
+                s.max_pressure_pa,
+                s.in_range_load_n,
+                c.total(),
+                c.in_range,
+                c.unstained,
+                c.below_range,
+                c.above_range,
+                c.off_curve
+            )
+            .map_err(io)?;
+        }
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::colour::{ColourRow, ColourTable};
@@ -569,80 +645,4 @@ mod tests {
             r.pixels.len()
         );
     }
-}
-
-/// Write the per-pixel readings of `regions` as CSV (`region_id,x_m,y_m,pressure_Pa,class`),
-/// pressure empty unless in range.
-pub fn write_region_pixels_csv(path: &Path, map: &FilmMap, regions: &[Region]) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
-        let io = |e: std::io::Error| Error::io(path, e);
-        writeln!(w, "# film pressure map, pixels of the regions of interest; x_m, y_m in m (film frame, y up), pressure_Pa in Pa").map_err(io)?;
-        writeln!(w, "# class: in_range (pressure given), unstained, below_range, above_range, off_curve (rejected colour); pixel size {} m", map.pixel_size_m).map_err(io)?;
-        writeln!(w, "region_id,x_m,y_m,pressure_Pa,class").map_err(io)?;
-        for r in regions {
-            for &(i, j) in &r.pixels {
-                let (x, y) = map.position(i, j);
-                let p = map.pressure_pa[[i, j]];
-                let ps = if p.is_finite() {
-                    format!("{p:.6e}")
-                } else {
-                    String::new()
-                };
-                writeln!(
-                    w,
-                    "{},{x:.6e},{y:.6e},{ps},{}",
-                    r.id,
-                    map.class[[i, j]].name()
-                )
-                .map_err(io)?;
-            }
-        }
-        Ok(())
-    })
-}
-
-/// Column header of the region summary CSV.
-pub const SUMMARY_COLUMNS: &str = "id,centre_x_m,centre_y_m,equivalent_diameter_m,area_m2,mean_pressure_Pa,max_pressure_Pa,in_range_load_N,n_pixels,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_order,fit_R2,fit_rms_residual_Pa";
-
-/// Write region summaries (with their fit quality, if any) as CSV.
-pub fn write_summary_csv(
-    path: &Path,
-    summaries: &[(RegionSummary, Option<&super::polyfit::PolyFit2>)],
-) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
-        let io = |e: std::io::Error| Error::io(path, e);
-        writeln!(w, "# film regions: centre in m (film frame, y up), area in m², pressures in Pa, load in N; mean/max over in-range pixels; counts in pixels").map_err(io)?;
-        writeln!(w, "{SUMMARY_COLUMNS}").map_err(io)?;
-        for (s, f) in summaries {
-            let c = s.counts;
-            let (fo, fr, fe) = match f {
-                Some(f) => (
-                    f.order.to_string(),
-                    format!("{:.9}", f.r_squared),
-                    format!("{:.6e}", f.rms_residual_pa),
-                ),
-                None => Default::default(),
-            };
-            writeln!(
-                w,
-                "{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{},{fo},{fr},{fe}",
-                s.id,
-                s.centre_x_m,
-                s.centre_y_m,
-                s.equivalent_diameter_m,
-                s.area_m2,
-                s.mean_pressure_pa,
-                s.max_pressure_pa,
-                s.in_range_load_n,
-                c.total(),
-                c.in_range,
-                c.unstained,
-                c.below_range,
-                c.above_range,
-                c.off_curve
-            )
-            .map_err(io)?;
-        }
-        Ok(())
-    })
 }
