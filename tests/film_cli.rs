@@ -466,3 +466,46 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
     assert_fails(&o, &["bad_preload.csv"]);
     assert!(!st.root.join("e.csv").exists());
 }
+
+#[test]
+fn raw_grey_scan_with_density_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    // A grey disc of radius 3 mm (30 px at 0.1 mm) on white paper: luma 113 → optical density
+    // D = log10(255/113) = 0.35347.
+    let img = dir.path().join("scan.png");
+    let mut im = image::RgbImage::from_pixel(100, 100, image::Rgb([255, 255, 255]));
+    for (c, r, px) in im.enumerate_pixels_mut() {
+        if (c as f64 - 50.0).hypot(r as f64 - 50.0) <= 30.0 {
+            *px = image::Rgb([113, 113, 113]);
+        }
+    }
+    im.save(&img).unwrap();
+    let cal = dir.path().join("density.csv");
+    std::fs::write(
+        &cal,
+        "# optical density of luma -> MPa\ndensity,pressure_MPa\n0.1,1.0\n0.6,6.0\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&img),
+        "--density-calibration",
+        s(&cal),
+        "--pixel-size-mm",
+        "0.1",
+        "--fit-order",
+        "0",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let regions = read_rows(&out.join("regions.csv"));
+    assert_eq!(regions.len(), 1);
+    let d = (255.0f64 / 113.0).log10();
+    let want = 1e6 + (d - 0.1) / 0.5 * 5e6;
+    assert!((num(&regions[0], "mean_pressure_Pa") - want).abs() < 1e-6 * want);
+    // 2821 pixel centres within 30 px of the centre: the disc, no rim of paper.
+    assert_eq!(regions[0]["n_pixels"], "2821");
+}

@@ -406,8 +406,8 @@ pub fn optical_density(rgb: [f64; 3]) -> f64 {
 /// Calibration points optical density → pressure for raw scans, interpolated piecewise-linearly.
 ///
 /// File format: CSV with header `density,pressure_MPa` (or `density,pressure_Pa`), `#` comments;
-/// both columns strictly increasing. Densities below the first point are below range, above the
-/// last point above range. Density readings cannot tell pen marks from pressure colour: restrict
+/// both columns strictly increasing. Densities below the first point read as unstained (a raw
+/// scan cannot tell faint stain from paper), above the last point as above range. Density readings cannot tell pen marks from pressure colour: restrict
 /// the region of interest when a raw scan carries marks.
 #[derive(Debug, Clone)]
 pub struct DensityCalibration {
@@ -490,7 +490,8 @@ impl DensityCalibration {
         let d = optical_density(rgb);
         let (first, last) = (self.points[0], self.points[self.points.len() - 1]);
         if d < first.0 {
-            return PixelReading::of(PixelClass::BelowRange);
+            // A raw scan cannot tell faint stain from paper: below the first point is unstained.
+            return PixelReading::of(PixelClass::Unstained);
         }
         if d > last.0 {
             return PixelReading::of(PixelClass::AboveRange);
@@ -636,7 +637,7 @@ mod tests {
     #[test]
     fn density_calibration_interpolates_and_flags_range() {
         let d = DensityCalibration::new(vec![(0.1, 1e6), (0.5, 5e6)], "d").unwrap();
-        assert_eq!(d.read([255.0; 3]).class, PixelClass::BelowRange);
+        assert_eq!(d.read([255.0; 3]).class, PixelClass::Unstained);
         assert_eq!(d.read([0.0; 3]).class, PixelClass::AboveRange);
         let grey = 255.0 / 10f64.powf(0.3);
         let r = d.read([grey; 3]);
