@@ -4,6 +4,7 @@ use asperity::elements::{provenance_json, InputFile};
 use asperity::film::colour::{
     ColourTable, ColourToPressure, DensityCalibration, DEFAULT_MAX_COLOUR_DISTANCE,
 };
+use asperity::film::fitted_pressure_at;
 use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placement, Preload};
 use asperity::film::polyfit::{self, PolyFit2};
 use asperity::film::reduce::reduce;
@@ -275,19 +276,6 @@ pub fn run(args: FilmArgs) -> Result<()> {
         };
         let region = &regions[region_idx];
         let fit = fits[region_idx].as_ref().expect("every region is fitted");
-        let (ri0, ri1, rj0, rj1) = (
-            region.pixels.iter().map(|p| p.0).min().unwrap_or(0),
-            region.pixels.iter().map(|p| p.0).max().unwrap_or(0),
-            region.pixels.iter().map(|p| p.1).min().unwrap_or(0),
-            region.pixels.iter().map(|p| p.1).max().unwrap_or(0),
-        );
-        let s = pixel_size_m;
-        let (bx0, bx1, by0, by1) = (
-            (ri0 as f64 - 0.5) * s,
-            (ri1 as f64 + 0.5) * s,
-            (rj0 as f64 - 0.5) * s,
-            (rj1 as f64 + 0.5) * s,
-        );
         let nodes = read_nodes_csv(nodes_path)?;
         let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
         if off.len() != 2 {
@@ -302,24 +290,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
             rotation_rad: args.node_rotation_deg.to_radians(),
             scale: args.node_scale,
         };
-        let pressure_at = |x: f64, y: f64| -> Result<f64> {
-            if !map.contains(x, y) {
-                return Err(Error::Data(format!(
-                    "lies at ({:.3}, {:.3}) mm, outside the film map (0–{:.3} × 0–{:.3} mm): check the node placement",
-                    x * 1e3,
-                    y * 1e3,
-                    nx as f64 * s * 1e3,
-                    ny as f64 * s * 1e3
-                )));
-            }
-            if x < bx0 || x > bx1 || y < by0 || y > by1 {
-                return Err(Error::Data(format!(
-                    "lies at ({:.3}, {:.3}) mm, outside region {} ({:.3}–{:.3} × {:.3}–{:.3} mm), where the fit would extrapolate",
-                    x * 1e3, y * 1e3, region.id, bx0 * 1e3, bx1 * 1e3, by0 * 1e3, by1 * 1e3
-                )));
-            }
-            Ok(fit.eval(x, y))
-        };
+        let pressure_at = |x: f64, y: f64| fitted_pressure_at(&map, region, fit, x, y);
         let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)?;
         let pre_comment = format!(
             "asperity {} node preloads N0 = sigma_fit(x, y) * area from {} (region {}, order-{} fit)",

@@ -181,6 +181,23 @@ pub struct Region {
     pub pixels: Vec<(usize, usize)>,
 }
 
+impl Region {
+    /// Bounding box `[x0, x1, y0, y1]` (m) of the region's pixels, pixel edges included.
+    pub fn bounds_m(&self, map: &FilmMap) -> [f64; 4] {
+        let s = map.pixel_size_m;
+        let i0 = self.pixels.iter().map(|p| p.0).min().unwrap_or(0);
+        let i1 = self.pixels.iter().map(|p| p.0).max().unwrap_or(0);
+        let j0 = self.pixels.iter().map(|p| p.1).min().unwrap_or(0);
+        let j1 = self.pixels.iter().map(|p| p.1).max().unwrap_or(0);
+        [
+            (i0 as f64 - 0.5) * s,
+            (i1 as f64 + 0.5) * s,
+            (j0 as f64 - 0.5) * s,
+            (j1 as f64 + 0.5) * s,
+        ]
+    }
+}
+
 fn point_in_polygon(x: f64, y: f64, poly: &[(f64, f64)]) -> bool {
     let mut inside = false;
     let n = poly.len();
