@@ -509,3 +509,76 @@ fn raw_grey_scan_with_density_calibration() {
     // 2821 pixel centres within 30 px of the centre: the disc, no rim of paper.
     assert_eq!(regions[0]["n_pixels"], "2821");
 }
+
+#[test]
+fn polygon_roi_and_jpeg_input() {
+    let st = setup();
+    // An octagon enclosing the patch (radius 4 mm about (10, 10) mm) but not the pen stroke.
+    let poly: Vec<String> = (0..8)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::FRAC_PI_4;
+            format!("{},{}", 10.0 + 5.0 * a.cos(), 10.0 + 5.0 * a.sin())
+        })
+        .collect();
+    let out = st.root.join("poly");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--roi-polygon-mm",
+        &poly.join(";"),
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_rows(&out.join("regions.csv"));
+    assert_eq!(r.len(), 1);
+    // Every pixel centre within 4 mm of the centre is in range; the rest of the octagon is paper.
+    let inside = (0..N * N)
+        .filter(|k| {
+            let (c, rr) = (k % N, k / N);
+            let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - rr) as f64 * PIXEL_MM);
+            (x - CX).hypot(y - CY) <= R
+        })
+        .count();
+    assert_eq!(r[0]["n_in_range"], inside.to_string());
+    assert_eq!(
+        num(&r[0], "n_in_range") + num(&r[0], "n_unstained"),
+        num(&r[0], "n_pixels")
+    );
+
+    // The same film as a JPEG (quality 95): compression noise stays within the colour distance
+    // inside the patch; the patch is found with the same size and mean pressure within 1 %.
+    let jpg = st.root.join("film.jpg");
+    image::open(&st.image)
+        .unwrap()
+        .to_rgb8()
+        .save_with_format(&jpg, image::ImageFormat::Jpeg)
+        .unwrap();
+    let out_j = st.root.join("jpg");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&jpg),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--out-dir",
+        s(&out_j),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j = read_rows(&out_j.join("regions.csv"));
+    assert_eq!(j.len(), 1, "{j:?}");
+    let (dj, pj) = (
+        num(&j[0], "equivalent_diameter_m"),
+        num(&j[0], "mean_pressure_Pa"),
+    );
+    let pp = num(&r[0], "mean_pressure_Pa");
+    assert!((dj - 8e-3).abs() < 0.2e-3, "{dj}");
+    assert!((pj - pp).abs() < 0.01 * pp, "{pj} vs {pp}");
+}
