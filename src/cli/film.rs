@@ -408,10 +408,10 @@ pub fn run(args: FilmArgs) -> Result<()> {
         )?;
     }
 
-    println!("id,centre_x_mm,centre_y_mm,diameter_mm,area_mm2,mean_pressure_MPa,n_in_range,n_below_range,n_above_range,n_off_curve,fit_R2");
+    println!("id,centre_x_mm,centre_y_mm,diameter_mm,area_mm2,mean_pressure_MPa,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_R2");
     for (s, f) in &pairs {
         println!(
-            "{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{},{},{}",
+            "{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{},{},{},{}",
             s.id,
             s.centre_x_m * 1e3,
             s.centre_y_m * 1e3,
@@ -419,7 +419,8 @@ pub fn run(args: FilmArgs) -> Result<()> {
             s.area_m2 * 1e6,
             s.mean_pressure_pa / 1e6,
             s.counts.in_range,
-            s.counts.below_range + s.counts.unstained,
+            s.counts.unstained,
+            s.counts.below_range,
             s.counts.above_range,
             s.counts.off_curve,
             f.map(|f| format!("{:.4}", f.r_squared)).unwrap_or_default()

@@ -373,8 +373,9 @@ pub fn detect_patches(
         .iter()
         .map(|(id, pix)| fill_holes(pix, &label, *id))
         .collect();
-    // Number from the top of the image (largest y first), then left to right, in rows of patches
-    // whose centres differ in y by less than one minimum diameter.
+    // Reading order: rows of patches from the top of the image (largest y first), left to right
+    // within a row. A patch joins the current row when its centre lies less than the row's first
+    // patch's equivalent diameter below it.
     let centre = |p: &Vec<(usize, usize)>| {
         let n = p.len() as f64;
         (
@@ -382,12 +383,22 @@ pub fn detect_patches(
             p.iter().map(|q| q.1 as f64).sum::<f64>() / n,
         )
     };
-    let band = min_diameter_m / map.pixel_size_m;
-    patches.sort_by(|a, b| {
-        let (ca, cb) = (centre(a), centre(b));
-        let (ra, rb) = ((-ca.1 / band).round(), (-cb.1 / band).round());
-        ra.total_cmp(&rb).then(ca.0.total_cmp(&cb.0))
-    });
+    patches.sort_by(|a, b| centre(b).1.total_cmp(&centre(a).1));
+    let mut ordered: Vec<Vec<(usize, usize)>> = Vec::with_capacity(patches.len());
+    let mut row: Vec<Vec<(usize, usize)>> = Vec::new();
+    let mut row_top = (f64::NAN, 0.0);
+    for p in patches {
+        let c = centre(&p);
+        if row.is_empty() || row_top.0 - c.1 >= row_top.1 {
+            row.sort_by(|a, b| centre(a).0.total_cmp(&centre(b).0));
+            ordered.append(&mut row);
+            row_top = (c.1, (4.0 * p.len() as f64 / std::f64::consts::PI).sqrt());
+        }
+        row.push(p);
+    }
+    row.sort_by(|a, b| centre(a).0.total_cmp(&centre(b).0));
+    ordered.append(&mut row);
+    let patches = ordered;
     Ok(PatchDetection {
         patches: patches
             .into_iter()
