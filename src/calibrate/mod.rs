@@ -1,1 +1,5 @@
 //! Calibration of element parameters (kn, E0, k, Et versus pressure) from BEM hysteresis loops.
+
+pub mod table;
+
+pub use table::{CalibrationRow, CalibrationTable, Interpolated, RangeFlag};

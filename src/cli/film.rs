@@ -1,8 +1,462 @@
+//! `asperity film`: film image → pressure map, regions, polynomial fit, node preloads.
+
+use asperity::elements::{provenance_json, InputFile};
+use asperity::film::colour::{
+    ColourTable, ColourToPressure, DensityCalibration, DEFAULT_MAX_COLOUR_DISTANCE,
+};
+use asperity::film::fitted_pressure_at;
+use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placement, Preload};
+use asperity::film::polyfit::{self, PolyFit2};
+use asperity::film::reduce::reduce;
+use asperity::film::regions::{
+    detect_patches, roi_region, summarise, write_region_pixels_csv, write_summary_csv, FilmMap,
+    Region, Roi, DEFAULT_RIM_PIXELS,
+};
+use asperity::output::write_string_atomic;
+use asperity::plot::{heatmap, HeatMap};
 use asperity::{Error, Result};
+use ndarray::Array2;
+use std::path::{Path, PathBuf};
 
+/// Pressure-measurement film → pressure map (Pa), regions, order-n polynomial fit, preloads.
+///
+/// Film frame: x to the right, y upwards, metres, origin at the centre of the image's bottom-left
+/// pixel. Without --roi-rect-mm / --roi-polygon-mm, round patches are detected automatically.
 #[derive(clap::Args)]
-pub struct FilmArgs {}
+pub struct FilmArgs {
+    #[command(flatten)]
+    opts: Box<FilmOptions>,
+}
 
-pub fn run(_args: FilmArgs) -> Result<()> {
-    Err(Error::Data("`film` is not implemented yet".into()))
+/// The flags of `asperity film` (boxed in [`FilmArgs`] to keep the CLI's command enum small).
+#[derive(clap::Args)]
+pub struct FilmOptions {
+    /// Film image (PNG, JPEG or TIFF; 8 or 16 bit).
+    #[arg(long)]
+    image: PathBuf,
+    /// Pixel size in mm (square pixels).
+    #[arg(long)]
+    pixel_size_mm: f64,
+    /// Colour table CSV (pressure, R, G, B; vendor format in MPa).
+    #[arg(
+        long,
+        conflicts_with = "density_calibration",
+        required_unless_present = "density_calibration"
+    )]
+    colour_table: Option<PathBuf>,
+    /// Off-curve rejection distance in RGB units (0–255, Euclidean).
+    #[arg(long, default_value_t = DEFAULT_MAX_COLOUR_DISTANCE)]
+    max_colour_distance: f64,
+    /// Density calibration CSV (density,pressure_MPa) for raw scans, instead of a colour table.
+    #[arg(long)]
+    density_calibration: Option<PathBuf>,
+    /// Rectangular region of interest `x0,y0,x1,y1` in mm (film frame).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        conflicts_with = "roi_polygon_mm",
+        allow_hyphen_values = true
+    )]
+    roi_rect_mm: Option<Vec<f64>>,
+    /// Polygonal region of interest `x,y;x,y;...` in mm (film frame, at least 3 vertices).
+    #[arg(long, allow_hyphen_values = true)]
+    roi_polygon_mm: Option<String>,
+    /// Smallest equivalent diameter (mm) of an automatically detected patch.
+    #[arg(long, default_value_t = 2.0)]
+    min_patch_diameter_mm: f64,
+    /// Width (pixels) of the stained below-range rim joined to a detected patch.
+    #[arg(long, default_value_t = DEFAULT_RIM_PIXELS)]
+    rim_pixels: usize,
+    /// Order of the 2-D polynomial fitted to each region's in-range pressures.
+    #[arg(long, default_value_t = 4)]
+    fit_order: usize,
+    /// Contact nodes CSV (id,x_m,y_m[,area_m2]) to preload from the fitted pressure.
+    #[arg(long)]
+    nodes: Option<PathBuf>,
+    /// Region whose fit preloads the nodes (required when several regions exist).
+    #[arg(long)]
+    nodes_region: Option<usize>,
+    /// Node placement offset `x,y` in mm (mesh frame → film frame).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    node_offset_mm: Option<Vec<f64>>,
+    /// Node placement rotation in degrees (counter-clockwise).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    node_rotation_deg: f64,
+    /// Node placement scale (mesh length → film length).
+    #[arg(long, default_value_t = 1.0)]
+    node_scale: f64,
+    /// Rescale preloads so that they sum to this total normal load (N).
+    #[arg(long)]
+    total_load_n: Option<f64>,
+    /// Reduce the nodes on a coarse triangular mesh of this side (mm).
+    #[arg(long)]
+    reduce_mesh_size_mm: Option<f64>,
+    /// Output directory.
+    #[arg(long)]
+    out_dir: PathBuf,
+}
+
+fn parse_polygon(s: &str) -> Result<Vec<(f64, f64)>> {
+    s.split(';')
+        .filter(|v| !v.trim().is_empty())
+        .map(|v| {
+            let xy: Vec<&str> = v.split(',').map(str::trim).collect();
+            let num = |t: &str| {
+                t.parse::<f64>()
+                    .map_err(|_| Error::param("--roi-polygon-mm", format!("`{t}` is not a number")))
+            };
+            if xy.len() != 2 {
+                return Err(Error::param(
+                    "--roi-polygon-mm",
+                    format!("vertex `{v}` is not `x,y`"),
+                ));
+            }
+            Ok((num(xy[0])? * 1e-3, num(xy[1])? * 1e-3))
+        })
+        .collect()
+}
+
+fn plot_region(
+    path: &Path,
+    map: &FilmMap,
+    region: &Region,
+    value: impl Fn(usize, usize) -> f64,
+    title: &str,
+    label: &str,
+) -> Result<()> {
+    let i0 = region.pixels.iter().map(|p| p.0).min().unwrap_or(0);
+    let i1 = region.pixels.iter().map(|p| p.0).max().unwrap_or(0);
+    let j0 = region.pixels.iter().map(|p| p.1).min().unwrap_or(0);
+    let j1 = region.pixels.iter().map(|p| p.1).max().unwrap_or(0);
+    let mut f = Array2::from_elem((i1 - i0 + 1, j1 - j0 + 1), f64::NAN);
+    for &(i, j) in &region.pixels {
+        f[[i - i0, j - j0]] = value(i, j);
+    }
+    let s = map.pixel_size_m;
+    heatmap(
+        path,
+        &f,
+        s,
+        s,
+        &HeatMap {
+            title,
+            value_label: label,
+            value_scale: 1e-6,
+            length_scale: 1e3,
+            length_unit: "mm (from region corner)",
+        },
+    )
+}
+
+pub fn run(args: FilmArgs) -> Result<()> {
+    let args = *args.opts;
+    let pixel_size_m =
+        asperity::error::require_positive("--pixel-size-mm", args.pixel_size_mm)? * 1e-3;
+    let (reader, table_path) = match (&args.colour_table, &args.density_calibration) {
+        (Some(t), None) => (
+            ColourToPressure::Table(ColourTable::read_csv(t, args.max_colour_distance)?),
+            t.clone(),
+        ),
+        (None, Some(d)) => (
+            ColourToPressure::Density(DensityCalibration::read_csv(d)?),
+            d.clone(),
+        ),
+        _ => {
+            return Err(Error::param(
+                "--colour-table / --density-calibration",
+                "give exactly one",
+            ))
+        }
+    };
+    let map = FilmMap::read_image(&args.image, &reader, pixel_size_m)?;
+    let (nx, ny) = map.dim();
+    let (lo, hi) = reader.range_pa();
+    let all = map.class_counts();
+    eprintln!(
+        "{}: {nx} × {ny} px at {} mm; range {:.3}–{:.3} MPa; pixels in range {}, unstained {}, below range {}, above range {}, off-curve (rejected) {}",
+        args.image.display(),
+        args.pixel_size_mm,
+        lo / 1e6,
+        hi / 1e6,
+        all.in_range,
+        all.unstained,
+        all.below_range,
+        all.above_range,
+        all.off_curve
+    );
+
+    // Regions.
+    let (regions, discarded) = if let Some(r) = &args.roi_rect_mm {
+        if r.len() != 4 {
+            return Err(Error::param(
+                "--roi-rect-mm",
+                format!("needs 4 values x0,y0,x1,y1, got {}", r.len()),
+            ));
+        }
+        let roi = Roi::Rectangle {
+            x0: r[0] * 1e-3,
+            y0: r[1] * 1e-3,
+            x1: r[2] * 1e-3,
+            y1: r[3] * 1e-3,
+        };
+        (vec![roi_region(&map, &roi, 1)?], 0)
+    } else if let Some(p) = &args.roi_polygon_mm {
+        (
+            vec![roi_region(&map, &Roi::Polygon(parse_polygon(p)?), 1)?],
+            0,
+        )
+    } else {
+        let d = detect_patches(&map, args.min_patch_diameter_mm * 1e-3, args.rim_pixels)?;
+        if d.patches.is_empty() {
+            return Err(Error::Data(format!(
+                "{}: no pressure patch of at least {} mm found ({} smaller components discarded); check the colour table, --max-colour-distance or give a region of interest",
+                args.image.display(),
+                args.min_patch_diameter_mm,
+                d.discarded_small
+            )));
+        }
+        (d.patches, d.discarded_small)
+    };
+
+    // Fits and summaries.
+    let mut fits: Vec<Option<PolyFit2>> = Vec::new();
+    let mut summaries = Vec::new();
+    for r in &regions {
+        let s = summarise(&map, r)?;
+        let pts: Vec<(f64, f64, f64)> = r
+            .pixels
+            .iter()
+            .filter(|&&(i, j)| map.pressure_pa[[i, j]].is_finite())
+            .map(|&(i, j)| {
+                let (x, y) = map.position(i, j);
+                (x, y, map.pressure_pa[[i, j]])
+            })
+            .collect();
+        if pts.is_empty() {
+            return Err(Error::Data(format!(
+                "region {} holds no in-range pixel ({} pixels: {:?}): nothing to fit",
+                r.id,
+                r.pixels.len(),
+                s.counts
+            )));
+        }
+        let fit = polyfit::fit(&pts, args.fit_order, None)
+            .map_err(|e| Error::Data(format!("region {}: {e}", r.id)))?;
+        fits.push(Some(fit));
+        summaries.push(s);
+    }
+
+    // Nodes.
+    let mut inputs = vec![
+        InputFile::new("image", &args.image)?,
+        InputFile::new("colour_calibration", &table_path)?,
+    ];
+    let mut node_summary = serde_json::Value::Null;
+    type NodeOutputs = (Vec<Preload>, String, Option<(Vec<Preload>, String)>);
+    let mut node_outputs: Option<NodeOutputs> = None;
+    if let Some(nodes_path) = &args.nodes {
+        inputs.push(InputFile::new("nodes", nodes_path)?);
+        let region_idx = match args.nodes_region {
+            Some(id) => regions.iter().position(|r| r.id == id).ok_or_else(|| {
+                Error::param(
+                    "--nodes-region",
+                    format!("no region {id} (found {})", regions.len()),
+                )
+            })?,
+            None if regions.len() == 1 => 0,
+            None => {
+                return Err(Error::param(
+                    "--nodes-region",
+                    format!(
+                        "{} regions were found: name the one the nodes sit on",
+                        regions.len()
+                    ),
+                ))
+            }
+        };
+        let region = &regions[region_idx];
+        let fit = fits[region_idx].as_ref().expect("every region is fitted");
+        let nodes = read_nodes_csv(nodes_path)?;
+        let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
+        if off.len() != 2 {
+            return Err(Error::param(
+                "--node-offset-mm",
+                format!("needs 2 values x,y, got {}", off.len()),
+            ));
+        }
+        let placement = Placement {
+            offset_x_m: off[0] * 1e-3,
+            offset_y_m: off[1] * 1e-3,
+            rotation_rad: args.node_rotation_deg.to_radians(),
+            scale: args.node_scale,
+        };
+        let pressure_at = |x: f64, y: f64| fitted_pressure_at(&map, region, fit, x, y);
+        let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)?;
+        let pre_comment = format!(
+            "asperity {} node preloads N0 = sigma_fit(x, y) * area from {} (region {}, order-{} fit)",
+            env!("CARGO_PKG_VERSION"),
+            args.image.display(),
+            region.id,
+            fit.order
+        );
+        eprintln!(
+            "{} nodes on region {}: total area {:.4} mm², total load {:.6} N (scale {:.6}), {} negative fitted pressures set to 0",
+            psum.n_nodes,
+            region.id,
+            psum.total_area_m2 * 1e6,
+            psum.total_load_n,
+            psum.load_scale,
+            psum.clamped_negative
+        );
+        let mut reduced = serde_json::Value::Null;
+        let mut reduced_rows = None;
+        if let Some(h) = args.reduce_mesh_size_mm {
+            let r = reduce(
+                &pre,
+                asperity::error::require_positive("--reduce-mesh-size-mm", h)? * 1e-3,
+            )?;
+            let red_comment = format!(
+                "asperity {} reduced node preloads: {} of {} nodes kept on a {} mm triangular mesh; area and load are sums over each triangle",
+                env!("CARGO_PKG_VERSION"),
+                r.nodes.len(),
+                r.n_fine,
+                h
+            );
+            eprintln!(
+                "reduced {} nodes to {} on a {h} mm mesh",
+                r.n_fine,
+                r.nodes.len()
+            );
+            reduced_rows = Some((r.nodes.clone(), red_comment));
+            reduced = serde_json::json!({
+                "mesh_size_m": r.mesh_size_m,
+                "n_kept": r.nodes.len(),
+                "total_area_m2": r.nodes.iter().map(|p| p.area_m2).sum::<f64>(),
+                "total_load_n": r.nodes.iter().map(|p| p.n0_n).sum::<f64>(),
+            });
+        }
+        node_outputs = Some((pre, pre_comment, reduced_rows));
+        node_summary = serde_json::json!({
+            "region": region.id,
+            "placement": placement,
+            "preloads": psum,
+            "reduction": reduced,
+        });
+    }
+
+    // Every input is checked: write the outputs.
+    let out = &args.out_dir;
+    let pairs: Vec<_> = summaries
+        .iter()
+        .cloned()
+        .zip(fits.iter().map(|f| f.as_ref()))
+        .collect();
+    write_summary_csv(&out.join("regions.csv"), &pairs)?;
+    write_region_pixels_csv(&out.join("pressure_map.csv"), &map, &regions)?;
+    let npy = out.join("pressure_map_Pa.npy");
+    asperity::output::write_atomic(&npy, |w| {
+        use ndarray_npy::WriteNpyExt;
+        map.pressure_pa
+            .write_npy(w)
+            .map_err(|e| Error::Data(format!("{}: {e}", npy.display())))
+    })?;
+    heatmap(
+        &out.join("pressure_map.png"),
+        &map.pressure_pa,
+        pixel_size_m,
+        pixel_size_m,
+        &HeatMap {
+            title: "film pressure (in-range pixels)",
+            value_label: "pressure (MPa)",
+            value_scale: 1e-6,
+            length_scale: 1e3,
+            length_unit: "mm",
+        },
+    )?;
+    let fit_refs: Vec<(usize, &PolyFit2)> = regions
+        .iter()
+        .zip(&fits)
+        .filter_map(|(r, f)| f.as_ref().map(|f| (r.id, f)))
+        .collect();
+    polyfit::write_coefficients_csv(&out.join("fit_coefficients.csv"), &fit_refs)?;
+    for (r, f) in regions.iter().zip(&fits) {
+        let Some(f) = f else { continue };
+        plot_region(
+            &out.join(format!("region_{}_fitted.png", r.id)),
+            &map,
+            r,
+            |i, j| {
+                let (x, y) = map.position(i, j);
+                f.eval(x, y)
+            },
+            &format!(
+                "region {}: order-{} fit, R² = {:.3}",
+                r.id, f.order, f.r_squared
+            ),
+            "fitted pressure (MPa)",
+        )?;
+        plot_region(
+            &out.join(format!("region_{}_residual.png", r.id)),
+            &map,
+            r,
+            |i, j| {
+                let (x, y) = map.position(i, j);
+                map.pressure_pa[[i, j]] - f.eval(x, y)
+            },
+            &format!("region {}: measured − fitted", r.id),
+            "residual (MPa)",
+        )?;
+    }
+
+    println!("id,centre_x_mm,centre_y_mm,diameter_mm,area_mm2,mean_pressure_MPa,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_R2");
+    for (s, f) in &pairs {
+        println!(
+            "{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{},{},{},{}",
+            s.id,
+            s.centre_x_m * 1e3,
+            s.centre_y_m * 1e3,
+            s.equivalent_diameter_m * 1e3,
+            s.area_m2 * 1e6,
+            s.mean_pressure_pa / 1e6,
+            s.counts.in_range,
+            s.counts.unstained,
+            s.counts.below_range,
+            s.counts.above_range,
+            s.counts.off_curve,
+            f.map(|f| format!("{:.4}", f.r_squared)).unwrap_or_default()
+        );
+    }
+
+    if let Some((pre, pre_comment, reduced_rows)) = &node_outputs {
+        write_preloads_csv(&out.join("preload.csv"), pre, pre_comment)?;
+        if let Some((rows, comment)) = reduced_rows {
+            write_preloads_csv(&out.join("preload_reduced.csv"), rows, comment)?;
+        }
+    }
+
+    let params = serde_json::json!({
+        "pixel_size_m": pixel_size_m,
+        "max_colour_distance_rgb": args.max_colour_distance,
+        "calibrated_range_pa": [lo, hi],
+        "fit_order": args.fit_order,
+        "roi_rect_mm": args.roi_rect_mm,
+        "roi_polygon_mm": args.roi_polygon_mm,
+        "min_patch_diameter_mm": args.min_patch_diameter_mm,
+        "rim_pixels": args.rim_pixels,
+        "total_load_n": args.total_load_n,
+        "reduce_mesh_size_mm": args.reduce_mesh_size_mm,
+    });
+    let summary = serde_json::json!({
+        "image_pixels": all,
+        "discarded_small_components": discarded,
+        "regions": summaries,
+        "fits": fits,
+        "nodes": node_summary,
+    });
+    let json = provenance_json("film", &inputs, params, summary);
+    write_string_atomic(
+        &out.join("film.json"),
+        &serde_json::to_string_pretty(&json).map_err(|e| Error::Data(e.to_string()))?,
+    )?;
+    Ok(())
 }

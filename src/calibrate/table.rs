@@ -1,0 +1,512 @@
+//! Calibration table: Valanis element parameters per unit nominal area versus nominal pressure.
+//!
+//! # File format
+//!
+//! A CSV file with exactly these columns, in this order (units in the names, SI):
+//!
+//! ```text
+//! pressure_Pa,contact_area_ratio,kn_N_per_m3,E0_N_per_m3,k,mu,Et_N_per_m3,fit_R2,energy_per_cycle_J_per_m2
+//! ```
+//!
+//! one row per nominal pressure, pressures strictly increasing and positive. `kn` is the normal
+//! contact stiffness per unit area `dp/dδ` (N/m³), `E0`, `Et` the Valanis stiffnesses per unit area
+//! (N/m³), `k` the Valanis shape parameter, `mu` the friction coefficient, `fit_R2` the coefficient
+//! of determination of the Valanis fit against the BEM loop, `energy_per_cycle_J_per_m2` the
+//! energy the BEM loop dissipates per cycle per unit nominal area.
+//!
+//! # Interpolation
+//!
+//! [`CalibrationTable::interpolate`] interpolates every column with the monotone piecewise-cubic
+//! Hermite scheme of Fritsch & Carlson (1980, *SIAM J. Numer. Anal.* 17:238) in `ln p`: it passes
+//! through the rows, is C¹, and never overshoots: where a column is monotonic in the data it is
+//! monotonic in between, and it stays within the range of the two neighbouring rows.
+//!
+//! **Outside the table's range** the values are **clamped to the nearest end row** (no
+//! extrapolation: the element laws are not to be trusted where no BEM loop was computed) and the
+//! result is flagged ([`RangeFlag::Below`] / [`RangeFlag::Above`], `in_range = false`) so that the
+//! caller can count and report the nodes concerned. A non-positive or NaN pressure is treated as
+//! below the range.
+
+use crate::error::{Error, Result};
+use crate::output::write_atomic;
+use std::path::Path;
+
+/// The CSV header, exactly.
+pub const COLUMNS: [&str; 9] = [
+    "pressure_Pa",
+    "contact_area_ratio",
+    "kn_N_per_m3",
+    "E0_N_per_m3",
+    "k",
+    "mu",
+    "Et_N_per_m3",
+    "fit_R2",
+    "energy_per_cycle_J_per_m2",
+];
+
+/// One row of the calibration table (per unit nominal area, SI).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CalibrationRow {
+    /// Nominal (mean) contact pressure (Pa).
+    pub pressure_pa: f64,
+    /// Real over nominal contact area (–).
+    pub contact_area_ratio: f64,
+    /// Normal contact stiffness per unit area, dp/dδ (N/m³).
+    pub kn_n_per_m3: f64,
+    /// Valanis initial-loading stiffness per unit area (N/m³).
+    pub e0_n_per_m3: f64,
+    /// Valanis shape parameter, 0 ≤ k < 1 (–).
+    pub k: f64,
+    /// Friction coefficient (–).
+    pub mu: f64,
+    /// Valanis residual stiffness per unit area (N/m³).
+    pub et_n_per_m3: f64,
+    /// Coefficient of determination of the fit (–).
+    pub fit_r2: f64,
+    /// Energy dissipated per cycle by the BEM loop, per unit nominal area (J/m²).
+    pub energy_per_cycle_j_per_m2: f64,
+}
+
+impl CalibrationRow {
+    fn values(&self) -> [f64; 9] {
+        [
+            self.pressure_pa,
+            self.contact_area_ratio,
+            self.kn_n_per_m3,
+            self.e0_n_per_m3,
+            self.k,
+            self.mu,
+            self.et_n_per_m3,
+            self.fit_r2,
+            self.energy_per_cycle_j_per_m2,
+        ]
+    }
+
+    fn from_values(v: [f64; 9]) -> Self {
+        Self {
+            pressure_pa: v[0],
+            contact_area_ratio: v[1],
+            kn_n_per_m3: v[2],
+            e0_n_per_m3: v[3],
+            k: v[4],
+            mu: v[5],
+            et_n_per_m3: v[6],
+            fit_r2: v[7],
+            energy_per_cycle_j_per_m2: v[8],
+        }
+    }
+
+    /// Physical admissibility of one row; the message names the offending column.
+    fn check(&self) -> std::result::Result<(), String> {
+        for (name, v) in COLUMNS.iter().zip(self.values()) {
+            if !v.is_finite() {
+                return Err(format!("`{name}` is not a finite number ({v})"));
+            }
+        }
+        let positive = [
+            ("pressure_Pa", self.pressure_pa),
+            ("kn_N_per_m3", self.kn_n_per_m3),
+            ("E0_N_per_m3", self.e0_n_per_m3),
+            ("mu", self.mu),
+        ];
+        for (name, v) in positive {
+            if v <= 0.0 {
+                return Err(format!("`{name}` must be > 0, got {v}"));
+            }
+        }
+        if !(0.0..1.0).contains(&self.k) {
+            return Err(format!("`k` must satisfy 0 <= k < 1, got {}", self.k));
+        }
+        if !(0.0..=1.0).contains(&self.contact_area_ratio) {
+            return Err(format!(
+                "`contact_area_ratio` must be in [0, 1], got {}",
+                self.contact_area_ratio
+            ));
+        }
+        if self.et_n_per_m3 < 0.0 || self.et_n_per_m3 >= self.e0_n_per_m3 {
+            return Err(format!(
+                "`Et_N_per_m3` must satisfy 0 <= Et < E0 = {}, got {}",
+                self.e0_n_per_m3, self.et_n_per_m3
+            ));
+        }
+        if self.energy_per_cycle_j_per_m2 < 0.0 {
+            return Err(format!(
+                "`energy_per_cycle_J_per_m2` must be >= 0, got {}",
+                self.energy_per_cycle_j_per_m2
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Where a queried pressure lies relative to the table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum RangeFlag {
+    /// Below the first row (or non-positive / NaN): values of the first row.
+    Below,
+    /// Within `[p_first, p_last]`: interpolated.
+    Within,
+    /// Above the last row: values of the last row.
+    Above,
+}
+
+/// Element parameters at one pressure, interpolated from a [`CalibrationTable`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interpolated {
+    /// The queried pressure (Pa).
+    pub pressure_pa: f64,
+    /// Real over nominal contact area (–).
+    pub contact_area_ratio: f64,
+    /// Normal stiffness per unit area (N/m³).
+    pub kn_n_per_m3: f64,
+    /// Valanis E0 per unit area (N/m³).
+    pub e0_n_per_m3: f64,
+    /// Valanis k (–).
+    pub k: f64,
+    /// Friction coefficient (–).
+    pub mu: f64,
+    /// Valanis Et per unit area (N/m³).
+    pub et_n_per_m3: f64,
+    /// True when the pressure lies within the table's range (values interpolated, not clamped).
+    pub in_range: bool,
+    /// Which side of the table the pressure fell on.
+    pub range: RangeFlag,
+}
+
+/// The calibration table: rows sorted by strictly increasing pressure.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CalibrationTable {
+    pub rows: Vec<CalibrationRow>,
+}
+
+impl CalibrationTable {
+    /// Build from rows, checking each row and the pressure ordering.
+    pub fn new(rows: Vec<CalibrationRow>) -> Result<Self> {
+        let table = Self { rows };
+        table.validate()?;
+        Ok(table)
+    }
+
+    /// Check every row (finite, physical) and that pressures strictly increase.
+    pub fn validate(&self) -> Result<()> {
+        if self.rows.is_empty() {
+            return Err(Error::Data("calibration table has no rows".into()));
+        }
+        for (i, r) in self.rows.iter().enumerate() {
+            r.check()
+                .map_err(|m| Error::param(format!("rows[{i}]"), m))?;
+            if i > 0 && r.pressure_pa <= self.rows[i - 1].pressure_pa {
+                return Err(Error::param(
+                    format!("rows[{i}].pressure_Pa"),
+                    "pressures must be strictly increasing",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Read a table written by [`write_csv`](Self::write_csv) (or by hand). Errors name the file
+    /// and the 1-based line: wrong header, wrong field count, unparsable number, unphysical
+    /// value, pressures not strictly increasing, no rows.
+    pub fn read_csv(path: &Path) -> Result<Self> {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let mut rdr = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .flexible(true)
+            .from_reader(file);
+        let headers = rdr
+            .headers()
+            .map_err(|e| Error::parse(path, 1, format!("cannot read header: {e}")))?
+            .clone();
+        let got: Vec<&str> = headers.iter().collect();
+        if got != COLUMNS {
+            return Err(Error::parse(
+                path,
+                1,
+                format!(
+                    "header must be `{}`, got `{}`",
+                    COLUMNS.join(","),
+                    got.join(",")
+                ),
+            ));
+        }
+        let mut rows: Vec<CalibrationRow> = Vec::new();
+        for rec in rdr.records() {
+            let rec = rec.map_err(|e| {
+                let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+                Error::parse(path, line, e.to_string())
+            })?;
+            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+            if rec.len() == 1 && rec.get(0) == Some("") {
+                continue; // blank line
+            }
+            if rec.len() != COLUMNS.len() {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("expected {} fields, found {}", COLUMNS.len(), rec.len()),
+                ));
+            }
+            let mut v = [0.0; 9];
+            for (j, field) in rec.iter().enumerate() {
+                v[j] = field.parse::<f64>().map_err(|_| {
+                    Error::parse(
+                        path,
+                        line,
+                        format!("column `{}`: `{field}` is not a number", COLUMNS[j]),
+                    )
+                })?;
+            }
+            let row = CalibrationRow::from_values(v);
+            row.check().map_err(|m| Error::parse(path, line, m))?;
+            if let Some(prev) = rows.last() {
+                if row.pressure_pa <= prev.pressure_pa {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!(
+                            "`pressure_Pa` must increase strictly: {} after {}",
+                            row.pressure_pa, prev.pressure_pa
+                        ),
+                    ));
+                }
+            }
+            rows.push(row);
+        }
+        if rows.is_empty() {
+            return Err(Error::parse(path, 0, "calibration table has no data rows"));
+        }
+        Ok(Self { rows })
+    }
+
+    /// Write the table atomically (complete file or none).
+    pub fn write_csv(&self, path: &Path) -> Result<()> {
+        self.validate()?;
+        write_atomic(path, |w| {
+            let mut wtr = csv::Writer::from_writer(w);
+            let io = |e: csv::Error| Error::Data(format!("{}: {e}", path.display()));
+            wtr.write_record(COLUMNS).map_err(io)?;
+            for r in &self.rows {
+                wtr.write_record(r.values().iter().map(|v| format!("{v}")))
+                    .map_err(io)?;
+            }
+            wtr.flush().map_err(|e| Error::io(path, e))?;
+            Ok(())
+        })
+    }
+
+    /// Smallest and largest tabulated pressure (Pa).
+    pub fn pressure_range(&self) -> (f64, f64) {
+        (
+            self.rows.first().map_or(f64::NAN, |r| r.pressure_pa),
+            self.rows.last().map_or(f64::NAN, |r| r.pressure_pa),
+        )
+    }
+
+    /// Parameters at `pressure_pa`: monotone cubic (Fritsch–Carlson) in `ln p` within the range,
+    /// clamped to the end row and flagged outside it (see the module documentation).
+    pub fn interpolate(&self, pressure_pa: f64) -> Interpolated {
+        let rows = &self.rows;
+        assert!(
+            !rows.is_empty(),
+            "interpolate on an empty calibration table"
+        );
+        let (p_lo, p_hi) = self.pressure_range();
+        let make = |r: &CalibrationRow, range: RangeFlag| Interpolated {
+            pressure_pa,
+            contact_area_ratio: r.contact_area_ratio,
+            kn_n_per_m3: r.kn_n_per_m3,
+            e0_n_per_m3: r.e0_n_per_m3,
+            k: r.k,
+            mu: r.mu,
+            et_n_per_m3: r.et_n_per_m3,
+            in_range: range == RangeFlag::Within,
+            range,
+        };
+        if pressure_pa.is_nan() || pressure_pa < p_lo {
+            // Also NaN and non-positive pressures.
+            return make(&rows[0], RangeFlag::Below);
+        }
+        if pressure_pa > p_hi {
+            return make(&rows[rows.len() - 1], RangeFlag::Above);
+        }
+        if rows.len() == 1 {
+            return make(&rows[0], RangeFlag::Within);
+        }
+        let x: Vec<f64> = rows.iter().map(|r| r.pressure_pa.ln()).collect();
+        let xq = pressure_pa.ln();
+        let column = |f: fn(&CalibrationRow) -> f64| {
+            let y: Vec<f64> = rows.iter().map(f).collect();
+            pchip(&x, &y, xq)
+        };
+        Interpolated {
+            pressure_pa,
+            contact_area_ratio: column(|r| r.contact_area_ratio),
+            kn_n_per_m3: column(|r| r.kn_n_per_m3),
+            e0_n_per_m3: column(|r| r.e0_n_per_m3),
+            k: column(|r| r.k),
+            mu: column(|r| r.mu),
+            et_n_per_m3: column(|r| r.et_n_per_m3),
+            in_range: true,
+            range: RangeFlag::Within,
+        }
+    }
+}
+
+/// Monotone piecewise-cubic Hermite interpolation (Fritsch & Carlson 1980), with the end slopes
+/// of Moler's `pchip` (one-sided three-point formula, limited). `x` strictly increasing,
+/// `x[0] ≤ xq ≤ x[n−1]`, `n ≥ 2`.
+pub fn pchip(x: &[f64], y: &[f64], xq: f64) -> f64 {
+    let n = x.len();
+    debug_assert!(n >= 2 && y.len() == n);
+    let h: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+    let delta: Vec<f64> = (0..n - 1).map(|i| (y[i + 1] - y[i]) / h[i]).collect();
+    let mut d = vec![0.0; n];
+    if n == 2 {
+        d[0] = delta[0];
+        d[1] = delta[0];
+    } else {
+        for i in 1..n - 1 {
+            if delta[i - 1] * delta[i] > 0.0 {
+                // Weighted harmonic mean (Fritsch–Butland form used by Fritsch–Carlson/pchip).
+                let w1 = 2.0 * h[i] + h[i - 1];
+                let w2 = h[i] + 2.0 * h[i - 1];
+                d[i] = (w1 + w2) / (w1 / delta[i - 1] + w2 / delta[i]);
+            }
+        }
+        let end = |h0: f64, h1: f64, d0: f64, d1: f64| {
+            let s = ((2.0 * h0 + h1) * d0 - h0 * d1) / (h0 + h1);
+            if s.signum() != d0.signum() {
+                0.0
+            } else if d0.signum() != d1.signum() && s.abs() > 3.0 * d0.abs() {
+                3.0 * d0
+            } else {
+                s
+            }
+        };
+        d[0] = end(h[0], h[1], delta[0], delta[1]);
+        d[n - 1] = end(h[n - 2], h[n - 3], delta[n - 2], delta[n - 3]);
+    }
+    // Locate the interval.
+    let i = match x.iter().rposition(|&xi| xi <= xq) {
+        Some(i) if i >= n - 1 => n - 2,
+        Some(i) => i,
+        None => 0,
+    };
+    let t = (xq - x[i]) / h[i];
+    let (h00, h10, h01, h11) = (
+        (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t),
+        t * (1.0 - t) * (1.0 - t),
+        t * t * (3.0 - 2.0 * t),
+        t * t * (t - 1.0),
+    );
+    h00 * y[i] + h10 * h[i] * d[i] + h01 * y[i + 1] + h11 * h[i] * d[i + 1]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(p: f64, kn: f64, e0: f64, k: f64) -> CalibrationRow {
+        CalibrationRow {
+            pressure_pa: p,
+            contact_area_ratio: 0.01,
+            kn_n_per_m3: kn,
+            e0_n_per_m3: e0,
+            k,
+            mu: 0.6,
+            et_n_per_m3: 0.0,
+            fit_r2: 0.99,
+            energy_per_cycle_j_per_m2: 1e-3,
+        }
+    }
+
+    fn table() -> CalibrationTable {
+        CalibrationTable::new(vec![
+            row(1e5, 1e12, 1e12, 0.2),
+            row(1e6, 5e12, 3e12, 0.5),
+            row(2e6, 8e12, 5e12, 0.4),
+            row(1e7, 3e13, 1e13, 0.45),
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn passes_through_rows_and_is_monotone_between() {
+        let t = table();
+        for r in &t.rows {
+            let i = t.interpolate(r.pressure_pa);
+            assert!(i.in_range);
+            assert!((i.kn_n_per_m3 - r.kn_n_per_m3).abs() < 1e-6 * r.kn_n_per_m3);
+            assert!((i.k - r.k).abs() < 1e-12);
+        }
+        let mut prev = 0.0;
+        for j in 0..=400 {
+            let p = 1e5 * 100f64.powf(j as f64 / 400.0);
+            let i = t.interpolate(p);
+            assert!(i.kn_n_per_m3 >= prev, "kn not monotone at {p}");
+            prev = i.kn_n_per_m3;
+            // No overshoot in the non-monotone k column: stays within neighbours' range.
+            assert!(i.k >= 0.2 - 1e-12 && i.k <= 0.5 + 1e-12);
+        }
+    }
+
+    #[test]
+    fn linear_in_log_p_data_is_reproduced() {
+        let x = [0.0, 1.0, 3.0, 4.0];
+        let y = [1.0, 3.0, 7.0, 9.0];
+        for xq in [0.5, 2.0, 3.7] {
+            assert!((pchip(&x, &y, xq) - (1.0 + 2.0 * xq)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn outside_range_is_clamped_and_flagged() {
+        let t = table();
+        let lo = t.interpolate(1e3);
+        assert_eq!(lo.range, RangeFlag::Below);
+        assert!(!lo.in_range);
+        assert_eq!(lo.kn_n_per_m3, 1e12);
+        let hi = t.interpolate(1e9);
+        assert_eq!(hi.range, RangeFlag::Above);
+        assert_eq!(hi.e0_n_per_m3, 1e13);
+        assert_eq!(t.interpolate(0.0).range, RangeFlag::Below);
+        assert_eq!(t.interpolate(f64::NAN).range, RangeFlag::Below);
+    }
+
+    #[test]
+    fn csv_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        let t = table();
+        t.write_csv(&p).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.starts_with(&COLUMNS.join(",")));
+        assert_eq!(CalibrationTable::read_csv(&p).unwrap(), t);
+    }
+
+    #[test]
+    fn malformed_csv_errors_name_file_and_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.csv");
+        let header = COLUMNS.join(",");
+        let cases = [
+            (format!("{header}\n1e5,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3\n1e6,0.1,abc,1e12,0.2,0.6,0,0.99,1e-3\n"), ":3", "kn_N_per_m3"),
+            (format!("{header}\n1e5,0.1,1e12,1e12,1.2,0.6,0,0.99,1e-3\n"), ":2", "`k`"),
+            (format!("{header}\n1e6,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3\n1e5,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3\n"), ":3", "increase"),
+            (format!("{header}\n1e5,0.1,1e12\n"), ":2", "fields"),
+            ("pressure,kn\n1,2\n".to_string(), ":1", "header"),
+            (format!("{header}\n"), "bad.csv", "no data"),
+        ];
+        for (text, loc, what) in cases {
+            std::fs::write(&p, text).unwrap();
+            let msg = CalibrationTable::read_csv(&p).unwrap_err().to_string();
+            assert!(
+                msg.contains("bad.csv") && msg.contains(loc) && msg.contains(what),
+                "{msg}"
+            );
+        }
+        assert!(CalibrationTable::read_csv(&dir.path().join("missing.csv")).is_err());
+    }
+}

@@ -1,0 +1,662 @@
+//! Valanis microslip element with a time-varying normal load.
+//!
+//! # Constitutive equation
+//!
+//! The endochronic (Valanis) friction element in the form used for 3-D microslip contact elements
+//! in harmonic-balance codes (Valanis 1971; Gaul & Lenz 1997, *Acta Mechanica* 125; with the
+//! normal-load dependent λ of the 3-D contact-element literature):
+//!
+//! ```text
+//! dF/dt = E0·q̇ · [1 + (λ/E0)·s·(Et·q − F)] / [1 + k·(λ/E0)·s·(Et·q − F)],   s = sign(q̇)
+//! λ     = E0 / (μ·Fz(t)·(1 − k·Et/E0)),                                    0 ≤ k < 1, 0 ≤ Et < E0
+//! Fz(t) = max(0, N0 + kn·uz(t))                                            (zero on separation)
+//! ```
+//!
+//! With the abbreviation `x = (λ/E0)·s·(Et·q − F)` the force rate along the path is
+//! `dF/dq = E0·(1 + x)/(1 + k·x)` ([`force_slope`]).
+//!
+//! * `E0` is the **initial-loading slope** (`x = 0` on a virgin element).
+//! * After a reversal from gross slip (`x = +1` for `Et = 0`) the **reload slope is 2E0/(1+k)**.
+//! * Under sustained sliding the force approaches the asymptote `F = Et·q ± μ·Fz·(1 − Et/E0)`
+//!   (`x → x∞ = −(1 − Et/E0)/(1 − k·Et/E0)`), i.e. the Coulomb limit `±μFz` for `Et = 0`.
+//!
+//! # Units
+//!
+//! The mathematics is the same in two systems of units; pick one and keep it:
+//!
+//! | quantity | per unit nominal area (calibration tables) | per element (dynamic codes) |
+//! |---|---|---|
+//! | `q`, `uz` | m | m |
+//! | `F`, `Fz`, `N0` | Pa (traction, pressure) | N |
+//! | `E0`, `Et`, `kn` | N/m³ (Pa/m) | N/m |
+//! | `k`, `μ` | – | – |
+//!
+//! Sign convention: `uz > 0` closes the contact (increases the normal load); `Fz ≤ 0` is
+//! separation.
+//!
+//! # Policies (documented, shared by both integrators)
+//!
+//! * **Falling normal load.** When `Fz` decreases the admissible force shrinks. The force is
+//!   projected onto the current limit `|F − Et·(q − q_ref)| ≤ μ·Fz·(1 − Et/E0)` (a return map, as
+//!   for a Coulomb slider). With constant `Fz` the projection never acts.
+//! * **Separation** (`Fz ≤ 0`): `F = 0`, and the element forgets its history. At re-contact (the
+//!   point where the linearly interpolated `Fz` crosses zero) it starts as a virgin element with
+//!   `q_ref` = the displacement at re-contact, so that the `Et` spring is unstretched there.
+//!   Initially `q_ref = q[0]`.
+//!
+//! # Integrators
+//!
+//! * [`implicit_euler_step`]: backward Euler on each input increment, as dynamic codes use. The
+//!   scalar implicit equation is a quadratic in `x` and is solved in closed form (no iteration).
+//! * [`reference_step`]: adaptive Dormand–Prince 5(4) along each increment (displacement and normal
+//!   load interpolated linearly), tolerance 1e-10 of the slip force: the accurate reference.
+//! * [`closed_form_branch`]: exact solution on a monotonic branch at constant `Fz` (the separable
+//!   ODE integrated analytically), used to validate the other two.
+//!
+//! Two in-plane directions are two uncoupled elements ([`integrate_in_plane`]).
+
+use crate::error::{Error, Result};
+
+/// Parameters of a Valanis element (see the module documentation for units).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ValanisParams {
+    /// Initial-loading tangential stiffness `E0` (N/m³ per area, or N/m per element).
+    pub e0: f64,
+    /// Shape parameter `k`, `0 ≤ k < 1`: the reload slope after reversal is `2E0/(1+k)`.
+    pub k: f64,
+    /// Residual (post-slip) stiffness `Et`, `0 ≤ Et < E0`, same unit as `E0`.
+    pub et: f64,
+    /// Friction coefficient `μ > 0`.
+    pub mu: f64,
+}
+
+impl ValanisParams {
+    /// Build and validate.
+    pub fn new(e0: f64, k: f64, et: f64, mu: f64) -> Result<Self> {
+        let p = Self { e0, k, et, mu };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Check `E0 > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, `μ > 0`, all finite.
+    pub fn validate(&self) -> Result<()> {
+        crate::error::require_positive("e0", self.e0)?;
+        crate::error::require_positive("mu", self.mu)?;
+        if !(self.k.is_finite() && (0.0..1.0).contains(&self.k)) {
+            return Err(Error::param(
+                "k",
+                format!("must satisfy 0 <= k < 1, got {}", self.k),
+            ));
+        }
+        if !(self.et.is_finite() && self.et >= 0.0 && self.et < self.e0) {
+            return Err(Error::param(
+                "et",
+                format!("must satisfy 0 <= Et < E0 = {}, got {}", self.e0, self.et),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `λ = E0 / (μ·Fz·(1 − k·Et/E0))` (infinite at separation).
+    pub fn lambda(&self, fz: f64) -> f64 {
+        self.e0 / (self.mu * fz.max(0.0) * (1.0 - self.k * self.et / self.e0))
+    }
+
+    /// Half-width of the sliding asymptote band: `|F − Et·q| → μ·Fz·(1 − Et/E0)`.
+    pub fn slip_limit(&self, fz: f64) -> f64 {
+        self.mu * fz.max(0.0) * (1.0 - self.et / self.e0)
+    }
+
+    /// `x∞ = −(1 − Et/E0)/(1 − k·Et/E0)`: the value of `x` on the sliding asymptote.
+    pub fn x_asymptote(&self) -> f64 {
+        let a = self.et / self.e0;
+        -(1.0 - a) / (1.0 - self.k * a)
+    }
+
+    /// Slope of the force right after a reversal from gross slip, `Et = 0`: `2E0/(1+k)`.
+    /// (For `Et > 0` the general value is [`force_slope`] at `x = −x∞`.)
+    pub fn reload_slope(&self) -> f64 {
+        2.0 * self.e0 / (1.0 + self.k)
+    }
+}
+
+/// `dF/dq = E0·(1 + x)/(1 + k·x)`, the Valanis force slope as a function of
+/// `x = (λ/E0)·s·(Et·q − F)`. Valid for `1 + k·x > 0`.
+pub fn force_slope(p: &ValanisParams, x: f64) -> f64 {
+    p.e0 * (1.0 + x) / (1.0 + p.k * x)
+}
+
+/// Normal load `Fz = max(0, N0 + kn·uz)` (zero on separation; `uz > 0` closes the contact).
+pub fn normal_load(n0: f64, kn: f64, uz: f64) -> f64 {
+    (n0 + kn * uz).max(0.0)
+}
+
+/// [`normal_load`] for a whole history of normal displacements.
+pub fn normal_load_history(n0: f64, kn: f64, uz: &[f64]) -> Vec<f64> {
+    uz.iter().map(|&u| normal_load(n0, kn, u)).collect()
+}
+
+/// State of one element after a step: everything the next step needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ValanisState {
+    /// Tangential force `F` (Pa or N).
+    pub force: f64,
+    /// Tangential displacement `q` at which `force` holds (m).
+    pub q: f64,
+    /// Normal load `Fz` at this point as given (Pa or N; `≤ 0` means separated).
+    pub fz: f64,
+    /// Displacement at the last (re-)contact: the `Et` term uses `q − q_ref` (m).
+    pub q_ref: f64,
+}
+
+impl ValanisState {
+    /// A virgin element at displacement `q` under normal load `fz`.
+    pub fn virgin(q: f64, fz: f64) -> Self {
+        Self {
+            force: 0.0,
+            q,
+            fz,
+            q_ref: q,
+        }
+    }
+}
+
+/// Project `force` onto the admissible band `|F − Et·(q − q_ref)| ≤ μ·Fz·(1 − Et/E0)`.
+fn project(p: &ValanisParams, force: f64, q: f64, q_ref: f64, fz: f64) -> f64 {
+    let centre = p.et * (q - q_ref);
+    let half = p.slip_limit(fz);
+    force.clamp(centre - half, centre + half)
+}
+
+/// Handle separation and re-contact inside the increment `state → (q1, fz1)`. Returns `Ok` with
+/// the state from which the smooth update must start (moved to the re-contact point if contact
+/// begins inside the increment), or `Err` with the final state when the increment ends separated.
+fn contact_transition(
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> std::result::Result<ValanisState, ValanisState> {
+    if fz1 <= 0.0 {
+        // Ends separated: no force, history forgotten.
+        return Err(ValanisState {
+            force: 0.0,
+            q: q1,
+            fz: fz1,
+            q_ref: q1,
+        });
+    }
+    if state.fz <= 0.0 {
+        // Re-contact where the linearly interpolated load crosses zero: θ* = fz0/(fz0 − fz1).
+        let theta = state.fz / (state.fz - fz1);
+        let q_contact = state.q + theta * (q1 - state.q);
+        return Ok(ValanisState::virgin(q_contact, 0.0));
+    }
+    Ok(*state)
+}
+
+/// One backward-Euler increment of the Valanis element from `state` to displacement `q1` under
+/// normal load `fz1`.
+///
+/// Backward Euler: `F1 = F0 + Δq·E0·(1 + x1)/(1 + k·x1)`, `x1 = g·(Et·(q1 − q_ref) − F1)`,
+/// `g = s·λ(Fz1)/E0`. Substituting `F1 = Et·(q1 − q_ref) − x1/g` gives the quadratic
+/// `k·x² + (1 − A·k + B)·x + (B − A) = 0` with `A = g·(Et·(q1 − q_ref) − F0)` and
+/// `B = λ1·|Δq| ≥ 0`; its larger root is the unique one with `1 + k·x > 0` (the discriminant
+/// exceeds `(1 − B + A·k)²` by `4B(1 − k)`), evaluated in the cancellation-free form.
+pub fn implicit_euler_step(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> ValanisState {
+    let start = match contact_transition(state, q1, fz1) {
+        Ok(s) => s,
+        Err(separated) => return separated,
+    };
+    let fz1 = fz1.max(0.0);
+    let dq = q1 - start.q;
+    let q_ref = start.q_ref;
+    let mut force = start.force;
+    if dq != 0.0 {
+        let lam = p.lambda(fz1);
+        let s = dq.signum();
+        let g = s * lam / p.e0;
+        let a_coef = g * (p.et * (q1 - q_ref) - start.force);
+        let b_coef = lam * dq.abs();
+        let x = if p.k == 0.0 {
+            (a_coef - b_coef) / (1.0 + b_coef)
+        } else {
+            let b = 1.0 - a_coef * p.k + b_coef;
+            let c = b_coef - a_coef;
+            let disc = (b * b - 4.0 * p.k * c).max(0.0).sqrt();
+            if b > 0.0 {
+                // x₊ = (−b + √Δ)/(2k) = 2c/(−b − √Δ)
+                2.0 * c / (-b - disc)
+            } else {
+                (-b + disc) / (2.0 * p.k)
+            }
+        };
+        force = p.et * (q1 - q_ref) - x / g;
+    }
+    ValanisState {
+        force: project(p, force, q1, q_ref, fz1),
+        q: q1,
+        fz: fz1,
+        q_ref,
+    }
+}
+
+/// Relative tolerance of [`reference_step`], as a fraction of the slip force scale.
+pub const REFERENCE_TOLERANCE: f64 = 1e-10;
+
+/// One increment of the accurate reference integrator: adaptive Dormand–Prince 5(4) in the path
+/// parameter `θ ∈ [0, 1]` with `q(θ) = q0 + θ·Δq`, `Fz(θ) = Fz0 + θ·ΔFz` (linear interpolation of
+/// the input samples), error per step below [`REFERENCE_TOLERANCE`] × `max(μ·Fz, |F|)`.
+///
+/// Inside a step `x` is clamped to `≥ x∞` so that the right-hand side stays finite when the
+/// normal load falls; after each accepted step the force is projected onto the admissible band
+/// (the same policy as [`implicit_euler_step`]). Fails with [`Error::NonConvergence`] only if the
+/// step size collapses.
+pub fn reference_step(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> Result<ValanisState> {
+    let start = match contact_transition(state, q1, fz1) {
+        Ok(s) => s,
+        Err(separated) => return Ok(separated),
+    };
+    let fz1 = fz1.max(0.0);
+    let (q0, fz0, q_ref) = (start.q, start.fz, start.q_ref);
+    let dq = q1 - q0;
+    if dq == 0.0 {
+        return Ok(ValanisState {
+            force: project(p, start.force, q1, q_ref, fz1),
+            q: q1,
+            fz: fz1,
+            q_ref,
+        });
+    }
+    let s = dq.signum();
+    let x_min = p.x_asymptote();
+    // dF/dθ along the increment.
+    let rhs = |theta: f64, f: f64| -> f64 {
+        let q = q0 + theta * dq;
+        let fz = (fz0 + theta * (fz1 - fz0)).max(f64::MIN_POSITIVE);
+        let x = (p.lambda(fz) / p.e0 * s * (p.et * (q - q_ref) - f)).max(x_min);
+        dq * force_slope(p, x)
+    };
+    let scale = (p.mu * fz0.max(fz1))
+        .max(start.force.abs())
+        .max(f64::MIN_POSITIVE);
+    let tol = REFERENCE_TOLERANCE * scale;
+
+    // Dormand–Prince 5(4) tableau.
+    const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
+    const A: [[f64; 6]; 7] = [
+        [0.0; 6],
+        [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+        [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+        [
+            19372.0 / 6561.0,
+            -25360.0 / 2187.0,
+            64448.0 / 6561.0,
+            -212.0 / 729.0,
+            0.0,
+            0.0,
+        ],
+        [
+            9017.0 / 3168.0,
+            -355.0 / 33.0,
+            46732.0 / 5247.0,
+            49.0 / 176.0,
+            -5103.0 / 18656.0,
+            0.0,
+        ],
+        [
+            35.0 / 384.0,
+            0.0,
+            500.0 / 1113.0,
+            125.0 / 192.0,
+            -2187.0 / 6784.0,
+            11.0 / 84.0,
+        ],
+    ];
+    const B5: [f64; 7] = [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+        0.0,
+    ];
+    const B4: [f64; 7] = [
+        5179.0 / 57600.0,
+        0.0,
+        7571.0 / 16695.0,
+        393.0 / 640.0,
+        -92097.0 / 339200.0,
+        187.0 / 2100.0,
+        1.0 / 40.0,
+    ];
+
+    let mut theta = 0.0;
+    let mut f = start.force;
+    let mut h: f64 = 0.25;
+    let mut steps = 0usize;
+    const MAX_STEPS: usize = 100_000;
+    while theta < 1.0 {
+        if steps >= MAX_STEPS || h < 1e-14 {
+            return Err(Error::NonConvergence {
+                solver: "Valanis reference integrator (Dormand–Prince 5(4))".into(),
+                iterations: steps,
+                residual: h,
+                tolerance: 1e-14,
+            });
+        }
+        steps += 1;
+        h = h.min(1.0 - theta);
+        let mut kk = [0.0; 7];
+        for i in 0..7 {
+            let mut fi = f;
+            for (j, kj) in kk.iter().enumerate().take(i) {
+                fi += h * A[i][j] * kj;
+            }
+            kk[i] = rhs(theta + C[i] * h, fi);
+        }
+        let f5: f64 = f + h * B5.iter().zip(&kk).map(|(b, k)| b * k).sum::<f64>();
+        let f4: f64 = f + h * B4.iter().zip(&kk).map(|(b, k)| b * k).sum::<f64>();
+        let err = (f5 - f4).abs();
+        if err <= tol || h < 1e-12 {
+            theta += h;
+            let q = q0 + theta * dq;
+            let fz = fz0 + theta * (fz1 - fz0);
+            f = project(p, f5, q, q_ref, fz);
+        }
+        let factor = if err == 0.0 {
+            5.0
+        } else {
+            (0.9 * (tol / err).powf(0.2)).clamp(0.2, 5.0)
+        };
+        h *= factor;
+    }
+    Ok(ValanisState {
+        force: f,
+        q: q1,
+        fz: fz1,
+        q_ref,
+    })
+}
+
+/// Which integrator [`integrate`] uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Integrator {
+    /// Backward Euler on each input increment ([`implicit_euler_step`]).
+    ImplicitEuler,
+    /// Adaptive Dormand–Prince 5(4) reference ([`reference_step`]).
+    Reference,
+}
+
+fn check_history(q: &[f64], fz: &[f64]) -> Result<()> {
+    if q.len() != fz.len() {
+        return Err(Error::param(
+            "fz",
+            format!(
+                "normal-load history has {} samples, displacement history {}",
+                fz.len(),
+                q.len()
+            ),
+        ));
+    }
+    if let Some(i) = q.iter().position(|v| !v.is_finite()) {
+        return Err(Error::param("q", format!("sample {i} is not finite")));
+    }
+    if let Some(i) = fz.iter().position(|v| !v.is_finite()) {
+        return Err(Error::param("fz", format!("sample {i} is not finite")));
+    }
+    Ok(())
+}
+
+/// Force history `F[i]` of a virgin element driven by displacements `q[i]` under normal loads
+/// `fz[i]` (same length; `fz ≤ 0` is separation). `F[0] = 0`.
+pub fn integrate(p: &ValanisParams, q: &[f64], fz: &[f64], method: Integrator) -> Result<Vec<f64>> {
+    p.validate()?;
+    check_history(q, fz)?;
+    let mut out = Vec::with_capacity(q.len());
+    let Some((&q_first, &fz_first)) = q.first().zip(fz.first()) else {
+        return Ok(out);
+    };
+    let mut state = ValanisState::virgin(q_first, fz_first);
+    out.push(state.force);
+    for (&qi, &fzi) in q.iter().zip(fz).skip(1) {
+        state = match method {
+            Integrator::ImplicitEuler => implicit_euler_step(p, &state, qi, fzi),
+            Integrator::Reference => reference_step(p, &state, qi, fzi)?,
+        };
+        out.push(state.force);
+    }
+    Ok(out)
+}
+
+/// [`integrate`] with [`Integrator::ImplicitEuler`].
+pub fn integrate_implicit_euler(p: &ValanisParams, q: &[f64], fz: &[f64]) -> Result<Vec<f64>> {
+    integrate(p, q, fz, Integrator::ImplicitEuler)
+}
+
+/// [`integrate`] with [`Integrator::Reference`].
+pub fn integrate_reference(p: &ValanisParams, q: &[f64], fz: &[f64]) -> Result<Vec<f64>> {
+    integrate(p, q, fz, Integrator::Reference)
+}
+
+/// Two in-plane directions as two uncoupled elements sharing the normal load:
+/// returns `(Fx, Fy)` for displacement histories `qx`, `qy`.
+pub fn integrate_in_plane(
+    p: &ValanisParams,
+    qx: &[f64],
+    qy: &[f64],
+    fz: &[f64],
+    method: Integrator,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    Ok((integrate(p, qx, fz, method)?, integrate(p, qy, fz, method)?))
+}
+
+/// Exact force at `q1` on a monotonic branch at constant normal load `fz`, starting from
+/// `(q0, f0)` with `q_ref` the reference displacement of the `Et` term.
+///
+/// With `a = Et/E0`, `C = a − 1`, `D = a·k − 1`, the ODE `dx/d|q| = λ·(C + D·x)/(1 + k·x)`
+/// separates and integrates to
+/// `λ·|q1 − q0| = (k/D)·(x1 − x0) + ((D − k·C)/D²)·ln((C + D·x1)/(C + D·x0))`,
+/// which is solved for `x1` by bisection (the right side is monotonic in `x1` between `x0` and
+/// the asymptote `x∞ = −C/D`).
+pub fn closed_form_branch(
+    p: &ValanisParams,
+    fz: f64,
+    q_ref: f64,
+    q0: f64,
+    f0: f64,
+    q1: f64,
+) -> f64 {
+    let dq = q1 - q0;
+    if dq == 0.0 || fz <= 0.0 {
+        return if fz <= 0.0 { 0.0 } else { f0 };
+    }
+    let s = dq.signum();
+    let lam = p.lambda(fz);
+    let g = s * lam / p.e0;
+    let a = p.et / p.e0;
+    let (c, d) = (a - 1.0, a * p.k - 1.0);
+    let x0 = (g * (p.et * (q0 - q_ref) - f0)).max(p.x_asymptote());
+    let target = lam * dq.abs();
+    let path = |x: f64| {
+        (p.k / d) * (x - x0) + ((d - p.k * c) / (d * d)) * ((c + d * x) / (c + d * x0)).ln()
+    };
+    // path(x) increases from 0 at x0 to +∞ at x∞ (< x0).
+    let (mut hi, mut lo) = (x0, p.x_asymptote());
+    for _ in 0..200 {
+        let mid = 0.5 * (hi + lo);
+        if mid == hi || mid == lo {
+            break;
+        }
+        if path(mid) < target {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let x1 = 0.5 * (hi + lo);
+    p.et * (q1 - q_ref) - x1 / g
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::{dissipated_energy, sine_history};
+
+    fn params() -> ValanisParams {
+        ValanisParams::new(1.0e13, 0.4, 0.0, 0.6).unwrap()
+    }
+
+    #[test]
+    fn initial_slope_is_e0_and_force_saturates_at_mu_fz() {
+        let p = params();
+        let fz = 1.0e6;
+        let f = closed_form_branch(&p, fz, 0.0, 0.0, 0.0, 1e-12);
+        // Secant over 1e-12 m differs from the tangent by ≈ (1−k)·E0·q/(2μFz) = 5e-6.
+        assert!((f / 1e-12 - p.e0).abs() / p.e0 < 1e-5, "{}", f / 1e-12);
+        let f_far = closed_form_branch(&p, fz, 0.0, 0.0, 0.0, 1e-4);
+        assert!((f_far - p.mu * fz).abs() / (p.mu * fz) < 1e-9);
+    }
+
+    #[test]
+    fn reload_slope_after_gross_slip_is_2e0_over_1_plus_k() {
+        for k in [0.0, 0.3, 0.8] {
+            let p = ValanisParams::new(2.0e12, k, 0.0, 0.5).unwrap();
+            let fz = 2.0e6;
+            // Drive into gross slip (F ≈ μFz), then reverse by a tiny step.
+            let q = [0.0, 2e-4, 2e-4 - 1e-13];
+            let f = integrate_reference(&p, &q, &[fz; 3]).unwrap();
+            assert!((f[1] - p.mu * fz).abs() / (p.mu * fz) < 1e-9);
+            let slope = (f[1] - f[2]) / 1e-13;
+            let expect = 2.0 * p.e0 / (1.0 + k);
+            assert!(
+                (slope - expect).abs() / expect < 1e-4,
+                "k={k}: {slope} vs {expect}"
+            );
+            assert!((p.reload_slope() - expect).abs() < 1e-3 * expect);
+        }
+    }
+
+    #[test]
+    fn reference_matches_closed_form_on_branches() {
+        let p = ValanisParams::new(1.0e13, 0.6, 1.0e12, 0.6).unwrap();
+        let fz = 1.0e6;
+        let q: Vec<f64> = (0..=50).map(|i| i as f64 * 1e-8).collect();
+        let f = integrate_reference(&p, &q, &vec![fz; q.len()]).unwrap();
+        for (qi, fi) in q.iter().zip(&f) {
+            let exact = closed_form_branch(&p, fz, 0.0, 0.0, 0.0, *qi);
+            assert!((fi - exact).abs() < 1e-8 * p.mu * fz, "{fi} vs {exact}");
+        }
+        // Unloading branch from the end point, one large reference step.
+        let (q0, f0) = (q[50], f[50]);
+        let st = ValanisState {
+            force: f0,
+            q: q0,
+            fz,
+            q_ref: 0.0,
+        };
+        let s1 = reference_step(&p, &st, q0 - 3e-7, fz).unwrap();
+        let exact = closed_form_branch(&p, fz, 0.0, q0, f0, q0 - 3e-7);
+        assert!((s1.force - exact).abs() < 1e-8 * p.mu * fz);
+    }
+
+    #[test]
+    fn integrators_agree_on_a_loop() {
+        let p = params();
+        let fz = 1.0e6;
+        let q = sine_history(3.0 * p.mu * fz / p.e0, 3, 2000);
+        let fzs = vec![fz; q.len()];
+        let fe = integrate_implicit_euler(&p, &q, &fzs).unwrap();
+        let fr = integrate_reference(&p, &q, &fzs).unwrap();
+        let max_dev = fe
+            .iter()
+            .zip(&fr)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(max_dev < 0.005 * p.mu * fz, "max deviation {max_dev}");
+        let last = q.len() - 2001;
+        let ee = dissipated_energy(&q[last..], &fe[last..]);
+        let er = dissipated_energy(&q[last..], &fr[last..]);
+        assert!((ee - er).abs() / er < 0.005, "{ee} vs {er}");
+    }
+
+    #[test]
+    fn implicit_euler_is_first_order() {
+        let p = params();
+        let fz = 1.0e6;
+        let amp = 2.0 * p.mu * fz / p.e0;
+        let err = |n: usize| {
+            let q = sine_history(amp, 1, n);
+            let fzs = vec![fz; q.len()];
+            let fe = integrate_implicit_euler(&p, &q, &fzs).unwrap();
+            let fr = integrate_reference(&p, &q, &fzs).unwrap();
+            fe.iter()
+                .zip(&fr)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+        };
+        let (e1, e2) = (err(400), err(800));
+        let ratio = e1 / e2;
+        assert!(ratio > 1.7 && ratio < 2.3, "error ratio {ratio}");
+    }
+
+    #[test]
+    fn separation_zeroes_force_and_recontact_starts_virgin() {
+        let p = params();
+        let q = [0.0, 1e-6, 2e-6, 3e-6, 3e-6 + 1e-12];
+        let fz = [1e6, 1e6, 0.0, 1e6, 1e6];
+        for m in [Integrator::ImplicitEuler, Integrator::Reference] {
+            let f = integrate(&p, &q, &fz, m).unwrap();
+            assert_eq!(f[2], 0.0);
+            // Re-contact at θ = 0 of the increment 2→3: virgin from q = 2e-6, loading slope E0.
+            let slope = (f[4] - f[3]) / 1e-12;
+            assert!(f[3] > 0.0 && slope > 0.0);
+        }
+    }
+
+    #[test]
+    fn falling_normal_load_caps_force_at_current_limit() {
+        let p = params();
+        let q = [0.0, 1e-5, 1e-5];
+        let fz = [1e6, 1e6, 0.5e6];
+        for m in [Integrator::ImplicitEuler, Integrator::Reference] {
+            let f = integrate(&p, &q, &fz, m).unwrap();
+            assert!((f[2] - p.mu * 0.5e6).abs() < 1e-6 * p.mu * 1e6);
+        }
+    }
+
+    #[test]
+    fn invalid_parameters_are_refused() {
+        assert!(ValanisParams::new(1e12, 1.0, 0.0, 0.6).is_err());
+        assert!(ValanisParams::new(1e12, -0.1, 0.0, 0.6).is_err());
+        assert!(ValanisParams::new(-1e12, 0.5, 0.0, 0.6).is_err());
+        assert!(ValanisParams::new(1e12, 0.5, 2e12, 0.6).is_err());
+        assert!(ValanisParams::new(1e12, 0.5, 0.0, -0.6).is_err());
+        let p = params();
+        assert!(integrate_implicit_euler(&p, &[0.0, 1.0], &[1.0]).is_err());
+        assert!(integrate_implicit_euler(&p, &[0.0, f64::NAN], &[1.0, 1.0]).is_err());
+    }
+
+    #[test]
+    fn in_plane_directions_are_uncoupled() {
+        let p = params();
+        let q = sine_history(1e-7, 1, 100);
+        let zero = vec![0.0; q.len()];
+        let fz = vec![1e6; q.len()];
+        let (fx, fy) = integrate_in_plane(&p, &q, &zero, &fz, Integrator::ImplicitEuler).unwrap();
+        let alone = integrate_implicit_euler(&p, &q, &fz).unwrap();
+        assert_eq!(fx, alone);
+        assert!(fy.iter().all(|&v| v == 0.0));
+    }
+}

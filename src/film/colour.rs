@@ -1,0 +1,647 @@
+//! Colour → pressure for pressure-measurement film.
+//!
+//! Two readings of a pixel are offered:
+//!
+//! * [`ColourTable`]: a vendor colour table (pressure, R, G, B), as exported by the Fujifilm
+//!   Prescale mobile app. The table rows inside the film's measuring range form a piecewise-linear
+//!   *colour curve* in RGB space; a pixel is projected onto the nearest point of that curve and its
+//!   pressure is interpolated linearly along the segment it projects to. Pixels farther than
+//!   `max_distance` (Euclidean, in 0–255 RGB units) from the curve are *off-curve* (pen marks, tape,
+//!   dirt) and are rejected, not mapped.
+//! * [`DensityCalibration`]: calibration points (optical density → pressure) for raw grey or colour
+//!   scans, interpolated piecewise-linearly.
+//!
+//! Both report below-range and above-range pixels as such: a pressure is only ever given to a
+//! pixel whose colour lies inside the calibrated range.
+//!
+//! ## Colour-table file format
+//! CSV, one row per table entry: `pressure, R, G, B` with R, G, B in 0–255. Lines starting with `;`
+//! or `#` are comments (the vendor app writes its header that way). An optional header row names
+//! the pressure unit: `pressure_Pa` → Pa, `pressure_MPa`, `MPa` or `Pressure` → MPa. Without a
+//! header the vendor convention (MPa) applies. Pressures must increase strictly down the table.
+//!
+//! ## Marker rows
+//! Vendor tables carry *marker* rows that are not part of the graded colour scale: the Prescale LW
+//! table starts with white (0 MPa, no colour), then green (2.0 MPa, the app's "below range" mark),
+//! the pink scale 2.5–9.06 MPa, and ends with yellow (10 MPa, "at or above range"). Markers are
+//! found by the size of the colour step between consecutive rows: a step longer than
+//! [`MARKER_STEP_FACTOR`] × the median step breaks the curve, and the longest unbroken run of rows
+//! is the graded curve. Rows before it are below-range markers, rows after it above-range markers.
+//! The measuring range is therefore `[first graded pressure, last graded pressure]`. A marker row
+//! at pressure 0 is the colour of unstained film.
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// A colour step longer than this multiple of the table's median step separates a marker row
+/// from the graded colour curve.
+pub const MARKER_STEP_FACTOR: f64 = 3.0;
+
+/// Tolerance on the segment parameter at the ends of the colour curve.
+const END_TOLERANCE: f64 = 1e-6;
+
+/// Default off-curve rejection distance in RGB units (0–255 scale, Euclidean): half of one step of
+/// the Prescale LW pink scale (whose steps are ≈ 40 units long).
+pub const DEFAULT_MAX_COLOUR_DISTANCE: f64 = 20.0;
+
+/// What a pixel's colour says about the pressure there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PixelClass {
+    /// Inside the calibrated range: the pressure is known.
+    InRange,
+    /// Unstained film: the colour of a 0-pressure marker row (white paper).
+    Unstained,
+    /// Stained, but below the film's measuring range (the below-range mark, or paler than the
+    /// palest graded colour).
+    BelowRange,
+    /// At or above the upper end of the measuring range (saturated, or the above-range mark).
+    AboveRange,
+    /// Colour far from the colour curve and from every marker (pen, tape, dirt): rejected.
+    OffCurve,
+}
+
+impl PixelClass {
+    /// Name used in output files.
+    pub fn name(self) -> &'static str {
+        match self {
+            PixelClass::InRange => "in_range",
+            PixelClass::Unstained => "unstained",
+            PixelClass::BelowRange => "below_range",
+            PixelClass::AboveRange => "above_range",
+            PixelClass::OffCurve => "off_curve",
+        }
+    }
+}
+
+/// The reading of one pixel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelReading {
+    pub class: PixelClass,
+    /// Pressure in Pa; `NaN` unless `class == InRange`.
+    pub pressure_pa: f64,
+}
+
+impl PixelReading {
+    fn of(class: PixelClass) -> Self {
+        Self {
+            class,
+            pressure_pa: f64::NAN,
+        }
+    }
+}
+
+/// One row of a colour table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ColourRow {
+    pub pressure_pa: f64,
+    /// R, G, B in 0–255.
+    pub rgb: [f64; 3],
+}
+
+/// A colour → pressure table split into its graded colour curve and its marker rows.
+#[derive(Debug, Clone)]
+pub struct ColourTable {
+    rows: Vec<ColourRow>,
+    /// Index range (inclusive start, exclusive end) of the graded rows in `rows`.
+    graded: std::ops::Range<usize>,
+    /// Off-curve rejection distance in RGB units.
+    pub max_distance: f64,
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Closest point of the (infinite) line through `a`, `b` to `c`: returns the line parameter `t`
+/// (0 at `a`, 1 at `b`) and the distance from `c` to the point at the clamped parameter when
+/// `clamp` is set, else to the point at `t` itself.
+fn project(a: [f64; 3], b: [f64; 3], c: [f64; 3], clamp: bool) -> (f64, f64) {
+    let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let ac = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    let t = (ab[0] * ac[0] + ab[1] * ac[1] + ab[2] * ac[2]) / l2;
+    let tt = if clamp { t.clamp(0.0, 1.0) } else { t };
+    let p = [a[0] + tt * ab[0], a[1] + tt * ab[1], a[2] + tt * ab[2]];
+    (t, dist(p, c))
+}
+
+impl ColourTable {
+    /// Build a table from rows (pressures strictly increasing), finding the graded curve and the
+    /// marker rows (see the module documentation). `source` names the table in error messages.
+    pub fn from_rows(rows: Vec<ColourRow>, max_distance: f64, source: &str) -> Result<Self> {
+        crate::error::require_positive("max_colour_distance", max_distance)?;
+        if rows.len() < 2 {
+            return Err(Error::Data(format!(
+                "{source}: a colour table needs at least 2 rows, got {}",
+                rows.len()
+            )));
+        }
+        for (k, w) in rows.windows(2).enumerate() {
+            if w[1].pressure_pa <= w[0].pressure_pa {
+                return Err(Error::Data(format!(
+                    "{source}: colour table is not monotone in pressure: row {} ({} Pa) does not exceed row {} ({} Pa)",
+                    k + 2,
+                    w[1].pressure_pa,
+                    k + 1,
+                    w[0].pressure_pa
+                )));
+            }
+            if dist(w[0].rgb, w[1].rgb) == 0.0 {
+                return Err(Error::Data(format!(
+                    "{source}: rows {} and {} have the same colour, so colour cannot identify pressure",
+                    k + 1,
+                    k + 2
+                )));
+            }
+        }
+        let graded = if rows.len() > 1 && rows[0].pressure_pa == 0.0 && rows.len() < 3 {
+            1..1
+        } else {
+            graded_run(&rows)
+        };
+        if graded.len() < 2 {
+            return Err(Error::Data(format!(
+                "{source}: no graded colour curve of at least 2 rows found (every step is a jump)"
+            )));
+        }
+        Ok(Self {
+            rows,
+            graded,
+            max_distance,
+        })
+    }
+
+    /// Read a colour table file (format in the module documentation).
+    pub fn read_csv(path: &Path, max_distance: f64) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let mut unit = 1e6; // vendor convention: MPa
+        let mut rows = Vec::new();
+        let mut seen_header = false;
+        for (k, raw) in text.lines().enumerate() {
+            let line_no = k + 1;
+            let line = raw.trim();
+            if line.is_empty() || line.starts_with(';') || line.starts_with('#') {
+                continue;
+            }
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            if fields.len() < 4 {
+                return Err(Error::parse(
+                    path,
+                    line_no,
+                    format!(
+                        "expected 4 columns (pressure, R, G, B), got {}",
+                        fields.len()
+                    ),
+                ));
+            }
+            if fields[0].parse::<f64>().is_err() && rows.is_empty() && !seen_header {
+                let name = fields[0].to_ascii_lowercase();
+                unit = if name.ends_with("_pa") {
+                    1.0
+                } else if name.contains("mpa") || name == "pressure" {
+                    1e6
+                } else {
+                    return Err(Error::parse(
+                        path,
+                        line_no,
+                        format!(
+                            "unknown pressure column `{}` (use pressure_Pa or pressure_MPa)",
+                            fields[0]
+                        ),
+                    ));
+                };
+                seen_header = true;
+                continue;
+            }
+            let mut v = [0.0; 4];
+            for (c, f) in fields.iter().take(4).enumerate() {
+                v[c] = f.parse::<f64>().map_err(|_| {
+                    Error::parse(
+                        path,
+                        line_no,
+                        format!("column {}: `{f}` is not a number", c + 1),
+                    )
+                })?;
+                if !v[c].is_finite() {
+                    return Err(Error::parse(
+                        path,
+                        line_no,
+                        format!("column {} is not finite", c + 1),
+                    ));
+                }
+            }
+            if v[1..].iter().any(|c| !(0.0..=255.0).contains(c)) {
+                return Err(Error::parse(path, line_no, "R, G, B must lie in 0–255"));
+            }
+            if v[0] < 0.0 {
+                return Err(Error::parse(path, line_no, "negative pressure"));
+            }
+            if let Some(prev) = rows.last().map(|r: &(ColourRow, usize)| r.0.pressure_pa) {
+                if v[0] * unit <= prev {
+                    return Err(Error::parse(
+                        path,
+                        line_no,
+                        format!(
+                            "colour table is not monotone in pressure: {} does not exceed the previous row's {}",
+                            v[0],
+                            prev / unit
+                        ),
+                    ));
+                }
+            }
+            rows.push((
+                ColourRow {
+                    pressure_pa: v[0] * unit,
+                    rgb: [v[1], v[2], v[3]],
+                },
+                line_no,
+            ));
+        }
+        let source = path.display().to_string();
+        Self::from_rows(
+            rows.into_iter().map(|r| r.0).collect(),
+            max_distance,
+            &source,
+        )
+    }
+
+    /// All rows, markers included.
+    pub fn rows(&self) -> &[ColourRow] {
+        &self.rows
+    }
+
+    /// The graded rows (the colour curve).
+    pub fn graded_rows(&self) -> &[ColourRow] {
+        &self.rows[self.graded.clone()]
+    }
+
+    /// Measuring range `(min, max)` in Pa: the pressures of the first and last graded rows.
+    pub fn range_pa(&self) -> (f64, f64) {
+        let g = self.graded_rows();
+        (g[0].pressure_pa, g[g.len() - 1].pressure_pa)
+    }
+
+    /// Colour of a pressure inside the measuring range (linear interpolation along the curve).
+    /// Used to render synthetic films; `None` outside the range.
+    pub fn colour_of(&self, pressure_pa: f64) -> Option<[f64; 3]> {
+        let g = self.graded_rows();
+        let (lo, hi) = self.range_pa();
+        if !(lo..=hi).contains(&pressure_pa) {
+            return None;
+        }
+        let k = g
+            .windows(2)
+            .position(|w| pressure_pa <= w[1].pressure_pa)
+            .unwrap_or(g.len() - 2);
+        let (a, b) = (g[k], g[k + 1]);
+        let t = (pressure_pa - a.pressure_pa) / (b.pressure_pa - a.pressure_pa);
+        Some([
+            a.rgb[0] + t * (b.rgb[0] - a.rgb[0]),
+            a.rgb[1] + t * (b.rgb[1] - a.rgb[1]),
+            a.rgb[2] + t * (b.rgb[2] - a.rgb[2]),
+        ])
+    }
+
+    /// Read one pixel (RGB in 0–255, fractional values allowed for 16-bit images).
+    ///
+    /// 1. Project onto every graded segment (clamped); the nearest wins. Within `max_distance` and
+    ///    strictly inside the curve → in range, pressure interpolated along the segment.
+    /// 2. Otherwise, within `max_distance` of a marker row → that marker's side (below/above).
+    /// 3. Otherwise, if the pixel lies within `max_distance` of the curve's straight extension
+    ///    beyond its first (last) row → below (above) range: e.g. a paler pink than the palest
+    ///    table entry is below range, not the lowest pressure.
+    /// 4. Otherwise off-curve (rejected).
+    pub fn read(&self, rgb: [f64; 3]) -> PixelReading {
+        let g = self.graded_rows();
+        let n = g.len();
+        let mut best = (f64::INFINITY, 0usize, 0.0);
+        for k in 0..n - 1 {
+            let (t, d) = project(g[k].rgb, g[k + 1].rgb, rgb, true);
+            if d < best.0 {
+                best = (d, k, t);
+            }
+        }
+        let (d, k, t) = best;
+        // `t` is the unclamped line parameter: < 0 beyond the first row, > 1 beyond the last.
+        // A small tolerance keeps a pixel of exactly the end row's colour (read back from a
+        // 16-bit or float image with rounding) in range.
+        let before_start = k == 0 && t < -END_TOLERANCE;
+        let after_end = k == n - 2 && t > 1.0 + END_TOLERANCE;
+        if d <= self.max_distance && !before_start && !after_end {
+            let p =
+                g[k].pressure_pa + t.clamp(0.0, 1.0) * (g[k + 1].pressure_pa - g[k].pressure_pa);
+            return PixelReading {
+                class: PixelClass::InRange,
+                pressure_pa: p,
+            };
+        }
+        // Nearest marker row within the distance.
+        let mut marker: Option<(f64, PixelClass)> = None;
+        for (idx, row) in self.rows.iter().enumerate() {
+            if self.graded.contains(&idx) {
+                continue;
+            }
+            let dm = dist(row.rgb, rgb);
+            if dm <= self.max_distance && marker.is_none_or(|m| dm < m.0) {
+                let side = if row.pressure_pa == 0.0 {
+                    PixelClass::Unstained
+                } else if idx < self.graded.start {
+                    PixelClass::BelowRange
+                } else {
+                    PixelClass::AboveRange
+                };
+                marker = Some((dm, side));
+            }
+        }
+        if let Some((_, side)) = marker {
+            return PixelReading::of(side);
+        }
+        // Beyond an end of the curve, on its straight extension.
+        if before_start && project(g[0].rgb, g[1].rgb, rgb, false).1 <= self.max_distance {
+            return PixelReading::of(PixelClass::BelowRange);
+        }
+        if after_end && project(g[n - 2].rgb, g[n - 1].rgb, rgb, false).1 <= self.max_distance {
+            return PixelReading::of(PixelClass::AboveRange);
+        }
+        PixelReading::of(PixelClass::OffCurve)
+    }
+}
+
+/// The longest run of consecutive rows whose colour steps are all at most
+/// `MARKER_STEP_FACTOR` × the median step (all rows for tables of fewer than 4 rows).
+/// A leading row at pressure 0 is always a marker (the unstained film colour): no film's graded
+/// scale starts at zero pressure.
+fn graded_run(rows: &[ColourRow]) -> std::ops::Range<usize> {
+    if rows[0].pressure_pa == 0.0 {
+        let r = graded_run(&rows[1..]);
+        return r.start + 1..r.end + 1;
+    }
+    if rows.len() < 4 {
+        return 0..rows.len();
+    }
+    let steps: Vec<f64> = rows.windows(2).map(|w| dist(w[0].rgb, w[1].rgb)).collect();
+    let mut sorted = steps.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let limit = MARKER_STEP_FACTOR * median;
+    let mut best = 0..1;
+    let mut start = 0;
+    for (k, s) in steps.iter().enumerate() {
+        if *s > limit {
+            start = k + 1;
+        } else if k + 2 - start > best.len() {
+            best = start..k + 2;
+        }
+    }
+    best
+}
+
+/// Optical density of a pixel: `D = log10(255 / L)`, with `L` the Rec. 709 luma of the 0–255
+/// RGB values (floored at 0.5 to keep black finite). White paper has `D = 0`; darker = denser.
+pub fn optical_density(rgb: [f64; 3]) -> f64 {
+    let l = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    (255.0 / l.max(0.5)).log10()
+}
+
+/// Calibration points optical density → pressure for raw scans, interpolated piecewise-linearly.
+///
+/// File format: CSV with header `density,pressure_MPa` (or `density,pressure_Pa`), `#` comments;
+/// both columns strictly increasing. Densities below the first point read as unstained (a raw
+/// scan cannot tell faint stain from paper), above the last point as above range. Density readings cannot tell pen marks from pressure colour: restrict
+/// the region of interest when a raw scan carries marks.
+#[derive(Debug, Clone)]
+pub struct DensityCalibration {
+    /// `(optical density, pressure in Pa)`, both strictly increasing.
+    pub points: Vec<(f64, f64)>,
+}
+
+impl DensityCalibration {
+    /// Build from points; checks both columns increase strictly.
+    pub fn new(points: Vec<(f64, f64)>, source: &str) -> Result<Self> {
+        if points.len() < 2 {
+            return Err(Error::Data(format!(
+                "{source}: density calibration needs at least 2 points"
+            )));
+        }
+        for (k, w) in points.windows(2).enumerate() {
+            if w[1].0 <= w[0].0 || w[1].1 <= w[0].1 {
+                return Err(Error::Data(format!(
+                    "{source}: density calibration is not monotone: point {} ({}, {} Pa) does not exceed point {} ({}, {} Pa) in both density and pressure",
+                    k + 2, w[1].0, w[1].1, k + 1, w[0].0, w[0].1
+                )));
+            }
+        }
+        Ok(Self { points })
+    }
+
+    /// Read a density calibration CSV (format above).
+    pub fn read_csv(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let mut unit = None;
+        let mut pts = Vec::new();
+        for (k, raw) in text.lines().enumerate() {
+            let line = raw.trim();
+            if line.is_empty() || line.starts_with('#') || line.starts_with(';') {
+                continue;
+            }
+            let f: Vec<&str> = line.split(',').map(str::trim).collect();
+            if f.len() < 2 {
+                return Err(Error::parse(
+                    path,
+                    k + 1,
+                    "expected 2 columns: density, pressure",
+                ));
+            }
+            if unit.is_none() {
+                let name = f[1].to_ascii_lowercase();
+                unit = Some(if name.ends_with("_pa") {
+                    1.0
+                } else if name.ends_with("_mpa") {
+                    1e6
+                } else {
+                    return Err(Error::parse(
+                        path,
+                        k + 1,
+                        "header must be `density,pressure_MPa` or `density,pressure_Pa`",
+                    ));
+                });
+                continue;
+            }
+            let d: f64 = f[0]
+                .parse()
+                .map_err(|_| Error::parse(path, k + 1, format!("`{}` is not a number", f[0])))?;
+            let p: f64 = f[1]
+                .parse()
+                .map_err(|_| Error::parse(path, k + 1, format!("`{}` is not a number", f[1])))?;
+            if !d.is_finite() || !p.is_finite() || p < 0.0 {
+                return Err(Error::parse(
+                    path,
+                    k + 1,
+                    "density and pressure must be finite, pressure ≥ 0",
+                ));
+            }
+            pts.push((d, p * unit.unwrap_or(1e6)));
+        }
+        Self::new(pts, &path.display().to_string())
+    }
+
+    /// Read one pixel.
+    pub fn read(&self, rgb: [f64; 3]) -> PixelReading {
+        let d = optical_density(rgb);
+        let (first, last) = (self.points[0], self.points[self.points.len() - 1]);
+        if d < first.0 {
+            // A raw scan cannot tell faint stain from paper: below the first point is unstained.
+            return PixelReading::of(PixelClass::Unstained);
+        }
+        if d > last.0 {
+            return PixelReading::of(PixelClass::AboveRange);
+        }
+        let k = self
+            .points
+            .windows(2)
+            .position(|w| d <= w[1].0)
+            .unwrap_or(self.points.len() - 2);
+        let (a, b) = (self.points[k], self.points[k + 1]);
+        PixelReading {
+            class: PixelClass::InRange,
+            pressure_pa: a.1 + (d - a.0) / (b.0 - a.0) * (b.1 - a.1),
+        }
+    }
+
+    /// Measuring range `(min, max)` in Pa.
+    pub fn range_pa(&self) -> (f64, f64) {
+        (self.points[0].1, self.points[self.points.len() - 1].1)
+    }
+}
+
+/// How colour becomes pressure.
+#[derive(Debug, Clone)]
+pub enum ColourToPressure {
+    Table(ColourTable),
+    Density(DensityCalibration),
+}
+
+impl ColourToPressure {
+    /// Read one pixel (RGB in 0–255).
+    pub fn read(&self, rgb: [f64; 3]) -> PixelReading {
+        match self {
+            ColourToPressure::Table(t) => t.read(rgb),
+            ColourToPressure::Density(d) => d.read(rgb),
+        }
+    }
+
+    /// Measuring range `(min, max)` in Pa.
+    pub fn range_pa(&self) -> (f64, f64) {
+        match self {
+            ColourToPressure::Table(t) => t.range_pa(),
+            ColourToPressure::Density(d) => d.range_pa(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Prescale LW vendor table (values as printed in the app's export).
+    pub(crate) fn lw_rows() -> Vec<ColourRow> {
+        let t = [
+            (0.00, 255.0, 255.0, 255.0),
+            (2.00, 0.0, 255.0, 0.0),
+            (2.50, 255.0, 227.0, 227.0),
+            (3.44, 255.0, 198.0, 198.0),
+            (4.38, 255.0, 170.0, 170.0),
+            (5.31, 255.0, 142.0, 142.0),
+            (6.25, 255.0, 113.0, 113.0),
+            (7.19, 255.0, 85.0, 85.0),
+            (8.13, 255.0, 57.0, 57.0),
+            (9.06, 255.0, 28.0, 28.0),
+            (10.00, 255.0, 255.0, 0.0),
+        ];
+        t.iter()
+            .map(|&(p, r, g, b)| ColourRow {
+                pressure_pa: p * 1e6,
+                rgb: [r, g, b],
+            })
+            .collect()
+    }
+
+    fn lw() -> ColourTable {
+        ColourTable::from_rows(lw_rows(), DEFAULT_MAX_COLOUR_DISTANCE, "lw").unwrap()
+    }
+
+    #[test]
+    fn markers_split_off_the_lw_table() {
+        let t = lw();
+        assert_eq!(t.graded_rows().len(), 8);
+        assert_eq!(t.range_pa(), (2.5e6, 9.06e6));
+    }
+
+    #[test]
+    fn table_colours_read_back_their_pressure() {
+        let t = lw();
+        for row in t.graded_rows() {
+            let r = t.read(row.rgb);
+            assert_eq!(r.class, PixelClass::InRange);
+            assert!((r.pressure_pa - row.pressure_pa).abs() < 1e-6);
+        }
+        // Midway between two rows: linear interpolation along the segment.
+        let r = t.read([255.0, 184.0, 184.0]);
+        assert!((r.pressure_pa - 3.91e6).abs() < 1e-6 * 3.91e6, "{r:?}");
+    }
+
+    #[test]
+    fn markers_and_off_curve_colours_are_not_mapped() {
+        let t = lw();
+        assert_eq!(t.read([255.0; 3]).class, PixelClass::Unstained);
+        assert_eq!(t.read([0.0, 255.0, 0.0]).class, PixelClass::BelowRange);
+        assert_eq!(t.read([5.0, 250.0, 3.0]).class, PixelClass::BelowRange);
+        assert_eq!(t.read([255.0, 255.0, 0.0]).class, PixelClass::AboveRange);
+        // Paler than the palest pink: below range, not 2.5 MPa.
+        assert_eq!(t.read([255.0, 238.0, 238.0]).class, PixelClass::BelowRange);
+        // Deeper than the deepest red: above range.
+        assert_eq!(t.read([255.0, 5.0, 5.0]).class, PixelClass::AboveRange);
+        // Blue ink, black pen: rejected.
+        assert_eq!(t.read([20.0, 40.0, 200.0]).class, PixelClass::OffCurve);
+        assert_eq!(t.read([0.0, 0.0, 0.0]).class, PixelClass::OffCurve);
+    }
+
+    #[test]
+    fn colour_of_inverts_read() {
+        let t = lw();
+        for p in [2.5e6, 3.0e6, 5.55e6, 9.06e6] {
+            let c = t.colour_of(p).unwrap();
+            assert!((t.read(c).pressure_pa - p).abs() < 1e-6 * p);
+        }
+        assert!(t.colour_of(1e6).is_none());
+    }
+
+    #[test]
+    fn non_monotone_table_is_an_error() {
+        let mut rows = lw_rows();
+        rows.swap(4, 5);
+        let e = ColourTable::from_rows(rows, 20.0, "t.csv").unwrap_err();
+        assert!(e.to_string().contains("not monotone in pressure"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(
+            &p,
+            ";Pressure,R,G,B\n2.5,255,227,227\n3.44,255,198,198\n3.0,255,170,170\n",
+        )
+        .unwrap();
+        let e = ColourTable::read_csv(&p, 20.0).unwrap_err();
+        assert!(e.to_string().contains("t.csv:4"), "{e}");
+        assert!(e.to_string().contains("not monotone"), "{e}");
+    }
+
+    #[test]
+    fn density_calibration_interpolates_and_flags_range() {
+        let d = DensityCalibration::new(vec![(0.1, 1e6), (0.5, 5e6)], "d").unwrap();
+        assert_eq!(d.read([255.0; 3]).class, PixelClass::Unstained);
+        assert_eq!(d.read([0.0; 3]).class, PixelClass::AboveRange);
+        let grey = 255.0 / 10f64.powf(0.3);
+        let r = d.read([grey; 3]);
+        assert!((r.pressure_pa - 3e6).abs() < 1e-3, "{r:?}");
+        assert!(DensityCalibration::new(vec![(0.1, 1e6), (0.5, 0.5e6)], "d").is_err());
+    }
+}

@@ -1,0 +1,431 @@
+//! Contact nodes of a finite-element interface and their normal preloads.
+//!
+//! Nodes file: CSV with header `id,x_m,y_m` and optionally `area_m2` (tributary area), `#`
+//! comment lines allowed. Coordinates are in the mesh frame; a [`Placement`] maps them onto the
+//! film frame. When no areas are given, each node receives one third of the area of every
+//! Delaunay triangle it belongs to (the lumped tributary area of linear triangles).
+//!
+//! Preload of a node: `N0 = σ(x, y) · A` with σ the pressure at the node's film position. When a
+//! total normal load `F` is given, every preload (and pressure) is scaled by `F / Σ N0`, so the
+//! preloads sum to `F`.
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// A contact node in the mesh frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    pub id: u64,
+    pub x_m: f64,
+    pub y_m: f64,
+    /// Tributary area (m²), if the mesh provides it.
+    pub area_m2: Option<f64>,
+}
+
+/// Mesh frame → film frame: `p_film = offset + scale · R(rotation) · p_mesh`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Placement {
+    pub offset_x_m: f64,
+    pub offset_y_m: f64,
+    /// Counter-clockwise rotation (rad).
+    pub rotation_rad: f64,
+    /// Uniform scale (dimensionless, > 0).
+    pub scale: f64,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self {
+            offset_x_m: 0.0,
+            offset_y_m: 0.0,
+            rotation_rad: 0.0,
+            scale: 1.0,
+        }
+    }
+}
+
+impl Placement {
+    /// Film-frame position of a mesh-frame point.
+    pub fn apply(&self, x: f64, y: f64) -> (f64, f64) {
+        let (s, c) = self.rotation_rad.sin_cos();
+        (
+            self.offset_x_m + self.scale * (c * x - s * y),
+            self.offset_y_m + self.scale * (s * x + c * y),
+        )
+    }
+
+    /// Check the parameters.
+    pub fn validate(&self) -> Result<()> {
+        crate::error::require_finite("node offset x", self.offset_x_m)?;
+        crate::error::require_finite("node offset y", self.offset_y_m)?;
+        crate::error::require_finite("node rotation", self.rotation_rad)?;
+        crate::error::require_positive("node scale", self.scale)?;
+        Ok(())
+    }
+}
+
+/// Read a nodes CSV (see the module documentation).
+pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| match e.into_kind() {
+            csv::ErrorKind::Io(io) => Error::io(path, io),
+            k => Error::parse(path, 0, format!("{k:?}")),
+        })?;
+    let headers = rdr
+        .headers()
+        .map_err(|e| Error::parse(path, 1, e.to_string()))?
+        .clone();
+    let col = |name: &str| headers.iter().position(|h| h == name);
+    let (ci, cx, cy) = match (col("id"), col("x_m"), col("y_m")) {
+        (Some(a), Some(b), Some(c)) => (a, b, c),
+        _ => {
+            return Err(Error::parse(
+                path,
+                1,
+                format!(
+                    "header must name columns id, x_m, y_m (and optionally area_m2); got `{}`",
+                    headers.iter().collect::<Vec<_>>().join(",")
+                ),
+            ))
+        }
+    };
+    let ca = col("area_m2");
+    let mut nodes: Vec<Node> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+            Error::parse(path, line, e.to_string())
+        })?;
+        let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+        let field = |c: usize, name: &str| -> Result<f64> {
+            let s = rec.get(c).unwrap_or("");
+            let v: f64 = s
+                .parse()
+                .map_err(|_| Error::parse(path, line, format!("{name}: `{s}` is not a number")))?;
+            if !v.is_finite() {
+                return Err(Error::parse(path, line, format!("{name} is not finite")));
+            }
+            Ok(v)
+        };
+        let id_s = rec.get(ci).unwrap_or("");
+        let id: u64 = id_s.parse().map_err(|_| {
+            Error::parse(
+                path,
+                line,
+                format!("id: `{id_s}` is not a non-negative integer"),
+            )
+        })?;
+        if !seen.insert(id) {
+            return Err(Error::parse(path, line, format!("duplicate node id {id}")));
+        }
+        let area = match ca {
+            Some(c) if !rec.get(c).unwrap_or("").is_empty() => {
+                let a = field(c, "area_m2")?;
+                if a <= 0.0 {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!("area_m2 must be > 0, got {a}"),
+                    ));
+                }
+                Some(a)
+            }
+            _ => None,
+        };
+        nodes.push(Node {
+            id,
+            x_m: field(cx, "x_m")?,
+            y_m: field(cy, "y_m")?,
+            area_m2: area,
+        });
+    }
+    if nodes.is_empty() {
+        return Err(Error::parse(path, 0, "no nodes"));
+    }
+    let with_area = nodes.iter().filter(|n| n.area_m2.is_some()).count();
+    if with_area != 0 && with_area != nodes.len() {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "area_m2 given for {with_area} of {} nodes: give it for all or none",
+                nodes.len()
+            ),
+        ));
+    }
+    Ok(nodes)
+}
+
+/// Lumped tributary areas from the Delaunay triangulation of the points: each node receives a
+/// third of the area of each triangle it is a vertex of. The areas sum to the convex hull's area.
+pub fn tributary_areas(points: &[(f64, f64)]) -> Result<Vec<f64>> {
+    let pts: Vec<delaunator::Point> = points
+        .iter()
+        .map(|&(x, y)| delaunator::Point { x, y })
+        .collect();
+    let tri = delaunator::triangulate(&pts);
+    if tri.triangles.is_empty() {
+        return Err(Error::Data(format!(
+            "cannot triangulate {} nodes (fewer than 3, or all collinear): give area_m2 in the nodes file",
+            points.len()
+        )));
+    }
+    let mut area = vec![0.0; points.len()];
+    for t in tri.triangles.chunks(3) {
+        let (a, b, c) = (points[t[0]], points[t[1]], points[t[2]]);
+        let at = 0.5 * ((b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1)).abs();
+        for &k in t {
+            area[k] += at / 3.0;
+        }
+    }
+    if let Some(k) = area.iter().position(|a| *a <= 0.0) {
+        return Err(Error::Data(format!(
+            "node {k} belongs to no triangle (duplicate position?): give area_m2 in the nodes file"
+        )));
+    }
+    Ok(area)
+}
+
+/// A node with its preload.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Preload {
+    pub id: u64,
+    /// Film-frame position (m).
+    pub x_m: f64,
+    pub y_m: f64,
+    pub area_m2: f64,
+    /// Local contact pressure (Pa) = N0 / area.
+    #[serde(rename = "pressure_Pa")]
+    pub pressure_pa: f64,
+    /// Normal preload (N).
+    #[serde(rename = "N0_N")]
+    pub n0_n: f64,
+}
+
+/// What happened while computing preloads.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PreloadSummary {
+    pub n_nodes: usize,
+    pub total_area_m2: f64,
+    /// Σ N0 before any rescaling (N).
+    pub raw_total_load_n: f64,
+    /// Σ N0 after rescaling (N).
+    pub total_load_n: f64,
+    /// Factor applied to every preload (1 without a target load).
+    pub load_scale: f64,
+    /// Nodes whose pressure evaluated negative (polynomial undershoot) and were set to zero.
+    pub clamped_negative: usize,
+    /// Whether areas came from a Delaunay triangulation.
+    pub areas_from_triangulation: bool,
+}
+
+/// Preloads of `nodes` placed by `placement` on a pressure field. `pressure_at(x, y)` returns the
+/// pressure (Pa) at a film-frame point or an error (e.g. point outside the map). Negative
+/// pressures (a polynomial undershooting near a patch edge) are set to zero and counted.
+pub fn preloads(
+    nodes: &[Node],
+    placement: &Placement,
+    pressure_at: impl Fn(f64, f64) -> Result<f64>,
+    total_load_n: Option<f64>,
+) -> Result<(Vec<Preload>, PreloadSummary)> {
+    placement.validate()?;
+    if let Some(f) = total_load_n {
+        crate::error::require_positive("total_load_n", f)?;
+    }
+    let film: Vec<(f64, f64)> = nodes
+        .iter()
+        .map(|n| placement.apply(n.x_m, n.y_m))
+        .collect();
+    let from_tri = nodes.iter().any(|n| n.area_m2.is_none());
+    let areas: Vec<f64> = if from_tri {
+        tributary_areas(&film)?
+    } else {
+        // Given areas are in the mesh frame: scale² maps them onto the film.
+        nodes
+            .iter()
+            .map(|n| n.area_m2.unwrap_or(0.0) * placement.scale * placement.scale)
+            .collect()
+    };
+    let mut clamped = 0;
+    let mut out = Vec::with_capacity(nodes.len());
+    for ((n, &(x, y)), &a) in nodes.iter().zip(&film).zip(&areas) {
+        let mut p = pressure_at(x, y).map_err(|e| match e {
+            Error::Data(m) => Error::Data(format!("node {}: {m}", n.id)),
+            other => other,
+        })?;
+        if p < 0.0 {
+            p = 0.0;
+            clamped += 1;
+        }
+        out.push(Preload {
+            id: n.id,
+            x_m: x,
+            y_m: y,
+            area_m2: a,
+            pressure_pa: p,
+            n0_n: p * a,
+        });
+    }
+    let raw: f64 = out.iter().map(|p| p.n0_n).sum();
+    let scale = match total_load_n {
+        Some(f) => {
+            if raw <= 0.0 {
+                return Err(Error::Data(
+                    "cannot rescale preloads to the total load: the pressure is zero at every node"
+                        .into(),
+                ));
+            }
+            f / raw
+        }
+        None => 1.0,
+    };
+    for p in out.iter_mut() {
+        p.n0_n *= scale;
+        p.pressure_pa *= scale;
+    }
+    let summary = PreloadSummary {
+        n_nodes: out.len(),
+        total_area_m2: areas.iter().sum(),
+        raw_total_load_n: raw,
+        total_load_n: out.iter().map(|p| p.n0_n).sum(),
+        load_scale: scale,
+        clamped_negative: clamped,
+        areas_from_triangulation: from_tri,
+    };
+    Ok((out, summary))
+}
+
+/// Write preloads as CSV with a units header.
+pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        for line in comment.lines() {
+            writeln!(w, "# {line}").map_err(io)?;
+        }
+        writeln!(
+            w,
+            "# units: x_m, y_m in m (film frame), area_m2 in m², pressure_Pa in Pa, N0_N in N"
+        )
+        .map_err(io)?;
+        writeln!(w, "id,x_m,y_m,area_m2,pressure_Pa,N0_N").map_err(io)?;
+        for p in rows {
+            writeln!(
+                w,
+                "{},{:.12e},{:.12e},{:.15e},{:.12e},{:.15e}",
+                p.id, p.x_m, p.y_m, p.area_m2, p.pressure_pa, p.n0_n
+            )
+            .map_err(io)?;
+        }
+        Ok(())
+    })
+}
+
+/// Read a preload CSV written by [`write_preloads_csv`].
+pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| match e.into_kind() {
+            csv::ErrorKind::Io(io) => Error::io(path, io),
+            k => Error::parse(path, 0, format!("{k:?}")),
+        })?;
+    let mut out: Vec<Preload> = Vec::new();
+    for rec in rdr.deserialize::<Preload>() {
+        let p = rec.map_err(|e| {
+            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+            Error::parse(
+                path,
+                line,
+                format!("expected columns id,x_m,y_m,area_m2,pressure_Pa,N0_N: {e}"),
+            )
+        })?;
+        let ok = [p.x_m, p.y_m, p.area_m2, p.pressure_pa, p.n0_n]
+            .iter()
+            .all(|v| v.is_finite())
+            && p.area_m2 > 0.0
+            && p.pressure_pa >= 0.0;
+        if !ok {
+            return Err(Error::parse(
+                path,
+                out.len() + 1,
+                format!(
+                    "node {}: values must be finite, area > 0 and pressure ≥ 0",
+                    p.id
+                ),
+            ));
+        }
+        out.push(p);
+    }
+    if out.is_empty() {
+        return Err(Error::parse(path, 0, "no preload rows"));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid_nodes(n: usize, h: f64) -> Vec<Node> {
+        let mut v = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                v.push(Node {
+                    id: (i * n + j) as u64 + 1,
+                    x_m: i as f64 * h,
+                    y_m: j as f64 * h,
+                    area_m2: None,
+                });
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn tributary_areas_sum_to_the_hull_area() {
+        let nodes = grid_nodes(6, 1e-3);
+        let pts: Vec<_> = nodes.iter().map(|n| (n.x_m, n.y_m)).collect();
+        let a = tributary_areas(&pts).unwrap();
+        let total: f64 = a.iter().sum();
+        assert!((total - 25e-6).abs() < 1e-15, "{total}");
+        assert!(a.iter().all(|&x| x > 0.0 && x < 2e-6));
+    }
+
+    #[test]
+    fn preloads_follow_pressure_and_rescale_to_total() {
+        let nodes = grid_nodes(5, 1e-3);
+        let place = Placement {
+            offset_x_m: 0.01,
+            offset_y_m: 0.02,
+            rotation_rad: 0.3,
+            scale: 1.0,
+        };
+        let sigma = |x: f64, y: f64| Ok(1e6 + 1e8 * (x - 0.01) + 5e7 * (y - 0.02));
+        let (p, s) = preloads(&nodes, &place, sigma, None).unwrap();
+        assert!((s.total_area_m2 - 16e-6).abs() < 1e-15);
+        for q in &p {
+            assert!((q.n0_n - q.pressure_pa * q.area_m2).abs() < 1e-12);
+        }
+        let (p, s) = preloads(&nodes, &place, sigma, Some(123.0)).unwrap();
+        let total: f64 = p.iter().map(|q| q.n0_n).sum();
+        assert!((total - 123.0).abs() <= 1e-9 * 123.0);
+        assert!((s.total_load_n - 123.0).abs() <= 1e-9 * 123.0);
+    }
+
+    #[test]
+    fn placement_rotates_counter_clockwise() {
+        let p = Placement {
+            offset_x_m: 1.0,
+            offset_y_m: 2.0,
+            rotation_rad: std::f64::consts::FRAC_PI_2,
+            scale: 2.0,
+        };
+        let (x, y) = p.apply(1.0, 0.0);
+        assert!((x - 1.0).abs() < 1e-12 && (y - 4.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,584 @@
+//! End to end through the binary: a synthetic film with one round patch of known pressure
+//! `σ = 6 − 3 (r/R)²` MPa → patch, fit, node preloads (placed by offset + rotation), rescaling to
+//! a total load, node reduction, and the element table joined with an example calibration table.
+//! Then the error paths: unreadable images, empty regions, non-monotone colour tables, nodes
+//! outside the map.
+
+use asperity::calibrate::table::{CalibrationRow, CalibrationTable};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const LW_TABLE: &str = ";Pressure,R,G,B\n0.00,255.0,255.0,255.0\n2.00,0.0,255.0,0.0\n2.50,255.0,227.0,227.0\n3.44,255.0,198.0,198.0\n4.38,255.0,170.0,170.0\n5.31,255.0,142.0,142.0\n6.25,255.0,113.0,113.0\n7.19,255.0,85.0,85.0\n8.13,255.0,57.0,57.0\n9.06,255.0,28.0,28.0\n10.00,255.0,255.0,0.0\n";
+
+const PIXEL_MM: f64 = 0.1;
+const N: u32 = 200;
+/// Patch centre (mm, film frame) and radius (mm).
+const CX: f64 = 10.0;
+const CY: f64 = 10.0;
+const R: f64 = 4.0;
+
+fn sigma_pa(x_mm: f64, y_mm: f64) -> f64 {
+    let r2 = ((x_mm - CX).powi(2) + (y_mm - CY).powi(2)) / (R * R);
+    6e6 - 3e6 * r2
+}
+
+fn lw_grey(p: f64) -> f64 {
+    let rows = [
+        (2.50e6, 227.0),
+        (3.44e6, 198.0),
+        (4.38e6, 170.0),
+        (5.31e6, 142.0),
+        (6.25e6, 113.0),
+    ];
+    let k = rows.windows(2).position(|w| p <= w[1].0).unwrap();
+    let (a, b) = (rows[k], rows[k + 1]);
+    a.1 + (p - a.0) / (b.0 - a.0) * (b.1 - a.1)
+}
+
+/// 8-bit film: the patch, a green pen stroke and a blue ink blot on white.
+fn render(path: &Path) {
+    let mut img = image::RgbImage::from_pixel(N, N, image::Rgb([255, 255, 255]));
+    for (c, r, px) in img.enumerate_pixels_mut() {
+        let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - r) as f64 * PIXEL_MM);
+        if (x - CX).hypot(y - CY) <= R {
+            let g = lw_grey(sigma_pa(x, y)).round() as u8;
+            *px = image::Rgb([255, g, g]);
+        } else if (2.0..18.0).contains(&x) && (16.0..18.0).contains(&y) {
+            *px = image::Rgb([0, 255, 0]);
+        } else if (1.0..3.0).contains(&x) && (1.0..3.0).contains(&y) {
+            *px = image::Rgb([20, 30, 200]);
+        }
+    }
+    img.save(path).unwrap();
+}
+
+/// Mesh-frame nodes on a 0.25 mm grid inside a disc of radius 3.5 mm about the origin.
+fn write_nodes(path: &Path, with_area: bool) {
+    let mut s = String::from(if with_area {
+        "id,x_m,y_m,area_m2\n"
+    } else {
+        "id,x_m,y_m\n"
+    });
+    let mut id = 100;
+    for i in -14i32..=14 {
+        for j in -14i32..=14 {
+            let (x, y) = (i as f64 * 0.25e-3, j as f64 * 0.25e-3);
+            if x.hypot(y) <= 3.5e-3 {
+                id += 1;
+                if with_area {
+                    s += &format!("{id},{x},{y},6.25e-8\n");
+                } else {
+                    s += &format!("{id},{x},{y}\n");
+                }
+            }
+        }
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+struct Setup {
+    _dir: tempfile::TempDir,
+    root: PathBuf,
+    image: PathBuf,
+    table: PathBuf,
+    nodes: PathBuf,
+}
+
+fn setup() -> Setup {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().to_path_buf();
+    let image = root.join("film.png");
+    render(&image);
+    let table = root.join("lw.csv");
+    std::fs::write(&table, LW_TABLE).unwrap();
+    let nodes = root.join("nodes.csv");
+    write_nodes(&nodes, false);
+    Setup {
+        _dir: dir,
+        root,
+        image,
+        table,
+        nodes,
+    }
+}
+
+/// Rows of a `#`-commented CSV as maps column → value.
+fn read_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
+    row[col].parse().unwrap()
+}
+
+#[test]
+fn film_to_preloads_to_reduced_nodes_to_elements() {
+    let st = setup();
+    let out = st.root.join("out");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--fit-order",
+        "4",
+        "--nodes",
+        s(&st.nodes),
+        "--node-offset-mm",
+        "10,10",
+        "--node-rotation-deg",
+        "30",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // One patch (the pen stroke and the ink blot are not patches), of radius 4 mm.
+    let regions = read_rows(&out.join("regions.csv"));
+    assert_eq!(regions.len(), 1);
+    let d = num(&regions[0], "equivalent_diameter_m");
+    assert!((d - 8e-3).abs() < 0.1e-3, "{d}");
+    assert!((num(&regions[0], "centre_x_m") - 10e-3).abs() < 0.05e-3);
+    assert!(num(&regions[0], "fit_R2") > 0.999);
+    for f in [
+        "pressure_map.png",
+        "pressure_map_Pa.npy",
+        "pressure_map.csv",
+        "region_1_fitted.png",
+        "region_1_residual.png",
+        "film.json",
+        "fit_coefficients.csv",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // Preloads follow the known field at the placed node positions (mesh (x, y) rotated 30° and
+    // offset by 10 mm: the radius is unchanged) and N0 = σ·A.
+    let pre = read_rows(&out.join("preload.csv"));
+    let mut raw_total = 0.0;
+    for r in &pre {
+        let (x, y) = (num(r, "x_m") * 1e3, num(r, "y_m") * 1e3);
+        let want = sigma_pa(x, y);
+        let got = num(r, "pressure_Pa");
+        assert!(
+            (got - want).abs() < 0.01 * want,
+            "node {}: {got} vs {want}",
+            r["id"]
+        );
+        assert!((num(r, "N0_N") - got * num(r, "area_m2")).abs() < 1e-9 * num(r, "N0_N"));
+        raw_total += num(r, "N0_N");
+    }
+    // Areas from the Delaunay triangulation sum to the hull of the node cloud (a bit under π·3.5²).
+    let area: f64 = pre.iter().map(|r| num(r, "area_m2")).sum();
+    assert!(
+        area < std::f64::consts::PI * 3.5e-3 * 3.5e-3
+            && area > 0.95 * std::f64::consts::PI * 3.5e-3 * 3.5e-3,
+        "{area}"
+    );
+
+    // Rescaled to a total load, then reduced.
+    let out2 = st.root.join("out2");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--nodes",
+        s(&st.nodes),
+        "--node-offset-mm",
+        "10,10",
+        "--node-rotation-deg",
+        "30",
+        "--total-load-n",
+        "150",
+        "--reduce-mesh-size-mm",
+        "1.0",
+        "--out-dir",
+        s(&out2),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pre2 = read_rows(&out2.join("preload.csv"));
+    let total: f64 = pre2.iter().map(|r| num(r, "N0_N")).sum();
+    assert!((total - 150.0).abs() <= 1e-9 * 150.0, "{total}");
+    // Rescaling multiplies every preload by the same factor.
+    let factor = 150.0 / raw_total;
+    for (a, b) in pre.iter().zip(&pre2) {
+        assert!((num(b, "N0_N") - factor * num(a, "N0_N")).abs() <= 1e-9 * num(b, "N0_N"));
+    }
+    let red = read_rows(&out2.join("preload_reduced.csv"));
+    assert!(
+        red.len() < pre2.len() / 5 && red.len() > 20,
+        "{} of {}",
+        red.len(),
+        pre2.len()
+    );
+    let red_area: f64 = red.iter().map(|r| num(r, "area_m2")).sum();
+    let red_load: f64 = red.iter().map(|r| num(r, "N0_N")).sum();
+    assert!(
+        (red_area - area).abs() <= 1e-9 * area,
+        "{red_area} vs {area}"
+    );
+    assert!((red_load - 150.0).abs() <= 1e-9 * 150.0, "{red_load}");
+
+    // Elements: an EXAMPLE calibration table written for this test (values of a plausible
+    // magnitude, not the reference table of calib/), 2–4 MPa, so that the hottest elements fall
+    // above its range.
+    let example = CalibrationTable::new(
+        [2e6, 3e6, 4e6]
+            .iter()
+            .map(|&p| CalibrationRow {
+                pressure_pa: p,
+                contact_area_ratio: 0.05 * p / 2e6,
+                kn_n_per_m3: 4e13 * p / 2e6,
+                e0_n_per_m3: 8e13 * p / 2e6,
+                k: 0.9,
+                mu: 0.6,
+                et_n_per_m3: 1e11,
+                fit_r2: 0.99,
+                energy_per_cycle_j_per_m2: 10.0,
+            })
+            .collect(),
+    )
+    .unwrap();
+    let table_csv = st.root.join("example-calibration-table.csv");
+    example.write_csv(&table_csv).unwrap();
+    let elements = st.root.join("elements.csv");
+    let o = run(&[
+        "elements",
+        "--preload",
+        s(&out2.join("preload_reduced.csv")),
+        "--table",
+        s(&table_csv),
+        "--out",
+        s(&elements),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_rows(&elements);
+    assert_eq!(rows.len(), red.len());
+    let mut above = 0;
+    for (e, r) in rows.iter().zip(&red) {
+        assert_eq!(e["id"], r["id"]);
+        let p = num(e, "pressure_Pa");
+        let a = num(e, "area_m2");
+        let v = example.interpolate(p);
+        assert!((num(e, "kn_N_per_m") - v.kn_n_per_m3 * a).abs() <= 1e-8 * v.kn_n_per_m3 * a);
+        assert!((num(e, "E0_N_per_m") - v.e0_n_per_m3 * a).abs() <= 1e-8 * v.e0_n_per_m3 * a);
+        assert!((num(e, "Et_N_per_m") - v.et_n_per_m3 * a).abs() <= 1e-8 * v.et_n_per_m3 * a);
+        assert_eq!(num(e, "mu"), 0.6);
+        let flag: i32 = e["out_of_range"].parse().unwrap();
+        assert_eq!(
+            flag,
+            if p > 4e6 {
+                1
+            } else if p < 2e6 {
+                -1
+            } else {
+                0
+            }
+        );
+        above += (flag == 1) as usize;
+    }
+    assert!(
+        above > 0,
+        "the example table should leave the hottest elements above its range"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains(&format!("{above} above")), "{stdout}");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(st.root.join("elements.json")).unwrap())
+            .unwrap();
+    assert_eq!(sidecar["summary"]["n_above_range"], above);
+    assert_eq!(sidecar["crate_version"], env!("CARGO_PKG_VERSION"));
+    let table_hash = asperity::elements::sha256_file(&table_csv).unwrap();
+    assert!(sidecar["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|i| i["sha256"] == table_hash.as_str()));
+}
+
+#[test]
+fn given_areas_are_used_and_scaled_by_the_placement() {
+    let st = setup();
+    let nodes = st.root.join("nodes_area.csv");
+    write_nodes(&nodes, true);
+    let out = st.root.join("out");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--nodes",
+        s(&nodes),
+        "--node-offset-mm",
+        "10,10",
+        "--node-scale",
+        "1.0",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pre = read_rows(&out.join("preload.csv"));
+    assert!(pre
+        .iter()
+        .all(|r| (num(r, "area_m2") - 6.25e-8).abs() < 1e-20));
+}
+
+fn assert_fails(o: &Output, needles: &[&str]) {
+    assert!(!o.status.success(), "should fail");
+    let err = String::from_utf8_lossy(&o.stderr);
+    for n in needles {
+        assert!(err.contains(n), "stderr should mention `{n}`: {err}");
+    }
+}
+
+#[test]
+fn bad_inputs_fail_clearly_and_write_nothing() {
+    let st = setup();
+    let out = st.root.join("out");
+    let base = |image: &Path, table: &Path| -> Vec<String> {
+        [
+            "film",
+            "--image",
+            s(image),
+            "--colour-table",
+            s(table),
+            "--pixel-size-mm",
+            "0.1",
+            "--out-dir",
+            s(&out),
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect()
+    };
+    let go = |args: Vec<String>| run(&args.iter().map(String::as_str).collect::<Vec<_>>());
+
+    // Unreadable image: text with a .png name, and a missing file.
+    let bogus = st.root.join("bogus.png");
+    std::fs::write(&bogus, "not an image").unwrap();
+    assert_fails(
+        &go(base(&bogus, &st.table)),
+        &["bogus.png", "cannot read image"],
+    );
+    assert_fails(
+        &go(base(&st.root.join("missing.png"), &st.table)),
+        &["missing.png"],
+    );
+
+    // Colour table not monotone in pressure: the file and line are named.
+    let bad_table = st.root.join("bad_table.csv");
+    std::fs::write(
+        &bad_table,
+        ";Pressure,R,G,B\n2.5,255,227,227\n4.0,255,198,198\n3.9,255,170,170\n",
+    )
+    .unwrap();
+    assert_fails(
+        &go(base(&st.image, &bad_table)),
+        &["bad_table.csv:4", "not monotone in pressure"],
+    );
+
+    // Empty region of interest.
+    let mut a = base(&st.image, &st.table);
+    a.extend(["--roi-rect-mm", "500,500,600,600"].map(String::from));
+    assert_fails(&go(a), &["contains no pixel"]);
+
+    // A region with no in-range pixel (the white corner).
+    let mut a = base(&st.image, &st.table);
+    a.extend(["--roi-rect-mm", "15,1,19,5"].map(String::from));
+    assert_fails(&go(a), &["no in-range pixel"]);
+
+    // An image without any patch.
+    let blank = st.root.join("blank.png");
+    image::RgbImage::from_pixel(50, 50, image::Rgb([255, 255, 255]))
+        .save(&blank)
+        .unwrap();
+    assert_fails(&go(base(&blank, &st.table)), &["no pressure patch"]);
+
+    // Nodes outside the map (placement far off), and outside the fitted patch.
+    let mut a = base(&st.image, &st.table);
+    a.extend(["--nodes", s(&st.nodes), "--node-offset-mm", "1000,1000"].map(String::from));
+    assert_fails(&go(a), &["outside the film map", "node "]);
+    let mut a = base(&st.image, &st.table);
+    a.extend(["--nodes", s(&st.nodes), "--node-offset-mm", "8,10"].map(String::from));
+    assert_fails(&go(a), &["extrapolate"]);
+
+    // Malformed nodes file.
+    let bad_nodes = st.root.join("bad_nodes.csv");
+    std::fs::write(&bad_nodes, "id,x_m,y_m\n1,0.0,0.0\n2,abc,0.0\n").unwrap();
+    let mut a = base(&st.image, &st.table);
+    a.extend(["--nodes", s(&bad_nodes), "--node-offset-mm", "10,10"].map(String::from));
+    assert_fails(&go(a), &["bad_nodes.csv:3", "x_m"]);
+
+    // Bad pixel size.
+    let mut a = base(&st.image, &st.table);
+    a[6] = "-0.1".into();
+    assert_fails(&go(a), &["pixel-size-mm"]);
+
+    // None of the failures left output behind.
+    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().count() == 0);
+
+    // Elements: malformed preload file.
+    let bad_pre = st.root.join("bad_preload.csv");
+    std::fs::write(
+        &bad_pre,
+        "id,x_m,y_m,area_m2,pressure_Pa,N0_N\n1,0,0,-1,1e6,1\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "elements",
+        "--preload",
+        s(&bad_pre),
+        "--table",
+        s(&st.table),
+        "--out",
+        s(&st.root.join("e.csv")),
+    ]);
+    assert_fails(&o, &["bad_preload.csv"]);
+    assert!(!st.root.join("e.csv").exists());
+}
+
+#[test]
+fn raw_grey_scan_with_density_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    // A grey disc of radius 3 mm (30 px at 0.1 mm) on white paper: luma 113 → optical density
+    // D = log10(255/113) = 0.35347.
+    let img = dir.path().join("scan.png");
+    let mut im = image::RgbImage::from_pixel(100, 100, image::Rgb([255, 255, 255]));
+    for (c, r, px) in im.enumerate_pixels_mut() {
+        if (c as f64 - 50.0).hypot(r as f64 - 50.0) <= 30.0 {
+            *px = image::Rgb([113, 113, 113]);
+        }
+    }
+    im.save(&img).unwrap();
+    let cal = dir.path().join("density.csv");
+    std::fs::write(
+        &cal,
+        "# optical density of luma -> MPa\ndensity,pressure_MPa\n0.1,1.0\n0.6,6.0\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&img),
+        "--density-calibration",
+        s(&cal),
+        "--pixel-size-mm",
+        "0.1",
+        "--fit-order",
+        "0",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let regions = read_rows(&out.join("regions.csv"));
+    assert_eq!(regions.len(), 1);
+    let d = (255.0f64 / 113.0).log10();
+    let want = 1e6 + (d - 0.1) / 0.5 * 5e6;
+    assert!((num(&regions[0], "mean_pressure_Pa") - want).abs() < 1e-6 * want);
+    // 2821 pixel centres within 30 px of the centre: the disc, no rim of paper.
+    assert_eq!(regions[0]["n_pixels"], "2821");
+}
+
+#[test]
+fn polygon_roi_and_jpeg_input() {
+    let st = setup();
+    // An octagon enclosing the patch (radius 4 mm about (10, 10) mm) but not the pen stroke.
+    let poly: Vec<String> = (0..8)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::FRAC_PI_4;
+            format!("{},{}", 10.0 + 5.0 * a.cos(), 10.0 + 5.0 * a.sin())
+        })
+        .collect();
+    let out = st.root.join("poly");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--roi-polygon-mm",
+        &poly.join(";"),
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_rows(&out.join("regions.csv"));
+    assert_eq!(r.len(), 1);
+    // Every pixel centre within 4 mm of the centre is in range; the rest of the octagon is paper.
+    let inside = (0..N * N)
+        .filter(|k| {
+            let (c, rr) = (k % N, k / N);
+            let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - rr) as f64 * PIXEL_MM);
+            (x - CX).hypot(y - CY) <= R
+        })
+        .count();
+    assert_eq!(r[0]["n_in_range"], inside.to_string());
+    assert_eq!(
+        num(&r[0], "n_in_range") + num(&r[0], "n_unstained"),
+        num(&r[0], "n_pixels")
+    );
+
+    // The same film as a JPEG (quality 95): compression noise stays within the colour distance
+    // inside the patch; the patch is found with the same size and mean pressure within 1 %.
+    let jpg = st.root.join("film.jpg");
+    image::open(&st.image)
+        .unwrap()
+        .to_rgb8()
+        .save_with_format(&jpg, image::ImageFormat::Jpeg)
+        .unwrap();
+    let out_j = st.root.join("jpg");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&jpg),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--out-dir",
+        s(&out_j),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j = read_rows(&out_j.join("regions.csv"));
+    assert_eq!(j.len(), 1, "{j:?}");
+    let (dj, pj) = (
+        num(&j[0], "equivalent_diameter_m"),
+        num(&j[0], "mean_pressure_Pa"),
+    );
+    let pp = num(&r[0], "mean_pressure_Pa");
+    assert!((dj - 8e-3).abs() < 0.2e-3, "{dj}");
+    assert!((pj - pp).abs() < 0.01 * pp, "{pj} vs {pp}");
+}
