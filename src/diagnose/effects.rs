@@ -120,7 +120,9 @@ impl Effect {
                     ]
                 }
             }
-            Effect::DirectionalFriction => vec![ParamSpec::tanh("direction_asymmetry", "-", 0.9)],
+            Effect::DirectionalFriction => {
+                vec![ParamSpec::symmetric("direction_asymmetry", "-", 0.9)]
+            }
         }
     }
 }
@@ -133,10 +135,10 @@ pub enum Transform {
     Log,
     /// `scale·z`.
     Linear,
-    /// `scale·tanh(z)` (bounded by ±scale).
-    Tanh,
-    /// `scale·σ(z)` with the logistic σ (in (0, scale)).
-    Logistic,
+    /// `lo + (hi − lo)·(sin z + 1)/2`: bounded in `[lo, hi]` without the vanishing sensitivity
+    /// of logistic or tanh maps near the bounds (the MINUIT transform for doubly bounded
+    /// parameters; James & Roos 1975). Here `lo = −scale` or `0` (`lower_zero`), `hi = scale`.
+    Sine { lower_zero: bool },
 }
 
 /// One model parameter: name, unit, transform, scale and the starting physical value.
@@ -169,20 +171,22 @@ impl ParamSpec {
             start,
         }
     }
-    pub fn tanh(name: &'static str, unit: &'static str, scale: f64) -> Self {
+    /// Bounded in `[−scale, scale]`, starting at 0.
+    pub fn symmetric(name: &'static str, unit: &'static str, scale: f64) -> Self {
         Self {
             name,
             unit,
-            transform: Transform::Tanh,
+            transform: Transform::Sine { lower_zero: false },
             scale,
             start: 0.0,
         }
     }
-    pub fn logistic(name: &'static str, unit: &'static str, scale: f64, start: f64) -> Self {
+    /// Bounded in `[0, scale]`.
+    pub fn unit_interval(name: &'static str, unit: &'static str, scale: f64, start: f64) -> Self {
         Self {
             name,
             unit,
-            transform: Transform::Logistic,
+            transform: Transform::Sine { lower_zero: true },
             scale,
             start,
         }
@@ -192,10 +196,11 @@ impl ParamSpec {
     pub fn value(&self, z: f64) -> f64 {
         self.scale
             * match self.transform {
-                Transform::Log => z.exp(),
+                // Bounded exponent: keeps every trial value finite (e^±40 ≈ 10^±17).
+                Transform::Log => z.clamp(-40.0, 40.0).exp(),
                 Transform::Linear => z,
-                Transform::Tanh => z.tanh(),
-                Transform::Logistic => 1.0 / (1.0 + (-z).exp()),
+                Transform::Sine { lower_zero: true } => 0.5 * (z.sin() + 1.0),
+                Transform::Sine { lower_zero: false } => z.sin(),
             }
     }
 
@@ -205,12 +210,14 @@ impl ParamSpec {
         match self.transform {
             Transform::Log => u.max(1e-300).ln(),
             Transform::Linear => u,
-            Transform::Tanh => u.clamp(-0.999_999, 0.999_999).atanh(),
-            Transform::Logistic => {
-                let u = u.clamp(1e-9, 1.0 - 1e-9);
-                (u / (1.0 - u)).ln()
-            }
+            Transform::Sine { lower_zero: true } => (2.0 * u - 1.0).clamp(-1.0, 1.0).asin(),
+            Transform::Sine { lower_zero: false } => u.clamp(-1.0, 1.0).asin(),
         }
+    }
+
+    /// Optimisation variable of the starting value `scale·start`.
+    pub fn start_z(&self) -> f64 {
+        self.z_of(self.scale * self.start)
     }
 
     /// Initial simplex step in `z`.
@@ -218,8 +225,7 @@ impl ParamSpec {
         match self.transform {
             Transform::Log => 0.7,
             Transform::Linear => 0.05,
-            Transform::Tanh => 0.05,
-            Transform::Logistic => 1.0,
+            Transform::Sine { .. } => 0.3,
         }
     }
 }
@@ -299,8 +305,19 @@ impl Model {
         c
     }
 
-    /// Simulated tangential force (N) for the drive.
+    /// Simulated tangential force (N) for the drive. A model with a non-finite or invalid
+    /// parameter (an optimiser's trial point) returns NaN forces.
     pub fn simulate(&self, drive: &Drive) -> Vec<f64> {
+        let n = drive.q_m.len();
+        let finite = self
+            .effects
+            .iter()
+            .all(|(_, v)| v.iter().all(|x| x.is_finite()))
+            && self.baseline.valanis.validate().is_ok()
+            && self.baseline.normal_n > 0.0;
+        if !finite {
+            return vec![f64::NAN; n];
+        }
         let mut p = self.baseline.valanis;
         if let Some(s) = self.effect(Effect::MacroslipSlope) {
             p.et = (p.et + s[0]).min(0.9 * p.e0);
@@ -312,7 +329,6 @@ impl Model {
             None => None,
         };
         let damping = self.effect(Effect::ViscousDamping).map_or(0.0, |c| c[0]);
-        let n = drive.q_m.len();
         let fz0 = self.baseline.normal_n * self.capacity(drive, 0);
         let limit0 = p.slip_limit(fz0);
         let mut state = ValanisState {
@@ -529,8 +545,8 @@ mod tests {
         for s in [
             ParamSpec::log("a", "-", 3.0, 0.1),
             ParamSpec::linear("b", "-", 0.0),
-            ParamSpec::tanh("c", "-", 0.9),
-            ParamSpec::logistic("d", "-", 0.98, 0.5),
+            ParamSpec::symmetric("c", "-", 0.9),
+            ParamSpec::unit_interval("d", "-", 0.98, 0.5),
         ] {
             let z = 0.37;
             assert!((s.z_of(s.value(z)) - z).abs() < 1e-9);
