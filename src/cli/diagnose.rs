@@ -4,7 +4,7 @@ use asperity::diagnose::report::{self, InputInfo, Outputs, Report};
 use asperity::diagnose::{diagnose, Baseline, BaselineSource, Columns, Options, Record};
 use asperity::element::valanis::ValanisParams;
 use asperity::error::require_positive;
-use asperity::Result;
+use asperity::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// Compare a Valanis element with a measured record (time, tangential displacement, tangential
@@ -101,7 +101,11 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let result = diagnose(&record, &options);
     bar.finish_and_clear();
-    let d = result?;
+    // Data errors of the analysis (no complete cycle, constant displacement, ...) name the file.
+    let d = result.map_err(|e| match e {
+        Error::Data(m) => Error::Data(format!("{}: {m}", args.record.display())),
+        other => other,
+    })?;
     let mut cols = vec![columns.time, columns.displacement, columns.force];
     cols.extend(columns.normal_force);
     let rep = Report::new(
