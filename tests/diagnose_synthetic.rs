@@ -46,6 +46,13 @@ fn truth(effect: Option<Effect>) -> Model {
 }
 
 fn synthesise(effect: Option<Effect>, seed: u64) -> Record {
+    synthesise_with_normal(effect, seed, false)
+}
+
+/// With `measured_normal`, the normal load varies as `N = 1000 N·(1 + 0.2 sin θ)` and is
+/// recorded (with 0.5 % noise); the force is generated with that load when `effect` is
+/// normal-load variation, with a constant load otherwise.
+fn synthesise_with_normal(effect: Option<Effect>, seed: u64, measured_normal: bool) -> Record {
     let tau = std::f64::consts::TAU;
     let n = (CYCLES * PER_CYCLE as f64) as usize + 1;
     let t: Vec<f64> = (0..n)
@@ -55,13 +62,17 @@ fn synthesise(effect: Option<Effect>, seed: u64) -> Record {
         .iter()
         .map(|&t| AMPLITUDE_M * (tau * FREQUENCY_HZ * t).sin())
         .collect();
+    let ratio: Vec<f64> = t
+        .iter()
+        .map(|&t| 1.0 + 0.2 * (tau * FREQUENCY_HZ * t).sin())
+        .collect();
     let drive = Drive {
         q_m: x.clone(),
         velocity_m_per_s: t
             .iter()
             .map(|&t| AMPLITUDE_M * tau * FREQUENCY_HZ * (tau * FREQUENCY_HZ * t).cos())
             .collect(),
-        normal_ratio: None,
+        normal_ratio: measured_normal.then(|| ratio.clone()),
         phase_rad: t.iter().map(|&t| tau * FREQUENCY_HZ * t).collect(),
         time_s: t.clone(),
         initial_force_n: 0.0,
@@ -69,13 +80,24 @@ fn synthesise(effect: Option<Effect>, seed: u64) -> Record {
         amplitude_m: AMPLITUDE_M,
         velocity_scale: tau * FREQUENCY_HZ * AMPLITUDE_M,
     };
-    let f = truth(effect).simulate(&drive);
+    let mut model = truth(effect);
+    if measured_normal && effect == Some(Effect::NormalLoadVariation) {
+        model.effects = vec![(Effect::NormalLoadVariation, vec![])];
+    }
+    let f = model.simulate(&drive);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let fnoise = Normal::new(0.0, FORCE_NOISE_N).unwrap();
     let xnoise = Normal::new(0.0, DISPLACEMENT_NOISE_M).unwrap();
     let f = f.iter().map(|v| v + fnoise.sample(&mut rng)).collect();
     let x = x.iter().map(|v| v + xnoise.sample(&mut rng)).collect();
-    Record::new(t, x, f, None).unwrap()
+    let normal = measured_normal.then(|| {
+        let g = Normal::new(0.0, 5.0).unwrap();
+        ratio
+            .iter()
+            .map(|r| 1000.0 * r + g.sample(&mut rng))
+            .collect()
+    });
+    Record::new(t, x, f, normal).unwrap()
 }
 
 struct Outcome {
@@ -84,11 +106,11 @@ struct Outcome {
     nrms_after: f64,
 }
 
-fn run(effect: Option<Effect>, baseline: &BaselineSource) -> Vec<Outcome> {
+fn run(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) -> Vec<Outcome> {
     (0..10u64)
         .into_par_iter()
         .map(|seed| {
-            let rec = synthesise(effect, 1000 + seed);
+            let rec = synthesise_with_normal(effect, 1000 + seed, normal);
             let options = Options {
                 baseline: baseline.clone(),
                 ..Options::default()
@@ -104,11 +126,11 @@ fn run(effect: Option<Effect>, baseline: &BaselineSource) -> Vec<Outcome> {
 }
 
 fn check(effect: Option<Effect>) {
-    check_with(effect, &BaselineSource::Fitted)
+    check_with(effect, &BaselineSource::Fitted, false)
 }
 
-fn check_with(effect: Option<Effect>, baseline: &BaselineSource) {
-    let out = run(effect, baseline);
+fn check_with(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) {
+    let out = run(effect, baseline, normal);
     for o in &out {
         eprintln!(
             "injected {:?}: first {:?}, nrms {:.4} -> {:.4}",
@@ -168,12 +190,13 @@ fn series_compliance_is_found_against_a_calibrated_baseline() {
     check_with(
         Some(Effect::SeriesCompliance),
         &BaselineSource::Given(truth(None).baseline),
+        false,
     );
 }
 
 #[test]
 fn no_effect_needed_against_a_calibrated_baseline() {
-    check_with(None, &BaselineSource::Given(truth(None).baseline));
+    check_with(None, &BaselineSource::Given(truth(None).baseline), false);
 }
 
 #[test]
@@ -184,4 +207,21 @@ fn normal_load_variation_is_found() {
 #[test]
 fn directional_friction_is_found() {
     check(Some(Effect::DirectionalFriction));
+}
+
+/// A measured normal force that varies over the cycle: the effect uses it as recorded (no
+/// parameter), and is found when the friction force follows it ...
+#[test]
+fn measured_normal_load_variation_is_found() {
+    check_with(
+        Some(Effect::NormalLoadVariation),
+        &BaselineSource::Fitted,
+        true,
+    );
+}
+
+/// ... and is not added when the friction force does not follow the recorded normal force.
+#[test]
+fn measured_normal_load_that_does_not_act_is_not_added() {
+    check_with(None, &BaselineSource::Fitted, true);
 }

@@ -12,6 +12,14 @@ use std::path::{Path, PathBuf};
 /// errors before and after (text, JSON, CSV, PNG).
 #[derive(clap::Args)]
 pub struct DiagnoseArgs {
+    /// Boxed: keeps the subcommand enum small.
+    #[command(flatten)]
+    pub args: Box<Flags>,
+}
+
+/// The flags of `asperity diagnose`.
+#[derive(clap::Args)]
+pub struct Flags {
     /// Measured record (CSV with a header row naming the columns).
     pub record: PathBuf,
     /// Time column (s).
@@ -73,6 +81,7 @@ fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String
 }
 
 pub fn run(args: DiagnoseArgs) -> Result<()> {
+    let args = *args.args;
     let columns = Columns {
         time: args.time_column.clone(),
         displacement: args.displacement_column.clone(),

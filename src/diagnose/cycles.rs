@@ -75,7 +75,7 @@ pub fn segment(time_s: &[f64], displacement_m: &[f64]) -> Result<Cycles> {
     let (lo, hi) = (percentile(x, 0.01), percentile(x, 0.99));
     let range = hi - lo;
     let scale = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if !(range > 1e-9 * scale) || range == 0.0 {
+    if range <= 1e-9 * scale || range == 0.0 || range.is_nan() {
         return Err(Error::Data(format!(
             "displacement is constant (range {range:.3e} m over {n} samples): no cycle to analyse"
         )));

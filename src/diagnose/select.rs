@@ -169,7 +169,7 @@ pub fn prepare(record: &Record) -> Result<Prepared> {
     });
     let force_scale =
         0.5 * (percentile(&record.force_n, 0.995) - percentile(&record.force_n, 0.005));
-    if !(force_scale > 0.0) {
+    if force_scale <= 0.0 || force_scale.is_nan() {
         return Err(Error::Data(
             "the measured force is constant: nothing to fit".into(),
         ));
