@@ -45,14 +45,10 @@ fn truth(effect: Option<Effect>) -> Model {
     }
 }
 
-fn synthesise(effect: Option<Effect>, seed: u64) -> Record {
-    synthesise_with_normal(effect, seed, false)
-}
-
 /// With `measured_normal`, the normal load varies as `N = 1000 N·(1 + 0.2 sin θ)` and is
 /// recorded (with 0.5 % noise); the force is generated with that load when `effect` is
 /// normal-load variation, with a constant load otherwise.
-fn synthesise_with_normal(effect: Option<Effect>, seed: u64, measured_normal: bool) -> Record {
+fn synthesise(effect: Option<Effect>, seed: u64, measured_normal: bool) -> Record {
     let tau = std::f64::consts::TAU;
     let n = (CYCLES * PER_CYCLE as f64) as usize + 1;
     let t: Vec<f64> = (0..n)
@@ -110,7 +106,7 @@ fn run(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) -> Vec<O
     (0..10u64)
         .into_par_iter()
         .map(|seed| {
-            let rec = synthesise_with_normal(effect, 1000 + seed, normal);
+            let rec = synthesise(effect, 1000 + seed, normal);
             let options = Options {
                 baseline: baseline.clone(),
                 ..Options::default()

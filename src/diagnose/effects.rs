@@ -372,6 +372,12 @@ fn inverse_link(f: f64, k: f64, gap: f64) -> f64 {
     f / k + gap * f.signum()
 }
 
+/// Drive displacement at which the link carries the element's current force (the previous
+/// step's drive position, to within its solver tolerance).
+fn q_previous(state: &ValanisState, _fz: f64, k: f64, gap: f64) -> f64 {
+    state.q + inverse_link(state.force, k, gap)
+}
+
 /// Advance the element behind a link to drive displacement `q`: find `y` with
 /// `F_v(y) = L(q − y)` by bracketed Illinois iteration.
 fn link_step(
@@ -388,9 +394,19 @@ fn link_step(
     };
     let bound = state.force.abs() + p.slip_limit(fz) + p.et * (state.q.abs() + q.abs() + gap);
     let width = gap + 1.1 * bound / k + 1e-15;
-    let (mut a, mut b) = (q - width, q + width);
+    // The previous step left F_v(y₀) = L(q₀ − y₀); for a drive increment Δq the root lies between
+    // "the element stays" (y₀) and "the element follows the drive" (y₀ + Δq). Try that narrow
+    // bracket (widened by a margin for the previous step's tolerance) before the wide one.
+    let (y0, dq) = (state.q, q - q_previous(state, fz, k, gap));
+    let margin = 1e-3 * dq.abs() + 1e-12 * width;
+    let (mut a, mut b) = (y0.min(y0 + dq) - margin, y0.max(y0 + dq) + margin);
     let (mut ha, _) = h(a);
     let (mut hb, _) = h(b);
+    if !(ha <= 0.0 && hb >= 0.0) {
+        (a, b) = (q - width, q + width);
+        ha = h(a).0;
+        hb = h(b).0;
+    }
     let mut grow = 0;
     while ha > 0.0 && grow < 60 {
         a -= 2.0 * (b - a);
