@@ -35,6 +35,7 @@ fn truth(effect: Option<Effect>) -> Model {
         Some(Effect::SeriesCompliance) => vec![1.0e6],
         Some(Effect::NormalLoadVariation) => vec![0.15, 0.10],
         Some(Effect::DirectionalFriction) => vec![0.12],
+        Some(Effect::StaticFrictionPeak) => vec![0.4, 0.25 * AMPLITUDE_M],
     };
     Model {
         baseline: Baseline {
@@ -220,4 +221,9 @@ fn measured_normal_load_variation_is_found() {
 #[test]
 fn measured_normal_load_that_does_not_act_is_not_added() {
     check_with(None, &BaselineSource::Fitted, true);
+}
+
+#[test]
+fn static_friction_peak_is_found() {
+    check(Some(Effect::StaticFrictionPeak));
 }

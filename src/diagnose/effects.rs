@@ -6,7 +6,7 @@
 //! modulated by the capacity effects:
 //!
 //! ```text
-//! Fz(t)   = N̄ · c_v(t) · c_d(t) · c_N(t)                   capacity effects
+//! Fz(t)   = N̄ · c_v(t) · c_d(t) · c_N(t) · c_s(t)          capacity effects
 //! F_v     = Valanis(y(t), Fz(t))  with  F_v(y) = L(x − y)   link: series spring and clearance
 //! F(t)    = F_v + c·ẋ                                        viscous damping
 //! ```
@@ -20,6 +20,7 @@
 //! | series compliance (rig flexibility) | link `L(u) = k_s·u` | `k_s` (N/m) |
 //! | normal load varying over the cycle | `c_N = N(t)/N̄` measured, or `1 + a₁cos θ + b₁ sin θ`, θ = 2π t/T | none, or `a₁`, `b₁` |
 //! | direction-dependent friction | `c_d = 1 + d·sign(ẋ)` | `d` |
+//! | static friction peak (breakaway) | `c_s = 1 + a·exp(−s/s₀)`, `s` = element travel since its last reversal (a slip-distance decay from static to dynamic friction, as in rate-and-state friction's characteristic slip distance; Dieterich 1979) | `a`, `s₀` (m) |
 //!
 //! The link equation `F_v(y) − L(x − y) = 0` is solved per time step for the element
 //! displacement `y` by a bracketed Illinois (regula falsi) iteration, with the element advanced
@@ -42,11 +43,12 @@ pub enum Effect {
     SeriesCompliance,
     NormalLoadVariation,
     DirectionalFriction,
+    StaticFrictionPeak,
 }
 
 impl Effect {
     /// Every candidate, in the order they are tested.
-    pub const ALL: [Effect; 7] = [
+    pub const ALL: [Effect; 8] = [
         Effect::MacroslipSlope,
         Effect::VelocityDependentFriction,
         Effect::ViscousDamping,
@@ -54,6 +56,7 @@ impl Effect {
         Effect::SeriesCompliance,
         Effect::NormalLoadVariation,
         Effect::DirectionalFriction,
+        Effect::StaticFrictionPeak,
     ];
 
     /// Identifier used in reports and JSON.
@@ -66,6 +69,7 @@ impl Effect {
             Effect::SeriesCompliance => "series_compliance",
             Effect::NormalLoadVariation => "normal_load_variation",
             Effect::DirectionalFriction => "directional_friction",
+            Effect::StaticFrictionPeak => "static_friction_peak",
         }
     }
 
@@ -87,6 +91,9 @@ impl Effect {
             }
             Effect::NormalLoadVariation => "the normal load varies over the cycle",
             Effect::DirectionalFriction => "friction differs between the two sliding directions",
+            Effect::StaticFrictionPeak => {
+                "friction peaks at breakaway after each stick and decays to dynamic over a slip distance"
+            }
         }
     }
 
@@ -120,6 +127,10 @@ impl Effect {
                     ]
                 }
             }
+            Effect::StaticFrictionPeak => vec![
+                ParamSpec::log("static_excess", "-", 1.0, 0.1),
+                ParamSpec::log("decay_slip_distance", "m", drive.amplitude_m, 0.05),
+            ],
             Effect::DirectionalFriction => {
                 vec![ParamSpec::symmetric("direction_asymmetry", "-", 0.9)]
             }
@@ -329,7 +340,13 @@ impl Model {
             None => None,
         };
         let damping = self.effect(Effect::ViscousDamping).map_or(0.0, |c| c[0]);
-        let fz0 = self.baseline.normal_n * self.capacity(drive, 0);
+        // Static friction peak: capacity × (1 + a·exp(−s/s₀)), s = element travel since its
+        // last reversal of motion (evaluated at the start of each step).
+        let peak = self
+            .effect(Effect::StaticFrictionPeak)
+            .map(|v| (v[0], v[1]));
+        let breakaway = |s: f64| peak.map_or(1.0, |(a, s0)| 1.0 + a * (-s / s0).exp());
+        let fz0 = self.baseline.normal_n * self.capacity(drive, 0) * breakaway(0.0);
         let limit0 = p.slip_limit(fz0);
         let mut state = ValanisState {
             force: drive.initial_force_n.clamp(-limit0, limit0),
@@ -343,13 +360,22 @@ impl Model {
         }
         let mut out = Vec::with_capacity(n);
         out.push(state.force + damping * drive.velocity_m_per_s[0]);
+        let (mut y_rev, mut dir) = (state.q, 0.0_f64);
         for i in 1..n {
-            let fz = self.baseline.normal_n * self.capacity(drive, i);
+            let fz = self.baseline.normal_n
+                * self.capacity(drive, i)
+                * breakaway((state.q - y_rev).abs());
             let q = drive.q_m[i];
+            let y_prev = state.q;
             state = match link_k {
                 None => implicit_euler_step(&p, &state, q, fz),
                 Some(k) => link_step(&p, &state, q, fz, k, gap),
             };
+            let dy = state.q - y_prev;
+            if dy != 0.0 && dy.signum() != dir {
+                y_rev = y_prev;
+                dir = dy.signum();
+            }
             out.push(state.force + damping * drive.velocity_m_per_s[i]);
         }
         out
