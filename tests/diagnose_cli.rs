@@ -150,3 +150,103 @@ fn one_complete_cycle_is_not_enough_to_score() {
     let p = write_record(dir.path(), "one.csv", &sine_rows(1.6, 200, 1e-3));
     fails_with(&p, &["one.csv", "at least 2"]);
 }
+
+/// The `--table` path: the baseline element comes from a calibration table (per unit area) at
+/// the given pressure and area, unchanged. The record is synthesised from that same element
+/// behind a 50 µm clearance, so the report must keep the tabulated element (E0·A, μ, N = p·A)
+/// and find the clearance.
+#[test]
+fn baseline_from_a_calibration_table() {
+    use asperity::diagnose::effects::Drive;
+    use asperity::diagnose::{Baseline, Effect, Model};
+    use asperity::element::valanis::ValanisParams;
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("table.csv");
+    std::fs::write(
+        &table,
+        "pressure_Pa,contact_area_ratio,kn_N_per_m3,E0_N_per_m3,k,mu,Et_N_per_m3,fit_R2,energy_per_cycle_J_per_m2\n\
+         1.0e5,0.01,1.0e11,2.0e9,0.3,0.5,0.0,0.99,1.0\n\
+         1.0e7,0.10,1.0e12,2.0e10,0.3,0.5,0.0,0.99,10.0\n",
+    )
+    .unwrap();
+    // At 1e5 Pa over 1e-3 m²: E0 = 2e6 N/m, N = 100 N, slip force 50 N.
+    let (amp, per_cycle, tau) = (1e-3, 160usize, std::f64::consts::TAU);
+    let n = 4 * per_cycle + per_cycle / 2;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 / per_cycle as f64).collect();
+    let x: Vec<f64> = t.iter().map(|&t| amp * (tau * t).sin()).collect();
+    let drive = Drive {
+        q_m: x.clone(),
+        velocity_m_per_s: t.iter().map(|&t| amp * tau * (tau * t).cos()).collect(),
+        normal_ratio: None,
+        phase_rad: t.iter().map(|&t| tau * t).collect(),
+        time_s: t.clone(),
+        initial_force_n: 0.0,
+        force_scale_n: 50.0,
+        amplitude_m: amp,
+        velocity_scale: amp * tau,
+    };
+    let model = Model {
+        baseline: Baseline {
+            valanis: ValanisParams::new(2e6, 0.3, 0.0, 0.5).unwrap(),
+            normal_n: 100.0,
+        },
+        effects: vec![(Effect::Backlash, vec![5e-5])],
+    };
+    let f = model.simulate(&drive);
+    let rows: Vec<String> = (0..n)
+        .map(|i| format!("{},{},{}", t[i], x[i], f[i]))
+        .collect();
+    let rec = write_record(dir.path(), "rig.csv", &rows);
+    let out = dir.path().join("out");
+    let o = run(&[
+        rec.to_str().unwrap(),
+        "--table",
+        table.to_str().unwrap(),
+        "--pressure-pa",
+        "1e5",
+        "--area-m2",
+        "1e-3",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("diagnose.json")).unwrap()).unwrap();
+    let b = &json["baseline"];
+    assert!((b["valanis"]["e0"].as_f64().unwrap() / 2e6 - 1.0).abs() < 1e-12);
+    assert!((b["normal_n"].as_f64().unwrap() / 100.0 - 1.0).abs() < 1e-12);
+    assert!(json["input"]["baseline_source"]
+        .as_str()
+        .unwrap()
+        .contains("calibration table"));
+    assert_eq!(json["effects_added"][0], "backlash");
+    let gap = json["final_model"]["effects"][0][1][0].as_f64().unwrap();
+    assert!((gap / 5e-5 - 1.0).abs() < 0.05, "gap {gap}");
+    // A pressure outside the table is used at the end row, with a warning.
+    let o = run(&[
+        rec.to_str().unwrap(),
+        "--table",
+        table.to_str().unwrap(),
+        "--pressure-pa",
+        "1e4",
+        "--area-m2",
+        "1e-3",
+        "--max-effects",
+        "0",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("outside the table's range"));
+    // A negative area is an error naming the flag.
+    let o = run(&[
+        rec.to_str().unwrap(),
+        "--table",
+        table.to_str().unwrap(),
+        "--pressure-pa",
+        "1e5",
+        "--area-m2=-1",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--area-m2"));
+}
