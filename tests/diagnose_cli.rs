@@ -48,7 +48,10 @@ fn measured(name: &str) {
         assert!(img.width() > 100);
     }
     let csv = std::fs::read_to_string(out.join("diagnose.csv")).unwrap();
-    assert!(csv.contains("time_s,displacement_m,measured_force_N,baseline_force_N,final_force_N"));
+    assert!(csv.contains(
+        "time_s,displacement_m,measured_force_N,baseline_force_N,final_force_N,\
+         residual_before_N,residual_after_N,phase"
+    ));
 }
 
 #[test]
@@ -220,7 +223,8 @@ fn baseline_from_a_calibration_table() {
         .unwrap()
         .contains("calibration table"));
     assert_eq!(json["effects_added"][0], "backlash");
-    let gap = json["final_model"]["effects"][0][1][0].as_f64().unwrap();
+    let gap = json["final_effect_parameters"][0][2].as_f64().unwrap();
+    assert_eq!(json["final_effect_parameters"][0][1], "gap (m)");
     assert!((gap / 5e-5 - 1.0).abs() < 0.05, "gap {gap}");
     // A pressure outside the table is used at the end row, with a warning.
     let o = run(&[

@@ -4,6 +4,7 @@
 //! Units: displacement m (figures in mm), force N, energy J, stiffness N/m. Error measures are
 //! dimensionless (see [`super::select::Errors`]).
 
+use super::cycles::classify_phases;
 use super::select::{Candidate, Diagnosis, Errors, FitInfo, PhaseStats, Round};
 use super::{Baseline, Effect};
 use crate::error::{Error, Result};
@@ -42,6 +43,8 @@ pub struct Report {
     pub effects_added: Vec<Effect>,
     pub conclusion: String,
     pub final_model: super::Model,
+    /// Fitted parameters of the effects added, with units: `(effect, name (unit), value)`.
+    pub final_effect_parameters: Vec<(Effect, String, f64)>,
     pub parameters_before: usize,
     pub parameters_after: usize,
     pub errors_before: Errors,
@@ -74,6 +77,17 @@ impl Report {
             effects_added: added,
             conclusion,
             final_model: d.final_model.clone(),
+            final_effect_parameters: d
+                .final_model
+                .effects
+                .iter()
+                .flat_map(|(e, v)| {
+                    e.params(&p.drive)
+                        .into_iter()
+                        .zip(v.clone())
+                        .map(move |(s, x)| (*e, format!("{} ({})", s.name, s.unit), x))
+                })
+                .collect(),
             parameters_before: d.n_parameters_before,
             parameters_after: d.n_parameters_after,
             errors_before: d.errors_before,
@@ -162,7 +176,11 @@ impl Report {
                     .to_string(),
             };
         }
-        s += &format!("\nconclusion: {}\n\n", self.conclusion);
+        s += &format!("\nconclusion: {}\n", self.conclusion);
+        for (e, name, v) in &self.final_effect_parameters {
+            s += &format!("  {}: {name} = {v:.4e}\n", e.id());
+        }
+        s += "\n";
         s += &format!(
             "errors (all complete cycles)     before       after\n\
              normalised RMS force error  {:>11.4e} {:>11.4e}\n\
@@ -286,14 +304,23 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         .map_err(io)?;
         writeln!(
             w,
-            "time_s,displacement_m,measured_force_N,baseline_force_N,final_force_N"
+            "time_s,displacement_m,measured_force_N,baseline_force_N,final_force_N,\
+             residual_before_N,residual_after_N,phase"
         )
         .map_err(io)?;
+        let phases = classify_phases(x, &d.baseline_force, &p.cycles);
         for i in 0..t.len() {
             writeln!(
                 w,
-                "{:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
-                t[i], x[i], y[i], d.baseline_force[i], d.final_force[i]
+                "{:.9e},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e},{}",
+                t[i],
+                x[i],
+                y[i],
+                d.baseline_force[i],
+                d.final_force[i],
+                y[i] - d.baseline_force[i],
+                y[i] - d.final_force[i],
+                phases[i].map_or("outside_cycles", |ph| ph.name())
             )
             .map_err(io)?;
         }
