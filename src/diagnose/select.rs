@@ -375,7 +375,7 @@ pub struct Errors {
     pub peak_force_error: f64,
     /// Mean over cycles of |E_model − E_measured| / E_measured, `E = ∮F dx` (J).
     pub energy_error: f64,
-    /// Same three on the held-out cycles only: RMS.
+    /// Normalised RMS force error on the held-out cycles only.
     pub held_out_nrms: f64,
 }
 
@@ -708,6 +708,41 @@ mod tests {
             assert!((s[i] - x[i]).abs() < 1e-12);
             assert!((d[i] - (0.5 - 0.06 * i as f64)).abs() < 1e-12);
         }
+    }
+
+    /// A force scaled by 1.1 has exactly 10 % energy and peak errors, and an RMS error of
+    /// 0.1·RMS(F)/force amplitude; the measured force itself has none.
+    #[test]
+    fn error_measures_of_a_scaled_force() {
+        let per = 200;
+        let n = 3 * per + per / 2;
+        let tau = std::f64::consts::TAU;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 / per as f64).collect();
+        let x: Vec<f64> = t.iter().map(|&t| 1e-3 * (tau * t).sin()).collect();
+        let y: Vec<f64> = t.iter().map(|&t| 50.0 * (tau * t + 0.5).cos()).collect();
+        let rec = Record::new(t, x, y.clone(), None).unwrap();
+        let prep = prepare(&rec).unwrap();
+        let e0 = errors(&prep, &y);
+        assert_eq!(
+            (e0.nrms, e0.peak_force_error, e0.energy_error),
+            (0.0, 0.0, 0.0)
+        );
+        let f: Vec<f64> = y.iter().map(|v| 1.1 * v).collect();
+        let e = errors(&prep, &f);
+        assert!((e.energy_error - 0.1).abs() < 1e-12, "{}", e.energy_error);
+        let fs = prep.drive.force_scale_n;
+        assert!(
+            (e.peak_force_error - 0.1 * 50.0 / fs).abs() < 2e-3,
+            "{}",
+            e.peak_force_error
+        );
+        // RMS of a sinusoid of amplitude 50 N is 50/√2 (whole cycles).
+        let expected = 0.1 * 50.0 / 2f64.sqrt() / fs;
+        assert!(
+            (e.nrms / expected - 1.0).abs() < 0.01,
+            "{} vs {expected}",
+            e.nrms
+        );
     }
 
     #[test]
