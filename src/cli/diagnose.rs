@@ -1,8 +1,140 @@
+//! Closing the loop: compare a model with measured hysteresis, find and add the missing effect.
+use asperity::calibrate::table::CalibrationTable;
+use asperity::diagnose::report::{self, InputInfo, Outputs, Report};
+use asperity::diagnose::{diagnose, Baseline, BaselineSource, Columns, Options, Record};
+use asperity::element::valanis::ValanisParams;
+use asperity::error::require_positive;
 use asperity::{Error, Result};
+use std::path::{Path, PathBuf};
 
+/// Compare a Valanis element with a measured record (time, tangential displacement, tangential
+/// force, optional normal force), find the missing effect on held-out cycles, and report the
+/// errors before and after (text, JSON, CSV, PNG).
 #[derive(clap::Args)]
-pub struct DiagnoseArgs {}
+pub struct DiagnoseArgs {
+    /// Boxed: keeps the subcommand enum small.
+    #[command(flatten)]
+    pub args: Box<Flags>,
+}
 
-pub fn run(_args: DiagnoseArgs) -> Result<()> {
-    Err(Error::Data("`diagnose` is not implemented yet".into()))
+/// The flags of `asperity diagnose`.
+#[derive(clap::Args)]
+pub struct Flags {
+    /// Measured record (CSV with a header row naming the columns).
+    pub record: PathBuf,
+    /// Time column (s).
+    #[arg(long, default_value = "time_s")]
+    pub time_column: String,
+    /// Tangential displacement column (m).
+    #[arg(long, default_value = "displacement_m")]
+    pub displacement_column: String,
+    /// Tangential force column (N).
+    #[arg(long, default_value = "friction_force_N")]
+    pub force_column: String,
+    /// Normal force column (N), when the normal load was measured.
+    #[arg(long)]
+    pub normal_force_column: Option<String>,
+    /// Calibration table (CSV, per unit area) giving the baseline element instead of fitting it.
+    #[arg(long, requires_all = ["pressure_pa", "area_m2"])]
+    pub table: Option<PathBuf>,
+    /// Nominal contact pressure (Pa) at which the table is read.
+    #[arg(long, requires = "table")]
+    pub pressure_pa: Option<f64>,
+    /// Nominal contact area (m²): per-area stiffnesses × area give the element's (N/m).
+    #[arg(long, requires = "table")]
+    pub area_m2: Option<f64>,
+    /// Maximum number of effects to add (each must be supported by the held-out evidence).
+    #[arg(long, default_value_t = 2)]
+    pub max_effects: usize,
+    /// Output directory: diagnose.{txt,json,csv}, diagnose-loops.png, diagnose-residual.png.
+    #[arg(long, default_value = "diagnose-out")]
+    pub out_dir: PathBuf,
+}
+
+/// Baseline element from a calibration table at pressure `p` (Pa) over area `a` (m²):
+/// `E0 = E0''·a`, `Et = Et''·a` (N/m), `N = p·a` (N), `k`, `μ` as tabulated.
+fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String)> {
+    require_positive("--pressure-pa", p)?;
+    require_positive("--area-m2", a)?;
+    let table = CalibrationTable::read_csv(path)?;
+    let row = table.interpolate(p);
+    let valanis = ValanisParams::new(row.e0_n_per_m3 * a, row.k, row.et_n_per_m3 * a, row.mu)?;
+    let mut source = format!(
+        "from calibration table {} at {p:.4e} Pa over {a:.4e} m²",
+        path.display()
+    );
+    if !row.in_range {
+        let (lo, hi) = table.pressure_range();
+        eprintln!(
+            "warning: {p:.4e} Pa is outside the table's range [{lo:.4e}, {hi:.4e}] Pa; \
+             the end row is used"
+        );
+        source += " (outside the table's range: end row used)";
+    }
+    Ok((
+        BaselineSource::Given(Baseline {
+            valanis,
+            normal_n: p * a,
+        }),
+        source,
+    ))
+}
+
+pub fn run(args: DiagnoseArgs) -> Result<()> {
+    let args = *args.args;
+    let columns = Columns {
+        time: args.time_column.clone(),
+        displacement: args.displacement_column.clone(),
+        force: args.force_column.clone(),
+        normal_force: args.normal_force_column.clone(),
+    };
+    let record = Record::read_csv(&args.record, &columns)?;
+    let (baseline, source) = match (&args.table, args.pressure_pa, args.area_m2) {
+        (Some(table), Some(p), Some(a)) => table_baseline(table, p, a)?,
+        _ => (
+            BaselineSource::Fitted,
+            "fitted to the training cycles".to_string(),
+        ),
+    };
+    let options = Options {
+        baseline,
+        max_effects: args.max_effects,
+        ..Options::default()
+    };
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_message(format!(
+        "diagnosing {} ({} samples): fitting baseline and candidate effects",
+        args.record.display(),
+        record.len()
+    ));
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let result = diagnose(&record, &options);
+    bar.finish_and_clear();
+    // Data errors of the analysis (no complete cycle, constant displacement, ...) name the file.
+    let d = result.map_err(|e| match e {
+        Error::Data(m) => Error::Data(format!("{}: {m}", args.record.display())),
+        other => other,
+    })?;
+    let mut cols = vec![columns.time, columns.displacement, columns.force];
+    cols.extend(columns.normal_force);
+    let rep = Report::new(
+        &d,
+        InputInfo {
+            file: args.record.display().to_string(),
+            columns: cols,
+            baseline_source: source,
+        },
+    );
+    let out = Outputs::in_dir(&args.out_dir);
+    report::write(&d, &rep, &out)?;
+    print!("{}", rep.text());
+    println!(
+        "\nwrote {}, {}, {}, {}, {}",
+        out.text.display(),
+        out.json.display(),
+        out.csv.display(),
+        out.loops_png.display(),
+        out.residual_png.display()
+    );
+    Ok(())
 }

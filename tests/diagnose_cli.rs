@@ -1,0 +1,256 @@
+//! End-to-end tests of `asperity diagnose` through the binary: the measured friction-damper loops
+//! (done-when 2) and the error paths (done-when 3).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .arg("diagnose")
+        .args(args)
+        .output()
+        .expect("run asperity")
+}
+
+/// Diagnose one measured record; check that the report names an effect and that the
+/// normalised RMS force error drops, on all cycles and on the held-out ones.
+fn measured(name: &str) {
+    let Some(path) = asperity::testdata::reference_file(&format!("loops/{name}")) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = run(&[path.to_str().unwrap(), "--out-dir", out.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    eprintln!("{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("diagnose.json")).unwrap()).unwrap();
+    let added = json["effects_added"].as_array().unwrap();
+    assert!(!added.is_empty(), "no effect found on {name}");
+    let before = json["errors_before"]["nrms"].as_f64().unwrap();
+    let after = json["errors_after"]["nrms"].as_f64().unwrap();
+    let held_before = json["errors_before"]["held_out_nrms"].as_f64().unwrap();
+    let held_after = json["errors_after"]["held_out_nrms"].as_f64().unwrap();
+    assert!(after < 0.9 * before, "nrms {before} -> {after}");
+    assert!(
+        held_after < 0.9 * held_before,
+        "held-out nrms {held_before} -> {held_after}"
+    );
+    let text = std::fs::read_to_string(out.join("diagnose.txt")).unwrap();
+    assert!(text.contains("effect found:"), "{text}");
+    for png in ["diagnose-loops.png", "diagnose-residual.png"] {
+        let img = image::open(out.join(png)).unwrap();
+        assert!(img.width() > 100);
+    }
+    let csv = std::fs::read_to_string(out.join("diagnose.csv")).unwrap();
+    assert!(csv.contains(
+        "time_s,displacement_m,measured_force_N,baseline_force_N,final_force_N,\
+         residual_before_N,residual_after_N,phase"
+    ));
+}
+
+#[test]
+fn measured_loops_half_inch() {
+    measured("brfd-dataset2-0.5Hz30lbtension0.5amplitude.csv");
+}
+
+#[test]
+fn measured_loops_one_inch() {
+    measured("brfd-dataset2-0.5Hz30lbtension1amplitude.csv");
+}
+
+#[test]
+fn measured_loops_one_and_a_half_inch() {
+    measured("brfd-dataset2-0.5Hz30lbtension1.5amplitude.csv");
+}
+
+fn write_record(dir: &Path, name: &str, rows: &[String]) -> PathBuf {
+    let p = dir.join(name);
+    let mut s = String::from("time_s,displacement_m,friction_force_N\n");
+    for r in rows {
+        s += r;
+        s += "\n";
+    }
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn sine_rows(cycles: f64, per_cycle: usize, amplitude: f64) -> Vec<String> {
+    let n = (cycles * per_cycle as f64) as usize;
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / per_cycle as f64;
+            let x = amplitude * (std::f64::consts::TAU * t).sin();
+            format!("{t},{x},{}", 100.0 * (x / 1e-4).tanh())
+        })
+        .collect()
+}
+
+/// The command fails with a message containing every `needle`, and writes no output.
+fn fails_with(input: &Path, needles: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = run(&[input.to_str().unwrap(), "--out-dir", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "should fail: {err}");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` not in: {err}");
+    }
+    assert!(!out.exists(), "no output may be written on error");
+}
+
+#[test]
+fn record_without_a_complete_cycle_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_record(dir.path(), "short.csv", &sine_rows(0.9, 200, 1e-3));
+    fails_with(&p, &["short.csv", "no complete cycle"]);
+}
+
+#[test]
+fn mismatched_column_lengths_are_rejected_with_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rows = sine_rows(3.0, 200, 1e-3);
+    rows[100] = "0.5,1e-4".into();
+    let p = write_record(dir.path(), "ragged.csv", &rows);
+    // Header is line 1, so rows[100] is line 102.
+    fails_with(&p, &["ragged.csv:102", "mismatched column lengths"]);
+}
+
+#[test]
+fn constant_displacement_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows: Vec<String> = (0..600)
+        .map(|i| format!("{},{},{}", i as f64 * 1e-3, 2e-3, 5.0))
+        .collect();
+    let p = write_record(dir.path(), "constant.csv", &rows);
+    fails_with(&p, &["constant.csv", "displacement is constant"]);
+}
+
+#[test]
+fn missing_column_and_file_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_record(dir.path(), "ok.csv", &sine_rows(3.0, 200, 1e-3));
+    let o = run(&[p.to_str().unwrap(), "--force-column", "force_kN"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("ok.csv:1") && err.contains("force_kN"),
+        "{err}"
+    );
+    let o = run(&["/nonexistent/record.csv"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/record.csv"));
+}
+
+#[test]
+fn one_complete_cycle_is_not_enough_to_score() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_record(dir.path(), "one.csv", &sine_rows(1.6, 200, 1e-3));
+    fails_with(&p, &["one.csv", "at least 2"]);
+}
+
+/// The `--table` path: the baseline element comes from a calibration table (per unit area) at
+/// the given pressure and area, unchanged. The record is synthesised from that same element
+/// behind a 50 µm clearance, so the report must keep the tabulated element (E0·A, μ, N = p·A)
+/// and find the clearance.
+#[test]
+fn baseline_from_a_calibration_table() {
+    use asperity::diagnose::effects::Drive;
+    use asperity::diagnose::{Baseline, Effect, Model};
+    use asperity::element::valanis::ValanisParams;
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("table.csv");
+    std::fs::write(
+        &table,
+        "pressure_Pa,contact_area_ratio,kn_N_per_m3,E0_N_per_m3,k,mu,Et_N_per_m3,fit_R2,energy_per_cycle_J_per_m2\n\
+         1.0e5,0.01,1.0e11,2.0e9,0.3,0.5,0.0,0.99,1.0\n\
+         1.0e7,0.10,1.0e12,2.0e10,0.3,0.5,0.0,0.99,10.0\n",
+    )
+    .unwrap();
+    // At 1e5 Pa over 1e-3 m²: E0 = 2e6 N/m, N = 100 N, slip force 50 N.
+    let (amp, per_cycle, tau) = (1e-3, 160usize, std::f64::consts::TAU);
+    let n = 4 * per_cycle + per_cycle / 2;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 / per_cycle as f64).collect();
+    let x: Vec<f64> = t.iter().map(|&t| amp * (tau * t).sin()).collect();
+    let drive = Drive {
+        q_m: x.clone(),
+        velocity_m_per_s: t.iter().map(|&t| amp * tau * (tau * t).cos()).collect(),
+        normal_ratio: None,
+        phase_rad: t.iter().map(|&t| tau * t).collect(),
+        time_s: t.clone(),
+        initial_force_n: 0.0,
+        force_scale_n: 50.0,
+        amplitude_m: amp,
+        velocity_scale: amp * tau,
+    };
+    let model = Model {
+        baseline: Baseline {
+            valanis: ValanisParams::new(2e6, 0.3, 0.0, 0.5).unwrap(),
+            normal_n: 100.0,
+        },
+        effects: vec![(Effect::Backlash, vec![5e-5])],
+    };
+    let f = model.simulate(&drive);
+    let rows: Vec<String> = (0..n)
+        .map(|i| format!("{},{},{}", t[i], x[i], f[i]))
+        .collect();
+    let rec = write_record(dir.path(), "rig.csv", &rows);
+    let out = dir.path().join("out");
+    let o = run(&[
+        rec.to_str().unwrap(),
+        "--table",
+        table.to_str().unwrap(),
+        "--pressure-pa",
+        "1e5",
+        "--area-m2",
+        "1e-3",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("diagnose.json")).unwrap()).unwrap();
+    let b = &json["baseline"];
+    assert!((b["valanis"]["e0"].as_f64().unwrap() / 2e6 - 1.0).abs() < 1e-12);
+    assert!((b["normal_n"].as_f64().unwrap() / 100.0 - 1.0).abs() < 1e-12);
+    assert!(json["input"]["baseline_source"]
+        .as_str()
+        .unwrap()
+        .contains("calibration table"));
+    assert_eq!(json["effects_added"][0], "backlash");
+    let gap = json["final_effect_parameters"][0][2].as_f64().unwrap();
+    assert_eq!(json["final_effect_parameters"][0][1], "gap (m)");
+    assert!((gap / 5e-5 - 1.0).abs() < 0.05, "gap {gap}");
+    // A pressure outside the table is used at the end row, with a warning.
+    let o = run(&[
+        rec.to_str().unwrap(),
+        "--table",
+        table.to_str().unwrap(),
+        "--pressure-pa",
+        "1e4",
+        "--area-m2",
+        "1e-3",
+        "--max-effects",
+        "0",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("outside the table's range"));
+    // A negative area is an error naming the flag.
+    let o = run(&[
+        rec.to_str().unwrap(),
+        "--table",
+        table.to_str().unwrap(),
+        "--pressure-pa",
+        "1e5",
+        "--area-m2=-1",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--area-m2"));
+}
