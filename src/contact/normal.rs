@@ -172,6 +172,10 @@ pub struct NormalSolver {
     height_scale: f64,
     plan: FftPlan,
     kernel: KernelSpectrum,
+    /// Displacement of a grid point under unit pressure on itself (m/Pa), relative to the
+    /// patch mean for periodic kernels: the step length used to let penetrating points enter
+    /// when the conjugate direction vanishes (a contact set of a single point).
+    self_compliance: f64,
     ws: ConvolutionWorkspace,
     options: NormalOptions,
     // Work arrays, reused.
@@ -269,6 +273,9 @@ impl NormalSolver {
         let kernel = boussinesq_spectrum(&plan, s.dx, s.dy, e_star);
         let ws = plan.workspace();
         let z = Array2::<f64>::zeros((nx, ny));
+        let mut delta = z.clone();
+        delta[[0, 0]] = 1.0;
+        let self_compliance = plan.convolve(&kernel, &delta)[[0, 0]];
         Ok(Self {
             nx,
             ny,
@@ -280,6 +287,7 @@ impl NormalSolver {
             height_scale,
             plan,
             kernel,
+            self_compliance,
             ws,
             options,
             p: z.clone(),
@@ -602,7 +610,12 @@ impl NormalSolver {
             });
             let r_mean = sum_r / n_c;
             let denom = sum_rt - r_mean * sum_t;
-            if denom.is_nan() || denom <= 0.0 {
+            let direction_vanished = g_norm == 0.0 && penetration > 0.0;
+            if direction_vanished && self.self_compliance > 0.0 {
+                // The contact set carries no gap gradient (e.g. a single point) while other
+                // points penetrate: no conjugate step exists, so let the penetrating points
+                // enter with the pressure that would close their own gap, p = −g / K(0).
+            } else if denom.is_nan() || denom <= 0.0 {
                 // K is positive definite on zero-mean fields: a non-positive curvature means
                 // the direction vanished (converged to round-off) or the data are broken.
                 return Err(Error::NonConvergence {
@@ -612,7 +625,11 @@ impl NormalSolver {
                     tolerance: tol,
                 });
             }
-            let tau = sum_gt / denom;
+            let tau = if direction_vanished && self.self_compliance > 0.0 {
+                1.0 / self.self_compliance
+            } else {
+                sum_gt / denom
+            };
             // Pressure update, projection, and entry of penetrating points.
             let pp = Ptr(slice_mut(&mut self.p).as_mut_ptr());
             let [sum_p, changed_set, entered] = chunked_sum(n, |r| {
@@ -879,6 +896,37 @@ mod tests {
         let sol = o.solve_load(1e6, None).unwrap();
         let e = solver.solve_load(1e6, Some(&sol)).unwrap_err().to_string();
         assert!(e.contains("warm_start") && e.contains("8 × 8"), "{e}");
+    }
+
+    /// A single asperity carrying the load is a valid state, and warm-starting a higher load
+    /// from it must let neighbours enter (the conjugate direction vanishes on one point).
+    #[test]
+    fn single_point_contact_set_grows_under_more_load() {
+        let n = 32;
+        let dx = 1e-6;
+        let mut h = Array2::from_shape_fn((n, n), |(i, j)| {
+            1e-8 * ((i as f64 * 0.7).sin() + (j as f64 * 1.3).cos())
+        });
+        h[[10, 12]] = 1e-6;
+        let s = Grid2::new(h, dx, dx, true).unwrap();
+        let mut solver = NormalSolver::new(
+            &NormalProblem {
+                surface: &s,
+                e_star_pa: 1e11,
+            },
+            NormalOptions::default(),
+        )
+        .unwrap();
+        let light = solver.solve_load(1e3, None).unwrap();
+        assert_eq!(
+            light.contact_points, 1,
+            "the spike alone carries a light load"
+        );
+        let heavy = solver.solve_load(2e9, Some(&light)).unwrap();
+        assert!(heavy.converged && heavy.contact_points > 1);
+        // Same answer as from a cold start.
+        let cold = solver.solve_load(2e9, None).unwrap();
+        assert!((heavy.mean_gap_m / cold.mean_gap_m - 1.0).abs() < 1e-6);
     }
 
     #[test]
