@@ -3,3 +3,6 @@
 pub mod table;
 
 pub use table::{CalibrationRow, CalibrationTable, Interpolated, RangeFlag};
+pub mod fit;
+
+pub use fit::{fit_valanis, FitOptions, FitResult, LoopData};
