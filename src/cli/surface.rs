@@ -1,11 +1,320 @@
+//! `asperity surface …`: generate, analyse, convert and combine rough surfaces.
+
+use asperity::plot::{line_plot, LinePlot, Scale, Series};
+use asperity::surface::stats::Psd;
+use asperity::surface::{self, Detrend, GaussianSurfaceSpec, SurfaceStats};
 use asperity::{Error, Result};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 #[derive(clap::Subcommand)]
 pub enum SurfaceCommand {
-    /// Gaussian-correlated rough patch from profilometer statistics.
-    Generate,
+    /// Gaussian-correlated periodic rough patch from profilometer statistics
+    /// (defaults: the reference case Rq 0.177 µm, cl 6.6 µm, 250 µm, 1024², seed 1).
+    Generate(Box<GenerateArgs>),
+    /// Statistics of a measured or generated topography (Ra, Rq, Rsk, Rku, rms slope/gradient,
+    /// correlation lengths) and its power spectral density (CSV + PNG).
+    Stats(StatsArgs),
 }
 
-pub fn run(_cmd: SurfaceCommand) -> Result<()> {
-    Err(Error::Data("`surface` is not implemented yet".into()))
+#[derive(clap::Args)]
+pub struct StatsArgs {
+    /// Topography file: .npy, .x3p, Dektak CSV export, height-matrix or profile text.
+    file: PathBuf,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// What to remove first: `mean` (default) or `plane` (least-squares plane / line).
+    #[arg(long, default_value = "mean")]
+    detrend: String,
+    /// PSD table to write (CSV); the plot goes beside it with extension .png.
+    /// Default: `<file stem>-psd.csv` in the current directory.
+    #[arg(long)]
+    psd_out: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct GenerateArgs {
+    /// TOML file with the fields of the surface spec (rq_m, clx_m, cly_m, lx_m, ly_m, nx, ny,
+    /// seed); flags given on the command line override it.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// RMS height Rq (m).
+    #[arg(long, allow_hyphen_values = true)]
+    rq_m: Option<f64>,
+    /// Isotropic 1/e correlation length (m); sets both --clx-m and --cly-m.
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["clx_m", "cly_m"])]
+    cl_m: Option<f64>,
+    /// 1/e correlation length along x (m).
+    #[arg(long, allow_hyphen_values = true)]
+    clx_m: Option<f64>,
+    /// 1/e correlation length along y (m).
+    #[arg(long, allow_hyphen_values = true)]
+    cly_m: Option<f64>,
+    /// Square patch side (m); sets both --lx-m and --ly-m.
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["lx_m", "ly_m"])]
+    size_m: Option<f64>,
+    /// Patch size along x (m).
+    #[arg(long, allow_hyphen_values = true)]
+    lx_m: Option<f64>,
+    /// Patch size along y (m).
+    #[arg(long, allow_hyphen_values = true)]
+    ly_m: Option<f64>,
+    /// Grid points per side (square grid); sets both --nx and --ny.
+    #[arg(long, conflicts_with_all = ["nx", "ny"])]
+    n: Option<usize>,
+    /// Grid points along x.
+    #[arg(long)]
+    nx: Option<usize>,
+    /// Grid points along y.
+    #[arg(long)]
+    ny: Option<usize>,
+    /// Random seed (same seed ⇒ same surface, bit for bit).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Output files; the format follows the extension (.npy, .x3p, .csv, .png). Repeatable.
+    #[arg(long = "out", short = 'o', default_values = ["surface.npy", "surface.png"])]
+    out: Vec<PathBuf>,
+}
+
+impl GenerateArgs {
+    /// Reference case, then the config file, then the flags.
+    fn spec(&self) -> Result<GaussianSurfaceSpec> {
+        let mut s = match &self.config {
+            Some(p) => read_spec(p)?,
+            None => GaussianSurfaceSpec::reference(),
+        };
+        let set = |dst: &mut f64, v: Option<f64>| {
+            if let Some(v) = v {
+                *dst = v;
+            }
+        };
+        set(&mut s.rq_m, self.rq_m);
+        set(&mut s.clx_m, self.cl_m.or(self.clx_m));
+        set(&mut s.cly_m, self.cl_m.or(self.cly_m));
+        set(&mut s.lx_m, self.size_m.or(self.lx_m));
+        set(&mut s.ly_m, self.size_m.or(self.ly_m));
+        if let Some(n) = self.n.or(self.nx) {
+            s.nx = n;
+        }
+        if let Some(n) = self.n.or(self.ny) {
+            s.ny = n;
+        }
+        if let Some(seed) = self.seed {
+            s.seed = seed;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// Read a surface spec from TOML (all fields required).
+fn read_spec(path: &Path) -> Result<GaussianSurfaceSpec> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    toml::from_str(&text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|r| text[..r.start].matches('\n').count() + 1)
+            .unwrap_or(0);
+        Error::parse(path, line, e.message().to_string())
+    })
+}
+
+pub fn run(cmd: SurfaceCommand) -> Result<()> {
+    match cmd {
+        SurfaceCommand::Generate(a) => generate(*a),
+        SurfaceCommand::Stats(a) => stats(a),
+    }
+}
+
+fn generate(a: GenerateArgs) -> Result<()> {
+    let spec = a.spec()?;
+    for p in &a.out {
+        surface::io::check_writable_format(p)?;
+    }
+    let t0 = Instant::now();
+    let grid = surface::generate(&spec)?;
+    let t_gen = t0.elapsed().as_secs_f64();
+    for p in &a.out {
+        surface::io::write(p, &grid)?;
+    }
+    println!(
+        "generated {}×{} patch {:.4e} m × {:.4e} m (dx {:.4e} m, dy {:.4e} m), Rq {:.6e} m, \
+         clx {:.4e} m, cly {:.4e} m, seed {}, periodic, in {:.3} s",
+        spec.nx,
+        spec.ny,
+        spec.lx_m,
+        spec.ly_m,
+        spec.dx(),
+        spec.dy(),
+        spec.rq_m,
+        spec.clx_m,
+        spec.cly_m,
+        spec.seed,
+        t_gen
+    );
+    for p in &a.out {
+        println!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+fn stats(a: StatsArgs) -> Result<()> {
+    let detrend: Detrend = a.detrend.parse()?;
+    let psd_csv = a.psd_out.clone().unwrap_or_else(|| {
+        let stem = a
+            .file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "surface".into());
+        PathBuf::from(format!("{stem}-psd.csv"))
+    });
+    if psd_csv.extension().is_none_or(|e| e != "csv") {
+        return Err(Error::param(
+            "psd-out",
+            format!("must end in .csv, got {}", psd_csv.display()),
+        ));
+    }
+    let psd_png = psd_csv.with_extension("png");
+    let t0 = Instant::now();
+    let topo = surface::io::read(&a.file)?;
+    let t_read = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let s = surface::stats(&topo, detrend)?;
+    let psd = surface::stats::power_spectrum(&topo, detrend)?;
+    let t_stats = t1.elapsed().as_secs_f64();
+    write_psd(&psd_csv, &psd_png, &a.file, &psd, detrend)?;
+    if a.json {
+        let mut v = serde_json::to_value(&s).map_err(|e| Error::Data(e.to_string()))?;
+        if let Some(o) = v.as_object_mut() {
+            o.insert("file".into(), a.file.display().to_string().into());
+            o.insert("psd_csv".into(), psd_csv.display().to_string().into());
+            o.insert("psd_png".into(), psd_png.display().to_string().into());
+            o.insert("read_time_s".into(), t_read.into());
+            o.insert("stats_time_s".into(), t_stats.into());
+        }
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&v).map_err(|e| Error::Data(e.to_string()))?
+        );
+    } else {
+        print_stats_table(&a.file, &s);
+        println!("PSD: {} and {}", psd_csv.display(), psd_png.display());
+        println!("read {t_read:.3} s, statistics {t_stats:.3} s");
+    }
+    Ok(())
+}
+
+fn opt(v: Option<f64>, unit: &str) -> String {
+    v.map(|x| format!("{x:.6e}{unit}"))
+        .unwrap_or_else(|| "—".into())
+}
+
+fn print_stats_table(file: &Path, s: &SurfaceStats) {
+    let shape = if s.kind == "area" {
+        format!(
+            "{} × {} points, {:.4e} m × {:.4e} m",
+            s.nx,
+            s.ny,
+            s.lx_m,
+            s.ly_m.unwrap_or(0.0)
+        )
+    } else {
+        format!(
+            "{} points over {:.4e} m ({})",
+            s.nx,
+            s.lx_m,
+            if s.uniform { "uniform" } else { "nonuniform" }
+        )
+    };
+    println!(
+        "{}: {} {shape}, periodic {}, detrend {:?}",
+        file.display(),
+        s.kind,
+        s.periodic,
+        s.detrend
+    );
+    println!("  Ra                     {:.6e} m", s.ra_m);
+    println!("  Rq (rms height)        {:.6e} m", s.rq_m);
+    println!("  Rsk                    {:.6}", s.rsk);
+    println!("  Rku                    {:.6}", s.rku);
+    println!("  rms slope (x)          {:.6e}", s.rms_slope);
+    if s.kind == "area" {
+        println!("  rms slope (y)          {}", opt(s.rms_slope_y, ""));
+        println!("  rms gradient           {}", opt(s.rms_gradient, ""));
+    }
+    println!(
+        "  correlation length 1/e {}",
+        opt(s.correlation_length_1_over_e_m, " m")
+    );
+    println!(
+        "  correlation length 0.2 {}",
+        opt(s.correlation_length_0_2_m, " m")
+    );
+    if s.kind == "area" {
+        println!(
+            "  corr. length 1/e along x {}",
+            opt(s.correlation_length_x_1_over_e_m, " m")
+        );
+        println!(
+            "  corr. length 1/e along y {}",
+            opt(s.correlation_length_y_1_over_e_m, " m")
+        );
+    }
+}
+
+/// PSD as CSV (with a header naming source, detrending and units) and a log-log PNG.
+fn write_psd(csv: &Path, png: &Path, source: &Path, psd: &Psd, detrend: Detrend) -> Result<()> {
+    use std::fmt::Write as _;
+    let (col, unit) = if psd.dim == 1 {
+        ("psd_m3", "m³")
+    } else {
+        ("psd_m4", "m⁴")
+    };
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "# power spectral density of {} ({}, detrend {:?}); q angular wavenumber",
+        source.display(),
+        if psd.dim == 1 {
+            "1-D profile"
+        } else {
+            "2-D, radially averaged"
+        },
+        detrend
+    );
+    let _ = writeln!(text, "q_rad_per_m,{col},count");
+    for ((q, c), n) in psd.q.iter().zip(&psd.c).zip(&psd.count) {
+        let _ = writeln!(text, "{q:e},{c:e},{n}");
+    }
+    asperity::output::write_string_atomic(csv, &text)?;
+    // The plot shows 12 decades below the peak; lower values are FFT round-off.
+    let c_max = psd.c.iter().cloned().fold(0.0, f64::max);
+    let points: Vec<(f64, f64)> = psd
+        .q
+        .iter()
+        .zip(&psd.c)
+        .filter(|(q, c)| **q > 0.0 && **c > 1e-12 * c_max)
+        .map(|(q, c)| (q.log10(), c.log10()))
+        .collect();
+    let title = format!(
+        "PSD of {}",
+        source
+            .file_name()
+            .map(|f| f.to_string_lossy())
+            .unwrap_or_default()
+    );
+    // Decimal logarithms on linear axes: readable labels over the many decades a PSD spans.
+    let y_label = format!("log10 C(q) ({unit})");
+    line_plot(
+        png,
+        &LinePlot {
+            title: &title,
+            x_label: "log10 q (rad/m)",
+            y_label: &y_label,
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+        },
+        &[Series::line("PSD", points)],
+    )
 }

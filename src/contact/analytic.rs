@@ -37,6 +37,79 @@ impl Hertz {
     }
 }
 
+/// Cattaneo–Mindlin partial slip of a Hertz contact under constant normal force `P` and a
+/// tangential force `T` (Johnson, *Contact Mechanics*, 1985, §7.2; Mindlin & Deresiewicz 1953).
+///
+/// Valid for quasi-identical bodies (normal and tangential problems decouple). The tangential
+/// compliance of the pair enters through `s = (2-ν1)/G1 + (2-ν2)/G2` (1/Pa); for identical
+/// bodies `s = 2(2-ν)/G`. SI units: N, m, Pa.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CattaneoMindlin {
+    /// Hertz contact radius a (m).
+    pub contact_radius: f64,
+    /// Normal force P (N).
+    pub normal_force: f64,
+    /// Friction coefficient μ (-).
+    pub friction_coefficient: f64,
+    /// Tangential compliance sum `s = Σ (2-ν_k)/G_k` (1/Pa).
+    pub compliance_sum: f64,
+}
+
+impl CattaneoMindlin {
+    /// The closed form for contact radius `a` (m), normal force `P` (N), friction coefficient μ
+    /// and the two bodies' shear moduli (Pa) and Poisson ratios.
+    pub fn new(a: f64, p: f64, mu: f64, g1: f64, nu1: f64, g2: f64, nu2: f64) -> Self {
+        Self {
+            contact_radius: a,
+            normal_force: p,
+            friction_coefficient: mu,
+            compliance_sum: (2.0 - nu1) / g1 + (2.0 - nu2) / g2,
+        }
+    }
+
+    fn mu_p(&self) -> f64 {
+        self.friction_coefficient * self.normal_force
+    }
+
+    /// Stick radius `c = a (1 − T/(μP))^(1/3)` (m), for `0 ≤ T ≤ μP`.
+    pub fn stick_radius(&self, t: f64) -> f64 {
+        self.contact_radius * (1.0 - t.abs() / self.mu_p()).max(0.0).cbrt()
+    }
+
+    /// Tangential displacement of the bodies under monotonic loading from zero to `T` (m):
+    /// `δ = 3μP·s/(16a) · [1 − (1 − T/(μP))^(2/3)]` (for identical bodies
+    /// `3μP(2−ν)/(8Ga)·[…]`, Johnson eq. 7.42). Odd in `T`.
+    pub fn displacement(&self, t: f64) -> f64 {
+        let x = (t.abs() / self.mu_p()).min(1.0);
+        let d = 3.0 * self.mu_p() * self.compliance_sum / (16.0 * self.contact_radius)
+            * (1.0 - (1.0 - x).powf(2.0 / 3.0));
+        d.copysign(t)
+    }
+
+    /// Initial tangential stiffness `dT/dδ` at `T = 0`: `8a/s` (N/m); identical bodies
+    /// `4Ga/(2−ν)` (Mindlin 1949).
+    pub fn initial_stiffness(&self) -> f64 {
+        8.0 * self.contact_radius / self.compliance_sum
+    }
+
+    /// Displacement on the unloading branch from `T*` down to `T` (Masing rule,
+    /// Mindlin & Deresiewicz 1953): `δ(T) = δ(T*) − 2 δ((T* − T)/2)`. The reloading branch from
+    /// `−T*` is its mirror image.
+    pub fn unloading_displacement(&self, t_star: f64, t: f64) -> f64 {
+        self.displacement(t_star) - 2.0 * self.displacement(0.5 * (t_star - t))
+    }
+
+    /// Energy dissipated per cycle of `T` oscillating between `±T*` (J):
+    /// `W = 9μ²P²·s/(10a) · {1 − (1−x)^(5/3) − (5x/6)[1 + (1−x)^(2/3)]}`, `x = T*/(μP)`
+    /// (identical bodies: `9μ²P²(2−ν)/(5Ga)·{…}`, Johnson 1985 eq. 7.59).
+    pub fn energy_per_cycle(&self, t_star: f64) -> f64 {
+        let x = (t_star.abs() / self.mu_p()).min(1.0);
+        let m = self.mu_p();
+        9.0 * m * m * self.compliance_sum / (10.0 * self.contact_radius)
+            * (1.0 - (1.0 - x).powf(5.0 / 3.0) - 5.0 * x / 6.0 * (1.0 + (1.0 - x).powf(2.0 / 3.0)))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -56,5 +129,49 @@ mod tests {
             h.peak_pressure
         );
         assert!((h.approach - 0.0200).abs() < 5e-5, "{}", h.approach);
+    }
+
+    /// The CONTACT `cattaneo` case of REFERENCES.md in mm and N/mm² (consistent units).
+    fn contact_case() -> CattaneoMindlin {
+        CattaneoMindlin::new(1.0, 9.1954, 0.4, 200.0, 0.42, 200.0, 0.42)
+    }
+
+    #[test]
+    fn cattaneo_mindlin_reference_values() {
+        let cm = contact_case();
+        let t = 0.875 * 0.4 * 9.1954;
+        // REFERENCES.md: c/a = 0.5 and δt = 8.17e-3 mm.
+        assert!((cm.stick_radius(t) - 0.5).abs() < 1e-12);
+        assert!((cm.displacement(t) - 8.17e-3).abs() < 0.01e-3, "{}", cm.displacement(t));
+        // REFERENCES.md check value: W = 1.1022e-2 N·mm at x = 0.875.
+        let w = cm.energy_per_cycle(t);
+        assert!((w / 1.1022e-2 - 1.0).abs() < 1e-4, "{w}");
+    }
+
+    #[test]
+    fn energy_equals_area_of_the_masing_loop() {
+        // Integrate the loop built from δ(T) numerically: W = ∮ T dδ.
+        let cm = contact_case();
+        for x in [0.25, 0.5, 0.875] {
+            let ts = x * 0.4 * 9.1954;
+            let n = 20000;
+            let mut w = 0.0;
+            for k in 0..n {
+                // Unloading branch T* → −T*; the reloading branch contributes the same by symmetry.
+                let t0 = ts - 2.0 * ts * k as f64 / n as f64;
+                let t1 = ts - 2.0 * ts * (k + 1) as f64 / n as f64;
+                let d0 = cm.unloading_displacement(ts, t0);
+                let d1 = cm.unloading_displacement(ts, t1);
+                w += 0.5 * (t0 + t1) * (d1 - d0);
+            }
+            // The reloading branch is the point reflection of the unloading one and adds the
+            // same ∫T dδ: ∮ T dδ = 2w.
+            let w = 2.0 * w;
+            let want = cm.energy_per_cycle(ts);
+            assert!((w / want - 1.0).abs() < 1e-5, "x={x}: {w} vs {want}");
+        }
+        // Small-load limit of the compliance: δ ≈ T·s/(8a).
+        let t = 1e-6;
+        assert!((cm.displacement(t) * cm.initial_stiffness() / t - 1.0).abs() < 1e-5);
     }
 }

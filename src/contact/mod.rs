@@ -1,3 +1,6 @@
 //! Contact solvers on the elastic half-space: normal (Polonsky–Keer) and tangential (Coulomb
 //! partial slip with history), and pressure sweeps.
 pub mod analytic;
+pub mod normal;
+pub mod sweep;
+pub mod tangential;

@@ -1,3 +1,11 @@
 //! Rough surfaces: generation from profilometer statistics, statistics of measured or generated
 //! topographies, file readers and writers, and the reduction of two rough bodies to one.
 pub mod combine;
+pub mod generate;
+pub mod io;
+pub mod stats;
+pub mod topography;
+
+pub use generate::{generate, GaussianSurfaceSpec};
+pub use stats::{stats, Detrend, SurfaceStats};
+pub use topography::{Profile, Topography};

@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Run tamaas 2.9 (PolonskyKeerRey, pressure-controlled) on a surface exported by asperity.
+
+Called by `cargo bench --bench normal` (benches/normal.rs) with the venv made by
+benches/peers/setup.sh; can also be run by hand:
+
+    /tmp/asperity-peers-venv/bin/python benches/peers/tamaas_compare.py CASE.json OUT.json
+
+CASE.json (written by the Rust benchmark):
+    surface_npy     path of the heights (m), float64 array of shape (nx, ny), periodic
+    lx_m, ly_m      patch size (m)
+    e_star_pa       composite modulus E* (Pa)
+    tolerance       solver tolerance (the same number asperity uses)
+    pressures_pa    imposed mean pressures (Pa)
+    repeats         timed cold solves per pressure (the fastest is reported)
+
+Conventions (checked on a Westergaard wave): tamaas' model modulus E with nu = 0 makes its
+hertz modulus E* = E/(1-nu^2) equal to E; its periodic kernel is 2/(E*|q|) like ours; the
+solved displacement satisfies u - h = gap >= 0 (0 in contact), so tamaas' mean displacement
+minus the mean height equals asperity's mean gap. Units: SI throughout.
+
+Threads: set OMP_NUM_THREADS before calling (tamaas parallelises with OpenMP/FFTW threads).
+"""
+import json
+import sys
+import time
+
+import numpy as np
+import tamaas as tm
+
+
+def main(case_path, out_path):
+    with open(case_path) as f:
+        case = json.load(f)
+    h = np.load(case["surface_npy"])
+    nx, ny = h.shape
+    tm.set_log_level(tm.LogLevel.error)
+    model = tm.ModelFactory.createModel(
+        tm.model_type.basic_2d, [case["lx_m"], case["ly_m"]], [nx, ny]
+    )
+    model.E = case["e_star_pa"]
+    model.nu = 0.0
+    assert abs(model.E_star / case["e_star_pa"] - 1.0) < 1e-12
+    solver = tm.PolonskyKeerRey(model, h, case["tolerance"])
+    results = []
+    for p in case["pressures_pa"]:
+        best = float("inf")
+        for _ in range(case["repeats"]):
+            model.traction[...] = 0.0
+            model.displacement[...] = 0.0
+            t0 = time.perf_counter()
+            solver.solve(p)
+            best = min(best, time.perf_counter() - t0)
+        trac = np.array(model.traction)
+        disp = np.array(model.displacement)
+        results.append(
+            {
+                "pressure_pa": p,
+                "mean_pressure_pa": float(trac.mean()),
+                "contact_area_ratio": float((trac > 0).mean()),
+                "mean_displacement_m": float(disp.mean()),
+                "mean_gap_m": float((disp - h).mean()),
+                "time_s": best,
+            }
+        )
+    info = {"tamaas_version": tm.__version__, "results": results}
+    with open(out_path, "w") as f:
+        json.dump(info, f, indent=1)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit("usage: tamaas_compare.py CASE.json OUT.json")
+    main(sys.argv[1], sys.argv[2])

@@ -1,0 +1,901 @@
+//! Frictionless normal contact of a rough surface with an elastic half-space: the projected
+//! conjugate-gradient method of Polonsky & Keer (Wear 231 (1999) 206–219).
+//!
+//! Units: lengths and gaps in m, pressures and moduli in Pa, energy in J.
+//!
+//! # Problem
+//! The two rough elastic bodies are reduced to a rigid rough surface of heights `h(x)` (the
+//! equivalent surface: sum of both roughnesses, peaks positive) against a flat elastic half-space
+//! of composite modulus `E*` (`1/E* = (1-ν1²)/E1 + (1-ν2²)/E2`). With the initial separation
+//! `h0 = max(h) − h` (zero at the highest point), the rigid approach `δ` and the elastic surface
+//! displacement `u = K ⊛ p` (Boussinesq; [`crate::halfspace::influence::boussinesq_spectrum`]),
+//! the gap is
+//!
+//! `g = h0 − δ + u`,
+//!
+//! and the unilateral contact conditions are `g ≥ 0`, `p ≥ 0`, `p·g = 0`, with the mean pressure
+//! imposed, `mean(p) = p̄` (load control). `δ` is the Lagrange multiplier of the load: it is the
+//! rigid approach measured from first contact of the highest grid point.
+//!
+//! # Algorithm (Polonsky & Keer 1999, §3, load control)
+//! Each iteration: `g = K⊛p + h0`, centred by its mean over the contact set `Ic = {p > 0}`
+//! (that mean is the current approach δ); conjugate direction `t = g + β t_old` on `Ic`
+//! (`β = G/G_old`, `G = Σ_Ic g²`, reset to steepest descent when points were added);
+//! `r = K⊛t` centred on `Ic`; step `τ = Σ_Ic g·t / Σ_Ic r·t`; `p ← max(p − τ t, 0)`;
+//! non-contact points that penetrate (`p = 0`, `g < 0`) enter with `p = −τ g`; finally `p` is
+//! scaled to the imposed mean pressure.
+//!
+//! Only one convolution per iteration is needed in the common case: when no point was clipped
+//! or added, `K⊛p_new = s·(K⊛p − τ K⊛t)` exactly (linearity; `s` is the load scaling), so the
+//! displacement is updated instead of recomputed. It is recomputed from `p` whenever the active
+//! set changed, every [`REFRESH_INTERVAL`] iterations against round-off drift, and always before
+//! convergence is accepted.
+//!
+//! # Convergence criterion
+//! The residual is the pressure-weighted relative gap error
+//!
+//! `ε = (Σ_Ic p_i |g_i| + p̄ Σ_{i∉Ic} max(−g_i, 0)) / (Σ_i p_i · h_rms)`,
+//!
+//! i.e. the complementarity error `Σ p·g` of tamaas' Polonsky–Keer–Rey solver (Rey, Anciaux &
+//! Molinari, Comput. Mech. 60 (2017) 69–81) normalised the same way (total load times the rms
+//! height `h_rms` of the surface), plus any remaining penetration outside the contact set. The
+//! solve stops when `ε ≤ tolerance` (default [`NormalOptions::DEFAULT_TOLERANCE`]), evaluated on
+//! a freshly convolved displacement; reaching `max_iterations` first is an
+//! [`Error::NonConvergence`], never a silent result.
+//!
+//! # Displacement control
+//! [`NormalSolver::solve_approach`] imposes the rigid approach `δ` instead of the load: the
+//! approach is a continuous increasing function of the mean pressure, `δ(p̄)`, so the solver
+//! finds `p̄` with `δ(p̄) = δ` by a bracketed secant (Illinois) search on `ln p̄`, each step a
+//! warm-started load-controlled solve. This works identically for periodic patches (whose mean
+//! pressure is not set by the zero-mean periodic kernel) and zero-padded (finite) contacts.
+
+use crate::error::{require_positive, Error, Result};
+use crate::grid::Grid2;
+use crate::halfspace::convolution::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum};
+use crate::halfspace::influence::boussinesq_spectrum;
+use ndarray::Array2;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The displacement is recomputed by a full convolution at least this often (iterations).
+pub const REFRESH_INTERVAL: usize = 25;
+
+/// Elements per chunk of the parallel reductions. Partial sums are added in chunk order, so
+/// results do not depend on the number of threads.
+const CHUNK: usize = 8192;
+
+/// A normal contact problem: the equivalent rough surface against an elastic half-space.
+#[derive(Debug, Clone, Copy)]
+pub struct NormalProblem<'a> {
+    /// Heights of the equivalent rough surface (m), peaks positive. `surface.periodic` selects
+    /// the periodic (representative patch) or zero-padded (finite contact) convolution.
+    pub surface: &'a Grid2,
+    /// Composite modulus E* (Pa), see [`crate::surface::combine::composite_modulus`].
+    pub e_star_pa: f64,
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NormalOptions {
+    /// Tolerance on the relative gap error ε (see the module documentation).
+    pub tolerance: f64,
+    /// Iteration cap of one load-controlled solve; exceeding it is [`Error::NonConvergence`].
+    pub max_iterations: usize,
+    /// Relative tolerance on the approach in displacement control.
+    pub approach_tolerance: f64,
+}
+
+impl NormalOptions {
+    /// Default tolerance on ε: well below the discretisation error of any practical grid.
+    pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+
+    /// Check the settings: tolerances finite and > 0, at least one iteration.
+    pub fn validate(&self) -> Result<()> {
+        require_positive("tolerance", self.tolerance)?;
+        require_positive("approach_tolerance", self.approach_tolerance)?;
+        if self.max_iterations == 0 {
+            return Err(Error::param("max_iterations", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+impl Default for NormalOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: Self::DEFAULT_TOLERANCE,
+            max_iterations: 5000,
+            approach_tolerance: 1e-7,
+        }
+    }
+}
+
+/// Solution of one normal contact problem. Every field is in SI units.
+#[derive(Debug, Clone)]
+pub struct NormalSolution {
+    /// Contact pressure p (Pa), grid shape; zero outside the contact.
+    pub pressure: Array2<f64>,
+    /// Gap g = h0 − δ + u (m), ≥ 0 up to the tolerance; zero (to round-off) in contact.
+    pub gap: Array2<f64>,
+    /// Elastic surface displacement u = K ⊛ p (m), combined for both bodies. Periodic patches:
+    /// zero-mean (the mean displacement is carried by the approach).
+    pub displacement: Array2<f64>,
+    /// Grid spacing along x (m), as the surface.
+    pub dx: f64,
+    /// Grid spacing along y (m).
+    pub dy: f64,
+    /// Nominal (imposed) mean pressure p̄ = mean(p) over the patch (Pa).
+    pub mean_pressure_pa: f64,
+    /// Real contact area over nominal area (-).
+    pub contact_area_ratio: f64,
+    /// Grid points in contact.
+    pub contact_points: usize,
+    /// Number of contact spots (4-connected clusters of contact points; clusters touching across
+    /// a periodic boundary count once).
+    pub contact_spots: usize,
+    /// Grid points of the smallest contact spot (0 without contact). Spots of a few points are
+    /// not resolved by the grid: refine it when this is small at the loads of interest.
+    pub smallest_spot_points: usize,
+    /// Median spot size in grid points.
+    pub median_spot_points: usize,
+    /// Mean gap (mean separation of the mean planes for a periodic patch) (m).
+    pub mean_gap_m: f64,
+    /// Rigid approach δ from first contact of the highest grid point (m).
+    pub approach_m: f64,
+    /// Elastic energy ½ Σ p·u·dA (J); periodic patches: the energy of the zero-mean part.
+    pub elastic_energy_j: f64,
+    /// Iterations of the last (or, in displacement control, all) Polonsky–Keer solves.
+    pub iterations: usize,
+    /// Final relative gap error ε.
+    pub residual: f64,
+    /// Always true for a returned solution (non-convergence is an error).
+    pub converged: bool,
+    /// Wall time of the solve (s).
+    pub wall_time_s: f64,
+}
+
+/// Polonsky–Keer solver for one surface: FFT plan, kernel spectrum and work arrays are built
+/// once by [`NormalSolver::new`] and reused by every solve (load steps, warm starts).
+pub struct NormalSolver {
+    nx: usize,
+    ny: usize,
+    dx: f64,
+    dy: f64,
+    boundary: Boundary,
+    e_star: f64,
+    /// Initial separation h0 = max(h) − h (m).
+    separation: Array2<f64>,
+    /// Normalisation length of the residual: rms height about the mean (m).
+    height_scale: f64,
+    plan: FftPlan,
+    kernel: KernelSpectrum,
+    ws: ConvolutionWorkspace,
+    options: NormalOptions,
+    // Work arrays, reused.
+    p: Array2<f64>,
+    u: Array2<f64>,
+    g: Array2<f64>,
+    t: Array2<f64>,
+    r: Array2<f64>,
+}
+
+impl std::fmt::Debug for NormalSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NormalSolver")
+            .field("grid", &(self.nx, self.ny))
+            .field("spacing_m", &(self.dx, self.dy))
+            .field("boundary", &self.boundary)
+            .field("e_star_pa", &self.e_star)
+            .field("options", &self.options)
+            .finish()
+    }
+}
+
+/// Sum of per-chunk partial results in chunk order (thread-count independent).
+fn chunked_sum<const K: usize>(
+    n: usize,
+    f: impl Fn(std::ops::Range<usize>) -> [f64; K] + Sync,
+) -> [f64; K] {
+    let chunks = n.div_ceil(CHUNK);
+    let parts: Vec<[f64; K]> = (0..chunks)
+        .into_par_iter()
+        .map(|c| f(c * CHUNK..((c + 1) * CHUNK).min(n)))
+        .collect();
+    let mut total = [0.0; K];
+    for p in parts {
+        for k in 0..K {
+            total[k] += p[k];
+        }
+    }
+    total
+}
+
+/// Raw mutable pointer wrapper for disjoint parallel chunk writes.
+#[derive(Clone, Copy)]
+struct Ptr(*mut f64);
+unsafe impl Send for Ptr {}
+unsafe impl Sync for Ptr {}
+impl Ptr {
+    /// Mutable slice of `range`. Safety: callers give each chunk a disjoint range.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn slice(&self, range: std::ops::Range<usize>) -> &mut [f64] {
+        std::slice::from_raw_parts_mut(self.0.add(range.start), range.len())
+    }
+}
+
+fn slice_mut(a: &mut Array2<f64>) -> &mut [f64] {
+    a.as_slice_mut()
+        .expect("work arrays are in standard layout")
+}
+
+impl NormalSolver {
+    /// Check the problem, plan the FFTs and transform the Boussinesq kernel.
+    pub fn new(problem: &NormalProblem<'_>, options: NormalOptions) -> Result<Self> {
+        let s = problem.surface;
+        let e_star = require_positive("e_star_pa", problem.e_star_pa)?;
+        require_positive("dx", s.dx)?;
+        require_positive("dy", s.dy)?;
+        options.validate()?;
+        let (nx, ny) = s.heights.dim();
+        if nx < 2 || ny < 1 || nx * ny < 4 {
+            return Err(Error::param(
+                "surface",
+                format!("grid {nx} × {ny} is too small for a contact solution"),
+            ));
+        }
+        if let Some(((i, j), v)) = s.heights.indexed_iter().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::param(
+                "surface",
+                format!("non-finite height {v} at grid point ({i}, {j})"),
+            ));
+        }
+        let h_max = s.heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let separation = s.heights.mapv(|h| h_max - h);
+        let n = (nx * ny) as f64;
+        let mean = s.heights.sum() / n;
+        let rms = (s.heights.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / n).sqrt();
+        // A perfectly flat surface has no length scale of its own; its gap error is exactly zero
+        // after the first iteration, so any positive scale works.
+        let height_scale = if rms > 0.0 { rms } else { s.dx.max(s.dy) };
+        let boundary = if s.periodic {
+            Boundary::Periodic
+        } else {
+            Boundary::ZeroPadded
+        };
+        let plan = FftPlan::new(nx, ny, boundary);
+        let kernel = boussinesq_spectrum(&plan, s.dx, s.dy, e_star);
+        let ws = plan.workspace();
+        let z = Array2::<f64>::zeros((nx, ny));
+        Ok(Self {
+            nx,
+            ny,
+            dx: s.dx,
+            dy: s.dy,
+            boundary,
+            e_star,
+            separation,
+            height_scale,
+            plan,
+            kernel,
+            ws,
+            options,
+            p: z.clone(),
+            u: z.clone(),
+            g: z.clone(),
+            t: z.clone(),
+            r: z,
+        })
+    }
+
+    /// Grid shape `(nx, ny)`.
+    pub fn grid_shape(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// Grid spacings `(dx, dy)` (m).
+    pub fn spacing(&self) -> (f64, f64) {
+        (self.dx, self.dy)
+    }
+
+    /// Boundary mode (from the surface's periodic flag).
+    pub fn boundary(&self) -> Boundary {
+        self.boundary
+    }
+
+    /// Composite modulus E* (Pa).
+    pub fn e_star_pa(&self) -> f64 {
+        self.e_star
+    }
+
+    /// Solver settings.
+    pub fn options(&self) -> &NormalOptions {
+        &self.options
+    }
+
+    /// Change the settings (e.g. the tolerance) without re-planning.
+    pub fn set_options(&mut self, options: NormalOptions) -> Result<()> {
+        options.validate()?;
+        self.options = options;
+        Ok(())
+    }
+
+    /// The FFT plan (for callers convolving other kernels on the same grid).
+    pub fn plan(&self) -> &FftPlan {
+        &self.plan
+    }
+
+    /// Initial separation h0 = max(h) − h (m).
+    pub fn separation(&self) -> &Array2<f64> {
+        &self.separation
+    }
+
+    /// Elastic displacement `u = K ⊛ p` (m) for any pressure field on this grid (Pa).
+    pub fn displacement_of(&mut self, pressure: &Array2<f64>) -> Result<Array2<f64>> {
+        self.check_shape("pressure", pressure.dim())?;
+        let mut out = Array2::zeros((self.nx, self.ny));
+        self.plan
+            .convolve_into(&self.kernel, pressure, &mut out, &mut self.ws);
+        Ok(out)
+    }
+
+    fn check_shape(&self, name: &str, dim: (usize, usize)) -> Result<()> {
+        if dim != (self.nx, self.ny) {
+            return Err(Error::param(
+                name,
+                format!(
+                    "grid {} × {} does not match the surface grid {} × {}",
+                    dim.0, dim.1, self.nx, self.ny
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Load control: solve for the imposed mean pressure `mean_pressure_pa` (Pa, over the whole
+    /// patch). `warm_start` (a previous solution on the same grid) gives the initial pressure
+    /// shape, scaled to the new load; otherwise the iteration starts from uniform pressure.
+    pub fn solve_load(
+        &mut self,
+        mean_pressure_pa: f64,
+        warm_start: Option<&NormalSolution>,
+    ) -> Result<NormalSolution> {
+        let start = Instant::now();
+        let p_mean = require_positive("mean_pressure_pa", mean_pressure_pa)?;
+        match warm_start {
+            Some(w) => {
+                self.check_shape("warm_start", w.pressure.dim())?;
+                let s = w.pressure.sum();
+                if !(s.is_finite() && s > 0.0) || w.pressure.iter().any(|v| v.is_nan() || *v < 0.0)
+                {
+                    return Err(Error::param(
+                        "warm_start",
+                        "pressure must be finite, non-negative and not all zero",
+                    ));
+                }
+                let scale = p_mean * (self.nx * self.ny) as f64 / s;
+                self.p.zip_mut_with(&w.pressure, |p, w| *p = w * scale);
+            }
+            None => self.p.fill(p_mean),
+        }
+        let (iterations, residual, approach) = self.iterate(p_mean)?;
+        Ok(self.solution(p_mean, approach, iterations, residual, start))
+    }
+
+    /// Displacement control: solve for the imposed rigid approach `approach_m` (m, measured from
+    /// first contact of the highest grid point; must be > 0). The mean pressure is found by a
+    /// bracketed secant search on `δ(p̄)` (see the module documentation); `warm_start` provides
+    /// the first guess of the pressure. `iterations` of the result counts all inner iterations.
+    pub fn solve_approach(
+        &mut self,
+        approach_m: f64,
+        warm_start: Option<&NormalSolution>,
+    ) -> Result<NormalSolution> {
+        let start = Instant::now();
+        let target = require_positive("approach_m", approach_m)?;
+        let tol = self.options.approach_tolerance;
+        // First guess of p̄: from the warm start, else the stiffness of a full flat contact
+        // scaled down (any positive value works; the bracket expands geometrically).
+        let mut guess = match warm_start {
+            Some(w) => w.mean_pressure_pa * (target / w.approach_m.max(f64::MIN_POSITIVE)),
+            None => self.e_star * target / self.nx.max(self.ny) as f64 / self.dx.max(self.dy),
+        };
+        if !(guess.is_finite() && guess > 0.0) {
+            guess = self.e_star * 1e-6;
+        }
+        let mut total_iterations = 0;
+        let solve =
+            |this: &mut Self, p: f64, warm: Option<&NormalSolution>| this.solve_load(p, warm);
+        let mut cur = solve(self, guess, warm_start)?;
+        total_iterations += cur.iterations;
+        let f = |s: &NormalSolution| s.approach_m / target - 1.0;
+        // Bracket the root in ln p̄.
+        let (mut lo, mut hi);
+        let mut fc = f(&cur);
+        if fc.abs() <= tol {
+            cur.iterations = total_iterations;
+            cur.wall_time_s = start.elapsed().as_secs_f64();
+            return Ok(cur);
+        }
+        let factor: f64 = if fc < 0.0 { 4.0 } else { 0.25 };
+        let mut expansions = 0;
+        loop {
+            let next = solve(self, cur.mean_pressure_pa * factor, Some(&cur))?;
+            total_iterations += next.iterations;
+            let fnext = f(&next);
+            if fnext.abs() <= tol {
+                let mut s = next;
+                s.iterations = total_iterations;
+                s.wall_time_s = start.elapsed().as_secs_f64();
+                return Ok(s);
+            }
+            if (fnext < 0.0) != (fc < 0.0) {
+                if fc < 0.0 {
+                    lo = (cur, fc);
+                    hi = (next, fnext);
+                } else {
+                    lo = (next, fnext);
+                    hi = (cur, fc);
+                }
+                break;
+            }
+            cur = next;
+            fc = fnext;
+            expansions += 1;
+            if expansions > 60 {
+                return Err(Error::NonConvergence {
+                    solver: "normal contact, displacement control (bracketing)".into(),
+                    iterations: total_iterations,
+                    residual: fc.abs(),
+                    tolerance: tol,
+                });
+            }
+        }
+        // Illinois (modified regula falsi) on x = ln p̄.
+        let mut side = 0i32;
+        for _ in 0..100 {
+            let (xl, fl) = (lo.0.mean_pressure_pa.ln(), lo.1);
+            let (xh, fh) = (hi.0.mean_pressure_pa.ln(), hi.1);
+            let (mut wl, mut wh) = (fl, fh);
+            if side == -1 {
+                wh *= 0.5;
+            } else if side == 1 {
+                wl *= 0.5;
+            }
+            let x = (xl * wh - xh * wl) / (wh - wl);
+            let warm = if fl.abs() < fh.abs() { &lo.0 } else { &hi.0 };
+            let s = solve(self, x.exp(), Some(warm))?;
+            total_iterations += s.iterations;
+            let fs = f(&s);
+            if fs.abs() <= tol || (xh - xl).abs() < 1e-15 {
+                let mut s = s;
+                s.iterations = total_iterations;
+                s.wall_time_s = start.elapsed().as_secs_f64();
+                return Ok(s);
+            }
+            if fs < 0.0 {
+                lo = (s, fs);
+                side = -1;
+            } else {
+                hi = (s, fs);
+                side = 1;
+            }
+        }
+        Err(Error::NonConvergence {
+            solver: "normal contact, displacement control (secant)".into(),
+            iterations: total_iterations,
+            residual: lo.1.abs().min(hi.1.abs()),
+            tolerance: tol,
+        })
+    }
+
+    /// `u = K ⊛ p` into the work array.
+    fn convolve_pressure(&mut self) {
+        self.plan
+            .convolve_into(&self.kernel, &self.p, &mut self.u, &mut self.ws);
+    }
+
+    /// Polonsky–Keer iterations from the current `self.p` (already at mean `p_mean`).
+    /// Returns (iterations, residual, approach).
+    fn iterate(&mut self, p_mean: f64) -> Result<(usize, f64, f64)> {
+        let n = self.nx * self.ny;
+        let total_load = p_mean * n as f64;
+        let h_scale = self.height_scale;
+        let tol = self.options.tolerance;
+        let mut u_exact = false; // u = K⊛p computed by convolution (not updated) this iteration
+        let mut u_valid = false; // u corresponds to p (exactly or by linear update)
+        let mut since_refresh = 0usize;
+        let mut conjugate = false;
+        let mut g_norm_old = 1.0;
+        let mut last_residual = f64::INFINITY;
+        self.t.fill(0.0);
+        for it in 0..self.options.max_iterations {
+            if !u_valid || since_refresh >= REFRESH_INTERVAL {
+                self.convolve_pressure();
+                u_exact = true;
+                since_refresh = 0;
+            }
+            since_refresh += 1;
+            let p = self.p.as_slice().expect("layout");
+            let u = self.u.as_slice().expect("layout");
+            let h0 = self.separation.as_slice().expect("layout");
+            // Mean gap over the contact set: the current approach δ.
+            let [sum_g, n_c] = chunked_sum(n, |r| {
+                let mut s = [0.0; 2];
+                for i in r {
+                    if p[i] > 0.0 {
+                        s[0] += u[i] + h0[i];
+                        s[1] += 1.0;
+                    }
+                }
+                s
+            });
+            if n_c == 0.0 {
+                return Err(Error::Data(
+                    "normal contact: the pressure vanished everywhere (no contact set)".into(),
+                ));
+            }
+            let approach = sum_g / n_c;
+            // Centred gap, its squared norm on Ic, and the residual terms.
+            let gp = Ptr(slice_mut(&mut self.g).as_mut_ptr());
+            let [g_norm, compl, penetration] = chunked_sum(n, |r| {
+                // SAFETY: chunks are disjoint.
+                let g = unsafe { gp.slice(r.clone()) };
+                let mut s = [0.0; 3];
+                for (k, i) in r.enumerate() {
+                    let gi = u[i] + h0[i] - approach;
+                    g[k] = gi;
+                    if p[i] > 0.0 {
+                        s[0] += gi * gi;
+                        s[1] += p[i] * gi.abs();
+                    } else if gi < 0.0 {
+                        s[2] -= gi;
+                    }
+                }
+                s
+            });
+            let residual = (compl + p_mean * penetration) / (total_load * h_scale);
+            last_residual = residual;
+            if residual <= tol {
+                if u_exact {
+                    return Ok((it, residual, approach));
+                }
+                // Confirm on an exactly convolved displacement.
+                u_valid = false;
+                continue;
+            }
+            u_exact = false;
+            // Conjugate direction on Ic.
+            let beta = if conjugate { g_norm / g_norm_old } else { 0.0 };
+            g_norm_old = g_norm;
+            {
+                let g = self.g.as_slice().expect("layout");
+                let tp = Ptr(slice_mut(&mut self.t).as_mut_ptr());
+                chunked_sum::<0>(n, |r| {
+                    let t = unsafe { tp.slice(r.clone()) };
+                    for (k, i) in r.enumerate() {
+                        t[k] = if p[i] > 0.0 { g[i] + beta * t[k] } else { 0.0 };
+                    }
+                    []
+                });
+            }
+            // r = K⊛t, centred on Ic; step length τ.
+            self.plan
+                .convolve_into(&self.kernel, &self.t, &mut self.r, &mut self.ws);
+            let p = self.p.as_slice().expect("layout");
+            let g = self.g.as_slice().expect("layout");
+            let t = self.t.as_slice().expect("layout");
+            let rr = self.r.as_slice().expect("layout");
+            let [sum_r, sum_t, sum_rt, sum_gt] = chunked_sum(n, |r| {
+                let mut s = [0.0; 4];
+                for i in r {
+                    if p[i] > 0.0 {
+                        s[0] += rr[i];
+                        s[1] += t[i];
+                        s[2] += rr[i] * t[i];
+                        s[3] += g[i] * t[i];
+                    }
+                }
+                s
+            });
+            let r_mean = sum_r / n_c;
+            let denom = sum_rt - r_mean * sum_t;
+            if denom.is_nan() || denom <= 0.0 {
+                // K is positive definite on zero-mean fields: a non-positive curvature means
+                // the direction vanished (converged to round-off) or the data are broken.
+                return Err(Error::NonConvergence {
+                    solver: "normal contact (Polonsky–Keer)".into(),
+                    iterations: it,
+                    residual,
+                    tolerance: tol,
+                });
+            }
+            let tau = sum_gt / denom;
+            // Pressure update, projection, and entry of penetrating points.
+            let pp = Ptr(slice_mut(&mut self.p).as_mut_ptr());
+            let [sum_p, changed_set, entered] = chunked_sum(n, |r| {
+                let p = unsafe { pp.slice(r.clone()) };
+                let mut s = [0.0; 3];
+                for (k, i) in r.enumerate() {
+                    let pi = p[k];
+                    let mut new = pi;
+                    if pi > 0.0 {
+                        new = pi - tau * t[i];
+                        if new <= 0.0 {
+                            new = 0.0;
+                            s[1] = 1.0;
+                        }
+                    }
+                    if new == 0.0 && g[i] < 0.0 {
+                        new = -tau * g[i];
+                        s[1] = 1.0;
+                        s[2] = 1.0;
+                    }
+                    p[k] = new;
+                    s[0] += new;
+                }
+                s
+            });
+            conjugate = entered == 0.0;
+            if !(sum_p > 0.0 && sum_p.is_finite()) {
+                return Err(Error::Data(format!(
+                    "normal contact: pressure became {sum_p} at iteration {it}"
+                )));
+            }
+            // Impose the load; update u by linearity when the active set did not change.
+            let scale = total_load / sum_p;
+            let linear = changed_set == 0.0;
+            let pp = Ptr(slice_mut(&mut self.p).as_mut_ptr());
+            let up = Ptr(slice_mut(&mut self.u).as_mut_ptr());
+            let rr = self.r.as_slice().expect("layout");
+            chunked_sum::<0>(n, |r| {
+                let p = unsafe { pp.slice(r.clone()) };
+                for v in p.iter_mut() {
+                    *v *= scale;
+                }
+                if linear {
+                    let u = unsafe { up.slice(r.clone()) };
+                    for (k, i) in r.enumerate() {
+                        u[k] = scale * (u[k] - tau * rr[i]);
+                    }
+                }
+                []
+            });
+            u_valid = linear;
+        }
+        Err(Error::NonConvergence {
+            solver: "normal contact (Polonsky–Keer)".into(),
+            iterations: self.options.max_iterations,
+            residual: last_residual,
+            tolerance: tol,
+        })
+    }
+
+    /// Assemble the result from the converged work arrays.
+    fn solution(
+        &self,
+        p_mean: f64,
+        approach: f64,
+        iterations: usize,
+        residual: f64,
+        start: Instant,
+    ) -> NormalSolution {
+        let n = (self.nx * self.ny) as f64;
+        let pressure = self.p.clone();
+        let displacement = self.u.clone();
+        let gap = self.g.clone();
+        let contact = pressure.mapv(|v| v > 0.0);
+        let contact_points = contact.iter().filter(|c| **c).count();
+        let spots = spot_sizes(&contact, self.boundary == Boundary::Periodic);
+        let mut sorted = spots.clone();
+        sorted.sort_unstable();
+        let energy = 0.5
+            * pressure
+                .iter()
+                .zip(displacement.iter())
+                .map(|(p, u)| p * u)
+                .sum::<f64>()
+            * self.dx
+            * self.dy;
+        NormalSolution {
+            mean_gap_m: gap.sum() / n,
+            pressure,
+            gap,
+            displacement,
+            dx: self.dx,
+            dy: self.dy,
+            mean_pressure_pa: p_mean,
+            contact_area_ratio: contact_points as f64 / n,
+            contact_points,
+            contact_spots: spots.len(),
+            smallest_spot_points: sorted.first().copied().unwrap_or(0),
+            median_spot_points: sorted.get(sorted.len() / 2).copied().unwrap_or(0),
+            approach_m: approach,
+            elastic_energy_j: energy,
+            iterations,
+            residual,
+            converged: true,
+            wall_time_s: start.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+/// Sizes (grid points) of the 4-connected clusters of `true` cells. With `periodic`, clusters
+/// connect across the opposite edges of the grid.
+pub fn spot_sizes(mask: &Array2<bool>, periodic: bool) -> Vec<usize> {
+    let (nx, ny) = mask.dim();
+    let mut seen = Array2::from_elem((nx, ny), false);
+    let mut sizes = Vec::new();
+    let mut stack = Vec::new();
+    for i0 in 0..nx {
+        for j0 in 0..ny {
+            if !mask[[i0, j0]] || seen[[i0, j0]] {
+                continue;
+            }
+            seen[[i0, j0]] = true;
+            stack.push((i0, j0));
+            let mut size = 0;
+            while let Some((i, j)) = stack.pop() {
+                size += 1;
+                let mut visit = |a: usize, b: usize| {
+                    if mask[[a, b]] && !seen[[a, b]] {
+                        seen[[a, b]] = true;
+                        stack.push((a, b));
+                    }
+                };
+                if i > 0 {
+                    visit(i - 1, j);
+                } else if periodic {
+                    visit(nx - 1, j);
+                }
+                if i + 1 < nx {
+                    visit(i + 1, j);
+                } else if periodic {
+                    visit(0, j);
+                }
+                if j > 0 {
+                    visit(i, j - 1);
+                } else if periodic {
+                    visit(i, ny - 1);
+                }
+                if j + 1 < ny {
+                    visit(i, j + 1);
+                } else if periodic {
+                    visit(i, 0);
+                }
+            }
+            sizes.push(size);
+        }
+    }
+    sizes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::analytic::Hertz;
+
+    /// Sphere of radius `r` as a height map (peak at the grid centre), zero-padded window.
+    fn sphere(n: usize, dx: f64, radius: f64) -> Grid2 {
+        let c = (n / 2) as f64;
+        let h = Array2::from_shape_fn((n, n), |(i, j)| {
+            let x = (i as f64 - c) * dx;
+            let y = (j as f64 - c) * dx;
+            -(x * x + y * y) / (2.0 * radius)
+        });
+        Grid2::new(h, dx, dx, false).unwrap()
+    }
+
+    #[test]
+    fn spots_count_periodic_wrap() {
+        let mut m = Array2::from_elem((6, 5), false);
+        m[[0, 2]] = true;
+        m[[5, 2]] = true; // joins (0,2) across the x boundary when periodic
+        m[[2, 0]] = true;
+        m[[2, 1]] = true;
+        m[[3, 3]] = true;
+        let mut open = spot_sizes(&m, false);
+        open.sort();
+        assert_eq!(open, vec![1, 1, 1, 2]);
+        let mut per = spot_sizes(&m, true);
+        per.sort();
+        assert_eq!(per, vec![1, 2, 2]);
+    }
+
+    #[test]
+    fn hertz_small_grid_and_warm_start() {
+        // Coarse Hertz check (the 1 % validation lives in tests/normal_contact.rs).
+        let (radius, e_star) = (0.01, 1e11);
+        let hz = Hertz::new(radius, 1.0, e_star);
+        let n = 49;
+        let dx = 2.4 * hz.radius / n as f64;
+        let s = sphere(n, dx, radius);
+        let mut solver = NormalSolver::new(
+            &NormalProblem {
+                surface: &s,
+                e_star_pa: e_star,
+            },
+            NormalOptions::default(),
+        )
+        .unwrap();
+        let p_mean = 1.0 / s.area();
+        let cold = solver.solve_load(p_mean, None).unwrap();
+        let force = cold.pressure.sum() * dx * dx;
+        assert!((force - 1.0).abs() < 1e-9);
+        assert!((cold.approach_m / hz.approach - 1.0).abs() < 0.03);
+        assert_eq!(cold.contact_spots, 1);
+        let warm = solver.solve_load(p_mean, Some(&cold)).unwrap();
+        assert!(warm.iterations < cold.iterations / 2 + 2);
+        // Displacement control recovers the load.
+        let dc = solver.solve_approach(cold.approach_m, Some(&cold)).unwrap();
+        assert!((dc.mean_pressure_pa / p_mean - 1.0).abs() < 1e-5);
+        let dc2 = solver.solve_approach(cold.approach_m * 1.3, None).unwrap();
+        assert!((dc2.approach_m / (cold.approach_m * 1.3) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        let s = sphere(16, 1e-6, 1e-3);
+        let mk = |e: f64| {
+            NormalSolver::new(
+                &NormalProblem {
+                    surface: &s,
+                    e_star_pa: e,
+                },
+                NormalOptions::default(),
+            )
+        };
+        assert!(mk(0.0).is_err());
+        assert!(mk(f64::NAN).is_err());
+        let mut solver = mk(1e11).unwrap();
+        for p in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let e = solver.solve_load(p, None).unwrap_err().to_string();
+            assert!(e.contains("mean_pressure_pa"), "{e}");
+        }
+        let mut bad = s.clone();
+        bad.heights[[3, 4]] = f64::NAN;
+        let e = NormalSolver::new(
+            &NormalProblem {
+                surface: &bad,
+                e_star_pa: 1e11,
+            },
+            NormalOptions::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("(3, 4)"), "{e}");
+        // Warm start from another grid.
+        let other = sphere(8, 1e-6, 1e-3);
+        let mut o = NormalSolver::new(
+            &NormalProblem {
+                surface: &other,
+                e_star_pa: 1e11,
+            },
+            NormalOptions::default(),
+        )
+        .unwrap();
+        let sol = o.solve_load(1e6, None).unwrap();
+        let e = solver.solve_load(1e6, Some(&sol)).unwrap_err().to_string();
+        assert!(e.contains("warm_start") && e.contains("8 × 8"), "{e}");
+    }
+
+    #[test]
+    fn iteration_cap_is_an_error() {
+        let s = sphere(32, 1e-6, 1e-3);
+        let mut solver = NormalSolver::new(
+            &NormalProblem {
+                surface: &s,
+                e_star_pa: 1e11,
+            },
+            NormalOptions {
+                max_iterations: 3,
+                ..NormalOptions::default()
+            },
+        )
+        .unwrap();
+        match solver.solve_load(1e6, None) {
+            Err(Error::NonConvergence { iterations, .. }) => assert_eq!(iterations, 3),
+            other => panic!("expected NonConvergence, got {other:?}"),
+        }
+    }
+}

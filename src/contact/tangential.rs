@@ -1,0 +1,1174 @@
+//! Tangential contact with Coulomb friction and history: partial slip on a fixed pressure field.
+//!
+//! Units: lengths and displacements in m, tractions and pressures in Pa, forces in N, energies
+//! in J (per unit nominal area: J/m²).
+//!
+//! # Assumption: quasi-identical materials
+//! The shear traction also displaces the surfaces normally (Cerruti's `u_z ∝ (1−2ν)/G`), which
+//! would change the pressure. For two bodies this coupling enters as
+//! `(1−2ν1)/G1 − (1−2ν2)/G2` and vanishes when both bodies are of the same material
+//! (Johnson, *Contact Mechanics*, 1985, §7.1; Kalker's "quasi-identical" bodies). The solver
+//! assumes it: the pressure `p` from the normal solver is held fixed and only the tangential
+//! problem is solved. Every result carries [`QUASI_IDENTICAL_ASSUMPTION`].
+//!
+//! # The problem of one load step
+//! On the contact set `{p > 0}` (fixed during the history), with `C` the tangential compliance
+//! (Cerruti element coefficients of both bodies, [`crate::halfspace::influence`]), rigid shift
+//! `δ` (a 2-vector: body 1 moves by `δ` relative to body 2 far from the contact) and `g` the
+//! accumulated relative slip of the surface particles, the slip at point `i` is
+//! `g_i = δ − (C q)_i`. Over a step from the previous state (`g_prev`) the slip increment is
+//! `Δg_i = δ − (C q)_i − g_prev_i`, and Coulomb's law with history (Kalker 1990, *Three-
+//! dimensional elastic bodies in rolling contact*, ch. 2) reads
+//!
+//! - stick: `|q_i| < μ p_i` and `Δg_i = 0`,
+//! - slip: `|q_i| = μ p_i` and `Δg_i = λ_i q_i/|q_i|`, `λ_i ≥ 0` (traction along the slip
+//!   increment, i.e. opposing the motion of body 2 relative to body 1).
+//!
+//! These are exactly the optimality conditions of the convex quadratic program
+//! `min ½ qᵀCq − qᵀ(δ − g_prev)` subject to `|q_i| ≤ μ p_i` (Kalker's principle of minimum
+//! complementary energy for the increment), since `−∇ = Δg`. In **load control** the force
+//! `T = ΔA Σ q_i` is imposed instead and `δ` becomes the Lagrange multiplier of that constraint.
+//!
+//! # Solver
+//! Accelerated projected gradient (FISTA, Beck & Teboulle 2009) with gradient-based adaptive
+//! restart (O'Donoghue & Candès 2015), warm-started from the previous step's traction. The step
+//! is `1/L` with `L` the largest eigenvalue of the restricted compliance (power iteration, once
+//! per pressure field, with a 10 % margin). The projection is point-wise onto the disks
+//! `|q_i| ≤ μ p_i`; in load control it is onto the disks intersected with `ΔA Σ q_i = T`, done
+//! exactly by a 2-D Newton iteration on the shift `λ` with `q_i = P_i(z_i − λ)`; the rigid
+//! shift is then `δ = −λ/α`.
+//!
+//! Convergence: the natural residual of the variational inequality at the iterate `y`,
+//! `max_i |y_i − P(y − α∇f(y))_i| / max_i μ p_i` (a relative traction error; zero exactly at the
+//! solution), below [`TangentialOptions::tolerance`]. The iteration cap gives
+//! [`Error::NonConvergence`].
+//!
+//! # Compliance operator: cost that follows the contact set
+//! Shear lives only on the contact set, a small fraction of the grid at the reference loads.
+//! Two exact implementations of `u = C q` on the contact points are provided:
+//! - [`Operator::Dense`]: the restricted influence matrix (three `n × n` blocks `xx, xy, yy`,
+//!   built once per pressure field from a table of the kernel by grid offset), `O(n²)` per
+//!   product with `n` contact points;
+//! - [`Operator::Fft`]: scatter to the grid, FFT convolution with the three Cerruti spectra,
+//!   gather, `O(N log N)` per product with `N` grid points (×4 when zero-padded).
+//!
+//! Both give the same product (to round-off; tested). [`Operator::Auto`] takes the dense matrix
+//! while it fits in [`DENSE_MEMORY_LIMIT_BYTES`] and its estimated cost is below the FFT's; see
+//! BENCHMARKS.md for the measured comparison.
+
+use crate::error::{require_positive, Error, Result};
+use crate::halfspace::convolution::{multiply_in_place, Boundary, FftPlan};
+use crate::halfspace::influence::{
+    cerruti_spectra, cerruti_uxx, cerruti_uxy, cerruti_uyy, CerrutiConstants, CerrutiSpectra,
+};
+use crate::surface::combine::Material;
+use ndarray::Array2;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The modelling assumption carried in every result's metadata.
+pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
+coupling neglected (exact for two bodies of the same material); pressure held fixed";
+
+/// Largest dense restricted matrix (three blocks of `n²` f64) that [`Operator::Auto`] builds.
+pub const DENSE_MEMORY_LIMIT_BYTES: usize = 1 << 30;
+
+/// How the compliance product `u = C q` on the contact points is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Operator {
+    /// Dense when it fits in memory and is estimated cheaper, else FFT.
+    Auto,
+    /// Dense influence matrix restricted to the contact points.
+    Dense,
+    /// FFT convolution on the whole grid.
+    Fft,
+}
+
+/// A tangential contact problem on a fixed pressure field.
+#[derive(Debug, Clone)]
+pub struct TangentialProblem<'a> {
+    /// Contact pressure p (Pa), shape `(nx, ny)`, `[[i, j]]` at `(i·dx, j·dy)`; the contact set
+    /// is `{p > 0}`.
+    pub pressure: &'a Array2<f64>,
+    /// Grid spacing along x (m).
+    pub dx: f64,
+    /// Grid spacing along y (m).
+    pub dy: f64,
+    /// Periodic patch or finite contact (zero-padded convolution).
+    pub boundary: Boundary,
+    /// Coulomb friction coefficient μ (-), > 0.
+    pub friction_coefficient: f64,
+    /// Body 1 (the rough surface's material).
+    pub body1: Material,
+    /// Body 2 (the counter-face).
+    pub body2: Material,
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TangentialOptions {
+    /// Tolerance on the relative natural residual (see the module documentation).
+    pub tolerance: f64,
+    /// Iteration cap of one step; exceeding it is [`Error::NonConvergence`].
+    pub max_iterations: usize,
+    /// Compliance operator.
+    pub operator: Operator,
+}
+
+impl Default for TangentialOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-8,
+            max_iterations: 20_000,
+            operator: Operator::Auto,
+        }
+    }
+}
+
+/// What is imposed in a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Control {
+    /// Rigid tangential shift δ of body 1 relative to body 2 (m).
+    Displacement([f64; 2]),
+    /// Total tangential force T on the contact (N).
+    Force([f64; 2]),
+}
+
+impl Control {
+    fn scaled(self, s: f64) -> Self {
+        match self {
+            Control::Displacement(d) => Control::Displacement([d[0] * s, d[1] * s]),
+            Control::Force(t) => Control::Force([t[0] * s, t[1] * s]),
+        }
+    }
+
+    fn vector(self) -> [f64; 2] {
+        match self {
+            Control::Displacement(v) | Control::Force(v) => v,
+        }
+    }
+}
+
+/// The state after one load step.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TangentialStep {
+    /// Rigid tangential shift δ (m).
+    pub shift_m: [f64; 2],
+    /// Tangential force T = ΔA Σ q (N).
+    pub force_n: [f64; 2],
+    /// Mean shear stress over the nominal (grid) area, T / (nx·dx·ny·dy) (Pa).
+    pub mean_shear_pa: [f64; 2],
+    /// Fraction of the contact points that stick (-).
+    pub stick_fraction: f64,
+    /// Slip path length ∫|dg| accumulated since the start, averaged over the contact area (m).
+    pub accumulated_slip_m: f64,
+    /// Frictional work of this step, ΔA Σ q·Δg (J).
+    pub frictional_work_j: f64,
+    /// Solver iterations of this step.
+    pub iterations: usize,
+    /// Final relative natural residual.
+    pub residual: f64,
+    /// Residual below tolerance.
+    pub converged: bool,
+    /// Wall time of the step (s).
+    pub wall_time_s: f64,
+}
+
+/// Facts about a solver set up on one pressure field.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TangentialMetadata {
+    /// [`QUASI_IDENTICAL_ASSUMPTION`].
+    pub assumption: &'static str,
+    /// Friction coefficient μ.
+    pub friction_coefficient: f64,
+    /// Grid shape `(nx, ny)`.
+    pub grid: (usize, usize),
+    /// Boundary treatment.
+    pub boundary: Boundary,
+    /// Operator actually used (`Dense` or `Fft`).
+    pub operator: Operator,
+    /// Number of contact points.
+    pub contact_points: usize,
+    /// Normal force P = ΔA Σ p (N).
+    pub normal_force_n: f64,
+    /// Nominal (grid) area (m²).
+    pub nominal_area_m2: f64,
+    /// Largest eigenvalue estimate of the restricted compliance (m/Pa).
+    pub compliance_norm_m_per_pa: f64,
+    /// Time to build the operator (s).
+    pub setup_time_s: f64,
+}
+
+/// `u = C q` on the contact points, `q` and `u` as `[x, y]` pairs.
+enum Compliance {
+    Dense {
+        n: usize,
+        xx: Vec<f64>,
+        xy: Vec<f64>,
+        yy: Vec<f64>,
+    },
+    Fft {
+        plan: FftPlan,
+        spectra: CerrutiSpectra,
+        points: Vec<(usize, usize)>,
+    },
+}
+
+impl Compliance {
+    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
+        match self {
+            Compliance::Dense { n, xx, xy, yy } => {
+                let n = *n;
+                u.par_iter_mut().enumerate().for_each(|(i, ui)| {
+                    let (rxx, rxy, ryy) = (
+                        &xx[i * n..(i + 1) * n],
+                        &xy[i * n..(i + 1) * n],
+                        &yy[i * n..(i + 1) * n],
+                    );
+                    let (mut sx, mut sy) = (0.0, 0.0);
+                    for j in 0..n {
+                        let [qx, qy] = q[j];
+                        sx += rxx[j] * qx + rxy[j] * qy;
+                        sy += rxy[j] * qx + ryy[j] * qy;
+                    }
+                    *ui = [sx, sy];
+                });
+            }
+            Compliance::Fft {
+                plan,
+                spectra,
+                points,
+            } => {
+                let shape = plan.grid_shape();
+                let mut fx = Array2::<f64>::zeros(shape);
+                let mut fy = Array2::<f64>::zeros(shape);
+                for (k, &(i, j)) in points.iter().enumerate() {
+                    fx[[i, j]] = q[k][0];
+                    fy[[i, j]] = q[k][1];
+                }
+                let sx = plan.forward(&fx);
+                let sy = plan.forward(&fy);
+                // ũ_x = K_xx q̃_x + K_xy q̃_y,  ũ_y = K_xy q̃_x + K_yy q̃_y.
+                let mut ux = sx.clone();
+                multiply_in_place(&mut ux, &spectra.xx.values);
+                let mut t = sy.clone();
+                multiply_in_place(&mut t, &spectra.xy.values);
+                ux += &t;
+                let mut uy = sy;
+                multiply_in_place(&mut uy, &spectra.yy.values);
+                let mut t = sx;
+                multiply_in_place(&mut t, &spectra.xy.values);
+                uy += &t;
+                let ux = plan.inverse(ux);
+                let uy = plan.inverse(uy);
+                for (k, &(i, j)) in points.iter().enumerate() {
+                    u[k] = [ux[[i, j]], uy[[i, j]]];
+                }
+            }
+        }
+    }
+}
+
+/// Kernel `(K_xx, K_xy, K_yy)` by signed grid offset, tabulated once.
+struct KernelTable {
+    boundary: Boundary,
+    xx: Array2<f64>,
+    xy: Array2<f64>,
+    yy: Array2<f64>,
+}
+
+impl KernelTable {
+    /// Zero-padded: the element coefficients for offsets `0..=span` (the rest by symmetry:
+    /// `K_xx`, `K_yy` even, `K_xy` odd in each offset). Periodic: the exact periodic kernel on the
+    /// whole period, from the inverse FFT of the periodic spectra (the same operator as the FFT
+    /// path).
+    fn new(
+        boundary: Boundary,
+        shape: (usize, usize),
+        span: (usize, usize),
+        dx: f64,
+        dy: f64,
+        k: CerrutiConstants,
+    ) -> Self {
+        match boundary {
+            Boundary::ZeroPadded => {
+                let (a, b) = (0.5 * dx, 0.5 * dy);
+                let dims = (span.0 + 1, span.1 + 1);
+                let tab = |f: fn(f64, f64, f64, f64, CerrutiConstants) -> f64| {
+                    let mut t = Array2::<f64>::zeros(dims);
+                    t.indexed_iter_mut()
+                        .par_bridge()
+                        .for_each(|((i, j), v)| *v = f(i as f64 * dx, j as f64 * dy, a, b, k));
+                    t
+                };
+                Self {
+                    boundary,
+                    xx: tab(cerruti_uxx),
+                    xy: tab(cerruti_uxy),
+                    yy: tab(cerruti_uyy),
+                }
+            }
+            Boundary::Periodic => {
+                let plan = FftPlan::new(shape.0, shape.1, Boundary::Periodic);
+                let s = cerruti_spectra(&plan, dx, dy, k);
+                Self {
+                    boundary,
+                    xx: plan.inverse(s.xx.values),
+                    xy: plan.inverse(s.xy.values),
+                    yy: plan.inverse(s.yy.values),
+                }
+            }
+        }
+    }
+
+    fn get(&self, di: isize, dj: isize) -> (f64, f64, f64) {
+        match self.boundary {
+            Boundary::ZeroPadded => {
+                let (ai, aj) = (di.unsigned_abs(), dj.unsigned_abs());
+                let s = if (di < 0) != (dj < 0) && di != 0 && dj != 0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                (
+                    self.xx[[ai, aj]],
+                    s * self.xy[[ai, aj]],
+                    self.yy[[ai, aj]],
+                )
+            }
+            Boundary::Periodic => {
+                let (nx, ny) = self.xx.dim();
+                let i = di.rem_euclid(nx as isize) as usize;
+                let j = dj.rem_euclid(ny as isize) as usize;
+                (self.xx[[i, j]], self.xy[[i, j]], self.yy[[i, j]])
+            }
+        }
+    }
+}
+
+/// Estimated cost (arbitrary units, multiply-adds) of one product with each operator.
+fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
+    let dense = 4.0 * (n as f64).powi(2);
+    let nf = plan_points as f64;
+    // Two forward and two inverse real transforms (≈ 2.5 N log2 N each) plus six spectral
+    // products and the scatter/gather.
+    let fft = 4.0 * 2.5 * nf * nf.log2().max(1.0) + 8.0 * nf;
+    (dense, fft)
+}
+
+/// Partial-slip solver on one fixed pressure field, holding the contact history.
+pub struct TangentialSolver {
+    nx: usize,
+    ny: usize,
+    element_area: f64,
+    points: Vec<(usize, usize)>,
+    /// Traction bound μ p_i (Pa).
+    limit: Vec<f64>,
+    compliance: Compliance,
+    /// Step size α = 1/L (Pa/m).
+    alpha: f64,
+    options: TangentialOptions,
+    metadata: TangentialMetadata,
+    // History.
+    q: Vec<[f64; 2]>,
+    slip: Vec<[f64; 2]>,
+    slip_path: Vec<f64>,
+    shift: [f64; 2],
+    /// Projection multiplier of the last load-controlled step (warm start of its Newton).
+    lambda: [f64; 2],
+}
+
+impl std::fmt::Debug for TangentialSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TangentialSolver")
+            .field("metadata", &self.metadata)
+            .finish()
+    }
+}
+
+impl TangentialSolver {
+    /// Check the problem, find the contact set and build the compliance operator.
+    ///
+    /// Errors: μ ≤ 0 or not finite, non-positive spacing, negative or non-finite pressure,
+    /// invalid materials ([`Error::InvalidParameter`]); no point with `p > 0`
+    /// ([`Error::Data`]).
+    pub fn new(problem: &TangentialProblem<'_>, options: TangentialOptions) -> Result<Self> {
+        let start = Instant::now();
+        let mu = problem.friction_coefficient;
+        if !(mu.is_finite() && mu > 0.0) {
+            return Err(Error::param(
+                "friction_coefficient",
+                format!("μ must be finite and > 0, got {mu}"),
+            ));
+        }
+        let dx = require_positive("dx", problem.dx)?;
+        let dy = require_positive("dy", problem.dy)?;
+        require_positive("tolerance", options.tolerance)?;
+        if options.max_iterations == 0 {
+            return Err(Error::param("max_iterations", "must be at least 1"));
+        }
+        let body1 = problem.body1.validated("body1")?;
+        let body2 = problem.body2.validated("body2")?;
+        let (nx, ny) = problem.pressure.dim();
+        if nx == 0 || ny == 0 {
+            return Err(Error::param("pressure", "empty pressure field"));
+        }
+        if let Some(((i, j), v)) = problem
+            .pressure
+            .indexed_iter()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(Error::param(
+                "pressure",
+                format!("must be finite and ≥ 0, got {v} Pa at grid point ({i}, {j})"),
+            ));
+        }
+        let points: Vec<(usize, usize)> = problem
+            .pressure
+            .indexed_iter()
+            .filter(|(_, p)| **p > 0.0)
+            .map(|(ij, _)| ij)
+            .collect();
+        if points.is_empty() {
+            return Err(Error::Data(
+                "tangential contact: the pressure field has no contact (no point with p > 0); \
+                 nothing can carry shear"
+                    .into(),
+            ));
+        }
+        let n = points.len();
+        let limit: Vec<f64> = points
+            .iter()
+            .map(|&(i, j)| mu * problem.pressure[[i, j]])
+            .collect();
+        let k = CerrutiConstants::of_materials(body1, body2);
+        let plan_points = match problem.boundary {
+            Boundary::Periodic => nx * ny,
+            Boundary::ZeroPadded => 4 * nx * ny,
+        };
+        let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
+        let dense_bytes = 3usize
+            .saturating_mul(n)
+            .saturating_mul(n)
+            .saturating_mul(8);
+        let operator = match options.operator {
+            Operator::Auto => {
+                if dense_bytes <= DENSE_MEMORY_LIMIT_BYTES && dense_cost <= fft_cost {
+                    Operator::Dense
+                } else {
+                    Operator::Fft
+                }
+            }
+            o => o,
+        };
+        let compliance = match operator {
+            Operator::Dense => {
+                let (imin, imax) = points
+                    .iter()
+                    .fold((usize::MAX, 0), |(a, b), p| (a.min(p.0), b.max(p.0)));
+                let (jmin, jmax) = points
+                    .iter()
+                    .fold((usize::MAX, 0), |(a, b), p| (a.min(p.1), b.max(p.1)));
+                let table = KernelTable::new(
+                    problem.boundary,
+                    (nx, ny),
+                    (imax - imin, jmax - jmin),
+                    dx,
+                    dy,
+                    k,
+                );
+                let mut xx = vec![0.0; n * n];
+                let mut xy = vec![0.0; n * n];
+                let mut yy = vec![0.0; n * n];
+                xx.par_chunks_mut(n)
+                    .zip(xy.par_chunks_mut(n))
+                    .zip(yy.par_chunks_mut(n))
+                    .enumerate()
+                    .for_each(|(r, ((rxx, rxy), ryy))| {
+                        let (i, j) = points[r];
+                        for (c, &(i2, j2)) in points.iter().enumerate() {
+                            let (a, b, d) =
+                                table.get(i as isize - i2 as isize, j as isize - j2 as isize);
+                            rxx[c] = a;
+                            rxy[c] = b;
+                            ryy[c] = d;
+                        }
+                    });
+                Compliance::Dense { n, xx, xy, yy }
+            }
+            _ => {
+                let plan = FftPlan::new(nx, ny, problem.boundary);
+                let spectra = cerruti_spectra(&plan, dx, dy, k);
+                Compliance::Fft {
+                    plan,
+                    spectra,
+                    points: points.clone(),
+                }
+            }
+        };
+        let l = largest_eigenvalue(&compliance, n);
+        let element_area = dx * dy;
+        let normal_force = element_area * problem.pressure.sum();
+        let metadata = TangentialMetadata {
+            assumption: QUASI_IDENTICAL_ASSUMPTION,
+            friction_coefficient: mu,
+            grid: (nx, ny),
+            boundary: problem.boundary,
+            operator,
+            contact_points: n,
+            normal_force_n: normal_force,
+            nominal_area_m2: nx as f64 * dx * ny as f64 * dy,
+            compliance_norm_m_per_pa: l,
+            setup_time_s: start.elapsed().as_secs_f64(),
+        };
+        Ok(Self {
+            nx,
+            ny,
+            element_area,
+            points,
+            limit,
+            compliance,
+            alpha: 1.0 / (1.1 * l),
+            options,
+            metadata,
+            q: vec![[0.0; 2]; n],
+            slip: vec![[0.0; 2]; n],
+            slip_path: vec![0.0; n],
+            shift: [0.0; 2],
+            lambda: [0.0; 2],
+        })
+    }
+
+    /// Facts about the set-up (assumption, operator, contact points, normal force, ...).
+    pub fn metadata(&self) -> &TangentialMetadata {
+        &self.metadata
+    }
+
+    /// Friction limit of the total tangential force, μP (N).
+    pub fn friction_limit_n(&self) -> f64 {
+        self.element_area * self.limit.iter().sum::<f64>()
+    }
+
+    /// Forget the history: back to the virgin state (q = 0, no slip, no shift).
+    pub fn reset(&mut self) {
+        self.q.iter_mut().for_each(|v| *v = [0.0; 2]);
+        self.slip.iter_mut().for_each(|v| *v = [0.0; 2]);
+        self.slip_path.iter_mut().for_each(|v| *v = 0.0);
+        self.shift = [0.0; 2];
+        self.lambda = [0.0; 2];
+    }
+
+    /// Shear traction field (Pa) on the grid, components `(q_x, q_y)`.
+    pub fn traction(&self) -> (Array2<f64>, Array2<f64>) {
+        let mut qx = Array2::zeros((self.nx, self.ny));
+        let mut qy = Array2::zeros((self.nx, self.ny));
+        for (k, &(i, j)) in self.points.iter().enumerate() {
+            qx[[i, j]] = self.q[k][0];
+            qy[[i, j]] = self.q[k][1];
+        }
+        (qx, qy)
+    }
+
+    /// Stick mask on the grid (true where the contact sticks).
+    pub fn stick_mask(&self) -> Array2<bool> {
+        let mut m = Array2::from_elem((self.nx, self.ny), false);
+        for (k, &(i, j)) in self.points.iter().enumerate() {
+            m[[i, j]] = self.sticks(k);
+        }
+        m
+    }
+
+    /// Stick: strictly inside the friction disk (a projection puts slipping points exactly on it).
+    fn sticks(&self, k: usize) -> bool {
+        let [x, y] = self.q[k];
+        x.hypot(y) < self.limit[k] * (1.0 - 1e-9)
+    }
+
+    /// Solve one load step from the current state and make it the new state.
+    ///
+    /// Errors: non-finite control; in load control `|T| ≥ μP` (gross slip, no static solution);
+    /// the iteration cap ([`Error::NonConvergence`], the state is left unchanged).
+    pub fn step(&mut self, control: Control) -> Result<TangentialStep> {
+        let start = Instant::now();
+        let v = control.vector();
+        if !(v[0].is_finite() && v[1].is_finite()) {
+            return Err(Error::param(
+                "control",
+                format!("tangential load must be finite, got {v:?}"),
+            ));
+        }
+        let n = self.points.len();
+        let alpha = self.alpha;
+        let rmax = self.limit.iter().cloned().fold(0.0, f64::max);
+        // b = δ − g_prev (displacement control) or −g_prev (load control, δ unknown).
+        let (b, force_sum) = match control {
+            Control::Displacement(d) => (
+                self.slip
+                    .iter()
+                    .map(|g| [d[0] - g[0], d[1] - g[1]])
+                    .collect::<Vec<_>>(),
+                None,
+            ),
+            Control::Force(t) => {
+                let limit = self.friction_limit_n();
+                let tm = t[0].hypot(t[1]);
+                if tm >= limit {
+                    return Err(Error::param(
+                        "tangential force",
+                        format!(
+                            "|T| = {tm:.6e} N reaches the friction limit μP = {limit:.6e} N: \
+                             gross slip has no static solution in load control"
+                        ),
+                    ));
+                }
+                (
+                    self.slip.iter().map(|g| [-g[0], -g[1]]).collect(),
+                    Some([t[0] / self.element_area, t[1] / self.element_area]),
+                )
+            }
+        };
+        let mut q = self.q.clone();
+        let mut y = q.clone();
+        let mut q_new = vec![[0.0; 2]; n];
+        let mut u = vec![[0.0; 2]; n];
+        let mut z = vec![[0.0; 2]; n];
+        let mut lambda = self.lambda;
+        let mut t = 1.0f64;
+        let mut residual = f64::INFINITY;
+        let mut iterations = 0;
+        let mut converged = false;
+        while iterations < self.options.max_iterations {
+            iterations += 1;
+            self.compliance.apply(&y, &mut u);
+            for k in 0..n {
+                // z = y − α ∇f(y) = y + α Δg.
+                z[k] = [
+                    y[k][0] - alpha * (u[k][0] - b[k][0]),
+                    y[k][1] - alpha * (u[k][1] - b[k][1]),
+                ];
+            }
+            match force_sum {
+                None => {
+                    for k in 0..n {
+                        q_new[k] = project_disk(z[k], self.limit[k]);
+                    }
+                }
+                Some(s) => {
+                    lambda = project_disks_with_sum(&z, &self.limit, s, lambda, &mut q_new);
+                }
+            }
+            residual = y
+                .iter()
+                .zip(&q_new)
+                .map(|(a, c)| (a[0] - c[0]).hypot(a[1] - c[1]))
+                .fold(0.0, f64::max)
+                / rmax;
+            if residual <= self.options.tolerance {
+                converged = true;
+                break;
+            }
+            // Gradient restart: momentum pointing against the descent direction.
+            let restart: f64 = (0..n)
+                .map(|k| {
+                    (y[k][0] - q_new[k][0]) * (q_new[k][0] - q[k][0])
+                        + (y[k][1] - q_new[k][1]) * (q_new[k][1] - q[k][1])
+                })
+                .sum();
+            let t_next = if restart > 0.0 {
+                1.0
+            } else {
+                0.5 * (1.0 + (1.0 + 4.0 * t * t).sqrt())
+            };
+            let beta = if restart > 0.0 {
+                0.0
+            } else {
+                (t - 1.0) / t_next
+            };
+            for k in 0..n {
+                y[k] = [
+                    q_new[k][0] + beta * (q_new[k][0] - q[k][0]),
+                    q_new[k][1] + beta * (q_new[k][1] - q[k][1]),
+                ];
+            }
+            std::mem::swap(&mut q, &mut q_new);
+            t = t_next;
+        }
+        if !converged {
+            return Err(Error::NonConvergence {
+                solver: "tangential partial-slip (FISTA)".into(),
+                iterations,
+                residual,
+                tolerance: self.options.tolerance,
+            });
+        }
+        // Accept q_new; rigid shift, slip and work of the step.
+        let shift = match control {
+            Control::Displacement(d) => d,
+            Control::Force(_) => [-lambda[0] / alpha, -lambda[1] / alpha],
+        };
+        self.compliance.apply(&q_new, &mut u);
+        let mut work = 0.0;
+        for k in 0..n {
+            let g = [shift[0] - u[k][0], shift[1] - u[k][1]];
+            let dg = [g[0] - self.slip[k][0], g[1] - self.slip[k][1]];
+            work += q_new[k][0] * dg[0] + q_new[k][1] * dg[1];
+            self.slip_path[k] += dg[0].hypot(dg[1]);
+            self.slip[k] = g;
+        }
+        self.q = q_new;
+        self.shift = shift;
+        self.lambda = lambda;
+        let fsum = self.q.iter().fold([0.0, 0.0], |a, v| [a[0] + v[0], a[1] + v[1]]);
+        let force = [fsum[0] * self.element_area, fsum[1] * self.element_area];
+        let area = self.metadata.nominal_area_m2;
+        let stick = (0..n).filter(|&k| self.sticks(k)).count();
+        Ok(TangentialStep {
+            shift_m: shift,
+            force_n: force,
+            mean_shear_pa: [force[0] / area, force[1] / area],
+            stick_fraction: stick as f64 / n as f64,
+            accumulated_slip_m: self.slip_path.iter().sum::<f64>() / n as f64,
+            frictional_work_j: work * self.element_area,
+            iterations,
+            residual,
+            converged,
+            wall_time_s: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Rigid shift at which monotonic loading from the virgin state along the unit direction
+    /// `e` reaches gross slip (m): with every point saturated, `q_i = μ p_i e`, the slip
+    /// `g_i = δ − (C q)_i` must point along `e` everywhere, which first happens at
+    /// `δ_gs = max_i (C q)_i·e`. For a Hertz contact this is Mindlin's `3μP·s/(16a)`.
+    pub fn gross_slip_displacement(&self, direction: [f64; 2]) -> Result<f64> {
+        let m = direction[0].hypot(direction[1]);
+        if !(m.is_finite() && m > 0.0) {
+            return Err(Error::param(
+                "direction",
+                format!("must be a finite non-zero vector, got {direction:?}"),
+            ));
+        }
+        let e = [direction[0] / m, direction[1] / m];
+        let q: Vec<[f64; 2]> = self.limit.iter().map(|&r| [r * e[0], r * e[1]]).collect();
+        let u = self.apply_compliance(&q);
+        Ok(u.iter()
+            .map(|v| v[0] * e[0] + v[1] * e[1])
+            .fold(f64::NEG_INFINITY, f64::max))
+    }
+
+    /// Apply `u = C q` on the contact points (for tests and diagnostics).
+    pub fn apply_compliance(&self, q: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let mut u = vec![[0.0; 2]; self.points.len()];
+        self.compliance.apply(q, &mut u);
+        u
+    }
+
+    /// Contact points `(i, j)` in the order used by [`Self::apply_compliance`].
+    pub fn contact_points(&self) -> &[(usize, usize)] {
+        &self.points
+    }
+}
+
+/// Projection of `z` onto the disk of radius `r`.
+fn project_disk(z: [f64; 2], r: f64) -> [f64; 2] {
+    let m = z[0].hypot(z[1]);
+    if m <= r {
+        z
+    } else {
+        let s = r / m;
+        [z[0] * s, z[1] * s]
+    }
+}
+
+/// Projection onto `{|q_i| ≤ r_i} ∩ {Σ q_i = s}`: `q_i = P_i(z_i − λ)` with the 2-vector `λ`
+/// solving `h(λ) = Σ P_i(z_i − λ) − s = 0` (monotone; damped Newton from `λ0`). Returns `λ`.
+fn project_disks_with_sum(
+    z: &[[f64; 2]],
+    r: &[f64],
+    s: [f64; 2],
+    lambda0: [f64; 2],
+    out: &mut [[f64; 2]],
+) -> [f64; 2] {
+    let scale = r.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+    let eval = |lam: [f64; 2], out: &mut [[f64; 2]]| -> ([f64; 2], [f64; 3]) {
+        let mut h = [-s[0], -s[1]];
+        let mut jac = [0.0; 3]; // Σ D_i (symmetric 2×2: [xx, xy, yy])
+        for ((o, zi), &ri) in out.iter_mut().zip(z).zip(r) {
+            let v = [zi[0] - lam[0], zi[1] - lam[1]];
+            let m = v[0].hypot(v[1]);
+            if m <= ri {
+                *o = v;
+                jac[0] += 1.0;
+                jac[2] += 1.0;
+            } else {
+                let c = ri / m;
+                let e = [v[0] / m, v[1] / m];
+                *o = [v[0] * c, v[1] * c];
+                jac[0] += c * (1.0 - e[0] * e[0]);
+                jac[1] -= c * e[0] * e[1];
+                jac[2] += c * (1.0 - e[1] * e[1]);
+            }
+            h[0] += o[0];
+            h[1] += o[1];
+        }
+        (h, jac)
+    };
+    let mut lam = lambda0;
+    let (mut h, mut jac) = eval(lam, out);
+    for _ in 0..100 {
+        let hn = h[0].hypot(h[1]);
+        if hn <= 1e-14 * scale {
+            break;
+        }
+        // Newton: Σ D_i · Δλ = h (since ∂h/∂λ = −Σ D_i). Regularised against singular Σ D.
+        let reg = 1e-12 * z.len() as f64;
+        let (a, b, d) = (jac[0] + reg, jac[1], jac[2] + reg);
+        let det = a * d - b * b;
+        let step = [(d * h[0] - b * h[1]) / det, (a * h[1] - b * h[0]) / det];
+        let mut f = 1.0;
+        let mut accepted = false;
+        for _ in 0..40 {
+            let trial = [lam[0] + f * step[0], lam[1] + f * step[1]];
+            let (ht, jt) = eval(trial, out);
+            if ht[0].hypot(ht[1]) < hn {
+                lam = trial;
+                h = ht;
+                jac = jt;
+                accepted = true;
+                break;
+            }
+            f *= 0.5;
+        }
+        if !accepted {
+            break;
+        }
+    }
+    // Leave `out` consistent with the returned λ.
+    eval(lam, out);
+    lam
+}
+
+/// Largest eigenvalue of the (symmetric positive definite) restricted compliance by power
+/// iteration (m/Pa). The start vector mixes both components so that no mode is missed by
+/// symmetry.
+fn largest_eigenvalue(c: &Compliance, n: usize) -> f64 {
+    let mut v: Vec<[f64; 2]> = (0..n)
+        .map(|k| {
+            let s = ((k as f64 + 1.0) * 0.618_033_988_75).fract();
+            [1.0 + s, 0.5 - s]
+        })
+        .collect();
+    let norm = |v: &[[f64; 2]]| v.iter().map(|a| a[0] * a[0] + a[1] * a[1]).sum::<f64>().sqrt();
+    let mut u = vec![[0.0; 2]; n];
+    let mut est = 0.0;
+    for _ in 0..60 {
+        let nv = norm(&v);
+        v.iter_mut().for_each(|a| *a = [a[0] / nv, a[1] / nv]);
+        c.apply(&v, &mut u);
+        let rq: f64 = v.iter().zip(&u).map(|(a, b)| a[0] * b[0] + a[1] * b[1]).sum();
+        let converged = (rq - est).abs() <= 1e-4 * rq;
+        est = rq;
+        std::mem::swap(&mut v, &mut u);
+        if converged {
+            break;
+        }
+    }
+    est
+}
+
+/// A sinusoidal history: `control(t) = amplitude · sin(2π k / steps_per_cycle)`, `k = 1 ..=
+/// cycles·steps_per_cycle`, starting from the virgin state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Oscillation {
+    /// Amplitude: displacement δa (m) or force T* (N), with its direction.
+    pub amplitude: Control,
+    /// Number of cycles (≥ 1).
+    pub cycles: usize,
+    /// Steps per cycle (≥ 4).
+    pub steps_per_cycle: usize,
+}
+
+/// Energy balance of one cycle.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct CycleEnergy {
+    /// Cycle number (1-based; cycle 1 starts from the virgin state and includes the initial
+    /// loading branch, so it is not a closed loop).
+    pub cycle: usize,
+    /// Loop area ∮ T·dδ (trapezoidal rule over the steps) (J).
+    pub dissipated_j: f64,
+    /// The same per unit nominal area (J/m²).
+    pub dissipated_j_per_m2: f64,
+    /// Frictional work ΔA Σ q·Δg summed over the cycle's steps (J): equals the loop area for a
+    /// closed loop, up to the time discretisation.
+    pub frictional_work_j: f64,
+}
+
+/// Result of an oscillating history.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct OscillationResult {
+    /// Every step, starting with the initial state (step 0: zero load).
+    pub steps: Vec<TangentialStep>,
+    /// One entry per cycle.
+    pub cycles: Vec<CycleEnergy>,
+    /// Set-up facts, including the quasi-identical assumption.
+    pub metadata: TangentialMetadata,
+    /// Total wall time (s).
+    pub wall_time_s: f64,
+}
+
+/// Run an oscillating history from the virgin state (the solver is reset first).
+/// `progress(k, total)` is called after each step.
+///
+/// Errors: zero or non-finite amplitude, fewer than 1 cycle or 4 steps per cycle
+/// ([`Error::InvalidParameter`]); any step's errors.
+pub fn oscillate(
+    solver: &mut TangentialSolver,
+    oscillation: &Oscillation,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<OscillationResult> {
+    let start = Instant::now();
+    let a = oscillation.amplitude.vector();
+    let am = a[0].hypot(a[1]);
+    if !(am.is_finite() && am > 0.0) {
+        return Err(Error::param(
+            "amplitude",
+            format!("oscillation amplitude must be finite and non-zero, got {a:?}"),
+        ));
+    }
+    if oscillation.cycles == 0 {
+        return Err(Error::param("cycles", "must be at least 1"));
+    }
+    if oscillation.steps_per_cycle < 4 {
+        return Err(Error::param(
+            "steps_per_cycle",
+            format!("must be at least 4, got {}", oscillation.steps_per_cycle),
+        ));
+    }
+    solver.reset();
+    let n = oscillation.steps_per_cycle;
+    let total = oscillation.cycles * n;
+    let mut steps = Vec::with_capacity(total + 1);
+    steps.push(TangentialStep {
+        shift_m: [0.0; 2],
+        force_n: [0.0; 2],
+        mean_shear_pa: [0.0; 2],
+        stick_fraction: 1.0,
+        accumulated_slip_m: 0.0,
+        frictional_work_j: 0.0,
+        iterations: 0,
+        residual: 0.0,
+        converged: true,
+        wall_time_s: 0.0,
+    });
+    for k in 1..=total {
+        let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+        // sin of exact multiples of π are set to zero so that cycles close exactly.
+        let s = if (2 * k) % n == 0 { 0.0 } else { phase.sin() };
+        steps.push(solver.step(oscillation.amplitude.scaled(s))?);
+        progress(k, total);
+    }
+    let area = solver.metadata().nominal_area_m2;
+    let cycles = (0..oscillation.cycles)
+        .map(|c| {
+            let w = loop_area(&steps[c * n..=(c + 1) * n]);
+            let fw = steps[c * n + 1..=(c + 1) * n]
+                .iter()
+                .map(|s| s.frictional_work_j)
+                .sum();
+            CycleEnergy {
+                cycle: c + 1,
+                dissipated_j: w,
+                dissipated_j_per_m2: w / area,
+                frictional_work_j: fw,
+            }
+        })
+        .collect();
+    Ok(OscillationResult {
+        steps,
+        cycles,
+        metadata: solver.metadata().clone(),
+        wall_time_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// `∫ T·dδ` along consecutive steps, trapezoidal rule (J).
+pub fn loop_area(steps: &[TangentialStep]) -> f64 {
+    steps
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (&w[0], &w[1]);
+            (0..2)
+                .map(|c| 0.5 * (a.force_n[c] + b.force_n[c]) * (b.shift_m[c] - a.shift_m[c]))
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn steel() -> Material {
+        Material::STEEL
+    }
+
+    fn blob(nx: usize, ny: usize) -> Array2<f64> {
+        // Two separate contact spots and a few isolated points.
+        Array2::from_shape_fn((nx, ny), |(i, j)| {
+            let r1 = ((i as f64 - 4.0).powi(2) + (j as f64 - 5.0).powi(2)).sqrt();
+            let r2 = ((i as f64 - 12.0).powi(2) + (j as f64 - 3.0).powi(2)).sqrt();
+            let mut p = 0.0;
+            if r1 < 3.0 {
+                p += 1e6 * (1.0 - r1 / 3.0);
+            }
+            if r2 < 2.0 {
+                p += 2e6 * (1.0 - r2 / 2.0);
+            }
+            if (i * 7 + j * 3) % 23 == 0 {
+                p += 5e5;
+            }
+            p
+        })
+    }
+
+    fn solver(p: &Array2<f64>, boundary: Boundary, op: Operator, mu: f64) -> Result<TangentialSolver> {
+        TangentialSolver::new(
+            &TangentialProblem {
+                pressure: p,
+                dx: 1e-6,
+                dy: 1.5e-6,
+                boundary,
+                friction_coefficient: mu,
+                body1: steel(),
+                body2: steel(),
+            },
+            TangentialOptions {
+                operator: op,
+                ..TangentialOptions::default()
+            },
+        )
+    }
+
+    #[test]
+    fn dense_and_fft_operators_agree() {
+        let p = blob(16, 11);
+        for boundary in [Boundary::ZeroPadded, Boundary::Periodic] {
+            let d = solver(&p, boundary, Operator::Dense, 0.5).unwrap();
+            let f = solver(&p, boundary, Operator::Fft, 0.5).unwrap();
+            assert_eq!(d.metadata().operator, Operator::Dense);
+            assert_eq!(f.metadata().operator, Operator::Fft);
+            let q: Vec<[f64; 2]> = (0..d.contact_points().len())
+                .map(|k| [(k as f64 * 0.37).sin() * 1e5, (k as f64 * 0.91).cos() * 1e5])
+                .collect();
+            let ud = d.apply_compliance(&q);
+            let uf = f.apply_compliance(&q);
+            let scale = ud.iter().map(|u| u[0].abs().max(u[1].abs())).fold(0.0, f64::max);
+            for (a, b) in ud.iter().zip(&uf) {
+                assert!((a[0] - b[0]).abs() < 1e-10 * scale, "{boundary:?} {a:?} {b:?}");
+                assert!((a[1] - b[1]).abs() < 1e-10 * scale, "{boundary:?} {a:?} {b:?}");
+            }
+            // And the solutions of a step agree.
+            let (mut d, mut f) = (d, f);
+            let c = Control::Displacement([5e-12, -2e-12]);
+            let sd = d.step(c).unwrap();
+            let sf = f.step(c).unwrap();
+            assert!(sd.stick_fraction > 0.05 && sd.stick_fraction < 0.95, "{sd:?}");
+            assert!((sd.force_n[0] / sf.force_n[0] - 1.0).abs() < 1e-6);
+            assert!((sd.force_n[1] / sf.force_n[1] - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn load_control_returns_the_imposed_force_and_inverts_displacement_control() {
+        let p = blob(16, 11);
+        let mut s = solver(&p, Boundary::ZeroPadded, Operator::Dense, 0.5).unwrap();
+        let d = s.step(Control::Displacement([3e-12, 1e-12])).unwrap();
+        assert!(d.stick_fraction > 0.0 && d.stick_fraction < 1.0, "{d:?}");
+        let mut s2 = solver(&p, Boundary::ZeroPadded, Operator::Dense, 0.5).unwrap();
+        let f = s2.step(Control::Force(d.force_n)).unwrap();
+        for c in 0..2 {
+            assert!((f.force_n[c] - d.force_n[c]).abs() < 1e-9 * s.friction_limit_n());
+            assert!((f.shift_m[c] - d.shift_m[c]).abs() < 1e-5 * 3e-12, "{f:?} {d:?}");
+        }
+    }
+
+    #[test]
+    fn gross_slip_saturates_every_point_and_load_control_refuses_it() {
+        let p = blob(16, 11);
+        let mut s = solver(&p, Boundary::Periodic, Operator::Auto, 0.3).unwrap();
+        let st = s.step(Control::Displacement([1e-5, 0.0])).unwrap();
+        assert_eq!(st.stick_fraction, 0.0);
+        assert!((st.force_n[0] / s.friction_limit_n() - 1.0).abs() < 1e-9);
+        assert!(st.force_n[1].abs() < 1e-9 * s.friction_limit_n());
+        let lim = s.friction_limit_n();
+        let e = s.step(Control::Force([lim, 0.0])).unwrap_err();
+        assert!(e.to_string().contains("friction limit"), "{e}");
+    }
+
+    #[test]
+    fn gross_slip_displacement_separates_partial_from_gross_slip() {
+        let p = blob(16, 11);
+        let mut s = solver(&p, Boundary::ZeroPadded, Operator::Dense, 0.4).unwrap();
+        let d = s.gross_slip_displacement([1.0, 0.0]).unwrap();
+        let below = s.step(Control::Displacement([0.97 * d, 0.0])).unwrap();
+        assert!(below.stick_fraction > 0.0, "{below:?}");
+        s.reset();
+        let above = s.step(Control::Displacement([1.001 * d, 0.0])).unwrap();
+        assert_eq!(above.stick_fraction, 0.0, "{above:?}");
+    }
+
+    #[test]
+    fn bad_inputs_are_named() {
+        let p = blob(8, 8);
+        for mu in [0.0, -0.2, f64::NAN] {
+            let e = solver(&p, Boundary::Periodic, Operator::Auto, mu).unwrap_err();
+            assert!(e.to_string().contains("friction_coefficient"), "{e}");
+        }
+        let zero = Array2::<f64>::zeros((8, 8));
+        let e = solver(&zero, Boundary::Periodic, Operator::Auto, 0.5).unwrap_err();
+        assert!(e.to_string().contains("no contact"), "{e}");
+        let mut neg = p.clone();
+        neg[[2, 3]] = -1.0;
+        let e = solver(&neg, Boundary::Periodic, Operator::Auto, 0.5).unwrap_err();
+        assert!(e.to_string().contains("(2, 3)"), "{e}");
+        let mut s = solver(&p, Boundary::Periodic, Operator::Auto, 0.5).unwrap();
+        let e = oscillate(
+            &mut s,
+            &Oscillation {
+                amplitude: Control::Displacement([0.0, 0.0]),
+                cycles: 1,
+                steps_per_cycle: 8,
+            },
+            |_, _| {},
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("amplitude"), "{e}");
+    }
+
+    #[test]
+    fn iteration_cap_is_non_convergence() {
+        let p = blob(16, 11);
+        let mut s = TangentialSolver::new(
+            &TangentialProblem {
+                pressure: &p,
+                dx: 1e-6,
+                dy: 1e-6,
+                boundary: Boundary::ZeroPadded,
+                friction_coefficient: 0.5,
+                body1: steel(),
+                body2: steel(),
+            },
+            TangentialOptions {
+                max_iterations: 2,
+                tolerance: 1e-14,
+                operator: Operator::Auto,
+            },
+        )
+        .unwrap();
+        match s.step(Control::Displacement([1e-8, 0.0])) {
+            Err(Error::NonConvergence { iterations, .. }) => assert_eq!(iterations, 2),
+            other => panic!("expected NonConvergence, got {other:?}"),
+        }
+    }
+}

@@ -1,0 +1,101 @@
+//! Topography files: readers (one module per format) and writers, with [`read`] and [`write`]
+//! choosing the format from the file name and, for text files, the content.
+//!
+//! | file | read | write | content |
+//! |---|---|---|---|
+//! | `.npy` (+ `.npy.json` sidecar) | area | area | float64 heights in m, spacing in the sidecar |
+//! | `.x3p` | area | area | ISO 25178-72 zip: `main.xml` + binary heights |
+//! | text starting with `Scan Parameters` | profile | — | Bruker Dektak CSV export |
+//! | text with `# unit: …, dx_m: …, dy_m: …` | area | area (`.csv`, `.txt`, `.asc`) | height matrix |
+//! | other text | profile | — | CSV / whitespace columns with a header naming units |
+//! | `.png` | — | area | height image with a colour bar |
+
+pub mod dektak;
+pub mod matrix;
+pub mod npy;
+pub mod png;
+pub mod profile_text;
+pub mod text;
+pub mod units;
+pub mod x3p;
+
+use crate::error::{Error, Result};
+use crate::grid::Grid2;
+use crate::surface::topography::Topography;
+use std::path::Path;
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Read a topography, choosing the reader from the extension and, for text, the content.
+pub fn read(path: &Path) -> Result<Topography> {
+    match extension(path).as_str() {
+        "npy" => npy::read(path).map(Topography::Area),
+        "x3p" => x3p::read(path).map(Topography::Area),
+        "png" | "jpg" | "jpeg" | "tif" | "tiff" | "zip" | "json" => Err(Error::parse(
+            path,
+            0,
+            "not a topography format that can be read (known: .npy, .x3p, Dektak CSV, \
+             height-matrix or profile text)",
+        )),
+        _ => {
+            let text = text::read_text(path)?;
+            if text.trim().is_empty() {
+                return Err(Error::parse(path, 0, "empty file"));
+            }
+            if text.contains('\0') {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    "binary file of unknown format (known: .npy, .x3p, Dektak CSV, \
+                     height-matrix or profile text)",
+                ));
+            }
+            if dektak::detect(&text) {
+                dektak::read(path, &text).map(Topography::Profile)
+            } else if matrix::detect(&text) {
+                matrix::read(path, &text).map(Topography::Area)
+            } else {
+                profile_text::read(path, &text).map(Topography::Profile)
+            }
+        }
+    }
+}
+
+/// Extensions [`write`] accepts.
+pub const WRITABLE: &[&str] = &["npy", "x3p", "csv", "txt", "asc", "png"];
+
+/// Check, before any work is done, that `path` names a format [`write`] knows.
+pub fn check_writable_format(path: &Path) -> Result<()> {
+    let ext = extension(path);
+    if WRITABLE.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        Err(Error::param(
+            "output",
+            format!(
+                "cannot write `{}`: known formats {}",
+                path.display(),
+                WRITABLE
+                    .iter()
+                    .map(|e| format!(".{e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ))
+    }
+}
+
+/// Write a height map, choosing the format from the extension.
+pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
+    check_writable_format(path)?;
+    match extension(path).as_str() {
+        "npy" => npy::write(path, grid),
+        "x3p" => x3p::write(path, grid),
+        "png" => png::write(path, grid, "height map"),
+        _ => matrix::write(path, grid),
+    }
+}

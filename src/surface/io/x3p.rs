@@ -1,0 +1,372 @@
+//! ISO 25178-72 (ISO 5436-2) XML 3D surface profiles, `.x3p`.
+//!
+//! An x3p file is a zip archive holding `main.xml` (the description) and the binary point data
+//! (`bindata/data.bin`, named by `Record3/DataLink/PointDataLink`). What is read:
+//!
+//! - `Record1/Axes/CX`, `CY`: `AxisType` must be `I` (incremental: a regular grid) with the
+//!   spacing `Increment` in metres; `CZ`: `AxisType` `A` (absolute), `DataType` `D` (f64), `F`
+//!   (f32), `L` (u32) or `I` (u16), optional `Increment` (scale) and `Offset`.
+//! - `Record3/MatrixDimension/SizeX`, `SizeY` (points along x, y), `SizeZ` must be 1.
+//! - The binary data are little-endian, x fastest: value `k = j·SizeX + i` is the height at
+//!   `(i·dx, j·dy)`; its length must be exactly `SizeX·SizeY·size(DataType)`. When
+//!   `MD5ChecksumPointData` is given it must match the data.
+//!
+//! Heights are in metres. Missing points (NaN) are an error: fill them before the analysis. The
+//! format has no notion of periodicity; the writer records a periodic patch as the comment
+//! `asperity:periodic` in `Record2/Comment`, which the reader honours.
+
+use crate::error::{Error, Result};
+use crate::grid::Grid2;
+use crate::output::write_atomic_via_path;
+use md5::{Digest, Md5};
+use ndarray::Array2;
+use quick_xml::events::Event;
+use std::collections::HashMap;
+use std::io::{Read, Write};
+use std::path::Path;
+
+/// Marker written into `Record2/Comment` for periodic patches.
+pub const PERIODIC_MARK: &str = "asperity:periodic";
+
+/// Element texts of `main.xml` keyed by their path without the root, e.g.
+/// `Record1/Axes/CX/Increment`.
+fn xml_texts(path: &Path, xml: &str) -> Result<HashMap<String, String>> {
+    let mut reader = quick_xml::Reader::from_str(xml);
+    reader.config_mut().trim_text(true);
+    let mut stack: Vec<String> = Vec::new();
+    let mut out = HashMap::new();
+    loop {
+        let ev = reader.read_event().map_err(|e| {
+            Error::parse(
+                path,
+                0,
+                format!(
+                    "main.xml is not well-formed XML (byte {}): {e}",
+                    reader.buffer_position()
+                ),
+            )
+        })?;
+        match ev {
+            Event::Start(e) => {
+                stack.push(String::from_utf8_lossy(e.local_name().as_ref()).into_owned())
+            }
+            Event::End(_) => {
+                stack.pop();
+            }
+            Event::Text(t) if stack.len() > 1 => {
+                let text = t
+                    .unescape()
+                    .map_err(|e| Error::parse(path, 0, format!("main.xml: {e}")))?;
+                out.insert(stack[1..].join("/"), text.trim().to_string());
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    Ok(out)
+}
+
+struct Description {
+    nx: usize,
+    ny: usize,
+    dx: f64,
+    dy: f64,
+    data_type: char,
+    z_scale: f64,
+    z_offset: f64,
+    link: String,
+    md5: Option<String>,
+    periodic: bool,
+}
+
+fn describe(path: &Path, t: &HashMap<String, String>) -> Result<Description> {
+    let get = |k: &str| {
+        t.get(k)
+            .map(String::as_str)
+            .ok_or_else(|| Error::parse(path, 0, format!("main.xml lacks `{k}`")))
+    };
+    let num = |k: &str| -> Result<f64> {
+        let s = get(k)?;
+        s.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| {
+                Error::parse(path, 0, format!("main.xml: `{k}` = `{s}` is not a number"))
+            })
+    };
+    let size = |k: &str| -> Result<usize> {
+        let s = get(k)?;
+        s.parse::<usize>().ok().filter(|&v| v > 0).ok_or_else(|| {
+            Error::parse(
+                path,
+                0,
+                format!("main.xml: `{k}` = `{s}` is not a positive integer"),
+            )
+        })
+    };
+    if let Some(ft) = t.get("Record1/FeatureType") {
+        if ft != "SUR" {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("x3p FeatureType `{ft}`: only areal surfaces (`SUR`) are supported"),
+            ));
+        }
+    }
+    for ax in ["CX", "CY"] {
+        let at = get(&format!("Record1/Axes/{ax}/AxisType"))?;
+        if at != "I" {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "x3p axis {ax} has AxisType `{at}`; only incremental (`I`) grids are supported"
+                ),
+            ));
+        }
+    }
+    let az = get("Record1/Axes/CZ/AxisType")?;
+    if az != "A" {
+        return Err(Error::parse(
+            path,
+            0,
+            format!("x3p axis CZ has AxisType `{az}`, expected `A`"),
+        ));
+    }
+    let dt = get("Record1/Axes/CZ/DataType")?;
+    let data_type = match dt {
+        "D" | "F" | "L" | "I" => dt.chars().next().unwrap_or('D'),
+        _ => {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("x3p CZ DataType `{dt}` unknown (D, F, L, I)"),
+            ))
+        }
+    };
+    let nz = size("Record3/MatrixDimension/SizeZ")?;
+    if nz != 1 {
+        return Err(Error::parse(
+            path,
+            0,
+            format!("x3p SizeZ = {nz}: layered data are not supported"),
+        ));
+    }
+    let opt = |k: &str, default: f64| -> Result<f64> {
+        if t.contains_key(k) {
+            num(k)
+        } else {
+            Ok(default)
+        }
+    };
+    Ok(Description {
+        nx: size("Record3/MatrixDimension/SizeX")?,
+        ny: size("Record3/MatrixDimension/SizeY")?,
+        dx: num("Record1/Axes/CX/Increment")?,
+        dy: num("Record1/Axes/CY/Increment")?,
+        data_type,
+        z_scale: opt("Record1/Axes/CZ/Increment", 1.0)?,
+        z_offset: opt("Record1/Axes/CZ/Offset", 0.0)?,
+        link: get("Record3/DataLink/PointDataLink")?.to_string(),
+        md5: t.get("Record3/DataLink/MD5ChecksumPointData").cloned(),
+        periodic: t
+            .get("Record2/Comment")
+            .is_some_and(|c| c.contains(PERIODIC_MARK)),
+    })
+}
+
+fn bytes_per_value(data_type: char) -> usize {
+    match data_type {
+        'D' => 8,
+        'F' | 'L' => 4,
+        _ => 2,
+    }
+}
+
+/// Decode little-endian values of the given x3p data type.
+fn decode(data_type: char, b: &[u8]) -> f64 {
+    match data_type {
+        'D' => f64::from_le_bytes(b.try_into().expect("8 bytes")),
+        'F' => f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64,
+        'L' => u32::from_le_bytes(b.try_into().expect("4 bytes")) as f64,
+        _ => u16::from_le_bytes(b.try_into().expect("2 bytes")) as f64,
+    }
+}
+
+/// Read an x3p file.
+pub fn read(path: &Path) -> Result<Grid2> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut zip = zip::ZipArchive::new(file)
+        .map_err(|e| Error::parse(path, 0, format!("not a valid x3p (zip) archive: {e}")))?;
+    let mut xml = String::new();
+    zip.by_name("main.xml")
+        .map_err(|e| Error::parse(path, 0, format!("x3p archive has no main.xml: {e}")))?
+        .read_to_string(&mut xml)
+        .map_err(|e| Error::parse(path, 0, format!("reading main.xml: {e}")))?;
+    let d = describe(path, &xml_texts(path, &xml)?)?;
+    let expected =
+        d.nx.checked_mul(d.ny)
+            .and_then(|n| n.checked_mul(bytes_per_value(d.data_type)))
+            .ok_or_else(|| Error::parse(path, 0, "x3p matrix dimensions overflow"))?;
+    let mut entry = zip.by_name(&d.link).map_err(|e| {
+        Error::parse(
+            path,
+            0,
+            format!("x3p point data `{}` missing from the archive: {e}", d.link),
+        )
+    })?;
+    if entry.size() != expected as u64 {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "x3p point data `{}` has {} bytes, but SizeX × SizeY × {} bytes ({} × {} × {}) = {expected}: \
+                 truncated or inconsistent",
+                d.link,
+                entry.size(),
+                d.data_type,
+                d.nx,
+                d.ny,
+                bytes_per_value(d.data_type)
+            ),
+        ));
+    }
+    let mut bin = Vec::with_capacity(expected);
+    entry
+        .read_to_end(&mut bin)
+        .map_err(|e| Error::parse(path, 0, format!("reading x3p point data `{}`: {e}", d.link)))?;
+    if bin.len() != expected {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "x3p point data truncated: {} of {expected} bytes",
+                bin.len()
+            ),
+        ));
+    }
+    if let Some(want) = &d.md5 {
+        let got = format!("{:x}", Md5::digest(&bin));
+        if !got.eq_ignore_ascii_case(want.trim()) {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("x3p point data MD5 {got} does not match MD5ChecksumPointData {want}: corrupted"),
+            ));
+        }
+    }
+    let w = bytes_per_value(d.data_type);
+    let mut heights = Array2::<f64>::zeros((d.nx, d.ny));
+    for (k, chunk) in bin.chunks_exact(w).enumerate() {
+        let (i, j) = (k % d.nx, k / d.nx);
+        heights[[i, j]] = d.z_offset + d.z_scale * decode(d.data_type, chunk);
+    }
+    if let Some(((i, j), v)) = heights.indexed_iter().find(|(_, v)| !v.is_finite()) {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "x3p height at point ({i}, {j}) is {v} (missing data); fill missing points first"
+            ),
+        ));
+    }
+    Grid2::new(heights, d.dx, d.dy, d.periodic).map_err(|e| Error::parse(path, 0, e.to_string()))
+}
+
+/// ISO 8601 UTC timestamp of now (for `Record2/Date`), without a date-time crate:
+/// days-to-civil conversion of Howard Hinnant's `chrono`-compatible algorithm.
+fn utc_now_iso8601() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        (rem % 3600) / 60,
+        rem % 60
+    )
+}
+
+/// The `main.xml` of a grid written with f64 (`D`) heights.
+fn main_xml(grid: &Grid2, md5_data: &str) -> String {
+    let comment = if grid.periodic { PERIODIC_MARK } else { "" };
+    let date = utc_now_iso8601();
+    format!(
+        r#"<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
+<p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xsi:schemaLocation="http://www.opengps.eu/2008/ISO5436_2 http://www.opengps.eu/2008/ISO5436_2/ISO5436_2.xsd">
+  <Record1>
+    <Revision>ISO5436 - 2000</Revision>
+    <FeatureType>SUR</FeatureType>
+    <Axes>
+      <CX><AxisType>I</AxisType><DataType>D</DataType><Increment>{dx:?}</Increment><Offset>0</Offset></CX>
+      <CY><AxisType>I</AxisType><DataType>D</DataType><Increment>{dy:?}</Increment><Offset>0</Offset></CY>
+      <CZ><AxisType>A</AxisType><DataType>D</DataType></CZ>
+    </Axes>
+  </Record1>
+  <Record2>
+    <Date>{date}</Date>
+    <Instrument>
+      <Manufacturer>asperity</Manufacturer>
+      <Model>asperity</Model>
+      <Serial>not available</Serial>
+      <Version>{version}</Version>
+    </Instrument>
+    <CalibrationDate>{date}</CalibrationDate>
+    <ProbingSystem><Type>Software</Type><Identification>asperity</Identification></ProbingSystem>
+    <Comment>{comment}</Comment>
+  </Record2>
+  <Record3>
+    <MatrixDimension><SizeX>{nx}</SizeX><SizeY>{ny}</SizeY><SizeZ>1</SizeZ></MatrixDimension>
+    <DataLink><PointDataLink>bindata/data.bin</PointDataLink><MD5ChecksumPointData>{md5_data}</MD5ChecksumPointData></DataLink>
+  </Record3>
+  <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>
+</p:ISO5436_2>
+"#,
+        dx = grid.dx,
+        dy = grid.dy,
+        nx = grid.nx(),
+        ny = grid.ny(),
+        version = env!("CARGO_PKG_VERSION"),
+    )
+}
+
+/// Write `grid` as an x3p archive (f64 heights in m), atomically.
+pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
+    let (nx, ny) = (grid.nx(), grid.ny());
+    let mut bin = Vec::with_capacity(nx * ny * 8);
+    for j in 0..ny {
+        for i in 0..nx {
+            bin.extend_from_slice(&grid.heights[[i, j]].to_le_bytes());
+        }
+    }
+    let md5_data = format!("{:X}", Md5::digest(&bin));
+    let xml = main_xml(grid, &md5_data);
+    let md5_xml = format!("{:x} *main.xml\n", Md5::digest(xml.as_bytes()));
+    write_atomic_via_path(path, |tmp| {
+        let zerr = |e: zip::result::ZipError| Error::parse(path, 0, format!("writing x3p: {e}"));
+        let ioerr = |e| Error::io(path, e);
+        let file = std::fs::File::create(tmp).map_err(|e| Error::io(tmp, e))?;
+        let mut z = zip::ZipWriter::new(file);
+        let opts = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        z.start_file("main.xml", opts).map_err(zerr)?;
+        z.write_all(xml.as_bytes()).map_err(ioerr)?;
+        z.start_file("bindata/data.bin", opts).map_err(zerr)?;
+        z.write_all(&bin).map_err(ioerr)?;
+        z.start_file("md5checksum.hex", opts).map_err(zerr)?;
+        z.write_all(md5_xml.as_bytes()).map_err(ioerr)?;
+        z.finish().map_err(zerr)?;
+        Ok(())
+    })
+}

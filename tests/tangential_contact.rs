@@ -1,0 +1,311 @@
+//! Tangential contact validated against Cattaneo–Mindlin / Mindlin–Deresiewicz closed forms and
+//! the output of the CONTACT code (Vollebregt/Kalker) for the same case
+//! (`../shared/data/contact/REFERENCES.md`), plus the CLI's error paths.
+//!
+//! Units: SI (m, Pa, N, J). The reference case is G = 200 N/mm² = 2e8 Pa, ν = 0.42 for both
+//! bodies (identical, so normal and tangential problems decouple exactly), R = 50 mm,
+//! P = 9.1954 N (a = 1 mm), μ = 0.4.
+
+use asperity::contact::analytic::{CattaneoMindlin, Hertz};
+use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
+use asperity::contact::tangential::{
+    oscillate, Control, Operator, Oscillation, TangentialOptions, TangentialProblem,
+    TangentialSolver,
+};
+use asperity::halfspace::Boundary;
+use asperity::surface::combine::{composite_modulus, Material};
+use asperity::{Error, Grid2};
+use ndarray::Array2;
+use std::process::Command;
+
+const G: f64 = 2e8;
+const NU: f64 = 0.42;
+const R: f64 = 0.05;
+const P: f64 = 9.1954;
+const MU: f64 = 0.4;
+
+fn material() -> Material {
+    Material {
+        youngs_modulus_pa: 2.0 * G * (1.0 + NU),
+        poisson_ratio: NU,
+    }
+}
+
+fn e_star() -> f64 {
+    composite_modulus(material(), material()).unwrap()
+}
+
+fn closed_form(a: f64) -> CattaneoMindlin {
+    CattaneoMindlin::new(a, P, MU, G, NU, G, NU)
+}
+
+/// Element-centre coordinate of index `i` on an `n`-point grid centred on the sphere.
+fn centre(i: usize, n: usize, dx: f64) -> f64 {
+    (i as f64 - 0.5 * (n as f64 - 1.0)) * dx
+}
+
+/// Hertz pressure sampled at the element centres, scaled so that ΔA Σ p = P exactly (the
+/// sampled sum misses the edge of the ellipsoid by O(dx/a)).
+fn hertz_pressure(n: usize, dx: f64) -> Array2<f64> {
+    let h = Hertz::new(R, P, e_star());
+    let mut p = Array2::from_shape_fn((n, n), |(i, j)| {
+        h.pressure(centre(i, n, dx).hypot(centre(j, n, dx)))
+    });
+    let s = p.sum() * dx * dx;
+    p.mapv_inplace(|v| v * P / s);
+    p
+}
+
+fn solver_on(p: &Array2<f64>, dx: f64) -> TangentialSolver {
+    TangentialSolver::new(
+        &TangentialProblem {
+            pressure: p,
+            dx,
+            dy: dx,
+            boundary: Boundary::ZeroPadded,
+            friction_coefficient: MU,
+            body1: material(),
+            body2: material(),
+        },
+        TangentialOptions::default(),
+    )
+    .unwrap()
+}
+
+/// Done-when 1: monotonic T–δ within 2 % for T ≤ 0.9 μP, stick radius at T = 0.875 μP within one
+/// grid spacing, 44 points across the contact diameter.
+#[test]
+fn cattaneo_mindlin_monotonic_loading_on_hertz_pressure() {
+    let a = Hertz::new(R, P, e_star()).radius;
+    let dx = 2.0 * a / 44.0;
+    let n = 50;
+    let p = hertz_pressure(n, dx);
+    let mut s = solver_on(&p, dx);
+    let cm = closed_form(a);
+    let mu_p = MU * P;
+    let levels = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.875, 0.9];
+    let mut worst: f64 = 0.0;
+    for &x in &levels {
+        let st = s.step(Control::Force([x * mu_p, 0.0])).unwrap();
+        let want = cm.displacement(x * mu_p);
+        let err = st.shift_m[0] / want - 1.0;
+        worst = worst.max(err.abs());
+        eprintln!(
+            "T/μP = {x}: δ = {:.5e} m, closed form {want:.5e} m ({:+.2} %), {} iterations",
+            st.shift_m[0],
+            100.0 * err,
+            st.iterations
+        );
+        assert!(err.abs() < 0.02, "T/μP = {x}: {err}");
+        assert!(st.shift_m[1].abs() < 1e-9 * want);
+        if x == 0.875 {
+            let stick = s.stick_mask();
+            let points = stick.iter().filter(|b| **b).count();
+            let c_num = (points as f64 * dx * dx / std::f64::consts::PI).sqrt();
+            let c_max = stick
+                .indexed_iter()
+                .filter(|(_, b)| **b)
+                .map(|((i, j), _)| centre(i, n, dx).hypot(centre(j, n, dx)))
+                .fold(0.0, f64::max);
+            let c = cm.stick_radius(x * mu_p);
+            eprintln!("stick radius: area-equivalent {c_num:.4e}, outermost {c_max:.4e}, closed form {c:.4e}, dx {dx:.3e}");
+            assert!((c_num - c).abs() <= dx, "{c_num} vs {c}");
+            assert!((c_max - c).abs() <= dx, "{c_max} vs {c}");
+        }
+    }
+    eprintln!("worst relative error {worst:.4}");
+}
+
+/// Done-when 1: the CONTACT `cattaneo` case, 19 × 19 grid over [−1.26667, 1.26667]² mm:
+/// CONTACT's rigid shift 8.155e-3 mm (and its 45 stick / 132 slip elements). With the sampled
+/// Hertz pressure and with our own normal solver on the same grid.
+#[test]
+fn contact_code_cattaneo_case() {
+    let n = 19;
+    let dx = 2.0 * 1.26667e-3 / n as f64;
+    let fx = -0.875 * MU * P;
+    let contact_shift = -8.155e-6;
+    // (a) Hertz pressure sampled on the grid.
+    let p = hertz_pressure(n, dx);
+    let mut s = solver_on(&p, dx);
+    let st = s.step(Control::Force([fx, 0.0])).unwrap();
+    let err = st.shift_m[0] / contact_shift - 1.0;
+    eprintln!(
+        "sampled Hertz: shift {:.5e} m ({:+.2} % vs CONTACT), stick {} of {}",
+        st.shift_m[0],
+        100.0 * err,
+        s.stick_mask().iter().filter(|b| **b).count(),
+        s.metadata().contact_points
+    );
+    assert!(err.abs() < 0.02, "{err}");
+    // (b) pressure from the normal solver (sphere heights h = −r²/(2R), load P).
+    let heights = Array2::from_shape_fn((n, n), |(i, j)| {
+        let r2 = centre(i, n, dx).powi(2) + centre(j, n, dx).powi(2);
+        -r2 / (2.0 * R)
+    });
+    let surface = Grid2::new(heights, dx, dx, false).unwrap();
+    let mut normal = NormalSolver::new(
+        &NormalProblem {
+            surface: &surface,
+            e_star_pa: e_star(),
+        },
+        NormalOptions::default(),
+    )
+    .unwrap();
+    let sol = normal
+        .solve_load(P / (n as f64 * dx).powi(2), None)
+        .unwrap();
+    let mut s = solver_on(&sol.pressure, dx);
+    let st = s.step(Control::Force([fx, 0.0])).unwrap();
+    let err = st.shift_m[0] / contact_shift - 1.0;
+    let stick = s.stick_mask().iter().filter(|b| **b).count();
+    eprintln!(
+        "normal solver: shift {:.5e} m ({:+.2} % vs CONTACT), stick {stick}, slip {} (CONTACT: 45 / 132)",
+        st.shift_m[0],
+        100.0 * err,
+        s.metadata().contact_points - stick
+    );
+    assert!(err.abs() < 0.02, "{err}");
+}
+
+/// Done-when 2: T oscillating between ±T*: energy per cycle within 3 % of Mindlin–Deresiewicz,
+/// cycles 2 and 3 equal to 0.1 %.
+#[test]
+fn mindlin_deresiewicz_energy_per_cycle() {
+    let a = Hertz::new(R, P, e_star()).radius;
+    let dx = 2.0 * a / 30.0;
+    let n = 34;
+    let p = hertz_pressure(n, dx);
+    let mut s = solver_on(&p, dx);
+    let cm = closed_form(a);
+    for x in [0.25, 0.5, 0.875] {
+        let t_star = x * MU * P;
+        let r = oscillate(
+            &mut s,
+            &Oscillation {
+                amplitude: Control::Force([t_star, 0.0]),
+                cycles: 3,
+                steps_per_cycle: 60,
+            },
+            |_, _| {},
+        )
+        .unwrap();
+        let want = cm.energy_per_cycle(t_star);
+        let (w2, w3) = (r.cycles[1].dissipated_j, r.cycles[2].dissipated_j);
+        eprintln!(
+            "T*/μP = {x}: W2 = {w2:.5e} J, W3 = {w3:.5e} J, closed form {want:.5e} J ({:+.2} %), friction work {:.5e} J, cycle 2-3 difference {:.2e}",
+            100.0 * (w3 / want - 1.0),
+            r.cycles[2].frictional_work_j,
+            (w2 / w3 - 1.0).abs()
+        );
+        assert!((w3 / want - 1.0).abs() < 0.03, "x = {x}: {w3} vs {want}");
+        assert!((w2 / w3 - 1.0).abs() < 1e-3, "x = {x}: {w2} vs {w3}");
+    }
+}
+
+/// Done-when 5 (library): non-convergence is reported as such.
+#[test]
+fn hertz_iteration_cap_gives_non_convergence() {
+    let a = Hertz::new(R, P, e_star()).radius;
+    let dx = 2.0 * a / 20.0;
+    let p = hertz_pressure(24, dx);
+    let mut s = TangentialSolver::new(
+        &TangentialProblem {
+            pressure: &p,
+            dx,
+            dy: dx,
+            boundary: Boundary::ZeroPadded,
+            friction_coefficient: MU,
+            body1: material(),
+            body2: material(),
+        },
+        TangentialOptions {
+            tolerance: 1e-12,
+            max_iterations: 3,
+            operator: Operator::Fft,
+        },
+    )
+    .unwrap();
+    let e = s.step(Control::Force([0.5 * MU * P, 0.0])).unwrap_err();
+    assert!(matches!(e, Error::NonConvergence { .. }), "{e}");
+    assert!(e.to_string().contains("did not converge"), "{e}");
+}
+
+fn run_cli(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(["contact", "tangential"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Done-when 5 (CLI): μ ≤ 0 and zero amplitude are refused with the flag named, no output.
+#[test]
+fn cli_rejects_bad_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let out_s = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--friction-coefficient", "0"], "--friction-coefficient"),
+        (vec!["--friction-coefficient", "-0.3"], "--friction-coefficient"),
+        (vec!["--amplitude-m", "0"], "--amplitude-m"),
+        (vec!["--pressures-pa", "1e6,-2"], "--pressures-pa"),
+    ] {
+        let mut a = args.clone();
+        a.extend(["--grid", "64", "--out-dir", out_s]);
+        let o = run_cli(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "output written despite the error");
+    }
+}
+
+/// The CLI end to end on a small grid: CSV with units, one loop per pressure, PNG.
+#[test]
+fn cli_writes_loops_on_a_small_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = run_cli(&[
+        "--grid",
+        "128",
+        "--pressures-pa",
+        "1e6,1e7",
+        "--cycles",
+        "2",
+        "--steps-per-cycle",
+        "16",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let csv = std::fs::read_to_string(out.join("tangential_loops.csv")).unwrap();
+    let header = csv.lines().find(|l| !l.starts_with('#')).unwrap();
+    for col in [
+        "pressure_Pa",
+        "displacement_m",
+        "mean_shear_stress_Pa",
+        "stick_fraction",
+        "accumulated_slip_m",
+    ] {
+        assert!(header.contains(col), "{header}");
+    }
+    assert!(csv.contains("quasi-identical"), "assumption not stated");
+    let rows = csv.lines().filter(|l| !l.starts_with('#')).count() - 1;
+    assert_eq!(rows, 2 * (2 * 16 + 1));
+    let energy = std::fs::read_to_string(out.join("tangential_energy.csv")).unwrap();
+    assert!(energy.contains("dissipated_J_per_m2"), "{energy}");
+    // At 10 MPa the loop reaches gross slip (default amplitude): the last cycle's energy is
+    // positive, and the higher pressure dissipates more.
+    let e: Vec<f64> = energy
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .filter(|l| l.split(',').nth(1) == Some("2"))
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(e.len(), 2);
+    assert!(e[0] > 0.0 && e[1] > e[0], "{e:?}");
+    assert!(image::open(out.join("tangential_loops.png")).is_ok());
+}
