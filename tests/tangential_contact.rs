@@ -246,8 +246,14 @@ fn cli_rejects_bad_parameters() {
     let out = dir.path().join("t");
     let out_s = out.to_str().unwrap();
     for (args, needle) in [
-        (vec!["--friction-coefficient", "0"], "--friction-coefficient"),
-        (vec!["--friction-coefficient", "-0.3"], "--friction-coefficient"),
+        (
+            vec!["--friction-coefficient", "0"],
+            "--friction-coefficient",
+        ),
+        (
+            vec!["--friction-coefficient", "-0.3"],
+            "--friction-coefficient",
+        ),
         (vec!["--amplitude-m", "0"], "--amplitude-m"),
         (vec!["--pressures-pa", "1e6,-2"], "--pressures-pa"),
     ] {

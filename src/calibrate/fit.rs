@@ -19,7 +19,7 @@
 //!
 //! Nelder–Mead simplex (argmin) on transformed parameters that keep the constraints by
 //! construction: `E0 = E0_ref·exp(θ₀)` (> 0), `k = σ(θ₁)` (in (0, 1)), `Et = E0·σ(θ₂)` (in
-//! [0, E0)), with `σ` the logistic function. Three starts (k₀ = 0.1, 0.5, 0.9) with `E0` from the
+//! [0, E0)), with `σ` the logistic function. Several starts (default k₀ = 0.1, 0.5, 0.9) with `E0` from the
 //! steepest slope of the data (the reload slope `2E0/(1+k)`), best result kept.
 //!
 //! # Reported quality
@@ -100,7 +100,7 @@ impl LoopData {
 }
 
 /// Fit settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FitOptions {
     /// Friction coefficient, held fixed.
     pub mu: f64,
@@ -108,6 +108,8 @@ pub struct FitOptions {
     pub fit_et: bool,
     /// Nelder–Mead iteration cap per start.
     pub max_iters: u64,
+    /// Starting values of k, one Nelder–Mead run each (each in [0, 1)); the best is kept.
+    pub k_starts: Vec<f64>,
 }
 
 impl Default for FitOptions {
@@ -116,6 +118,7 @@ impl Default for FitOptions {
             mu: 0.6,
             fit_et: false,
             max_iters: 600,
+            k_starts: vec![0.1, 0.5, 0.9],
         }
     }
 }
@@ -266,7 +269,17 @@ pub fn fit_valanis(data: &LoopData, opts: &FitOptions) -> Result<FitResult> {
     };
     let mut best: Option<(Vec<f64>, f64, bool)> = None;
     let mut iterations = 0;
-    for k0 in [0.1, 0.5, 0.9] {
+    if opts.k_starts.is_empty() {
+        return Err(Error::param("k_starts", "give at least one start"));
+    }
+    for &k_start in &opts.k_starts {
+        if !(k_start.is_finite() && (0.0..1.0).contains(&k_start)) {
+            return Err(Error::param(
+                "k_starts",
+                format!("each k must satisfy 0 <= k < 1, got {k_start}"),
+            ));
+        }
+        let k0 = k_start.clamp(1e-6, 1.0 - 1e-6);
         let e0_0 = slope * (1.0 + k0) / 2.0;
         let mut x0 = vec![(e0_0 / slope).ln(), logit(k0)];
         if opts.fit_et {

@@ -6,3 +6,6 @@ pub use table::{CalibrationRow, CalibrationTable, Interpolated, RangeFlag};
 pub mod fit;
 
 pub use fit::{fit_valanis, FitOptions, FitResult, LoopData};
+pub mod config;
+
+pub use config::CalibrationConfig;

@@ -139,7 +139,10 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let mut spec = GaussianSurfaceSpec::reference();
     if let Some(n) = args.grid {
         if n < 8 {
-            return Err(Error::param("--grid", format!("must be at least 8, got {n}")));
+            return Err(Error::param(
+                "--grid",
+                format!("must be at least 8, got {n}"),
+            ));
         }
         spec.nx = n;
         spec.ny = n;

@@ -142,7 +142,11 @@ mod tests {
         let t = 0.875 * 0.4 * 9.1954;
         // REFERENCES.md: c/a = 0.5 and δt = 8.17e-3 mm.
         assert!((cm.stick_radius(t) - 0.5).abs() < 1e-12);
-        assert!((cm.displacement(t) - 8.17e-3).abs() < 0.01e-3, "{}", cm.displacement(t));
+        assert!(
+            (cm.displacement(t) - 8.17e-3).abs() < 0.01e-3,
+            "{}",
+            cm.displacement(t)
+        );
         // REFERENCES.md check value: W = 1.1022e-2 N·mm at x = 0.875.
         let w = cm.energy_per_cycle(t);
         assert!((w / 1.1022e-2 - 1.0).abs() < 1e-4, "{w}");

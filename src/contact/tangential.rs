@@ -331,11 +331,7 @@ impl KernelTable {
                 } else {
                     1.0
                 };
-                (
-                    self.xx[[ai, aj]],
-                    s * self.xy[[ai, aj]],
-                    self.yy[[ai, aj]],
-                )
+                (self.xx[[ai, aj]], s * self.xy[[ai, aj]], self.yy[[ai, aj]])
             }
             Boundary::Periodic => {
                 let (nx, ny) = self.xx.dim();
@@ -448,10 +444,7 @@ impl TangentialSolver {
             Boundary::ZeroPadded => 4 * nx * ny,
         };
         let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
-        let dense_bytes = 3usize
-            .saturating_mul(n)
-            .saturating_mul(n)
-            .saturating_mul(8);
+        let dense_bytes = 3usize.saturating_mul(n).saturating_mul(n).saturating_mul(8);
         let operator = match options.operator {
             Operator::Auto => {
                 if dense_bytes <= DENSE_MEMORY_LIMIT_BYTES && dense_cost <= fft_cost {
@@ -719,7 +712,10 @@ impl TangentialSolver {
         self.q = q_new;
         self.shift = shift;
         self.lambda = lambda;
-        let fsum = self.q.iter().fold([0.0, 0.0], |a, v| [a[0] + v[0], a[1] + v[1]]);
+        let fsum = self
+            .q
+            .iter()
+            .fold([0.0, 0.0], |a, v| [a[0] + v[0], a[1] + v[1]]);
         let force = [fsum[0] * self.element_area, fsum[1] * self.element_area];
         let area = self.metadata.nominal_area_m2;
         let stick = (0..n).filter(|&k| self.sticks(k)).count();
@@ -859,14 +855,23 @@ fn largest_eigenvalue(c: &Compliance, n: usize) -> f64 {
             [1.0 + s, 0.5 - s]
         })
         .collect();
-    let norm = |v: &[[f64; 2]]| v.iter().map(|a| a[0] * a[0] + a[1] * a[1]).sum::<f64>().sqrt();
+    let norm = |v: &[[f64; 2]]| {
+        v.iter()
+            .map(|a| a[0] * a[0] + a[1] * a[1])
+            .sum::<f64>()
+            .sqrt()
+    };
     let mut u = vec![[0.0; 2]; n];
     let mut est = 0.0;
     for _ in 0..60 {
         let nv = norm(&v);
         v.iter_mut().for_each(|a| *a = [a[0] / nv, a[1] / nv]);
         c.apply(&v, &mut u);
-        let rq: f64 = v.iter().zip(&u).map(|(a, b)| a[0] * b[0] + a[1] * b[1]).sum();
+        let rq: f64 = v
+            .iter()
+            .zip(&u)
+            .map(|(a, b)| a[0] * b[0] + a[1] * b[1])
+            .sum();
         let converged = (rq - est).abs() <= 1e-4 * rq;
         est = rq;
         std::mem::swap(&mut v, &mut u);
@@ -1032,7 +1037,12 @@ mod tests {
         })
     }
 
-    fn solver(p: &Array2<f64>, boundary: Boundary, op: Operator, mu: f64) -> Result<TangentialSolver> {
+    fn solver(
+        p: &Array2<f64>,
+        boundary: Boundary,
+        op: Operator,
+        mu: f64,
+    ) -> Result<TangentialSolver> {
         TangentialSolver::new(
             &TangentialProblem {
                 pressure: p,
@@ -1063,17 +1073,29 @@ mod tests {
                 .collect();
             let ud = d.apply_compliance(&q);
             let uf = f.apply_compliance(&q);
-            let scale = ud.iter().map(|u| u[0].abs().max(u[1].abs())).fold(0.0, f64::max);
+            let scale = ud
+                .iter()
+                .map(|u| u[0].abs().max(u[1].abs()))
+                .fold(0.0, f64::max);
             for (a, b) in ud.iter().zip(&uf) {
-                assert!((a[0] - b[0]).abs() < 1e-10 * scale, "{boundary:?} {a:?} {b:?}");
-                assert!((a[1] - b[1]).abs() < 1e-10 * scale, "{boundary:?} {a:?} {b:?}");
+                assert!(
+                    (a[0] - b[0]).abs() < 1e-10 * scale,
+                    "{boundary:?} {a:?} {b:?}"
+                );
+                assert!(
+                    (a[1] - b[1]).abs() < 1e-10 * scale,
+                    "{boundary:?} {a:?} {b:?}"
+                );
             }
             // And the solutions of a step agree.
             let (mut d, mut f) = (d, f);
             let c = Control::Displacement([5e-12, -2e-12]);
             let sd = d.step(c).unwrap();
             let sf = f.step(c).unwrap();
-            assert!(sd.stick_fraction > 0.05 && sd.stick_fraction < 0.95, "{sd:?}");
+            assert!(
+                sd.stick_fraction > 0.05 && sd.stick_fraction < 0.95,
+                "{sd:?}"
+            );
             assert!((sd.force_n[0] / sf.force_n[0] - 1.0).abs() < 1e-6);
             assert!((sd.force_n[1] / sf.force_n[1] - 1.0).abs() < 1e-6);
         }
@@ -1089,7 +1111,10 @@ mod tests {
         let f = s2.step(Control::Force(d.force_n)).unwrap();
         for c in 0..2 {
             assert!((f.force_n[c] - d.force_n[c]).abs() < 1e-9 * s.friction_limit_n());
-            assert!((f.shift_m[c] - d.shift_m[c]).abs() < 1e-5 * 3e-12, "{f:?} {d:?}");
+            assert!(
+                (f.shift_m[c] - d.shift_m[c]).abs() < 1e-5 * 3e-12,
+                "{f:?} {d:?}"
+            );
         }
     }
 

@@ -206,7 +206,8 @@ fn corner_sum(f: impl Fn(f64, f64) -> f64, x: f64, y: f64, a: f64, b: f64) -> f6
 /// `|x'| ≤ a, |y'| ≤ b` (m/Pa): `c_iso·[ξ ln(η+ρ) + η ln(ξ+ρ)] + c_dir·[η ln(ξ+ρ)]`.
 /// By symmetry `u_y` per unit `q_y` is `cerruti_uxx(y, x, b, a, k)`.
 pub fn cerruti_uxx(x: f64, y: f64, a: f64, b: f64, k: CerrutiConstants) -> f64 {
-    k.c_iso * corner_sum(love_corner, x, y, a, b) + k.c_dir * corner_sum(cerruti_corner_xx, x, y, a, b)
+    k.c_iso * corner_sum(love_corner, x, y, a, b)
+        + k.c_dir * corner_sum(cerruti_corner_xx, x, y, a, b)
 }
 
 /// Relative tangential displacement `u_y` at `(x, y)` per unit uniform shear `q_x` on the element
@@ -267,7 +268,6 @@ pub fn cerruti_spectra(plan: &FftPlan, dx: f64, dy: f64, k: CerrutiConstants) ->
         }
     }
 }
-
 
 #[cfg(test)]
 mod cerruti_tests {
@@ -334,9 +334,18 @@ mod cerruti_tests {
                 cerruti_uxy(x, y, a, b, K),
                 cerruti_uyy(x, y, a, b, K),
             );
-            assert!((got.0 - want.0).abs() < 1e-5 * want.0.abs(), "{got:?} {want:?}");
-            assert!((got.1 - want.1).abs() < 1e-4 * want.1.abs(), "{got:?} {want:?}");
-            assert!((got.2 - want.2).abs() < 1e-5 * want.2.abs(), "{got:?} {want:?}");
+            assert!(
+                (got.0 - want.0).abs() < 1e-5 * want.0.abs(),
+                "{got:?} {want:?}"
+            );
+            assert!(
+                (got.1 - want.1).abs() < 1e-4 * want.1.abs(),
+                "{got:?} {want:?}"
+            );
+            assert!(
+                (got.2 - want.2).abs() < 1e-5 * want.2.abs(),
+                "{got:?} {want:?}"
+            );
         }
     }
 
@@ -350,7 +359,13 @@ mod cerruti_tests {
         assert!(cerruti_uxy(0.0, 0.0, a, a, K).abs() < 1e-12);
         // u_xx even in x and y; u_xy odd in each; finite on element edges.
         let (a, b) = (0.5, 0.25);
-        for &(x, y) in &[(0.5, 0.0), (0.0, 0.25), (0.5, 0.25), (1.0, 0.5), (0.7, -0.1)] {
+        for &(x, y) in &[
+            (0.5, 0.0),
+            (0.0, 0.25),
+            (0.5, 0.25),
+            (1.0, 0.5),
+            (0.7, -0.1),
+        ] {
             let u = cerruti_uxx(x, y, a, b, K);
             assert!(u.is_finite() && u > 0.0);
             assert!((u - cerruti_uxx(-x, y, a, b, K)).abs() < 1e-14);
