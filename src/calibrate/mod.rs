@@ -9,3 +9,6 @@ pub use fit::{fit_valanis, FitOptions, FitResult, LoopData};
 pub mod config;
 
 pub use config::CalibrationConfig;
+pub mod pipeline;
+
+pub use pipeline::{run, write_outputs, CalibrationRun, ConfigSource};
