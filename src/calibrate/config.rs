@@ -213,7 +213,7 @@ impl CalibrationConfig {
                 format!("must be finite and > 0, got {}", l.amplitude_factor),
             ));
         }
-        if l.steps_per_cycle < 8 || l.steps_per_cycle % 4 != 0 {
+        if l.steps_per_cycle < 8 || !l.steps_per_cycle.is_multiple_of(4) {
             return Err(Error::param(
                 "loading.steps_per_cycle",
                 format!(
@@ -277,6 +277,15 @@ mod tests {
 
     fn reference_text() -> String {
         CalibrationConfig::reference().to_toml_string().unwrap()
+    }
+
+    #[test]
+    fn calib_reference_toml_is_the_built_in_case() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("calib/reference.toml");
+        assert_eq!(
+            CalibrationConfig::read(&path).unwrap(),
+            CalibrationConfig::reference()
+        );
     }
 
     #[test]

@@ -451,7 +451,8 @@ pub fn write_outputs(
             .map(|(&p, r)| (p, f(r)))
             .collect()
     };
-    let plots: [(&str, &str, &str, Scale, Vec<(f64, f64)>); 3] = [
+    type PlotSpec<'a> = (&'a str, &'a str, &'a str, Scale, Vec<(f64, f64)>);
+    let plots: [PlotSpec; 3] = [
         (
             files::KN_PLOT,
             "Normal contact stiffness per unit area vs pressure",
@@ -474,6 +475,22 @@ pub fn write_outputs(
             column(|r| r.k),
         ),
     ];
+    // The interpolant users get from the table, drawn on a fine log grid.
+    let (p_lo, p_hi) = run.table.pressure_range();
+    let interp = |name: &str| -> Vec<(f64, f64)> {
+        (0..=200)
+            .map(|i| {
+                let p = p_lo * (p_hi / p_lo).powf(i as f64 / 200.0);
+                let v = run.table.interpolate(p);
+                let y = match name {
+                    files::KN_PLOT => v.kn_n_per_m3,
+                    files::E0_PLOT => v.e0_n_per_m3,
+                    _ => v.k,
+                };
+                (p / 1e6, y)
+            })
+            .collect()
+    };
     for (name, title, ylabel, yscale, pts) in plots {
         let path = out_dir.join(name);
         line_plot(
@@ -486,8 +503,11 @@ pub fn write_outputs(
                 y_scale: yscale,
             },
             &[
-                Series::line("calibration", pts.clone()),
-                Series::markers("fitted points", pts),
+                Series::line(
+                    "table interpolation (monotone cubic in log p)",
+                    interp(name),
+                ),
+                Series::markers("calibrated pressures", pts),
             ],
         )?;
         written.push(path);
