@@ -91,6 +91,21 @@ fn generate_rejects_bad_parameters() {
         args.extend_from_slice(extra);
         assert_fails_without_output(&args, &out, want);
     }
+    // A malformed config names file and line.
+    let cfg = dir.path().join("bad.toml");
+    std::fs::write(&cfg, "rq_m = 1e-7\nclx_m = \"a\"\n").unwrap();
+    assert_fails_without_output(
+        &[
+            "surface",
+            "generate",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            o,
+        ],
+        &out,
+        "bad.toml:2",
+    );
     // An unknown output format is refused before anything is computed or written.
     let bad = dir.path().join("bad.xyz");
     assert_fails_without_output(
@@ -159,4 +174,12 @@ fn reference_patch_statistics_over_ten_seeds() {
             "mean {what} = {got:.4}, Gaussian-field expectation {expect:.4} ± {se:.4}"
         );
     }
+}
+
+#[test]
+fn shipped_reference_config_is_the_reference_case() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("surfaces/reference.toml");
+    let spec: asperity::surface::GaussianSurfaceSpec =
+        toml::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+    assert_eq!(spec, asperity::surface::GaussianSurfaceSpec::reference());
 }

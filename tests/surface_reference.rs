@@ -84,3 +84,40 @@ fn x3p_area_matches_surface_topography() {
         "rms gradient",
     );
 }
+
+#[test]
+fn x3p_converted_to_every_format_keeps_its_statistics() {
+    let Some(f) = asperity::testdata::reference_file("topography/x3p-2.x3p") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut want = stats_json(&f);
+    for ext in ["npy", "x3p", "csv"] {
+        let out = dir.path().join(format!("converted.{ext}"));
+        let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
+            .args(["surface", "convert"])
+            .arg(&f)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mut got = stats_json(&out);
+        for v in [&mut want, &mut got] {
+            for k in ["file", "psd_csv", "psd_png", "read_time_s", "stats_time_s"] {
+                v.as_object_mut().unwrap().remove(k);
+            }
+        }
+        assert_eq!(got, want, "{ext}");
+    }
+    let png = dir.path().join("x3p-2.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(["surface", "convert"])
+        .arg(&f)
+        .arg("-o")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(image::open(&png).is_ok());
+}

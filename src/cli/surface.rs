@@ -15,6 +15,56 @@ pub enum SurfaceCommand {
     /// Statistics of a measured or generated topography (Ra, Rq, Rsk, Rku, rms slope/gradient,
     /// correlation lengths) and its power spectral density (CSV + PNG).
     Stats(StatsArgs),
+    /// Two rough bodies reduced to one: equivalent surface (h1 - h2 on a common grid), equivalent
+    /// statistics (Rq = √(Rq1² + Rq2²)) and composite modulus 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2.
+    Combine(CombineArgs),
+    /// Convert a height map between formats (.npy, .x3p, .csv/.txt/.asc matrix, .png image).
+    Convert(ConvertArgs),
+}
+
+#[derive(clap::Args)]
+pub struct ConvertArgs {
+    /// Input height map (any readable area format).
+    input: PathBuf,
+    /// Output file(s); the format follows the extension. Repeatable.
+    #[arg(long = "out", short = 'o', required = true)]
+    out: Vec<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct CombineArgs {
+    /// Height map of body 1 (any readable area format).
+    #[arg(requires_all = ["surface2", "out"])]
+    surface1: Option<PathBuf>,
+    /// Height map of body 2 in the same frame (z from body 1 towards body 2), same grid.
+    surface2: Option<PathBuf>,
+    /// Output file(s) for the equivalent surface (.npy, .x3p, .csv, .png). Repeatable.
+    #[arg(long = "out", short = 'o')]
+    out: Vec<PathBuf>,
+    /// RMS height of body 1 (m), for the equivalent statistics.
+    #[arg(long, allow_hyphen_values = true, requires = "rq2_m")]
+    rq1_m: Option<f64>,
+    /// RMS height of body 2 (m).
+    #[arg(long, allow_hyphen_values = true, requires = "rq1_m")]
+    rq2_m: Option<f64>,
+    /// RMS slope of body 1.
+    #[arg(long, allow_hyphen_values = true, requires = "slope2")]
+    slope1: Option<f64>,
+    /// RMS slope of body 2.
+    #[arg(long, allow_hyphen_values = true, requires = "slope1")]
+    slope2: Option<f64>,
+    /// Young's modulus of body 1 (Pa).
+    #[arg(long, allow_hyphen_values = true, requires_all = ["nu1", "e2_pa", "nu2"])]
+    e1_pa: Option<f64>,
+    /// Poisson's ratio of body 1.
+    #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
+    nu1: Option<f64>,
+    /// Young's modulus of body 2 (Pa).
+    #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
+    e2_pa: Option<f64>,
+    /// Poisson's ratio of body 2.
+    #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
+    nu2: Option<f64>,
 }
 
 #[derive(clap::Args)]
@@ -120,10 +170,20 @@ fn read_spec(path: &Path) -> Result<GaussianSurfaceSpec> {
     })
 }
 
+/// A spinner on stderr for work that can take seconds (hidden when stderr is not a terminal).
+fn spinner(msg: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}
+
 pub fn run(cmd: SurfaceCommand) -> Result<()> {
     match cmd {
         SurfaceCommand::Generate(a) => generate(*a),
         SurfaceCommand::Stats(a) => stats(a),
+        SurfaceCommand::Combine(a) => combine(a),
+        SurfaceCommand::Convert(a) => convert(a),
     }
 }
 
@@ -132,12 +192,26 @@ fn generate(a: GenerateArgs) -> Result<()> {
     for p in &a.out {
         surface::io::check_writable_format(p)?;
     }
+    let pb = spinner(&format!("generating {}×{} patch", spec.nx, spec.ny));
     let t0 = Instant::now();
     let grid = surface::generate(&spec)?;
     let t_gen = t0.elapsed().as_secs_f64();
+    pb.set_message("writing");
+    let title = format!(
+        "generated: Rq {:.3} µm, cl {:.2} × {:.2} µm, seed {}",
+        spec.rq_m * 1e6,
+        spec.clx_m * 1e6,
+        spec.cly_m * 1e6,
+        spec.seed
+    );
     for p in &a.out {
-        surface::io::write(p, &grid)?;
+        if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            surface::io::png::write(p, &grid, &title)?;
+        } else {
+            surface::io::write(p, &grid)?;
+        }
     }
+    pb.finish_and_clear();
     println!(
         "generated {}×{} patch {:.4e} m × {:.4e} m (dx {:.4e} m, dy {:.4e} m), Rq {:.6e} m, \
          clx {:.4e} m, cly {:.4e} m, seed {}, periodic, in {:.3} s",
@@ -176,14 +250,17 @@ fn stats(a: StatsArgs) -> Result<()> {
         ));
     }
     let psd_png = psd_csv.with_extension("png");
+    let pb = spinner(&format!("reading {}", a.file.display()));
     let t0 = Instant::now();
     let topo = surface::io::read(&a.file)?;
     let t_read = t0.elapsed().as_secs_f64();
+    pb.set_message("statistics and PSD");
     let t1 = Instant::now();
     let s = surface::stats(&topo, detrend)?;
     let psd = surface::stats::power_spectrum(&topo, detrend)?;
     let t_stats = t1.elapsed().as_secs_f64();
     write_psd(&psd_csv, &psd_png, &a.file, &psd, detrend)?;
+    pb.finish_and_clear();
     if a.json {
         let mut v = serde_json::to_value(&s).map_err(|e| Error::Data(e.to_string()))?;
         if let Some(o) = v.as_object_mut() {
@@ -317,4 +394,97 @@ fn write_psd(csv: &Path, png: &Path, source: &Path, psd: &Psd, detrend: Detrend)
         },
         &[Series::line("PSD", points)],
     )
+}
+
+fn combine(a: CombineArgs) -> Result<()> {
+    use asperity::surface::combine::{
+        composite_modulus, equivalent_rms_slope, equivalent_rq, equivalent_surface, Material,
+    };
+    if a.surface1.is_none() && a.rq1_m.is_none() && a.slope1.is_none() && a.e1_pa.is_none() {
+        return Err(Error::param(
+            "combine",
+            "give two surfaces (SURFACE1 SURFACE2 --out FILE), or --rq1-m/--rq2-m, \
+             --slope1/--slope2, --e1-pa/--nu1/--e2-pa/--nu2",
+        ));
+    }
+    // Everything is computed and checked before any file is written.
+    let rq = match (a.rq1_m, a.rq2_m) {
+        (Some(r1), Some(r2)) => Some(equivalent_rq(r1, r2)?),
+        _ => None,
+    };
+    let slope = match (a.slope1, a.slope2) {
+        (Some(m1), Some(m2)) => Some(equivalent_rms_slope(m1, m2)?),
+        _ => None,
+    };
+    let e_star = match (a.e1_pa, a.nu1, a.e2_pa, a.nu2) {
+        (Some(e1), Some(nu1), Some(e2), Some(nu2)) => Some(composite_modulus(
+            Material {
+                youngs_modulus_pa: e1,
+                poisson_ratio: nu1,
+            },
+            Material {
+                youngs_modulus_pa: e2,
+                poisson_ratio: nu2,
+            },
+        )?),
+        _ => None,
+    };
+    let eq = match (&a.surface1, &a.surface2) {
+        (Some(p1), Some(p2)) => {
+            for p in &a.out {
+                surface::io::check_writable_format(p)?;
+            }
+            let g1 = surface::io::read(p1)?.into_area(&p1.display().to_string())?;
+            let g2 = surface::io::read(p2)?.into_area(&p2.display().to_string())?;
+            Some(equivalent_surface(&g1, &g2)?)
+        }
+        _ => None,
+    };
+    if let Some(v) = rq {
+        println!("equivalent Rq          {v:.6e} m");
+    }
+    if let Some(v) = slope {
+        println!("equivalent rms slope   {v:.6e}");
+    }
+    if let Some(v) = e_star {
+        println!("composite modulus E*   {v:.6e} Pa");
+    }
+    if let Some(g) = eq {
+        let s = surface::stats(&surface::Topography::Area(g.clone()), Detrend::Mean)?;
+        for p in &a.out {
+            surface::io::write(p, &g)?;
+        }
+        println!(
+            "equivalent surface {}×{}: Rq {:.6e} m, rms gradient {:.6e}",
+            g.nx(),
+            g.ny(),
+            s.rq_m,
+            s.rms_gradient.unwrap_or(f64::NAN)
+        );
+        for p in &a.out {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+fn convert(a: ConvertArgs) -> Result<()> {
+    for p in &a.out {
+        surface::io::check_writable_format(p)?;
+    }
+    let g = surface::io::read(&a.input)?.into_area(&a.input.display().to_string())?;
+    let title = a
+        .input
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    for p in &a.out {
+        if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            surface::io::png::write(p, &g, &title)?;
+        } else {
+            surface::io::write(p, &g)?;
+        }
+        println!("wrote {}", p.display());
+    }
+    Ok(())
 }

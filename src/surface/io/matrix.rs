@@ -21,13 +21,14 @@ use crate::surface::io::units::metres_per_unit;
 use ndarray::Array2;
 use std::path::Path;
 
-/// Whether the comment header declares a height matrix (has `dx_m` and `dy_m`).
+/// Whether the comment header declares a height matrix (has a `dy_m`: only areas have a y
+/// spacing; a missing `dx_m` or `unit` is then reported by [`read`]).
 pub fn detect(text: &str) -> bool {
     let keys: Vec<String> = numbered_lines(text)
         .take_while(|(_, l)| l.trim_start().starts_with('#') || l.trim().is_empty())
         .flat_map(|(_, l)| comment_pairs(l).into_iter().map(|(k, _)| k))
         .collect();
-    keys.iter().any(|k| k == "dx_m") && keys.iter().any(|k| k == "dy_m")
+    keys.iter().any(|k| k == "dy_m")
 }
 
 /// Read a height matrix (see the module documentation).

@@ -6,7 +6,7 @@
 //! | `.npy` (+ `.npy.json` sidecar) | area | area | float64 heights in m, spacing in the sidecar |
 //! | `.x3p` | area | area | ISO 25178-72 zip: `main.xml` + binary heights |
 //! | text starting with `Scan Parameters` | profile | — | Bruker Dektak CSV export |
-//! | text with `# unit: …, dx_m: …, dy_m: …` | area | area (`.csv`, `.txt`, `.asc`) | height matrix |
+//! | text with a `# unit: …, dx_m: …, dy_m: …` header | area | area (`.csv`, `.txt`, `.asc`) | height matrix |
 //! | other text | profile | — | CSV / whitespace columns with a header naming units |
 //! | `.png` | — | area | height image with a colour bar |
 

@@ -8,7 +8,8 @@
 //! ```
 //!
 //! With two columns the first is the position and the second the height; positions must
-//! increase strictly. When the positions are uniformly spaced (to 1e-6 of the spacing) the
+//! increase strictly. When the positions are uniformly spaced (to 1e-3 of the spacing, which
+//! allows for positions written with few digits) the
 //! profile is uniform with spacing `(x_last - x_first)/(n-1)`, otherwise it is kept as a
 //! nonuniform profile. With one column (heights only) the spacing comes from a `# dx_m: …`
 //! comment. Units: `m`, `mm`, `um`/`µm`, `nm`, `Å`, also spelled out (`Micrometer`).
@@ -20,7 +21,7 @@ use crate::surface::topography::Profile;
 use std::path::Path;
 
 /// Relative tolerance on the spacing below which positions count as uniform.
-pub const UNIFORM_TOLERANCE: f64 = 1e-6;
+pub const UNIFORM_TOLERANCE: f64 = 1e-3;
 
 /// Profile from positions and heights already in metres: uniform when the spacing is constant
 /// to [`UNIFORM_TOLERANCE`], nonuniform otherwise.

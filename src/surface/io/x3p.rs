@@ -370,3 +370,88 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
         Ok(())
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An x3p archive with the given CZ data type, scale/offset and raw little-endian data.
+    fn archive(path: &Path, data_type: &str, z: &str, nx: usize, ny: usize, bin: &[u8]) {
+        let xml = format!(
+            "<?xml version=\"1.0\"?><p:ISO5436_2 xmlns:p=\"http://www.opengps.eu/2008/ISO5436_2\">\
+             <Record1><Revision>ISO5436 - 2000</Revision><FeatureType>SUR</FeatureType><Axes>\
+             <CX><AxisType>I</AxisType><DataType>D</DataType><Increment>2e-6</Increment></CX>\
+             <CY><AxisType>I</AxisType><DataType>D</DataType><Increment>3e-6</Increment></CY>\
+             <CZ><AxisType>A</AxisType><DataType>{data_type}</DataType>{z}</CZ></Axes></Record1>\
+             <Record3><MatrixDimension><SizeX>{nx}</SizeX><SizeY>{ny}</SizeY><SizeZ>1</SizeZ>\
+             </MatrixDimension><DataLink><PointDataLink>bindata/data.bin</PointDataLink></DataLink>\
+             </Record3></p:ISO5436_2>"
+        );
+        let mut z = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
+        let o = zip::write::SimpleFileOptions::default();
+        z.start_file("main.xml", o).unwrap();
+        z.write_all(xml.as_bytes()).unwrap();
+        z.start_file("bindata/data.bin", o).unwrap();
+        z.write_all(bin).unwrap();
+        z.finish().unwrap();
+    }
+
+    #[test]
+    fn data_types_scale_offset_and_axis_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let (nx, ny) = (3, 2);
+        // Value k = j·nx + i, so height(i, j) identifies the axis order.
+        let f32_bin: Vec<u8> = (0..nx * ny)
+            .flat_map(|k| (k as f32 * 0.5).to_le_bytes())
+            .collect();
+        let p = dir.path().join("f.x3p");
+        archive(&p, "F", "", nx, ny, &f32_bin);
+        let g = read(&p).unwrap();
+        assert_eq!((g.nx(), g.ny()), (3, 2));
+        assert_eq!((g.dx, g.dy), (2e-6, 3e-6));
+        assert!(!g.periodic);
+        assert_eq!(g.heights[[2, 1]], 2.5); // k = 1·3 + 2 = 5
+        assert_eq!(g.heights[[1, 0]], 0.5);
+        let u16_bin: Vec<u8> = (0..nx * ny)
+            .flat_map(|k| (k as u16).to_le_bytes())
+            .collect();
+        let p = dir.path().join("i.x3p");
+        archive(
+            &p,
+            "I",
+            "<Increment>1e-9</Increment><Offset>-2e-9</Offset>",
+            nx,
+            ny,
+            &u16_bin,
+        );
+        let g = read(&p).unwrap();
+        assert!((g.heights[[2, 1]] - (5e-9 - 2e-9)).abs() < 1e-24);
+        let u32_bin: Vec<u8> = (0..nx * ny)
+            .flat_map(|k| (k as u32).to_le_bytes())
+            .collect();
+        let p = dir.path().join("l.x3p");
+        archive(&p, "L", "<Increment>1e-6</Increment>", nx, ny, &u32_bin);
+        assert!((read(&p).unwrap().heights[[0, 1]] - 3e-6).abs() < 1e-20);
+        // Unknown data type and wrong data length are named.
+        let p = dir.path().join("q.x3p");
+        archive(&p, "Q", "", nx, ny, &u32_bin);
+        assert!(read(&p).unwrap_err().to_string().contains("DataType `Q`"));
+        let p = dir.path().join("short.x3p");
+        archive(&p, "F", "", nx, ny, &f32_bin[..20]);
+        assert!(read(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("truncated or inconsistent"));
+    }
+
+    #[test]
+    fn write_read_round_trip_keeps_periodicity_and_bits() {
+        let dir = tempfile::tempdir().unwrap();
+        let h = Array2::from_shape_fn((5, 4), |(i, j)| (i as f64 - 2.0) * 1e-7 + j as f64 * 3e-9);
+        let g = Grid2::new(h, 1.5e-6, 2.5e-6, true).unwrap();
+        let p = dir.path().join("g.x3p");
+        write(&p, &g).unwrap();
+        assert_eq!(read(&p).unwrap(), g);
+        assert!(utc_now_iso8601().ends_with('Z'));
+    }
+}
