@@ -65,3 +65,103 @@ fn non_convergence_is_an_error_without_output() {
     assert!(err.contains("did not converge"), "{err}");
     assert_no_output(&out);
 }
+
+/// A small periodic height matrix: sum of two cosines (heights in m, 32² points of 1 µm).
+fn write_wavy_matrix(path: &Path, nan_at: Option<(usize, usize)>) {
+    let n = 32;
+    let mut text = String::from(
+        "# asperity height matrix\n# unit: m, dx_m: 1e-6, dy_m: 1e-6, periodic: true\n",
+    );
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                if nan_at == Some((i, j)) {
+                    return "nan".to_string();
+                }
+                let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+                let h = 0.2e-6
+                    * ((2.0 * std::f64::consts::PI * x).cos()
+                        + (2.0 * std::f64::consts::PI * y).cos())
+                    + 0.05e-6 * (6.0 * std::f64::consts::PI * x).sin();
+                format!("{h:e}")
+            })
+            .collect();
+        text.push_str(&row.join(", "));
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn sweep_on_a_surface_file_writes_csv_and_plots() {
+    let tmp = tempfile::tempdir().unwrap();
+    let surf = tmp.path().join("wavy.txt");
+    write_wavy_matrix(&surf, None);
+    let out = tmp.path().join("out");
+    let (ok, stdout, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        surf.to_str().unwrap(),
+        "--pressures-pa",
+        "20e6,5e6,50e6",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--pressure-maps",
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("β ="), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("normal_sweep.csv")).unwrap();
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header = lines.next().unwrap();
+    assert!(header.starts_with("pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 3);
+    // Sorted by pressure; area grows, mean gap closes, kn rises.
+    assert_eq!(rows[0][0], 5e6);
+    for w in rows.windows(2) {
+        assert!(w[1][0] > w[0][0] && w[1][1] > w[0][1] && w[1][2] < w[0][2] && w[1][3] > w[0][3]);
+    }
+    for f in [
+        "area_ratio.png",
+        "mean_gap.png",
+        "kn.png",
+        "pressure_map_5e6Pa.png",
+        "pressure_map_2e7Pa.png",
+        "pressure_map_5e7Pa.png",
+    ] {
+        assert!(image::open(out.join(f)).is_ok(), "{f}");
+    }
+}
+
+#[test]
+fn nan_surface_and_missing_file_fail_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let surf = tmp.path().join("nan.txt");
+    write_wavy_matrix(&surf, Some((3, 5)));
+    let out = tmp.path().join("out");
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        surf.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("nan.txt"), "{err}");
+    assert_no_output(&out);
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        tmp.path().join("absent.npy").to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("absent.npy"), "{err}");
+    assert_no_output(&out);
+}

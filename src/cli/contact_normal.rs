@@ -46,14 +46,10 @@ pub struct NormalArgs {
 /// Load the surface: a file, or the reference generated surface.
 fn load_surface(path: Option<&Path>) -> Result<(Grid2, String)> {
     match path {
-        // TEMPORARY until the surface readers (surface::io) are merged.
-        Some(p) => Err(Error::param(
-            "--surface",
-            format!(
-                "{}: reading surface files needs surface::io (not merged yet)",
-                p.display()
-            ),
-        )),
+        Some(p) => {
+            let grid = asperity::surface::io::read(p)?.into_area(&p.display().to_string())?;
+            Ok((grid, p.display().to_string()))
+        }
         None => {
             let spec = asperity::surface::generate::GaussianSurfaceSpec::reference();
             Ok((
