@@ -70,7 +70,8 @@ use std::time::Instant;
 pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
 coupling neglected (exact for two bodies of the same material); pressure held fixed";
 
-/// Largest dense restricted matrix (three blocks of `n²` f64) that [`Operator::Auto`] builds.
+/// Largest dense restricted matrix (`n(n+1)/2` pairs of three f32) that [`Operator::Auto`]
+/// builds.
 pub const DENSE_MEMORY_LIMIT_BYTES: usize = 1 << 30;
 
 /// How the compliance product `u = C q` on the contact points is computed.
@@ -202,44 +203,87 @@ pub struct TangentialMetadata {
 
 /// `u = C q` on the contact points, `q` and `u` as `[x, y]` pairs.
 enum Compliance {
-    Dense {
-        n: usize,
-        xx: Vec<f64>,
-        xy: Vec<f64>,
-        yy: Vec<f64>,
-    },
-    Fft {
-        plan: FftPlan,
-        spectra: CerrutiSpectra,
-        points: Vec<(usize, usize)>,
-    },
+    /// The symmetric restricted matrix: the 2×2 block of a pair, `[K_xx, K_xy, K_yy]`, is the
+    /// same for `(i, j)` and `(j, i)` (`K_xx`, `K_yy` even and `K_xy` odd in each offset
+    /// component), so only the upper triangle `j ≥ i` is stored, row by row (row `i` starts at
+    /// `i·n − i(i−1)/2`), in single precision (relative rounding 6e-8, far below the
+    /// discretisation error). Both halve the memory traffic that bounds the product; sums are
+    /// accumulated in double precision.
+    Dense(Box<DenseCompliance>),
+    Fft(Box<FftCompliance>),
+}
+
+/// The dense path of [`Compliance`].
+struct DenseCompliance {
+    n: usize,
+    /// Packed upper triangle.
+    k: Vec<[f32; 3]>,
+    /// Row ranges of about equal work, processed in parallel, partial sums added in order.
+    chunks: Vec<std::ops::Range<usize>>,
+}
+
+impl DenseCompliance {
+    fn row_offset(n: usize, i: usize) -> usize {
+        i * n - i * i.saturating_sub(1) / 2
+    }
+
+    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
+        let n = self.n;
+        let partial: Vec<Vec<[f64; 2]>> = self
+            .chunks
+            .par_iter()
+            .map(|rows| {
+                let mut acc = vec![[0.0; 2]; n];
+                for i in rows.clone() {
+                    let off = Self::row_offset(n, i);
+                    let row = &self.k[off..off + (n - i)];
+                    let qi = q[i];
+                    // Diagonal block.
+                    let d = row[0];
+                    let (mut sx, mut sy) = (
+                        d[0] as f64 * qi[0] + d[1] as f64 * qi[1],
+                        d[1] as f64 * qi[0] + d[2] as f64 * qi[1],
+                    );
+                    for ((kk, qj), aj) in row[1..]
+                        .iter()
+                        .zip(&q[i + 1..])
+                        .zip(acc[i + 1..].iter_mut())
+                    {
+                        let (kxx, kxy, kyy) = (kk[0] as f64, kk[1] as f64, kk[2] as f64);
+                        sx += kxx * qj[0] + kxy * qj[1];
+                        sy += kxy * qj[0] + kyy * qj[1];
+                        aj[0] += kxx * qi[0] + kxy * qi[1];
+                        aj[1] += kxy * qi[0] + kyy * qi[1];
+                    }
+                    acc[i][0] += sx;
+                    acc[i][1] += sy;
+                }
+                acc
+            })
+            .collect();
+        u.iter_mut().for_each(|v| *v = [0.0; 2]);
+        for acc in &partial {
+            for (v, a) in u.iter_mut().zip(acc) {
+                v[0] += a[0];
+                v[1] += a[1];
+            }
+        }
+    }
+}
+
+/// The FFT path of [`Compliance`].
+struct FftCompliance {
+    plan: FftPlan,
+    spectra: CerrutiSpectra,
+    points: Vec<(usize, usize)>,
 }
 
 impl Compliance {
     fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
         match self {
-            Compliance::Dense { n, xx, xy, yy } => {
-                let n = *n;
-                u.par_iter_mut().enumerate().for_each(|(i, ui)| {
-                    let (rxx, rxy, ryy) = (
-                        &xx[i * n..(i + 1) * n],
-                        &xy[i * n..(i + 1) * n],
-                        &yy[i * n..(i + 1) * n],
-                    );
-                    let (mut sx, mut sy) = (0.0, 0.0);
-                    for j in 0..n {
-                        let [qx, qy] = q[j];
-                        sx += rxx[j] * qx + rxy[j] * qy;
-                        sy += rxy[j] * qx + ryy[j] * qy;
-                    }
-                    *ui = [sx, sy];
-                });
-            }
-            Compliance::Fft {
-                plan,
-                spectra,
-                points,
-            } => {
+            Compliance::Dense(d) => d.apply(q, u),
+            Compliance::Fft(f) => {
+                let (plan, spectra, points) = (&f.plan, &f.spectra, &f.points);
                 let shape = plan.grid_shape();
                 let mut fx = Array2::<f64>::zeros(shape);
                 let mut fy = Array2::<f64>::zeros(shape);
@@ -444,7 +488,7 @@ impl TangentialSolver {
             Boundary::ZeroPadded => 4 * nx * ny,
         };
         let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
-        let dense_bytes = 3usize.saturating_mul(n).saturating_mul(n).saturating_mul(8);
+        let dense_bytes = 6usize.saturating_mul(n).saturating_mul(n + 1);
         let operator = match options.operator {
             Operator::Auto => {
                 if dense_bytes <= DENSE_MEMORY_LIMIT_BYTES && dense_cost <= fft_cost {
@@ -471,33 +515,51 @@ impl TangentialSolver {
                     dy,
                     k,
                 );
-                let mut xx = vec![0.0; n * n];
-                let mut xy = vec![0.0; n * n];
-                let mut yy = vec![0.0; n * n];
-                xx.par_chunks_mut(n)
-                    .zip(xy.par_chunks_mut(n))
-                    .zip(yy.par_chunks_mut(n))
-                    .enumerate()
-                    .for_each(|(r, ((rxx, rxy), ryy))| {
-                        let (i, j) = points[r];
-                        for (c, &(i2, j2)) in points.iter().enumerate() {
-                            let (a, b, d) =
-                                table.get(i as isize - i2 as isize, j as isize - j2 as isize);
-                            rxx[c] = a;
-                            rxy[c] = b;
-                            ryy[c] = d;
-                        }
-                    });
-                Compliance::Dense { n, xx, xy, yy }
+                let total = DenseCompliance::row_offset(n, n);
+                let mut kmat = vec![[0.0f32; 3]; total];
+                let mut rows: Vec<&mut [[f32; 3]]> = Vec::with_capacity(n);
+                let mut rest = kmat.as_mut_slice();
+                for r in 0..n {
+                    let (row, tail) = rest.split_at_mut(n - r);
+                    rows.push(row);
+                    rest = tail;
+                }
+                rows.into_par_iter().enumerate().for_each(|(r, row)| {
+                    let (i, j) = points[r];
+                    for (c, &(i2, j2)) in points[r..].iter().enumerate() {
+                        let (a, b, d) =
+                            table.get(i as isize - i2 as isize, j as isize - j2 as isize);
+                        row[c] = [a as f32, b as f32, d as f32];
+                    }
+                });
+                // Row chunks of about equal work (8 per thread).
+                let parts = (8 * rayon::current_num_threads()).clamp(1, n);
+                let mut chunks = Vec::with_capacity(parts);
+                let mut start = 0;
+                for p in 1..=parts {
+                    let target = total * p / parts;
+                    let mut end = start;
+                    while end < n && DenseCompliance::row_offset(n, end) < target {
+                        end += 1;
+                    }
+                    if p == parts {
+                        end = n;
+                    }
+                    if end > start {
+                        chunks.push(start..end);
+                        start = end;
+                    }
+                }
+                Compliance::Dense(Box::new(DenseCompliance { n, k: kmat, chunks }))
             }
             _ => {
                 let plan = FftPlan::new(nx, ny, problem.boundary);
                 let spectra = cerruti_spectra(&plan, dx, dy, k);
-                Compliance::Fft {
+                Compliance::Fft(Box::new(FftCompliance {
                     plan,
                     spectra,
                     points: points.clone(),
-                }
+                }))
             }
         };
         let l = largest_eigenvalue(&compliance, n);
@@ -1078,12 +1140,13 @@ mod tests {
                 .map(|u| u[0].abs().max(u[1].abs()))
                 .fold(0.0, f64::max);
             for (a, b) in ud.iter().zip(&uf) {
+                // The dense matrix is stored in single precision.
                 assert!(
-                    (a[0] - b[0]).abs() < 1e-10 * scale,
+                    (a[0] - b[0]).abs() < 1e-6 * scale,
                     "{boundary:?} {a:?} {b:?}"
                 );
                 assert!(
-                    (a[1] - b[1]).abs() < 1e-10 * scale,
+                    (a[1] - b[1]).abs() < 1e-6 * scale,
                     "{boundary:?} {a:?} {b:?}"
                 );
             }
@@ -1096,8 +1159,8 @@ mod tests {
                 sd.stick_fraction > 0.05 && sd.stick_fraction < 0.95,
                 "{sd:?}"
             );
-            assert!((sd.force_n[0] / sf.force_n[0] - 1.0).abs() < 1e-6);
-            assert!((sd.force_n[1] / sf.force_n[1] - 1.0).abs() < 1e-6);
+            assert!((sd.force_n[0] / sf.force_n[0] - 1.0).abs() < 1e-5);
+            assert!((sd.force_n[1] / sf.force_n[1] - 1.0).abs() < 1e-5);
         }
     }
 
