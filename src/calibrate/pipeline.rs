@@ -456,16 +456,16 @@ pub fn write_outputs(
         (
             files::KN_PLOT,
             "Normal contact stiffness per unit area vs pressure",
-            "kn (N/m³)",
+            "kn (10¹² N/m³)",
             Scale::Log,
-            column(|r| r.kn_n_per_m3),
+            column(|r| r.kn_n_per_m3 * 1e-12),
         ),
         (
             files::E0_PLOT,
             "Valanis E0 (initial tangential stiffness) per unit area vs pressure",
-            "E0 (N/m³)",
+            "E0 (10¹² N/m³)",
             Scale::Log,
-            column(|r| r.e0_n_per_m3),
+            column(|r| r.e0_n_per_m3 * 1e-12),
         ),
         (
             files::K_PLOT,
@@ -483,8 +483,8 @@ pub fn write_outputs(
                 let p = p_lo * (p_hi / p_lo).powf(i as f64 / 200.0);
                 let v = run.table.interpolate(p);
                 let y = match name {
-                    files::KN_PLOT => v.kn_n_per_m3,
-                    files::E0_PLOT => v.e0_n_per_m3,
+                    files::KN_PLOT => v.kn_n_per_m3 * 1e-12,
+                    files::E0_PLOT => v.e0_n_per_m3 * 1e-12,
                     _ => v.k,
                 };
                 (p / 1e6, y)
