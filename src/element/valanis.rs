@@ -640,6 +640,32 @@ mod tests {
     }
 
     #[test]
+    fn integrators_agree_on_a_loop_with_varying_normal_load() {
+        // Fz(t) = N0 + kn·uz(t) with uz out of phase with q: the adaptive (Dormand–Prince)
+        // path of the reference integrator against implicit Euler.
+        let p = ValanisParams::new(1.0e13, 0.5, 5.0e11, 0.6).unwrap();
+        let (n0, kn) = (1.0e6, 1.0e13);
+        let per = 2000;
+        let q = sine_history(2.0 * p.mu * n0 / p.e0, 2, per);
+        let uz: Vec<f64> = (0..q.len())
+            .map(|i| 0.3 * n0 / kn * (2.0 * std::f64::consts::PI * i as f64 / per as f64).cos())
+            .collect();
+        let fz = normal_load_history(n0, kn, &uz);
+        let fe = integrate_implicit_euler(&p, &q, &fz).unwrap();
+        let fr = integrate_reference(&p, &q, &fz).unwrap();
+        let max_dev = fe
+            .iter()
+            .zip(&fr)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(max_dev < 0.005 * p.mu * 1.3 * n0, "max deviation {max_dev}");
+        let last = q.len() - per - 1;
+        let ee = dissipated_energy(&q[last..], &fe[last..]);
+        let er = dissipated_energy(&q[last..], &fr[last..]);
+        assert!((ee - er).abs() / er < 0.005, "{ee} vs {er}");
+    }
+
+    #[test]
     fn implicit_euler_is_first_order() {
         let p = params();
         let fz = 1.0e6;
