@@ -343,6 +343,13 @@ pub fn describe_shape(pressures_pa: &[f64], values: &[f64]) -> String {
     }
 }
 
+/// A fitted `k` below this is reported as "at the lower bound 0". `k → 1` gives a sharp,
+/// Jenkins-like corner (slope E0 until saturation); `k = 0` the most gradual transition the
+/// Valanis form allows (exponential approach to μFz). A loop whose microslip transition is still
+/// more gradual drives the fit to k = 0; the fit is then the best k = 0 element, and the report
+/// says so.
+pub const K_BOUND_FLAG: f64 = 1e-3;
+
 /// Where the configuration came from (recorded in the sidecar).
 #[derive(Debug, Clone)]
 pub enum ConfigSource {
@@ -618,6 +625,7 @@ pub fn write_outputs(
                     "energy_rel_error": pc.fit.energy_rel_error,
                     "iterations": pc.fit.iterations,
                     "converged": pc.fit.converged,
+                    "k_at_lower_bound": pc.fit.params.k < K_BOUND_FLAG,
                     "final_cost": pc.fit.final_cost,
                     "wall_time_s": pc.fit.wall_time.as_secs_f64(),
                 },

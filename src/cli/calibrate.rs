@@ -87,6 +87,21 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
     let p: Vec<f64> = result.table.rows.iter().map(|r| r.pressure_pa).collect();
     let k: Vec<f64> = result.table.rows.iter().map(|r| r.k).collect();
     println!("k(p): {}", describe_shape(&p, &k));
+    let at_bound: Vec<String> = result
+        .table
+        .rows
+        .iter()
+        .filter(|r| r.k < pipeline::K_BOUND_FLAG)
+        .map(|r| format!("{} MPa", r.pressure_pa / 1e6))
+        .collect();
+    if !at_bound.is_empty() {
+        println!(
+            "note: k reached its lower bound 0 at {} (the BEM loop's microslip transition is \
+             more gradual than any Valanis element with k >= 0 gives; the fit is the best k = 0 \
+             element)",
+            at_bound.join(", ")
+        );
+    }
     let t = result.times;
     println!(
         "time: surface {:.1} s, normal sweep {:.1} s, loops {:.1} s, fits {:.1} s, total {:.1} s",
