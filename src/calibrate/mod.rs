@@ -3,3 +3,12 @@
 pub mod table;
 
 pub use table::{CalibrationRow, CalibrationTable, Interpolated, RangeFlag};
+pub mod fit;
+
+pub use fit::{fit_valanis, FitOptions, FitResult, LoopData};
+pub mod config;
+
+pub use config::CalibrationConfig;
+pub mod pipeline;
+
+pub use pipeline::{run, write_outputs, CalibrationRun, ConfigSource};

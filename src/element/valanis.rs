@@ -48,10 +48,11 @@
 //!
 //! * [`implicit_euler_step`]: backward Euler on each input increment, as dynamic codes use. The
 //!   scalar implicit equation is a quadratic in `x` and is solved in closed form (no iteration).
-//! * [`reference_step`]: adaptive Dormand–Prince 5(4) along each increment (displacement and normal
-//!   load interpolated linearly), tolerance 1e-10 of the slip force: the accurate reference.
-//! * [`closed_form_branch`]: exact solution on a monotonic branch at constant `Fz` (the separable
-//!   ODE integrated analytically), used to validate the other two.
+//! * [`reference_step`]: the accurate reference. On increments at constant `Fz` (each increment
+//!   is a monotonic branch) the exact solution [`closed_form_branch`] (the separable ODE integrated
+//!   analytically, solved by a monotone Newton iteration); where `Fz` changes, adaptive
+//!   Dormand–Prince 5(4) along the increment ([`adaptive_step`]; displacement and normal load
+//!   interpolated linearly, tolerance 1e-10 of the slip force).
 //!
 //! Two in-plane directions are two uncoupled elements ([`integrate_in_plane`]).
 
@@ -248,7 +249,9 @@ pub fn implicit_euler_step(
 /// Relative tolerance of [`reference_step`], as a fraction of the slip force scale.
 pub const REFERENCE_TOLERANCE: f64 = 1e-10;
 
-/// One increment of the accurate reference integrator: adaptive Dormand–Prince 5(4) in the path
+/// One increment of the accurate reference integrator. At constant normal load over the increment
+/// (the path is then a monotonic branch) it is the exact solution [`closed_form_branch`];
+/// otherwise adaptive Dormand–Prince 5(4) ([`adaptive_step`]) in the path
 /// parameter `θ ∈ [0, 1]` with `q(θ) = q0 + θ·Δq`, `Fz(θ) = Fz0 + θ·ΔFz` (linear interpolation of
 /// the input samples), error per step below [`REFERENCE_TOLERANCE`] × `max(μ·Fz, |F|)`.
 ///
@@ -266,8 +269,29 @@ pub fn reference_step(
         Ok(s) => s,
         Err(separated) => return Ok(separated),
     };
+    if start.fz == fz1 {
+        // Constant normal load over the increment: exact solution of the monotonic branch.
+        let force = closed_form_branch(p, fz1, start.q_ref, start.q, start.force, q1);
+        return Ok(ValanisState {
+            force: project(p, force, q1, start.q_ref, fz1),
+            q: q1,
+            fz: fz1,
+            q_ref: start.q_ref,
+        });
+    }
+    adaptive_step(p, &start, q1, fz1)
+}
+
+/// One increment by adaptive Dormand–Prince 5(4) (see [`reference_step`]); `state` must be in
+/// contact (`fz > 0`, or `0` at the re-contact point) and `fz1 > 0`.
+pub fn adaptive_step(
+    p: &ValanisParams,
+    start: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> Result<ValanisState> {
     let fz1 = fz1.max(0.0);
-    let (q0, fz0, q_ref) = (start.q, start.fz, start.q_ref);
+    let (q0, fz0, q_ref) = (start.q, start.fz.max(0.0), start.q_ref);
     let dq = q1 - q0;
     if dq == 0.0 {
         return Ok(ValanisState {
@@ -467,9 +491,11 @@ pub fn integrate_in_plane(
 ///
 /// With `a = Et/E0`, `C = a − 1`, `D = a·k − 1`, the ODE `dx/d|q| = λ·(C + D·x)/(1 + k·x)`
 /// separates and integrates to
-/// `λ·|q1 − q0| = (k/D)·(x1 − x0) + ((D − k·C)/D²)·ln((C + D·x1)/(C + D·x0))`,
-/// which is solved for `x1` by bisection (the right side is monotonic in `x1` between `x0` and
-/// the asymptote `x∞ = −C/D`).
+/// `λ·|q1 − q0| = (k/D)·(x1 − x0) + ((k − 1)/D²)·ln((C + D·x1)/(C + D·x0))`.
+/// In the variable `w = ln((C + D·x1)/(C + D·x0)) ≤ 0` this reads
+/// `ψ(w) = k·r0·(eʷ − 1) + (k − 1)·w − D²·λ·|q1 − q0| = 0` with `r0 = C + D·x0 ≤ 0`; `ψ` is
+/// decreasing and concave, so Newton's method from `w = 0` converges monotonically to the root.
+/// Then `x1 = (r0·eʷ − C)/D` and `F1 = Et·(q1 − q_ref) − s·x1·E0/λ`.
 pub fn closed_form_branch(
     p: &ValanisParams,
     fz: f64,
@@ -479,8 +505,11 @@ pub fn closed_form_branch(
     q1: f64,
 ) -> f64 {
     let dq = q1 - q0;
-    if dq == 0.0 || fz <= 0.0 {
-        return if fz <= 0.0 { 0.0 } else { f0 };
+    if fz <= 0.0 {
+        return 0.0;
+    }
+    if dq == 0.0 {
+        return f0;
     }
     let s = dq.signum();
     let lam = p.lambda(fz);
@@ -488,24 +517,25 @@ pub fn closed_form_branch(
     let a = p.et / p.e0;
     let (c, d) = (a - 1.0, a * p.k - 1.0);
     let x0 = (g * (p.et * (q0 - q_ref) - f0)).max(p.x_asymptote());
-    let target = lam * dq.abs();
-    let path = |x: f64| {
-        (p.k / d) * (x - x0) + ((d - p.k * c) / (d * d)) * ((c + d * x) / (c + d * x0)).ln()
+    let r0 = c + d * x0;
+    let x1 = if r0 >= 0.0 {
+        // On the asymptote already: the force follows it.
+        x0
+    } else {
+        let target = d * d * lam * dq.abs();
+        let mut w = 0.0f64;
+        for _ in 0..100 {
+            let ew = w.exp();
+            let psi = p.k * r0 * (ew - 1.0) + (p.k - 1.0) * w - target;
+            let dpsi = p.k * r0 * ew + (p.k - 1.0);
+            let step = psi / dpsi;
+            w -= step;
+            if step.abs() <= 1e-15 * w.abs().max(1.0) {
+                break;
+            }
+        }
+        (r0 * w.exp() - c) / d
     };
-    // path(x) increases from 0 at x0 to +∞ at x∞ (< x0).
-    let (mut hi, mut lo) = (x0, p.x_asymptote());
-    for _ in 0..200 {
-        let mid = 0.5 * (hi + lo);
-        if mid == hi || mid == lo {
-            break;
-        }
-        if path(mid) < target {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    let x1 = 0.5 * (hi + lo);
     p.et * (q1 - q_ref) - x1 / g
 }
 
@@ -549,26 +579,44 @@ mod tests {
     }
 
     #[test]
-    fn reference_matches_closed_form_on_branches() {
+    fn adaptive_integrator_matches_closed_form_on_branches() {
         let p = ValanisParams::new(1.0e13, 0.6, 1.0e12, 0.6).unwrap();
         let fz = 1.0e6;
-        let q: Vec<f64> = (0..=50).map(|i| i as f64 * 1e-8).collect();
-        let f = integrate_reference(&p, &q, &vec![fz; q.len()]).unwrap();
-        for (qi, fi) in q.iter().zip(&f) {
-            let exact = closed_form_branch(&p, fz, 0.0, 0.0, 0.0, *qi);
-            assert!((fi - exact).abs() < 1e-8 * p.mu * fz, "{fi} vs {exact}");
+        // Virgin loading branch, stepped with Dormand–Prince from sample to sample.
+        let mut st = ValanisState::virgin(0.0, fz);
+        for i in 1..=50 {
+            let q1 = i as f64 * 1e-8;
+            st = adaptive_step(&p, &st, q1, fz).unwrap();
+            let exact = closed_form_branch(&p, fz, 0.0, 0.0, 0.0, q1);
+            assert!(
+                (st.force - exact).abs() < 1e-8 * p.mu * fz,
+                "{} vs {exact}",
+                st.force
+            );
         }
-        // Unloading branch from the end point, one large reference step.
-        let (q0, f0) = (q[50], f[50]);
-        let st = ValanisState {
-            force: f0,
-            q: q0,
-            fz,
-            q_ref: 0.0,
-        };
-        let s1 = reference_step(&p, &st, q0 - 3e-7, fz).unwrap();
-        let exact = closed_form_branch(&p, fz, 0.0, q0, f0, q0 - 3e-7);
+        // Unloading branch from the end point, one large step each way.
+        let s1 = adaptive_step(&p, &st, st.q - 3e-7, fz).unwrap();
+        let exact = closed_form_branch(&p, fz, 0.0, st.q, st.force, st.q - 3e-7);
         assert!((s1.force - exact).abs() < 1e-8 * p.mu * fz);
+    }
+
+    #[test]
+    fn closed_form_satisfies_the_valanis_ode() {
+        // Central difference of the closed-form branch against dF/dq = E0(1+x)/(1+kx).
+        let p = ValanisParams::new(3.0e12, 0.8, 2.0e11, 0.5).unwrap();
+        let fz = 4.0e6;
+        let (q0, f0) = (1e-6, 0.3 * p.mu * fz);
+        for dq in [1e-8f64, 1e-7, 5e-7, -2e-7, -1e-6] {
+            let h = 1e-12 * dq.signum();
+            let f = |q: f64| closed_form_branch(&p, fz, 0.0, q0, f0, q);
+            let slope = (f(q0 + dq + h) - f(q0 + dq - h)) / (2.0 * h);
+            let x = p.lambda(fz) / p.e0 * dq.signum() * (p.et * (q0 + dq) - f(q0 + dq));
+            let expect = force_slope(&p, x);
+            assert!(
+                (slope - expect).abs() < 1e-4 * p.e0,
+                "dq={dq}: {slope} vs {expect}"
+            );
+        }
     }
 
     #[test]
@@ -586,6 +634,32 @@ mod tests {
             .fold(0.0, f64::max);
         assert!(max_dev < 0.005 * p.mu * fz, "max deviation {max_dev}");
         let last = q.len() - 2001;
+        let ee = dissipated_energy(&q[last..], &fe[last..]);
+        let er = dissipated_energy(&q[last..], &fr[last..]);
+        assert!((ee - er).abs() / er < 0.005, "{ee} vs {er}");
+    }
+
+    #[test]
+    fn integrators_agree_on_a_loop_with_varying_normal_load() {
+        // Fz(t) = N0 + kn·uz(t) with uz out of phase with q: the adaptive (Dormand–Prince)
+        // path of the reference integrator against implicit Euler.
+        let p = ValanisParams::new(1.0e13, 0.5, 5.0e11, 0.6).unwrap();
+        let (n0, kn) = (1.0e6, 1.0e13);
+        let per = 2000;
+        let q = sine_history(2.0 * p.mu * n0 / p.e0, 2, per);
+        let uz: Vec<f64> = (0..q.len())
+            .map(|i| 0.3 * n0 / kn * (2.0 * std::f64::consts::PI * i as f64 / per as f64).cos())
+            .collect();
+        let fz = normal_load_history(n0, kn, &uz);
+        let fe = integrate_implicit_euler(&p, &q, &fz).unwrap();
+        let fr = integrate_reference(&p, &q, &fz).unwrap();
+        let max_dev = fe
+            .iter()
+            .zip(&fr)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(max_dev < 0.005 * p.mu * 1.3 * n0, "max deviation {max_dev}");
+        let last = q.len() - per - 1;
         let ee = dissipated_energy(&q[last..], &fe[last..]);
         let er = dissipated_energy(&q[last..], &fr[last..]);
         assert!((ee - er).abs() / er < 0.005, "{ee} vs {er}");
