@@ -323,6 +323,66 @@ fn film_to_preloads_to_reduced_nodes_to_elements() {
         .any(|i| i["sha256"] == table_hash.as_str()));
 }
 
+/// Done-when 3 of the film stage: an element table produced end to end from the reference
+/// calibration table committed in `calib/` (produced by `asperity calibrate`).
+#[test]
+fn element_table_from_the_reference_calibration_table() {
+    let st = setup();
+    let out = st.root.join("out-ref");
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--nodes",
+        s(&st.nodes),
+        "--node-offset-mm",
+        "10,10",
+        "--total-load-n",
+        "150",
+        "--reduce-mesh-size-mm",
+        "1.0",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("calib/calibration_table.csv");
+    let table = CalibrationTable::read_csv(&reference).unwrap();
+    let elements = st.root.join("elements-ref.csv");
+    let o = run(&[
+        "elements",
+        "--preload",
+        s(&out.join("preload_reduced.csv")),
+        "--table",
+        s(&reference),
+        "--out",
+        s(&elements),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let red = read_rows(&out.join("preload_reduced.csv"));
+    let rows = read_rows(&elements);
+    assert_eq!(rows.len(), red.len());
+    let total_n0: f64 = rows.iter().map(|e| num(e, "N0_N")).sum();
+    assert!((total_n0 - 150.0).abs() <= 1e-9 * 150.0, "{total_n0}");
+    for e in &rows {
+        let (p, a) = (num(e, "pressure_Pa"), num(e, "area_m2"));
+        let v = table.interpolate(p);
+        let flag: i32 = e["out_of_range"].parse().unwrap();
+        assert_eq!(
+            flag == 0,
+            (1e5..=1e7).contains(&p),
+            "pressure {p} Pa, flag {flag}"
+        );
+        assert!((num(e, "kn_N_per_m") - v.kn_n_per_m3 * a).abs() <= 1e-8 * v.kn_n_per_m3 * a);
+        assert!((num(e, "E0_N_per_m") - v.e0_n_per_m3 * a).abs() <= 1e-8 * v.e0_n_per_m3 * a);
+        assert!((num(e, "k") - v.k).abs() <= 1e-9);
+        assert_eq!(num(e, "mu"), 0.6);
+    }
+}
+
 #[test]
 fn given_areas_are_used_and_scaled_by_the_placement() {
     let st = setup();
