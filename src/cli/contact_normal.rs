@@ -5,7 +5,7 @@
 use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
 use asperity::contact::sweep::{self, SweepOptions, REFERENCE_PRESSURES_PA};
 use asperity::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
-use asperity::surface::combine::{composite_modulus, Material};
+use asperity::surface::combine::composite_modulus;
 use asperity::{Error, Grid2, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -65,28 +65,14 @@ fn load_surface(path: Option<&Path>) -> Result<(Grid2, String)> {
 
 pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output.
-    let material = Material {
-        youngs_modulus_pa: args.youngs_modulus_pa,
-        poisson_ratio: args.poisson_ratio,
-    };
-    let material = material.validated("material").map_err(|e| match e {
-        Error::InvalidParameter { name, message } => Error::param(
-            if name.ends_with("poisson_ratio") {
-                "--poisson-ratio"
-            } else {
-                "--youngs-modulus-pa"
-            },
-            message,
-        ),
-        other => other,
-    })?;
+    let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
     let e_star = composite_modulus(material, material)?;
     let pressures = sweep::checked_pressures(
         args.pressures_pa
             .as_deref()
             .unwrap_or(&REFERENCE_PRESSURES_PA),
     )
-    .map_err(|e| rename_param(e, "--pressures-pa"))?;
+    .map_err(|e| super::rename_param(e, "--pressures-pa"))?;
     let options = NormalOptions {
         tolerance: args.tolerance,
         max_iterations: args.max_iterations,
@@ -104,7 +90,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
     })?;
     sweep_options
         .validate()
-        .map_err(|e| rename_param(e, "--derivative-step"))?;
+        .map_err(|e| super::rename_param(e, "--derivative-step"))?;
     let (surface, source) = load_surface(args.surface.as_deref())?;
     let mut solver = NormalSolver::new(
         &NormalProblem {
@@ -283,12 +269,4 @@ pub fn run(args: NormalArgs) -> Result<()> {
     }
     println!("wrote {}", args.out_dir.display());
     Ok(())
-}
-
-/// Name the CLI flag in a parameter error raised by the library.
-fn rename_param(e: Error, flag: &str) -> Error {
-    match e {
-        Error::InvalidParameter { message, .. } => Error::param(flag, message),
-        other => other,
-    }
 }

@@ -14,7 +14,7 @@ use asperity::contact::tangential::{
 };
 use asperity::halfspace::Boundary;
 use asperity::plot::{line_plot, LinePlot, Scale, Series};
-use asperity::surface::combine::{composite_modulus, Material};
+use asperity::surface::combine::composite_modulus;
 use asperity::surface::generate::{generate, GaussianSurfaceSpec};
 use asperity::{Error, Result};
 use std::fmt::Write as _;
@@ -66,13 +66,6 @@ pub struct TangentialArgs {
     out_dir: PathBuf,
 }
 
-fn rename_param(e: Error, flag: &str) -> Error {
-    match e {
-        Error::InvalidParameter { message, .. } => Error::param(flag, message),
-        other => other,
-    }
-}
-
 pub fn run(args: TangentialArgs) -> Result<()> {
     // Every input is checked before any work or output.
     let mu = args.friction_coefficient;
@@ -96,29 +89,14 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     if args.steps_per_cycle < 4 {
         return Err(Error::param("--steps-per-cycle", "must be at least 4"));
     }
-    let material = Material {
-        youngs_modulus_pa: args.youngs_modulus_pa,
-        poisson_ratio: args.poisson_ratio,
-    }
-    .validated("material")
-    .map_err(|e| match e {
-        Error::InvalidParameter { name, message } => Error::param(
-            if name.ends_with("poisson_ratio") {
-                "--poisson-ratio"
-            } else {
-                "--youngs-modulus-pa"
-            },
-            message,
-        ),
-        other => other,
-    })?;
+    let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
     let e_star = composite_modulus(material, material)?;
     let pressures = checked_pressures(
         args.pressures_pa
             .as_deref()
             .unwrap_or(&REFERENCE_PRESSURES_PA),
     )
-    .map_err(|e| rename_param(e, "--pressures-pa"))?;
+    .map_err(|e| super::rename_param(e, "--pressures-pa"))?;
     let operator = match args.operator.as_str() {
         "auto" => Operator::Auto,
         "dense" => Operator::Dense,
@@ -147,7 +125,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         spec.nx = n;
         spec.ny = n;
     }
-    spec.validate().map_err(|e| rename_param(e, "--grid"))?;
+    spec.validate()
+        .map_err(|e| super::rename_param(e, "--grid"))?;
 
     let started = std::time::Instant::now();
     let surface = generate(&spec)?;

@@ -9,3 +9,30 @@ pub mod diagnose;
 pub mod elements;
 pub mod film;
 pub mod surface;
+
+use asperity::surface::combine::Material;
+use asperity::{Error, Result};
+
+/// Name the CLI flag in a parameter error raised by the library.
+pub fn rename_param(e: Error, flag: &str) -> Error {
+    match e {
+        Error::InvalidParameter { message, .. } => Error::param(flag, message),
+        other => other,
+    }
+}
+
+/// The material of both bodies from `--youngs-modulus-pa` and `--poisson-ratio`, validated,
+/// with errors naming the flag.
+pub fn material_from_flags(youngs_modulus_pa: f64, poisson_ratio: f64) -> Result<Material> {
+    Material {
+        youngs_modulus_pa,
+        poisson_ratio,
+    }
+    .validated("material")
+    .map_err(|e| match e {
+        Error::InvalidParameter { ref name, .. } if name.ends_with("poisson_ratio") => {
+            rename_param(e, "--poisson-ratio")
+        }
+        e => rename_param(e, "--youngs-modulus-pa"),
+    })
+}
