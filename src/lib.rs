@@ -24,6 +24,7 @@ pub mod error;
 pub mod film;
 pub mod grid;
 pub mod halfspace;
+pub mod input;
 pub mod output;
 pub mod plot;
 pub mod surface;

@@ -209,12 +209,7 @@ impl CalibrationTable {
     /// and the 1-based line: wrong header, wrong field count, unparsable number, unphysical
     /// value, pressures not strictly increasing, no rows.
     pub fn read_csv(path: &Path) -> Result<Self> {
-        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut rdr = csv::ReaderBuilder::new()
-            .has_headers(true)
-            .trim(csv::Trim::All)
-            .flexible(true)
-            .from_reader(file);
+        let mut rdr = crate::input::csv_reader(path)?;
         let headers = rdr
             .headers()
             .map_err(|e| Error::parse(path, 1, format!("cannot read header: {e}")))?
@@ -233,11 +228,7 @@ impl CalibrationTable {
         }
         let mut rows: Vec<CalibrationRow> = Vec::new();
         for rec in rdr.records() {
-            let rec = rec.map_err(|e| {
-                let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-                Error::parse(path, line, e.to_string())
-            })?;
-            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+            let (rec, line) = crate::input::csv_record(path, rec)?;
             if rec.len() == 1 && rec.get(0) == Some("") {
                 continue; // blank line
             }

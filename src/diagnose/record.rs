@@ -134,15 +134,7 @@ impl Record {
 
     /// Read the chosen columns of a CSV file (header row with column names, then numbers).
     pub fn read_csv(path: &Path, columns: &Columns) -> Result<Self> {
-        let mut rdr = csv::ReaderBuilder::new()
-            .flexible(true)
-            .trim(csv::Trim::All)
-            .comment(Some(b'#'))
-            .from_path(path)
-            .map_err(|e| match e.into_kind() {
-                csv::ErrorKind::Io(io) => Error::io(path, io),
-                other => Error::parse(path, 0, format!("{other:?}")),
-            })?;
+        let mut rdr = crate::input::csv_reader(path)?;
         let headers = rdr
             .headers()
             .map_err(|e| Error::parse(path, 1, e.to_string()))?
@@ -166,11 +158,7 @@ impl Record {
         let (mut t, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new());
         let mut nf = inf.map(|_| Vec::new());
         for rec in rdr.records() {
-            let rec = rec.map_err(|e| {
-                let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-                Error::parse(path, line, e.to_string())
-            })?;
-            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+            let (rec, line) = crate::input::csv_record(path, rec)?;
             if rec.len() != headers.len() {
                 return Err(Error::parse(
                     path,

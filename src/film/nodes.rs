@@ -66,14 +66,7 @@ impl Placement {
 
 /// Read a nodes CSV (see the module documentation).
 pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| match e.into_kind() {
-            csv::ErrorKind::Io(io) => Error::io(path, io),
-            k => Error::parse(path, 0, format!("{k:?}")),
-        })?;
+    let mut rdr = crate::input::csv_reader(path)?;
     let headers = rdr
         .headers()
         .map_err(|e| Error::parse(path, 1, e.to_string()))?
@@ -96,11 +89,7 @@ pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
     let mut nodes: Vec<Node> = Vec::new();
     let mut seen = std::collections::HashSet::new();
     for rec in rdr.records() {
-        let rec = rec.map_err(|e| {
-            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-            Error::parse(path, line, e.to_string())
-        })?;
-        let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+        let (rec, line) = crate::input::csv_record(path, rec)?;
         let field = |c: usize, name: &str| -> Result<f64> {
             let s = rec.get(c).unwrap_or("");
             let v: f64 = s
@@ -326,14 +315,7 @@ pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Resul
 
 /// Read a preload CSV written by [`write_preloads_csv`].
 pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| match e.into_kind() {
-            csv::ErrorKind::Io(io) => Error::io(path, io),
-            k => Error::parse(path, 0, format!("{k:?}")),
-        })?;
+    let mut rdr = crate::input::csv_reader(path)?;
     let mut out: Vec<Preload> = Vec::new();
     for rec in rdr.deserialize::<Preload>() {
         let p = rec.map_err(|e| {

@@ -1,0 +1,71 @@
+//! Reading tabular input (CSV with a header row) with errors that name the file and line.
+//!
+//! Every CSV reader of the crate (calibration tables, contact nodes, preloads, measured
+//! records) opens its file through [`csv_reader`] and turns each record into
+//! `(record, line)` through [`csv_record`], so malformed input is always reported the same way:
+//! `file:line: message`.
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// Open a CSV file with a header row: fields trimmed, lines starting with `#` skipped, records
+/// of any length (callers check the field count against the header, naming the line).
+pub fn csv_reader(path: &Path) -> Result<csv::Reader<std::fs::File>> {
+    csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_path(path)
+        .map_err(|e| csv_error(path, e))
+}
+
+/// A CSV error as an [`Error`] naming the file and, where known, the 1-based line.
+pub fn csv_error(path: &Path, e: csv::Error) -> Error {
+    let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+    match e.into_kind() {
+        csv::ErrorKind::Io(io) => Error::io(path, io),
+        kind => Error::parse(path, line, csv_kind_message(kind)),
+    }
+}
+
+fn csv_kind_message(kind: csv::ErrorKind) -> String {
+    match kind {
+        csv::ErrorKind::Utf8 { err, .. } => format!("invalid UTF-8: {err}"),
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => format!("expected {expected_len} fields, found {len}"),
+        csv::ErrorKind::Deserialize { err, .. } => err.to_string(),
+        other => format!("{other:?}"),
+    }
+}
+
+/// A record with its 1-based line number, or the CSV error naming file and line.
+pub fn csv_record(
+    path: &Path,
+    rec: std::result::Result<csv::StringRecord, csv::Error>,
+) -> Result<(csv::StringRecord, usize)> {
+    let rec = rec.map_err(|e| csv_error(path, e))?;
+    let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+    Ok((rec, line))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_are_counted_from_the_file_start() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, "# comment\na,b\n1,2\n3,4\n").unwrap();
+        let mut rdr = csv_reader(&p).unwrap();
+        let lines: Vec<usize> = rdr
+            .records()
+            .map(|r| csv_record(&p, r).unwrap().1)
+            .collect();
+        assert_eq!(lines, vec![3, 4]);
+        let e = csv_reader(&dir.path().join("missing.csv")).unwrap_err();
+        assert!(e.to_string().contains("missing.csv"), "{e}");
+    }
+}
