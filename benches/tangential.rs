@@ -33,6 +33,11 @@ fn main() {
     let pressure: f64 = env_list("ASPERITY_BENCH_PRESSURE_PA", "1e7")[0];
     let steps: usize = env_list("ASPERITY_BENCH_STEPS", "40")[0];
     let operators: Vec<String> = env_list("ASPERITY_BENCH_OPERATORS", "dense,fft");
+    let tolerance = env_list::<f64>("ASPERITY_BENCH_TOLERANCE", "0")
+        .first()
+        .copied()
+        .filter(|&t| t > 0.0)
+        .unwrap_or(TangentialOptions::default().tolerance);
     let mu = 0.6;
     let m = Material::STEEL;
     let e_star = composite_modulus(m, m).unwrap();
@@ -40,7 +45,7 @@ fn main() {
         "threads {} | pressure {pressure:e} Pa | μ {mu} | one cycle of {steps} steps",
         rayon::current_num_threads()
     );
-    println!("grid  contact_points  operator  setup_s  cycle_s  per_step_s  mean_iterations");
+    println!("grid  contact_points  operator  setup_s  cycle_s  per_step_s  mean_iterations  energy_J_per_m2  tolerance");
     for &n in &grids {
         let mut spec = GaussianSurfaceSpec::reference();
         spec.nx = n;
@@ -75,6 +80,7 @@ fn main() {
                 },
                 TangentialOptions {
                     operator,
+                    tolerance,
                     ..TangentialOptions::default()
                 },
             );
@@ -102,11 +108,13 @@ fn main() {
             let cycle = t1.elapsed().as_secs_f64();
             let its: usize = r.steps.iter().map(|s| s.iterations).sum();
             println!(
-                "{n:>5}  {:>14}  {:>8}  {setup:>7.2}  {cycle:>7.2}  {:>10.4}  {:>15.1}",
+                "{n:>5}  {:>14}  {:>8}  {setup:>7.2}  {cycle:>7.2}  {:>10.4}  {:>15.1}  {:>15.9}  {:e}",
                 s.metadata().contact_points,
                 op,
                 cycle / steps as f64,
-                its as f64 / steps as f64
+                its as f64 / steps as f64,
+                r.cycles[0].dissipated_j_per_m2,
+                tolerance
             );
         }
     }
