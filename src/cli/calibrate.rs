@@ -57,13 +57,7 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
         config.contact.mu,
         config.loading.pressures_pa.len()
     );
-    let bar = indicatif::ProgressBar::new(pipeline::progress_units(&config));
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "calibrate {msg:>18} {bar:30} {pos}/{len} [{elapsed_precise} < {eta}]",
-        )
-        .expect("valid template"),
-    );
+    let bar = super::progress_bar("calibrate", pipeline::progress_units(&config));
     let result = pipeline::run(&config, &bar)?;
     bar.finish_and_clear();
     let written = pipeline::write_outputs(&result, &source, &args.out_dir)?;

@@ -113,13 +113,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
         e_star
     );
 
-    let bar = indicatif::ProgressBar::new(pressures.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "normal contact {bar:30} {pos}/{len} pressures [{elapsed_precise} < {eta}]",
-        )
-        .expect("valid template"),
-    );
+    let bar = super::progress_bar("normal contact (pressures)", pressures.len() as u64);
     let result = sweep::run(&mut solver, &pressures, sweep_options, |k| {
         bar.set_position(k as u64)
     });

@@ -140,12 +140,9 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     );
 
     let steps_per_pressure = (args.cycles * args.steps_per_cycle) as u64;
-    let bar = indicatif::ProgressBar::new(pressures.len() as u64 * (1 + steps_per_pressure));
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "tangential {msg:>12} {bar:30} {pos}/{len} [{elapsed_precise} < {eta}]",
-        )
-        .expect("valid template"),
+    let bar = super::progress_bar(
+        "tangential",
+        pressures.len() as u64 * (1 + steps_per_pressure),
     );
 
     // Normal contact at each pressure (ascending, warm-started).

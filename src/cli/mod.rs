@@ -36,3 +36,16 @@ pub fn material_from_flags(youngs_modulus_pa: f64, poisson_ratio: f64) -> Result
         e => rename_param(e, "--youngs-modulus-pa"),
     })
 }
+
+/// A progress bar on stderr for `len` units of work, labelled `label` (with the current step in
+/// its message), showing elapsed time and the estimate of what remains.
+pub fn progress_bar(label: &str, len: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{label} {{msg:>16}} {{bar:30}} {{pos}}/{{len}} [{{elapsed_precise}} < {{eta}}]"
+        ))
+        .expect("valid template"),
+    );
+    bar
+}
