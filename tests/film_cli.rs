@@ -133,6 +133,35 @@ fn num(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
     row[col].parse().unwrap()
 }
 
+/// `asperity film` on the synthetic setup with the nodes placed (offset 10 mm, rotated 30°),
+/// rescaled to a total load of 150 N and reduced on a 1 mm coarse mesh; returns the output dir.
+fn film_reduced(st: &Setup, name: &str) -> PathBuf {
+    let out = st.root.join(name);
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--nodes",
+        s(&st.nodes),
+        "--node-offset-mm",
+        "10,10",
+        "--node-rotation-deg",
+        "30",
+        "--total-load-n",
+        "150",
+        "--reduce-mesh-size-mm",
+        "1.0",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
 #[test]
 fn film_to_preloads_to_reduced_nodes_to_elements() {
     let st = setup();
@@ -200,29 +229,7 @@ fn film_to_preloads_to_reduced_nodes_to_elements() {
     );
 
     // Rescaled to a total load, then reduced.
-    let out2 = st.root.join("out2");
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--nodes",
-        s(&st.nodes),
-        "--node-offset-mm",
-        "10,10",
-        "--node-rotation-deg",
-        "30",
-        "--total-load-n",
-        "150",
-        "--reduce-mesh-size-mm",
-        "1.0",
-        "--out-dir",
-        s(&out2),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out2 = film_reduced(&st, "out2");
     let pre2 = read_rows(&out2.join("preload.csv"));
     let total: f64 = pre2.iter().map(|r| num(r, "N0_N")).sum();
     assert!((total - 150.0).abs() <= 1e-9 * 150.0, "{total}");
@@ -328,27 +335,7 @@ fn film_to_preloads_to_reduced_nodes_to_elements() {
 #[test]
 fn element_table_from_the_reference_calibration_table() {
     let st = setup();
-    let out = st.root.join("out-ref");
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--nodes",
-        s(&st.nodes),
-        "--node-offset-mm",
-        "10,10",
-        "--total-load-n",
-        "150",
-        "--reduce-mesh-size-mm",
-        "1.0",
-        "--out-dir",
-        s(&out),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = film_reduced(&st, "out-ref");
     let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("calib/calibration_table.csv");
     let table = CalibrationTable::read_csv(&reference).unwrap();
     let elements = st.root.join("elements-ref.csv");

@@ -99,15 +99,7 @@ fn order_4_fit_on_a_real_patch_reports_r_squared() {
     let Some(map) = reference_map() else { return };
     let det = detect_patches(&map, 2e-3, DEFAULT_RIM_PIXELS).unwrap();
     for p in &det.patches {
-        let pts: Vec<(f64, f64, f64)> = p
-            .pixels
-            .iter()
-            .filter(|&&(i, j)| map.pressure_pa[[i, j]].is_finite())
-            .map(|&(i, j)| {
-                let (x, y) = map.position(i, j);
-                (x, y, map.pressure_pa[[i, j]])
-            })
-            .collect();
+        let pts = map.pressure_points(&p.pixels);
         let f = polyfit::fit(&pts, 4, None).unwrap();
         eprintln!(
             "patch {}: order-4 fit R² = {:.3}, rms residual {:.3} MPa over {} pixels",

@@ -223,15 +223,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
     let mut summaries = Vec::new();
     for r in &regions {
         let s = summarise(&map, r)?;
-        let pts: Vec<(f64, f64, f64)> = r
-            .pixels
-            .iter()
-            .filter(|&&(i, j)| map.pressure_pa[[i, j]].is_finite())
-            .map(|&(i, j)| {
-                let (x, y) = map.position(i, j);
-                (x, y, map.pressure_pa[[i, j]])
-            })
-            .collect();
+        let pts = map.pressure_points(&r.pixels);
         if pts.is_empty() {
             return Err(Error::Data(format!(
                 "region {} holds no in-range pixel ({} pixels: {:?}): nothing to fit",

@@ -43,6 +43,19 @@ impl FilmMap {
         (i as f64 * self.pixel_size_m, j as f64 * self.pixel_size_m)
     }
 
+    /// The in-range samples of `pixels` as `(x_m, y_m, pressure_Pa)`: the data a smooth fit of a
+    /// region is made from (below-, above-range and rejected pixels carry no pressure).
+    pub fn pressure_points(&self, pixels: &[(usize, usize)]) -> Vec<(f64, f64, f64)> {
+        pixels
+            .iter()
+            .filter(|&&(i, j)| self.pressure_pa[[i, j]].is_finite())
+            .map(|&(i, j)| {
+                let (x, y) = self.position(i, j);
+                (x, y, self.pressure_pa[[i, j]])
+            })
+            .collect()
+    }
+
     /// Physical extent: the map covers `[-s/2, (nx − 1/2)·s] × [-s/2, (ny − 1/2)·s]`.
     pub fn contains(&self, x: f64, y: f64) -> bool {
         let (nx, ny) = self.dim();
