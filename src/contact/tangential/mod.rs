@@ -48,42 +48,39 @@
 //!
 //! # Compliance operator: cost that follows the contact set
 //! Shear lives only on the contact set, a small fraction of the grid at the reference loads.
-//! Two exact implementations of `u = C q` on the contact points are provided:
-//! - [`Operator::Dense`]: the restricted influence matrix (three `n × n` blocks `xx, xy, yy`,
-//!   built once per pressure field from a table of the kernel by grid offset), `O(n²)` per
-//!   product with `n` contact points;
+//! Two exact implementations of `u = C q` on the contact points (module `compliance`):
+//! - [`Operator::Dense`]: the restricted influence matrix by direct summation over the pairs of
+//!   contact points, `O(n²)` per product with `n` contact points, its entries read from a table
+//!   of the kernel by grid offset (memory `O(N)`, no `n × n` matrix is stored);
 //! - [`Operator::Fft`]: scatter to the grid, FFT convolution with the three Cerruti spectra,
 //!   gather, `O(N log N)` per product with `N` grid points (×4 when zero-padded).
 //!
-//! Both give the same product (to round-off; tested). [`Operator::Auto`] takes the dense matrix
-//! while it fits in [`DENSE_MEMORY_LIMIT_BYTES`] and its estimated cost is below the FFT's; see
-//! BENCHMARKS.md for the measured comparison.
+//! Both give the same product (to round-off; tested). [`Operator::Auto`] takes the one with the
+//! lower estimated cost; see BENCHMARKS.md for the measured comparison.
+
+mod compliance;
 
 use crate::error::{require_positive, Error, Result};
-use crate::halfspace::convolution::{multiply_in_place, Boundary, FftPlan};
-use crate::halfspace::influence::{
-    cerruti_spectra, cerruti_uxx, cerruti_uxy, cerruti_uyy, CerrutiConstants, CerrutiSpectra,
-};
+use crate::halfspace::convolution::Boundary;
+use crate::halfspace::influence::CerrutiConstants;
 use crate::surface::combine::Material;
+use compliance::{estimated_costs, largest_eigenvalue, Compliance};
 use ndarray::Array2;
-use rayon::prelude::*;
 use std::time::Instant;
 
 /// The modelling assumption carried in every result's metadata.
 pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
 coupling neglected (exact for two bodies of the same material); pressure held fixed";
 
-/// Largest dense restricted matrix (`n(n+1)/2` pairs of three f32) that [`Operator::Auto`]
-/// builds.
-pub const DENSE_MEMORY_LIMIT_BYTES: usize = 1 << 30;
-
 /// How the compliance product `u = C q` on the contact points is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Operator {
-    /// Dense when it fits in memory and is estimated cheaper, else FFT.
+    /// The one with the lower estimated cost (dense unless the contact set covers a large part
+    /// of the grid).
     Auto,
-    /// Dense influence matrix restricted to the contact points.
+    /// Influence matrix restricted to the contact points, by direct summation from a table of
+    /// the kernel by grid offset.
     Dense,
     /// FFT convolution on the whole grid.
     Fft,
@@ -207,208 +204,6 @@ pub struct TangentialMetadata {
     pub setup_time_s: f64,
 }
 
-/// `u = C q` on the contact points, `q` and `u` as `[x, y]` pairs.
-enum Compliance {
-    /// The symmetric restricted matrix: the 2×2 block of a pair, `[K_xx, K_xy, K_yy]`, is the
-    /// same for `(i, j)` and `(j, i)` (`K_xx`, `K_yy` even and `K_xy` odd in each offset
-    /// component), so only the upper triangle `j ≥ i` is stored, row by row (row `i` starts at
-    /// `i·n − i(i−1)/2`), in single precision (relative rounding 6e-8, far below the
-    /// discretisation error). Both halve the memory traffic that bounds the product; sums are
-    /// accumulated in double precision.
-    Dense(Box<DenseCompliance>),
-    Fft(Box<FftCompliance>),
-}
-
-/// Number of row chunks of the dense product (fixed, independent of the thread count).
-const DENSE_ROW_CHUNKS: usize = 32;
-
-/// The dense path of [`Compliance`].
-struct DenseCompliance {
-    n: usize,
-    /// Packed upper triangle.
-    k: Vec<[f32; 3]>,
-    /// Row ranges of about equal work, processed in parallel, partial sums added in order.
-    chunks: Vec<std::ops::Range<usize>>,
-}
-
-impl DenseCompliance {
-    fn row_offset(n: usize, i: usize) -> usize {
-        i * n - i * i.saturating_sub(1) / 2
-    }
-
-    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
-        let n = self.n;
-        let partial: Vec<Vec<[f64; 2]>> = self
-            .chunks
-            .par_iter()
-            .map(|rows| {
-                let mut acc = vec![[0.0; 2]; n];
-                for i in rows.clone() {
-                    let off = Self::row_offset(n, i);
-                    let row = &self.k[off..off + (n - i)];
-                    let qi = q[i];
-                    // Diagonal block.
-                    let d = row[0];
-                    let (mut sx, mut sy) = (
-                        d[0] as f64 * qi[0] + d[1] as f64 * qi[1],
-                        d[1] as f64 * qi[0] + d[2] as f64 * qi[1],
-                    );
-                    for ((kk, qj), aj) in row[1..]
-                        .iter()
-                        .zip(&q[i + 1..])
-                        .zip(acc[i + 1..].iter_mut())
-                    {
-                        let (kxx, kxy, kyy) = (kk[0] as f64, kk[1] as f64, kk[2] as f64);
-                        sx += kxx * qj[0] + kxy * qj[1];
-                        sy += kxy * qj[0] + kyy * qj[1];
-                        aj[0] += kxx * qi[0] + kxy * qi[1];
-                        aj[1] += kxy * qi[0] + kyy * qi[1];
-                    }
-                    acc[i][0] += sx;
-                    acc[i][1] += sy;
-                }
-                acc
-            })
-            .collect();
-        u.iter_mut().for_each(|v| *v = [0.0; 2]);
-        for acc in &partial {
-            for (v, a) in u.iter_mut().zip(acc) {
-                v[0] += a[0];
-                v[1] += a[1];
-            }
-        }
-    }
-}
-
-/// The FFT path of [`Compliance`].
-struct FftCompliance {
-    plan: FftPlan,
-    spectra: CerrutiSpectra,
-    points: Vec<(usize, usize)>,
-}
-
-impl Compliance {
-    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
-        match self {
-            Compliance::Dense(d) => d.apply(q, u),
-            Compliance::Fft(f) => {
-                let (plan, spectra, points) = (&f.plan, &f.spectra, &f.points);
-                let shape = plan.grid_shape();
-                let mut fx = Array2::<f64>::zeros(shape);
-                let mut fy = Array2::<f64>::zeros(shape);
-                for (k, &(i, j)) in points.iter().enumerate() {
-                    fx[[i, j]] = q[k][0];
-                    fy[[i, j]] = q[k][1];
-                }
-                let sx = plan.forward(&fx);
-                let sy = plan.forward(&fy);
-                // ũ_x = K_xx q̃_x + K_xy q̃_y,  ũ_y = K_xy q̃_x + K_yy q̃_y.
-                let mut ux = sx.clone();
-                multiply_in_place(&mut ux, &spectra.xx.values);
-                let mut t = sy.clone();
-                multiply_in_place(&mut t, &spectra.xy.values);
-                ux += &t;
-                let mut uy = sy;
-                multiply_in_place(&mut uy, &spectra.yy.values);
-                let mut t = sx;
-                multiply_in_place(&mut t, &spectra.xy.values);
-                uy += &t;
-                let ux = plan.inverse(ux);
-                let uy = plan.inverse(uy);
-                for (k, &(i, j)) in points.iter().enumerate() {
-                    u[k] = [ux[[i, j]], uy[[i, j]]];
-                }
-            }
-        }
-    }
-}
-
-/// Kernel `(K_xx, K_xy, K_yy)` by signed grid offset, tabulated once.
-struct KernelTable {
-    boundary: Boundary,
-    xx: Array2<f64>,
-    xy: Array2<f64>,
-    yy: Array2<f64>,
-}
-
-impl KernelTable {
-    /// Zero-padded: the element coefficients for offsets `0..=span` (the rest by symmetry:
-    /// `K_xx`, `K_yy` even, `K_xy` odd in each offset). Periodic: the exact periodic kernel on the
-    /// whole period, from the inverse FFT of the periodic spectra (the same operator as the FFT
-    /// path).
-    fn new(
-        boundary: Boundary,
-        shape: (usize, usize),
-        span: (usize, usize),
-        dx: f64,
-        dy: f64,
-        k: CerrutiConstants,
-    ) -> Self {
-        match boundary {
-            Boundary::ZeroPadded => {
-                let (a, b) = (0.5 * dx, 0.5 * dy);
-                let dims = (span.0 + 1, span.1 + 1);
-                let tab = |f: fn(f64, f64, f64, f64, CerrutiConstants) -> f64| {
-                    let mut t = Array2::<f64>::zeros(dims);
-                    t.indexed_iter_mut()
-                        .par_bridge()
-                        .for_each(|((i, j), v)| *v = f(i as f64 * dx, j as f64 * dy, a, b, k));
-                    t
-                };
-                Self {
-                    boundary,
-                    xx: tab(cerruti_uxx),
-                    xy: tab(cerruti_uxy),
-                    yy: tab(cerruti_uyy),
-                }
-            }
-            Boundary::Periodic => {
-                let plan = FftPlan::new(shape.0, shape.1, Boundary::Periodic);
-                let s = cerruti_spectra(&plan, dx, dy, k);
-                Self {
-                    boundary,
-                    xx: plan.inverse(s.xx.values),
-                    xy: plan.inverse(s.xy.values),
-                    yy: plan.inverse(s.yy.values),
-                }
-            }
-        }
-    }
-
-    fn get(&self, di: isize, dj: isize) -> (f64, f64, f64) {
-        match self.boundary {
-            Boundary::ZeroPadded => {
-                let (ai, aj) = (di.unsigned_abs(), dj.unsigned_abs());
-                let s = if (di < 0) != (dj < 0) && di != 0 && dj != 0 {
-                    -1.0
-                } else {
-                    1.0
-                };
-                (self.xx[[ai, aj]], s * self.xy[[ai, aj]], self.yy[[ai, aj]])
-            }
-            Boundary::Periodic => {
-                let (nx, ny) = self.xx.dim();
-                let i = di.rem_euclid(nx as isize) as usize;
-                let j = dj.rem_euclid(ny as isize) as usize;
-                (self.xx[[i, j]], self.xy[[i, j]], self.yy[[i, j]])
-            }
-        }
-    }
-}
-
-/// Estimated cost of one product with each operator, in units of one dense pair.
-///
-/// Calibrated on the 1024² reference patch (BENCHMARKS.md, same run): the packed single-precision
-/// dense product costs ≈ 1.5 ns per pair (`n²` pairs, memory bound), the FFT product (two
-/// forward and two inverse real transforms, six spectral products) ≈ 17 ns per `N log2 N`
-/// (`N` = FFT grid points), i.e. ≈ 11 dense pairs.
-fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
-    let dense = (n as f64).powi(2);
-    let nf = plan_points as f64;
-    let fft = 11.0 * nf * nf.log2().max(1.0);
-    (dense, fft)
-}
-
 /// Partial-slip solver on one fixed pressure field, holding the contact history.
 pub struct TangentialSolver {
     nx: usize,
@@ -420,6 +215,8 @@ pub struct TangentialSolver {
     compliance: Compliance,
     /// Step size α = 1/L (Pa/m).
     alpha: f64,
+    /// Largest traction bound max μ p_i (Pa), the scale of the natural residual.
+    max_limit: f64,
     options: TangentialOptions,
     metadata: TangentialMetadata,
     // History.
@@ -502,11 +299,10 @@ impl TangentialSolver {
             Boundary::Periodic => nx * ny,
             Boundary::ZeroPadded => 4 * nx * ny,
         };
-        let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
-        let dense_bytes = 6usize.saturating_mul(n).saturating_mul(n + 1);
         let operator = match options.operator {
             Operator::Auto => {
-                if dense_bytes <= DENSE_MEMORY_LIMIT_BYTES && dense_cost <= fft_cost {
+                let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
+                if dense_cost <= fft_cost {
                     Operator::Dense
                 } else {
                     Operator::Fft
@@ -514,71 +310,10 @@ impl TangentialSolver {
             }
             o => o,
         };
-        let compliance = match operator {
-            Operator::Dense => {
-                let (imin, imax) = points
-                    .iter()
-                    .fold((usize::MAX, 0), |(a, b), p| (a.min(p.0), b.max(p.0)));
-                let (jmin, jmax) = points
-                    .iter()
-                    .fold((usize::MAX, 0), |(a, b), p| (a.min(p.1), b.max(p.1)));
-                let table = KernelTable::new(
-                    problem.boundary,
-                    (nx, ny),
-                    (imax - imin, jmax - jmin),
-                    dx,
-                    dy,
-                    k,
-                );
-                let total = DenseCompliance::row_offset(n, n);
-                let mut kmat = vec![[0.0f32; 3]; total];
-                let mut rows: Vec<&mut [[f32; 3]]> = Vec::with_capacity(n);
-                let mut rest = kmat.as_mut_slice();
-                for r in 0..n {
-                    let (row, tail) = rest.split_at_mut(n - r);
-                    rows.push(row);
-                    rest = tail;
-                }
-                rows.into_par_iter().enumerate().for_each(|(r, row)| {
-                    let (i, j) = points[r];
-                    for (c, &(i2, j2)) in points[r..].iter().enumerate() {
-                        let (a, b, d) =
-                            table.get(i as isize - i2 as isize, j as isize - j2 as isize);
-                        row[c] = [a as f32, b as f32, d as f32];
-                    }
-                });
-                // Row chunks of about equal work, a fixed number of them (partial sums are
-                // added in chunk order, so the product does not depend on the thread count).
-                let parts = DENSE_ROW_CHUNKS.clamp(1, n);
-                let mut chunks = Vec::with_capacity(parts);
-                let mut start = 0;
-                for p in 1..=parts {
-                    let target = total * p / parts;
-                    let mut end = start;
-                    while end < n && DenseCompliance::row_offset(n, end) < target {
-                        end += 1;
-                    }
-                    if p == parts {
-                        end = n;
-                    }
-                    if end > start {
-                        chunks.push(start..end);
-                        start = end;
-                    }
-                }
-                Compliance::Dense(Box::new(DenseCompliance { n, k: kmat, chunks }))
-            }
-            _ => {
-                let plan = FftPlan::new(nx, ny, problem.boundary);
-                let spectra = cerruti_spectra(&plan, dx, dy, k);
-                Compliance::Fft(Box::new(FftCompliance {
-                    plan,
-                    spectra,
-                    points: points.clone(),
-                }))
-            }
-        };
+        let compliance =
+            Compliance::new(operator, problem.boundary, (nx, ny), &points, (dx, dy), k);
         let l = largest_eigenvalue(&compliance, n);
+        let max_limit = limit.iter().cloned().fold(0.0, f64::max);
         let element_area = dx * dy;
         let normal_force = element_area * problem.pressure.sum();
         let metadata = TangentialMetadata {
@@ -601,6 +336,7 @@ impl TangentialSolver {
             limit,
             compliance,
             alpha: 1.0 / (1.1 * l),
+            max_limit,
             options,
             metadata,
             q: vec![[0.0; 2]; n],
@@ -673,7 +409,6 @@ impl TangentialSolver {
         }
         let n = self.points.len();
         let alpha = self.alpha;
-        let rmax = self.limit.iter().cloned().fold(0.0, f64::max);
         // b = δ − g_prev (displacement control) or −g_prev (load control, δ unknown).
         let (b, force_sum) = match control {
             Control::Displacement(d) => (
@@ -701,80 +436,15 @@ impl TangentialSolver {
                 )
             }
         };
-        let mut q = self.warm_start(control);
-        let mut y = q.clone();
-        let mut q_new = vec![[0.0; 2]; n];
+        let q0 = self.warm_start(control);
+        let solved = match force_sum {
+            None => self.solve_fista(&b, None, q0, 0)?,
+            Some(sum) => self.solve_fista(&b, Some(sum), q0, 0)?,
+        };
+        let (q_new, lambda, iterations, residual) =
+            (solved.q, solved.lambda, solved.iterations, solved.residual);
+        let converged = true;
         let mut u = vec![[0.0; 2]; n];
-        let mut z = vec![[0.0; 2]; n];
-        let mut lambda = self.lambda;
-        let mut t = 1.0f64;
-        let mut residual = f64::INFINITY;
-        let mut iterations = 0;
-        let mut converged = false;
-        while iterations < self.options.max_iterations {
-            iterations += 1;
-            self.compliance.apply(&y, &mut u);
-            for k in 0..n {
-                // z = y − α ∇f(y) = y + α Δg.
-                z[k] = [
-                    y[k][0] - alpha * (u[k][0] - b[k][0]),
-                    y[k][1] - alpha * (u[k][1] - b[k][1]),
-                ];
-            }
-            match force_sum {
-                None => {
-                    for k in 0..n {
-                        q_new[k] = project_disk(z[k], self.limit[k]);
-                    }
-                }
-                Some(s) => {
-                    lambda = project_disks_with_sum(&z, &self.limit, s, lambda, &mut q_new);
-                }
-            }
-            residual = y
-                .iter()
-                .zip(&q_new)
-                .map(|(a, c)| (a[0] - c[0]).hypot(a[1] - c[1]))
-                .fold(0.0, f64::max)
-                / rmax;
-            if residual <= self.options.tolerance {
-                converged = true;
-                break;
-            }
-            // Gradient restart: momentum pointing against the descent direction.
-            let restart: f64 = (0..n)
-                .map(|k| {
-                    (y[k][0] - q_new[k][0]) * (q_new[k][0] - q[k][0])
-                        + (y[k][1] - q_new[k][1]) * (q_new[k][1] - q[k][1])
-                })
-                .sum();
-            let t_next = if restart > 0.0 {
-                1.0
-            } else {
-                0.5 * (1.0 + (1.0 + 4.0 * t * t).sqrt())
-            };
-            let beta = if restart > 0.0 {
-                0.0
-            } else {
-                (t - 1.0) / t_next
-            };
-            for k in 0..n {
-                y[k] = [
-                    q_new[k][0] + beta * (q_new[k][0] - q[k][0]),
-                    q_new[k][1] + beta * (q_new[k][1] - q[k][1]),
-                ];
-            }
-            std::mem::swap(&mut q, &mut q_new);
-            t = t_next;
-        }
-        if !converged {
-            return Err(Error::NonConvergence {
-                solver: "tangential partial-slip (FISTA)".into(),
-                iterations,
-                residual,
-                tolerance: self.options.tolerance,
-            });
-        }
         // Accept q_new; rigid shift, slip and work of the step.
         let shift = match control {
             Control::Displacement(d) => d,
@@ -814,6 +484,95 @@ impl TangentialSolver {
             residual,
             converged,
             wall_time_s: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// FISTA with gradient restart from `q0` on `min ½ qᵀCq − qᵀb` over the disks (and, in load
+    /// control, `Σ q = sum`), `used` products already spent on this step.
+    fn solve_fista(
+        &self,
+        b: &[[f64; 2]],
+        force_sum: Option<[f64; 2]>,
+        q0: Vec<[f64; 2]>,
+        used: usize,
+    ) -> Result<Solved> {
+        let n = self.points.len();
+        let alpha = self.alpha;
+        let rmax = self.max_limit;
+        let mut q = q0;
+        let mut y = q.clone();
+        let mut q_new = vec![[0.0; 2]; n];
+        let mut u = vec![[0.0; 2]; n];
+        let mut z = vec![[0.0; 2]; n];
+        let mut lambda = self.lambda;
+        let mut t = 1.0f64;
+        let mut residual = f64::INFINITY;
+        let mut iterations = used;
+        while iterations < self.options.max_iterations {
+            iterations += 1;
+            self.compliance.apply(&y, &mut u);
+            for k in 0..n {
+                // z = y − α ∇f(y) = y + α Δg.
+                z[k] = [
+                    y[k][0] - alpha * (u[k][0] - b[k][0]),
+                    y[k][1] - alpha * (u[k][1] - b[k][1]),
+                ];
+            }
+            match force_sum {
+                None => {
+                    for k in 0..n {
+                        q_new[k] = project_disk(z[k], self.limit[k]);
+                    }
+                }
+                Some(s) => {
+                    lambda = project_disks_with_sum(&z, &self.limit, s, lambda, &mut q_new);
+                }
+            }
+            residual = y
+                .iter()
+                .zip(&q_new)
+                .map(|(a, c)| (a[0] - c[0]).hypot(a[1] - c[1]))
+                .fold(0.0, f64::max)
+                / rmax;
+            if residual <= self.options.tolerance {
+                return Ok(Solved {
+                    q: q_new,
+                    lambda,
+                    iterations,
+                    residual,
+                });
+            }
+            // Gradient restart: momentum pointing against the descent direction.
+            let restart: f64 = (0..n)
+                .map(|k| {
+                    (y[k][0] - q_new[k][0]) * (q_new[k][0] - q[k][0])
+                        + (y[k][1] - q_new[k][1]) * (q_new[k][1] - q[k][1])
+                })
+                .sum();
+            let t_next = if restart > 0.0 {
+                1.0
+            } else {
+                0.5 * (1.0 + (1.0 + 4.0 * t * t).sqrt())
+            };
+            let beta = if restart > 0.0 {
+                0.0
+            } else {
+                (t - 1.0) / t_next
+            };
+            for k in 0..n {
+                y[k] = [
+                    q_new[k][0] + beta * (q_new[k][0] - q[k][0]),
+                    q_new[k][1] + beta * (q_new[k][1] - q[k][1]),
+                ];
+            }
+            std::mem::swap(&mut q, &mut q_new);
+            t = t_next;
+        }
+        Err(Error::NonConvergence {
+            solver: "tangential partial-slip (FISTA)".into(),
+            iterations,
+            residual,
+            tolerance: self.options.tolerance,
         })
     }
 
@@ -877,6 +636,16 @@ impl TangentialSolver {
     pub fn contact_points(&self) -> &[(usize, usize)] {
         &self.points
     }
+}
+
+/// The solution of one step's quadratic program.
+struct Solved {
+    q: Vec<[f64; 2]>,
+    /// Load control: the multiplier of `Σ q = T/ΔA` (zero in displacement control).
+    lambda: [f64; 2],
+    /// Compliance products spent.
+    iterations: usize,
+    residual: f64,
 }
 
 /// Projection of `z` onto the disk of radius `r`.
@@ -956,43 +725,6 @@ fn project_disks_with_sum(
     // Leave `out` consistent with the returned λ.
     eval(lam, out);
     lam
-}
-
-/// Largest eigenvalue of the (symmetric positive definite) restricted compliance by power
-/// iteration (m/Pa). The start vector mixes both components so that no mode is missed by
-/// symmetry.
-fn largest_eigenvalue(c: &Compliance, n: usize) -> f64 {
-    let mut v: Vec<[f64; 2]> = (0..n)
-        .map(|k| {
-            let s = ((k as f64 + 1.0) * 0.618_033_988_75).fract();
-            [1.0 + s, 0.5 - s]
-        })
-        .collect();
-    let norm = |v: &[[f64; 2]]| {
-        v.iter()
-            .map(|a| a[0] * a[0] + a[1] * a[1])
-            .sum::<f64>()
-            .sqrt()
-    };
-    let mut u = vec![[0.0; 2]; n];
-    let mut est = 0.0;
-    for _ in 0..60 {
-        let nv = norm(&v);
-        v.iter_mut().for_each(|a| *a = [a[0] / nv, a[1] / nv]);
-        c.apply(&v, &mut u);
-        let rq: f64 = v
-            .iter()
-            .zip(&u)
-            .map(|(a, b)| a[0] * b[0] + a[1] * b[1])
-            .sum();
-        let converged = (rq - est).abs() <= 1e-4 * rq;
-        est = rq;
-        std::mem::swap(&mut v, &mut u);
-        if converged {
-            break;
-        }
-    }
-    est
 }
 
 /// A sinusoidal history: `control(t) = amplitude · sin(2π k / steps_per_cycle)`, `k = 1 ..=
@@ -1191,7 +923,7 @@ mod tests {
                 .map(|u| u[0].abs().max(u[1].abs()))
                 .fold(0.0, f64::max);
             for (a, b) in ud.iter().zip(&uf) {
-                // The dense matrix is stored in single precision.
+                // The dense path's kernel table is stored in single precision.
                 assert!(
                     (a[0] - b[0]).abs() < 1e-6 * scale,
                     "{boundary:?} {a:?} {b:?}"
