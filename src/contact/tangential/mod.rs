@@ -115,8 +115,8 @@ pub struct TangentialProblem<'a> {
 pub struct TangentialOptions {
     /// Tolerance on the relative natural residual (see the module documentation). The default
     /// 1e-6 (a traction error of 1e-6 μ p_max) gives the energy per cycle of the 1024² reference
-    /// cycle at 10 MPa to 2e-10 relative of the 1e-8 result (BENCHMARKS.md, "Tangential
-    /// contact") for 26 % fewer iterations.
+    /// cycle at 10 MPa within 7e-9 of the 1e-8 result (BENCHMARKS.md, "Tangential contact")
+    /// for 32 % fewer iterations.
     pub tolerance: f64,
     /// Iteration cap of one step; exceeding it is [`Error::NonConvergence`].
     pub max_iterations: usize,
