@@ -1209,6 +1209,38 @@ mod tests {
         }
     }
 
+    /// The compliance product sums every target in a fixed order and the step solver is
+    /// sequential apart from it: a history is bit-identical in pools of 1 and 2 threads.
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let p = blob(16, 11);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut s = solver(&p, Boundary::Periodic, Operator::Dense, 0.5).unwrap();
+                let d = s.gross_slip_displacement([1.0, 0.3]).unwrap();
+                let r = oscillate(
+                    &mut s,
+                    &Oscillation {
+                        amplitude: Control::Displacement([0.8 * d, 0.24 * d]),
+                        cycles: 1,
+                        steps_per_cycle: 8,
+                    },
+                    |_, _| {},
+                )
+                .unwrap();
+                r.steps
+                    .iter()
+                    .flat_map(|s| [s.force_n[0].to_bits(), s.force_n[1].to_bits()])
+                    .collect::<Vec<u64>>()
+            })
+        };
+        assert_eq!(run(1), run(2));
+    }
+
     #[test]
     fn load_control_returns_the_imposed_force_and_inverts_displacement_control() {
         let p = blob(16, 11);
