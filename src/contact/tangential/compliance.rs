@@ -39,8 +39,8 @@ pub(super) enum Compliance {
 }
 
 impl Compliance {
-    /// Build the operator `operator` (`Dense` or `Fft`; `Auto` is resolved by the caller with
-    /// [`estimated_costs`]) on the contact `points` of a grid of `shape`.
+    /// Build the compliance operator on the contact `points` of a grid of `shape`: `Dense` or
+    /// `Fft` as asked, `Auto` the one with the lower [`estimated_costs`].
     pub(super) fn new(
         operator: Operator,
         boundary: Boundary,
@@ -50,19 +50,38 @@ impl Compliance {
         k: CerrutiConstants,
     ) -> Self {
         let (dx, dy) = spacing;
-        match operator {
-            Operator::Fft => {
-                let plan = FftPlan::new(shape.0, shape.1, boundary);
-                let spectra = cerruti_spectra(&plan, dx, dy, k);
-                Compliance::Fft(Box::new(FftCompliance {
-                    plan,
-                    spectra,
-                    points: points.to_vec(),
-                }))
+        let fft = match operator {
+            Operator::Dense => false,
+            Operator::Fft => true,
+            Operator::Auto => {
+                let plan_points = match boundary {
+                    Boundary::Periodic => shape.0 * shape.1,
+                    Boundary::ZeroPadded => 4 * shape.0 * shape.1,
+                };
+                let (dense, fft) = estimated_costs(points.len(), plan_points);
+                fft < dense
             }
-            _ => Compliance::Dense(Box::new(DirectCompliance::new(
+        };
+        if fft {
+            let plan = FftPlan::new(shape.0, shape.1, boundary);
+            let spectra = cerruti_spectra(&plan, dx, dy, k);
+            Compliance::Fft(Box::new(FftCompliance {
+                plan,
+                spectra,
+                points: points.to_vec(),
+            }))
+        } else {
+            Compliance::Dense(Box::new(DirectCompliance::new(
                 boundary, shape, points, dx, dy, k,
-            ))),
+            )))
+        }
+    }
+
+    /// The operator built (`Dense` or `Fft`).
+    pub(super) fn operator(&self) -> Operator {
+        match self {
+            Compliance::Dense(_) => Operator::Dense,
+            Compliance::Fft(_) => Operator::Fft,
         }
     }
 
@@ -108,9 +127,6 @@ fn runs_of(points: &[(usize, usize)]) -> Vec<Run> {
 /// stay in registers.
 const MAX_RUN: usize = 4 * LANES;
 
-/// Side (grid points) of the square tiles by which the runs are ordered for cache locality.
-const LOCALITY_TILE: usize = 64;
-
 /// Targets computed together in the direct summation (one SIMD register of `f64` with AVX2).
 const LANES: usize = 4;
 
@@ -129,10 +145,8 @@ const LANES: usize = 4;
 /// the end of a target run, is one contiguous segment of a row. For fixed `s`, `LANES`
 /// consecutive targets read `LANES` consecutive entries: one vector load per component.
 pub(super) struct DirectCompliance {
-    /// Runs in tile-major order.
+    /// Runs in point order.
     runs: Vec<Run>,
-    /// Indices into `runs` in point order.
-    in_point_order: Vec<usize>,
     boundary: Boundary,
     shape: (usize, usize),
     /// Zero-padded: `(span_i, span_j)` of the contact set.
@@ -153,10 +167,7 @@ impl DirectCompliance {
         dy: f64,
         k: CerrutiConstants,
     ) -> Self {
-        let mut runs = runs_of(points);
-        // Tile-major order: consecutive blocks read neighbouring table rows, which then stay
-        // in cache (the table of a 1024² grid is 26 MB; a pair of tiles uses ~150 KB of it).
-        runs.sort_by_key(|r| (r.i / LOCALITY_TILE, r.j0 / LOCALITY_TILE, r.i, r.j0));
+        let runs = runs_of(points);
         let (imin, imax) = points
             .iter()
             .fold((usize::MAX, 0), |(a, b), p| (a.min(p.0), b.max(p.0)));
@@ -193,11 +204,8 @@ impl DirectCompliance {
                     }
                 }
             });
-        let mut in_point_order: Vec<usize> = (0..runs.len()).collect();
-        in_point_order.sort_by_key(|&r| runs[r].start);
         Self {
             runs,
-            in_point_order,
             boundary,
             shape,
             span,
@@ -229,18 +237,17 @@ impl DirectCompliance {
         let qy: Vec<f64> = q.iter().map(|v| v[1]).collect();
         // One output slice per target run, filled in parallel; every sum runs over the source
         // runs in order, so the result does not depend on the thread count.
-        let mut outputs: Vec<Option<&mut [[f64; 2]]>> = Vec::with_capacity(self.runs.len());
-        outputs.resize_with(self.runs.len(), || None);
+        let mut outputs: Vec<&mut [[f64; 2]]> = Vec::with_capacity(self.runs.len());
         let mut rest = u;
-        for &r in &self.in_point_order {
-            let (head, tail) = rest.split_at_mut(self.runs[r].len);
-            outputs[r] = Some(head);
+        for r in &self.runs {
+            let (head, tail) = rest.split_at_mut(r.len);
+            outputs.push(head);
             rest = tail;
         }
         outputs
             .into_par_iter()
             .zip(self.runs.par_iter())
-            .for_each(|(out, t)| self.target_run(t, &qx, &qy, out.expect("every run has a slice")));
+            .for_each(|(out, t)| self.target_run(t, &qx, &qy, out));
     }
 
     /// `u` on the points of target run `t`: the sum over every source run of its Toeplitz block,
@@ -252,6 +259,11 @@ impl DirectCompliance {
             // SAFETY: the CPU supports AVX2 and FMA (checked just above).
             return unsafe { self.target_run_avx2(t, qx, qy, out) };
         }
+        self.target_run_portable(t, qx, qy, out)
+    }
+
+    /// [`Self::target_run`] without SIMD intrinsics.
+    fn target_run_portable(&self, t: &Run, qx: &[f64], qy: &[f64], out: &mut [[f64; 2]]) {
         let (ax, ay) = match t.len.div_ceil(LANES) {
             1 => self.sums_portable::<1>(t, qx, qy),
             2 => self.sums_portable::<2>(t, qx, qy),
@@ -263,14 +275,17 @@ impl DirectCompliance {
         }
     }
 
-    /// Bounds of the table segment read for target run `t` and source run `s`: the entries
-    /// `origin + c·LANES + l − w` for chunks `c < nc`, lanes `l` and sources `w < S.len`.
-    fn block_segment(&self, t: &Run, s: &Run, nc: usize) -> (usize, usize) {
+    /// [`Self::block_origin`], checked: the block reads the table entries
+    /// `origin + c·LANES + l − w` for chunks `c < nc`, lanes `l` and sources `w < S.len`, i.e.
+    /// `origin + 1 − S.len .. origin + nc·LANES`; the lower end is non-negative by the margin,
+    /// the upper end is asserted here.
+    fn checked_origin(&self, t: &Run, s: &Run, nc: usize) -> usize {
         let origin = self.block_origin(t, s);
-        let lo = origin + 1 - s.len;
-        let hi = origin + nc * LANES;
-        assert!(hi <= self.xx.len(), "table segment out of range");
-        (origin, lo)
+        assert!(
+            origin + nc * LANES <= self.xx.len(),
+            "table segment out of range"
+        );
+        origin
     }
 
     /// Portable summation; the same fused multiply-adds in the same order as the AVX2 build
@@ -285,7 +300,7 @@ impl DirectCompliance {
         let mut ax = [0.0; MAX_RUN];
         let mut ay = [0.0; MAX_RUN];
         for s in &self.runs {
-            let (origin, _) = self.block_segment(t, s, NC);
+            let origin = self.checked_origin(t, s, NC);
             for w in 0..s.len {
                 let (x, y) = (qx[s.start + w], qy[s.start + w]);
                 let base = origin - w;
@@ -341,15 +356,15 @@ impl DirectCompliance {
         let (pxx, pxy, pyy) = (self.xx.as_ptr(), self.xy.as_ptr(), self.yy.as_ptr());
         for (r, s) in self.runs.iter().enumerate() {
             // Checks lo ≥ 0 (by construction of the margin) and the end of the segment.
-            let (origin, _) = self.block_segment(t, s, NC);
+            let origin = self.checked_origin(t, s, NC);
             // Prefetch the segment of the block four ahead (its table row is elsewhere): the
             // blocks are short, and the product waits on the table's cache misses otherwise.
             if let Some(s2) = self.runs.get(r + 4) {
-                let (o2, lo2) = self.block_segment(t, s2, NC);
-                let hi2 = o2 + NC * LANES;
+                let o2 = self.checked_origin(t, s2, NC);
+                let (lo2, hi2) = (o2 + 1 - s2.len, o2 + NC * LANES);
                 let mut k = lo2;
                 while k < hi2 {
-                    // SAFETY: lo2..hi2 lies inside the table (block_segment).
+                    // SAFETY: lo2..hi2 lies inside the table (checked_origin).
                     unsafe {
                         _mm_prefetch::<_MM_HINT_T0>(pxx.add(k) as *const i8);
                         _mm_prefetch::<_MM_HINT_T0>(pxy.add(k) as *const i8);
@@ -369,7 +384,7 @@ impl DirectCompliance {
                 let base = origin - w;
                 for c in 0..NC {
                     // SAFETY: base + c·LANES + LANES ≤ origin + NC·LANES ≤ table length
-                    // (block_segment); unaligned loads of 4 f32.
+                    // (checked_origin); unaligned loads of 4 f32.
                     let (kxx, kxy, kyy) = unsafe {
                         let o = base + c * LANES;
                         (
@@ -524,7 +539,7 @@ impl KernelTable {
 /// direct summation ≈ 0.35 ns per pair of contact points (`n²` pairs: 5–6 ms at n = 4029),
 /// the FFT product (two forward and two inverse real transforms, six spectral products)
 /// ≈ 3.5 ns per `N log2 N` (`N` = FFT grid points: 72 ms at 1024² periodic).
-pub(super) fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
+fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
     const DENSE_NS_PER_PAIR: f64 = 0.35;
     const FFT_NS_PER_POINT_LOG: f64 = 3.5;
     let dense = DENSE_NS_PER_PAIR * (n as f64).powi(2);
@@ -616,15 +631,11 @@ mod tests {
             let mut simd = vec![[0.0; 2]; t.len];
             // SAFETY: AVX2 and FMA checked above.
             unsafe { c.target_run_avx2(t, &qx, &qy, &mut simd) };
-            let (ax, ay) = match t.len.div_ceil(LANES) {
-                1 => c.sums_portable::<1>(t, &qx, &qy),
-                2 => c.sums_portable::<2>(t, &qx, &qy),
-                3 => c.sums_portable::<3>(t, &qx, &qy),
-                _ => c.sums_portable::<4>(t, &qx, &qy),
-            };
-            for (k, v) in simd.iter().enumerate() {
-                assert_eq!(v[0].to_bits(), ax[k].to_bits(), "run {t:?} point {k}");
-                assert_eq!(v[1].to_bits(), ay[k].to_bits(), "run {t:?} point {k}");
+            let mut portable = vec![[0.0; 2]; t.len];
+            c.target_run_portable(t, &qx, &qy, &mut portable);
+            for (k, (v, w)) in simd.iter().zip(&portable).enumerate() {
+                assert_eq!(v[0].to_bits(), w[0].to_bits(), "run {t:?} point {k}");
+                assert_eq!(v[1].to_bits(), w[1].to_bits(), "run {t:?} point {k}");
             }
         }
     }

@@ -66,7 +66,7 @@ use crate::error::{require_positive, Error, Result};
 use crate::halfspace::convolution::Boundary;
 use crate::halfspace::influence::CerrutiConstants;
 use crate::surface::combine::Material;
-use compliance::{estimated_costs, largest_eigenvalue, Compliance};
+use compliance::{largest_eigenvalue, Compliance};
 use nalgebra::{DMatrix, DVector};
 use ndarray::Array2;
 use std::collections::VecDeque;
@@ -299,23 +299,15 @@ impl TangentialSolver {
             .map(|&(i, j)| mu * problem.pressure[[i, j]])
             .collect();
         let k = CerrutiConstants::of_materials(body1, body2);
-        let plan_points = match problem.boundary {
-            Boundary::Periodic => nx * ny,
-            Boundary::ZeroPadded => 4 * nx * ny,
-        };
-        let operator = match options.operator {
-            Operator::Auto => {
-                let (dense_cost, fft_cost) = estimated_costs(n, plan_points);
-                if dense_cost <= fft_cost {
-                    Operator::Dense
-                } else {
-                    Operator::Fft
-                }
-            }
-            o => o,
-        };
-        let compliance =
-            Compliance::new(operator, problem.boundary, (nx, ny), &points, (dx, dy), k);
+        let compliance = Compliance::new(
+            options.operator,
+            problem.boundary,
+            (nx, ny),
+            &points,
+            (dx, dy),
+            k,
+        );
+        let operator = compliance.operator();
         let l = largest_eigenvalue(&compliance, n);
         let max_limit = limit.iter().cloned().fold(0.0, f64::max);
         let element_area = dx * dy;
