@@ -17,3 +17,4 @@ pub mod continuation;
 pub mod hbm;
 pub mod model;
 pub mod nonlinear;
+pub mod time_integration;
