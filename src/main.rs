@@ -29,6 +29,8 @@ enum Command {
     Elements(cli::elements::ElementsArgs),
     /// Compare a model with a measured hysteresis record; find and add the missing effect.
     Diagnose(cli::diagnose::DiagnoseArgs),
+    /// Nonlinear forced response (harmonic balance, AFT, continuation) driven by element tables.
+    Response(cli::response::ResponseArgs),
 }
 
 fn main() {
@@ -40,6 +42,7 @@ fn main() {
         Command::Film(a) => cli::film::run(a),
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Response(a) => cli::response::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");

@@ -13,8 +13,11 @@
 
 pub mod aft;
 pub mod condensation;
+pub mod contact;
 pub mod continuation;
 pub mod hbm;
 pub mod model;
 pub mod nonlinear;
 pub mod time_integration;
+pub mod model_file;
+pub mod report;
