@@ -69,7 +69,12 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             bar.abandon();
             e
         })?;
-        results.push(report::summarise(&system, level, branch, &model.responses[0].1));
+        results.push(report::summarise(
+            &system,
+            level,
+            branch,
+            &model.responses[0].1,
+        ));
     }
     bar.finish_and_clear();
     // Everything computed: write the files.
@@ -90,7 +95,8 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         report::write_elements_csv(&el, &system, r)?;
         let p = &r.branch.points[r.peak];
         let x = system.coordinates(p);
-        let (amp, _) = report::harmonic_of(&system, &x, &model.responses[0].1, f.excitation.harmonic);
+        let (amp, _) =
+            report::harmonic_of(&system, &x, &model.responses[0].1, f.excitation.harmonic);
         let fpk = p.omega / (2.0 * std::f64::consts::PI);
         println!(
             "level {} N: {} points, peak {:.6e} m at {:.4} Hz ({}), energy/cycle at peak {:.4e} J, slip {:.3}, separation {:.3}; {} steps rejected, {} turning points, {:.2} s",
@@ -127,7 +133,13 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     for (label, row) in &model.responses {
         let safe: String = label
             .chars()
-            .map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' })
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
             .collect();
         let png = args.out_dir.join(format!("frf_{safe}.png"));
         report::plot_frf_family(&png, &system, label, row, &results)?;

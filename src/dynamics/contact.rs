@@ -64,20 +64,28 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
     for rec in rdr.records() {
         let (rec, line) = crate::input::csv_record(path, rec)?;
         let field = |i: usize, name: &str| -> Result<f64> {
-            let s = rec.get(i).ok_or_else(|| {
-                Error::parse(path, line, format!("missing value of `{name}`"))
-            })?;
+            let s = rec
+                .get(i)
+                .ok_or_else(|| Error::parse(path, line, format!("missing value of `{name}`")))?;
             let v: f64 = s.parse().map_err(|_| {
                 Error::parse(path, line, format!("`{name}` = `{s}` is not a number"))
             })?;
             if !v.is_finite() {
-                return Err(Error::parse(path, line, format!("`{name}` = {v} is not finite")));
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("`{name}` = {v} is not finite"),
+                ));
             }
             Ok(v)
         };
         let id_s = rec.get(ci[0]).unwrap_or("");
         let id: u64 = id_s.parse().map_err(|_| {
-            Error::parse(path, line, format!("`id` = `{id_s}` is not a non-negative integer"))
+            Error::parse(
+                path,
+                line,
+                format!("`id` = `{id_s}` is not a non-negative integer"),
+            )
         })?;
         if let Some(first) = seen.insert(id, line) {
             return Err(Error::parse(
@@ -133,21 +141,36 @@ pub fn read_pairs(path: &Path) -> Result<HashMap<u64, (String, String, usize)>> 
         .clone();
     let expect = ["element_id", "node_a", "node_b"];
     if headers.len() < 3 || headers.iter().take(3).ne(expect.iter().copied()) {
-        return Err(Error::parse(path, 0, "expected the header `element_id,node_a,node_b`"));
+        return Err(Error::parse(
+            path,
+            0,
+            "expected the header `element_id,node_a,node_b`",
+        ));
     }
     let mut out = HashMap::new();
     for rec in rdr.records() {
         let (rec, line) = crate::input::csv_record(path, rec)?;
         let id_s = rec.get(0).unwrap_or("");
         let id: u64 = id_s.parse().map_err(|_| {
-            Error::parse(path, line, format!("`element_id` = `{id_s}` is not an integer"))
+            Error::parse(
+                path,
+                line,
+                format!("`element_id` = `{id_s}` is not an integer"),
+            )
         })?;
         let (a, b) = (rec.get(1).unwrap_or(""), rec.get(2).unwrap_or(""));
         if a.is_empty() || b.is_empty() {
             return Err(Error::parse(path, line, "empty node name"));
         }
-        if out.insert(id, (a.to_string(), b.to_string(), line)).is_some() {
-            return Err(Error::parse(path, line, format!("element {id} is listed twice")));
+        if out
+            .insert(id, (a.to_string(), b.to_string(), line))
+            .is_some()
+        {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("element {id} is listed twice"),
+            ));
         }
     }
     Ok(out)
@@ -163,8 +186,13 @@ pub fn contact_frame(normal: [f64; 3], tangent: [f64; 3]) -> Result<[[f64; 3]; 3
     let dot: f64 = tangent.iter().zip(&n).map(|(a, b)| a * b).sum();
     let t: Vec<f64> = tangent.iter().zip(&n).map(|(a, b)| a - dot * b).collect();
     let tn = (t.iter().map(|v| v * v).sum::<f64>()).sqrt();
-    if !(tn.is_finite() && tn > 1e-9 * (tangent.iter().map(|v| v * v).sum::<f64>()).sqrt()) || tn == 0.0 {
-        return Err(Error::param("tangent", "must not be parallel to the normal"));
+    if !(tn.is_finite() && tn > 1e-9 * (tangent.iter().map(|v| v * v).sum::<f64>()).sqrt())
+        || tn == 0.0
+    {
+        return Err(Error::param(
+            "tangent",
+            "must not be parallel to the normal",
+        ));
     }
     let t1 = [t[0] / tn, t[1] / tn, t[2] / tn];
     let t2 = [

@@ -168,7 +168,11 @@ impl ModelFile {
         f.validate().map_err(|e| match e {
             Error::InvalidParameter { name, message } => {
                 let key = name.rsplit('.').next().unwrap_or(&name).to_string();
-                Error::parse(path, key_line(text, &key), format!("invalid `{name}`: {message}"))
+                Error::parse(
+                    path,
+                    key_line(text, &key),
+                    format!("invalid `{name}`: {message}"),
+                )
             }
             other => other,
         })?;
@@ -205,7 +209,10 @@ impl ModelFile {
         }
         let e = &self.excitation;
         if e.levels_n.is_empty() {
-            return Err(Error::param("excitation.levels_n", "give at least one level"));
+            return Err(Error::param(
+                "excitation.levels_n",
+                "give at least one level",
+            ));
         }
         if let Some(v) = e.levels_n.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(Error::param(
@@ -238,7 +245,10 @@ impl ModelFile {
             crate::error::require_positive(k, v)?;
         }
         if s.frequency_start_hz == s.frequency_end_hz {
-            return Err(Error::param("sweep.frequency_end_hz", "must differ from the start"));
+            return Err(Error::param(
+                "sweep.frequency_end_hz",
+                "must differ from the start",
+            ));
         }
         if s.harmonics == 0 {
             return Err(Error::param("sweep.harmonics", "must be ≥ 1"));
@@ -311,9 +321,9 @@ pub fn read_matrix(path: &Path, unit: &[&str]) -> Result<(Vec<String>, DMatrix<f
                 }
                 let mut row = Vec::with_capacity(cells.len());
                 for c in cells {
-                    let v: f64 = c.parse().map_err(|_| {
-                        Error::parse(path, line, format!("`{c}` is not a number"))
-                    })?;
+                    let v: f64 = c
+                        .parse()
+                        .map_err(|_| Error::parse(path, line, format!("`{c}` is not a number")))?;
                     if !v.is_finite() {
                         return Err(Error::parse(path, line, format!("{v} is not finite")));
                     }
@@ -346,13 +356,21 @@ pub fn read_matrix(path: &Path, unit: &[&str]) -> Result<(Vec<String>, DMatrix<f
         return Err(Error::parse(
             path,
             0,
-            format!("{} DOF labels but {} rows: the matrix must be square", n, rows.len()),
+            format!(
+                "{} DOF labels but {} rows: the matrix must be square",
+                n,
+                rows.len()
+            ),
         ));
     }
     let mut seen = HashMap::new();
     for l in &labels {
         if seen.insert(l.clone(), ()).is_some() {
-            return Err(Error::parse(path, 0, format!("DOF `{l}` appears twice in the header")));
+            return Err(Error::parse(
+                path,
+                0,
+                format!("DOF `{l}` appears twice in the header"),
+            ));
         }
     }
     Ok((labels, DMatrix::from_fn(n, n, |r, c| rows[r][c])))
@@ -363,9 +381,16 @@ type Shapes = HashMap<(String, usize), Vec<f64>>;
 
 fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
     let mut rdr = crate::input::csv_reader(path)?;
-    let h = rdr.headers().map_err(|e| crate::input::csv_error(path, e))?.clone();
+    let h = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
     if h.iter().ne(["mode", "frequency_Hz", "damping_ratio"]) {
-        return Err(Error::parse(path, 0, "expected the header `mode,frequency_Hz,damping_ratio`"));
+        return Err(Error::parse(
+            path,
+            0,
+            "expected the header `mode,frequency_Hz,damping_ratio`",
+        ));
     }
     let (mut f, mut z) = (Vec::new(), Vec::new());
     for rec in rdr.records() {
@@ -378,14 +403,26 @@ fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
         };
         let m = num(0, "mode")? as usize;
         if m != f.len() + 1 {
-            return Err(Error::parse(path, line, format!("modes must be numbered 1, 2, … in order; got {m}")));
+            return Err(Error::parse(
+                path,
+                line,
+                format!("modes must be numbered 1, 2, … in order; got {m}"),
+            ));
         }
         let (fr, zr) = (num(1, "frequency_Hz")?, num(2, "damping_ratio")?);
         if fr <= 0.0 {
-            return Err(Error::parse(path, line, format!("`frequency_Hz` must be > 0, got {fr}")));
+            return Err(Error::parse(
+                path,
+                line,
+                format!("`frequency_Hz` must be > 0, got {fr}"),
+            ));
         }
         if zr < 0.0 {
-            return Err(Error::parse(path, line, format!("negative damping: `damping_ratio` = {zr}")));
+            return Err(Error::parse(
+                path,
+                line,
+                format!("negative damping: `damping_ratio` = {zr}"),
+            ));
         }
         f.push(fr);
         z.push(zr);
@@ -398,11 +435,15 @@ fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
 
 fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
     let mut rdr = crate::input::csv_reader(path)?;
-    let h = rdr.headers().map_err(|e| crate::input::csv_error(path, e))?.clone();
+    let h = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
     let ok = h.len() == n_modes + 2
         && h.get(0) == Some("node")
         && h.get(1) == Some("direction")
-        && (0..n_modes).all(|r| h.get(r + 2) == Some(format!("mode_{}_per_sqrt_kg", r + 1).as_str()));
+        && (0..n_modes)
+            .all(|r| h.get(r + 2) == Some(format!("mode_{}_per_sqrt_kg", r + 1).as_str()));
     if !ok {
         return Err(Error::parse(
             path,
@@ -418,18 +459,36 @@ fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
             "x" => 0,
             "y" => 1,
             "z" => 2,
-            d => return Err(Error::parse(path, line, format!("direction `{d}`: expected x, y or z"))),
+            d => {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("direction `{d}`: expected x, y or z"),
+                ))
+            }
         };
         let mut v = Vec::with_capacity(n_modes);
         for r in 0..n_modes {
             let s = rec.get(r + 2).unwrap_or("");
-            let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| {
-                Error::parse(path, line, format!("mode {}: `{s}` is not a finite number", r + 1))
-            })?;
+            let x: f64 = s
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| {
+                    Error::parse(
+                        path,
+                        line,
+                        format!("mode {}: `{s}` is not a finite number", r + 1),
+                    )
+                })?;
             v.push(x);
         }
         if out.insert((node.clone(), axis), v).is_some() {
-            return Err(Error::parse(path, line, format!("node {node} direction {} repeated", ["x", "y", "z"][axis])));
+            return Err(Error::parse(
+                path,
+                line,
+                format!("node {node} direction {} repeated", ["x", "y", "z"][axis]),
+            ));
         }
     }
     Ok(out)
@@ -448,7 +507,12 @@ impl Kinematics {
         self.nodes.get(node)?[axis].clone()
     }
     /// `R·(x_a − x_b)` as a `3 × n` map; `Err(node)` if a node is unknown.
-    fn pair_map(&self, a: &str, b: &str, r: &[[f64; 3]; 3]) -> std::result::Result<DMatrix<f64>, String> {
+    fn pair_map(
+        &self,
+        a: &str,
+        b: &str,
+        r: &[[f64; 3]; 3],
+    ) -> std::result::Result<DMatrix<f64>, String> {
         let mut p = DMatrix::zeros(3, self.n);
         for (node, sign) in [(a, 1.0), (b, -1.0)] {
             if node == "ground" {
@@ -477,53 +541,61 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
     let resolve = |p: &Path| base.join(p);
     let mut inputs = vec![("model".to_string(), path.to_path_buf())];
     let l = &file.linear;
-    let (mut structure, kin) = if let (Some(m), Some(c), Some(k)) = (&l.mass, &l.damping, &l.stiffness) {
-        let (mp, cp, kp) = (resolve(m), resolve(c), resolve(k));
-        let (lm, mm) = read_matrix(&mp, &["kg"])?;
-        let (lc, cm) = read_matrix(&cp, &["N*s/m", "N·s/m", "Ns/m"])?;
-        let (lk, km) = read_matrix(&kp, &["N/m"])?;
-        for (p, lab) in [(&cp, &lc), (&kp, &lk)] {
-            if lab != &lm {
-                return Err(Error::parse(p, 0, format!("DOF labels differ from those of {}", mp.display())));
+    let (mut structure, kin) =
+        if let (Some(m), Some(c), Some(k)) = (&l.mass, &l.damping, &l.stiffness) {
+            let (mp, cp, kp) = (resolve(m), resolve(c), resolve(k));
+            let (lm, mm) = read_matrix(&mp, &["kg"])?;
+            let (lc, cm) = read_matrix(&cp, &["N*s/m", "N·s/m", "Ns/m"])?;
+            let (lk, km) = read_matrix(&kp, &["N/m"])?;
+            for (p, lab) in [(&cp, &lc), (&kp, &lk)] {
+                if lab != &lm {
+                    return Err(Error::parse(
+                        p,
+                        0,
+                        format!("DOF labels differ from those of {}", mp.display()),
+                    ));
+                }
             }
-        }
-        let n = lm.len();
-        let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
-        for (i, label) in lm.iter().enumerate() {
-            let (node, axis) = split_dof(label).expect("checked by read_matrix");
-            let mut row = vec![0.0; n];
-            row[i] = 1.0;
-            nodes.entry(node.to_string()).or_default()[axis] = Some(row);
-        }
-        let s = Structure::lumped(lm, mm, cm, km).map_err(|e| match e {
-            Error::InvalidParameter { name, message } => {
-                let p = match name.as_str() {
-                    "mass" => &mp,
-                    "damping" => &cp,
-                    _ => &kp,
-                };
-                Error::parse(p, 0, message)
+            let n = lm.len();
+            let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
+            for (i, label) in lm.iter().enumerate() {
+                let (node, axis) = split_dof(label).expect("checked by read_matrix");
+                let mut row = vec![0.0; n];
+                row[i] = 1.0;
+                nodes.entry(node.to_string()).or_default()[axis] = Some(row);
             }
-            o => o,
-        })?;
-        inputs.push(("mass".into(), mp));
-        inputs.push(("damping".into(), cp));
-        inputs.push(("stiffness".into(), kp));
-        (s, Kinematics { n, nodes })
-    } else {
-        let (mp, sp) = (resolve(l.modes.as_ref().expect("validated")), resolve(l.shapes.as_ref().expect("validated")));
-        let (f, z) = read_modes(&mp)?;
-        let shapes = read_shapes(&sp, f.len())?;
-        let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
-        for ((node, axis), v) in shapes {
-            nodes.entry(node).or_default()[axis] = Some(v);
-        }
-        let s = Structure::modal(&f, &z).map_err(|e| Error::parse(&mp, 0, e.to_string()))?;
-        inputs.push(("modes".into(), mp));
-        inputs.push(("shapes".into(), sp));
-        let n = f.len();
-        (s, Kinematics { n, nodes })
-    };
+            let s = Structure::lumped(lm, mm, cm, km).map_err(|e| match e {
+                Error::InvalidParameter { name, message } => {
+                    let p = match name.as_str() {
+                        "mass" => &mp,
+                        "damping" => &cp,
+                        _ => &kp,
+                    };
+                    Error::parse(p, 0, message)
+                }
+                o => o,
+            })?;
+            inputs.push(("mass".into(), mp));
+            inputs.push(("damping".into(), cp));
+            inputs.push(("stiffness".into(), kp));
+            (s, Kinematics { n, nodes })
+        } else {
+            let (mp, sp) = (
+                resolve(l.modes.as_ref().expect("validated")),
+                resolve(l.shapes.as_ref().expect("validated")),
+            );
+            let (f, z) = read_modes(&mp)?;
+            let shapes = read_shapes(&sp, f.len())?;
+            let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
+            for ((node, axis), v) in shapes {
+                nodes.entry(node).or_default()[axis] = Some(v);
+            }
+            let s = Structure::modal(&f, &z).map_err(|e| Error::parse(&mp, 0, e.to_string()))?;
+            inputs.push(("modes".into(), mp));
+            inputs.push(("shapes".into(), sp));
+            let n = f.len();
+            (s, Kinematics { n, nodes })
+        };
     let mut out_of_range = 0;
     for (ci, c) in file.contact.iter().enumerate() {
         let ep = resolve(&c.elements);
@@ -543,7 +615,11 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             let (a, b, where_) = match &pairs {
                 Some((pp, map)) => {
                     let (a, b, line) = map.get(&e.id).ok_or_else(|| {
-                        Error::parse(&ep, e.line, format!("element {} has no row in {}", e.id, pp.display()))
+                        Error::parse(
+                            &ep,
+                            e.line,
+                            format!("element {} has no row in {}", e.id, pp.display()),
+                        )
                     })?;
                     (a.clone(), b.clone(), Error::parse(pp, *line, ""))
                 }
@@ -554,23 +630,41 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
                 ),
             };
             let map = kin.pair_map(&a, &b, &frame).map_err(|node| {
-                let what = if structure.is_modal() { "has no mode shape" } else { "is not a node of the lumped model" };
+                let what = if structure.is_modal() {
+                    "has no mode shape"
+                } else {
+                    "is not a node of the lumped model"
+                };
                 match &where_ {
-                    Error::Parse { path, line, .. } => Error::parse(path, *line, format!("element {}: contact node `{node}` {what}", e.id)),
+                    Error::Parse { path, line, .. } => Error::parse(
+                        path,
+                        *line,
+                        format!("element {}: contact node `{node}` {what}", e.id),
+                    ),
                     _ => unreachable!(),
                 }
             })?;
-            let el = contact::element_for(c.law, e).map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
+            let el = contact::element_for(c.law, e)
+                .map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
             structure.attach(format!("{}", e.id), el, map)?;
         }
         inputs.push((format!("contact {} elements", ci + 1), ep));
     }
     let dof_err = |key: &str, label: &str| {
-        Error::parse(path, key_line(&text, key), format!("`{key}`: unknown DOF `{label}` (expected node.x|y|z of the model)"))
+        Error::parse(
+            path,
+            key_line(&text, key),
+            format!("`{key}`: unknown DOF `{label}` (expected node.x|y|z of the model)"),
+        )
     };
     let mut force = DVector::zeros(structure.n());
     for (i, d) in file.excitation.dofs.iter().enumerate() {
-        let w = file.excitation.weights.as_ref().map(|w| w[i]).unwrap_or(1.0);
+        let w = file
+            .excitation
+            .weights
+            .as_ref()
+            .map(|w| w[i])
+            .unwrap_or(1.0);
         force += DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?) * w;
     }
     let mut responses = Vec::new();

@@ -96,7 +96,12 @@ pub fn write_level_csv(
         for l in header.lines() {
             writeln!(w, "# {l}").map_err(io)?;
         }
-        writeln!(w, "# excitation level {} N (force amplitude of cos(ωt) on the excitation DOF)", result.level_n).map_err(io)?;
+        writeln!(
+            w,
+            "# excitation level {} N (force amplitude of cos(ωt) on the excitation DOF)",
+            result.level_n
+        )
+        .map_err(io)?;
         writeln!(w, "# units: frequency_Hz in Hz; amplitudes in m (h0: mean displacement); phase_rad = arg(a − i·b) of x = a·cos(kωt) + b·sin(kωt), relative to the force cos(ωt);").map_err(io)?;
         writeln!(w, "#   dissipated_energy_J: sum over elements of ∮f·du per cycle; stick/slip/separation: element-averaged fractions of the period").map_err(io)?;
         let mut cols = vec!["frequency_Hz".to_string()];
@@ -145,11 +150,7 @@ pub fn write_level_csv(
 }
 
 /// CSV of the elements at a level's peak.
-pub fn write_elements_csv(
-    path: &Path,
-    system: &HbmSystem<'_>,
-    result: &LevelResult,
-) -> Result<()> {
+pub fn write_elements_csv(path: &Path, system: &HbmSystem<'_>, result: &LevelResult) -> Result<()> {
     let peak = &result.branch.points[result.peak];
     crate::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
@@ -160,8 +161,16 @@ pub fn write_elements_csv(
             peak.omega / TWO_PI
         )
         .map_err(io)?;
-        writeln!(w, "# units: dissipated_energy_J in J per cycle; fractions of the period").map_err(io)?;
-        writeln!(w, "element,law,dissipated_energy_J,stick_fraction,slip_fraction,separation_fraction").map_err(io)?;
+        writeln!(
+            w,
+            "# units: dissipated_energy_J in J per cycle; fractions of the period"
+        )
+        .map_err(io)?;
+        writeln!(
+            w,
+            "element,law,dissipated_energy_J,stick_fraction,slip_fraction,separation_fraction"
+        )
+        .map_err(io)?;
         for (e, c) in system.structure.elements.iter().zip(&result.peak_elements) {
             writeln!(
                 w,
