@@ -267,6 +267,9 @@ pub fn read_kind(path: &Path) -> Result<String> {
     Ok(h.kind)
 }
 
+/// A shard file as read back.
+type StoredShard<S> = ShardFile<S, UnitRecord<<S as ShardedSweep>::Unit>>;
+
 /// The merged sweep: its configuration and every unit's result in unit order.
 #[derive(Debug, Clone)]
 pub struct Merged<S: ShardedSweep> {
@@ -282,8 +285,7 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
     if paths.is_empty() {
         return Err(Error::param("shards", "no shard file given"));
     }
-    let mut files: Vec<(PathBuf, ShardFile<S, UnitRecord<S::Unit>>)> =
-        Vec::with_capacity(paths.len());
+    let mut files: Vec<(PathBuf, StoredShard<S>)> = Vec::with_capacity(paths.len());
     for path in paths {
         let kind = read_kind(path)?;
         if kind != S::KIND {
@@ -293,7 +295,7 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
                 format!("a `{kind}` shard, expected `{}`", S::KIND),
             ));
         }
-        let file: ShardFile<S, UnitRecord<S::Unit>> = serde_json::from_str(&read_text(path)?)
+        let file: StoredShard<S> = serde_json::from_str(&read_text(path)?)
             .map_err(|e| Error::parse(path, e.line(), format!("malformed shard file: {e}")))?;
         let recomputed = config_sha256(&file.config)?;
         if recomputed != file.config_sha256 {
@@ -467,7 +469,7 @@ mod tests {
             f64::MIN_POSITIVE / 3.0, // subnormal after squaring → 0, before it is exact
             1e-300_f64.sqrt(),
             -2.718281828459045e-12,
-            123456789.123456789,
+            123456789.12345679,
             7.0,
         ];
         let sweep = Squares { values };
