@@ -114,7 +114,9 @@ impl CalibrationTable {
             "range",
             PyArray1::from_vec(
                 py,
-                vals.iter().map(|v| range_code(v.range)).collect::<Vec<i8>>(),
+                vals.iter()
+                    .map(|v| range_code(v.range))
+                    .collect::<Vec<i8>>(),
             ),
         )?;
         Ok(d)
@@ -137,9 +139,8 @@ impl CalibrationTable {
 /// numpy arrays.
 pub fn preload_columns<'py>(py: Python<'py>, rows: &[Preload]) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    let col = |f: fn(&Preload) -> f64| {
-        PyArray1::from_vec(py, rows.iter().map(f).collect::<Vec<f64>>())
-    };
+    let col =
+        |f: fn(&Preload) -> f64| PyArray1::from_vec(py, rows.iter().map(f).collect::<Vec<f64>>());
     d.set_item(
         "id",
         PyArray1::from_vec(py, rows.iter().map(|r| r.id).collect::<Vec<u64>>()),
@@ -212,10 +213,7 @@ fn element_columns<'py>(py: Python<'py>, rows: &[ElementRow]) -> PyResult<Bound<
     d.set_item("Et_N_per_m", col(|r| r.et_n_per_m))?;
     d.set_item(
         "out_of_range",
-        PyArray1::from_vec(
-            py,
-            rows.iter().map(|r| r.out_of_range).collect::<Vec<i8>>(),
-        ),
+        PyArray1::from_vec(py, rows.iter().map(|r| r.out_of_range).collect::<Vec<i8>>()),
     )?;
     Ok(d)
 }

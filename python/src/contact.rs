@@ -224,7 +224,9 @@ impl NormalSolver {
     ) -> PyResult<NormalSolution> {
         let warm = warm_start.as_ref().map(|w| &w.get().inner);
         let inner = &mut self.inner;
-        let sol = py.detach(|| inner.solve_load(mean_pressure_pa, warm)).py()?;
+        let sol = py
+            .detach(|| inner.solve_load(mean_pressure_pa, warm))
+            .py()?;
         Ok(self.wrap(sol))
     }
 
@@ -523,7 +525,10 @@ impl TangentialSolver {
             "iterations",
             PyArray1::from_vec(
                 py,
-                r.steps.iter().map(|s| s.iterations as u64).collect::<Vec<u64>>(),
+                r.steps
+                    .iter()
+                    .map(|s| s.iterations as u64)
+                    .collect::<Vec<u64>>(),
             ),
         )?;
         steps.set_item("residual", col(&|s| s.residual))?;

@@ -68,7 +68,11 @@ pub fn diagnose<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let record = Record::new(
         column(time_s, "time_s", "sample times (s)")?,
-        column(displacement_m, "displacement_m", "tangential displacement (m)")?,
+        column(
+            displacement_m,
+            "displacement_m",
+            "tangential displacement (m)",
+        )?,
         column(force_n, "force_n", "tangential force (N)")?,
         normal_force_n
             .map(|n| column(n, "normal_force_n", "normal force (N)"))
@@ -100,7 +104,9 @@ pub fn diagnose<'py>(
         max_effects,
         ..Options::default()
     };
-    let d = py.detach(|| asperity::diagnose::diagnose(&record, &options)).py()?;
+    let d = py
+        .detach(|| asperity::diagnose::diagnose(&record, &options))
+        .py()?;
     let mut columns = vec!["time_s".into(), "displacement_m".into(), "force_N".into()];
     if record.normal_force_n.is_some() {
         columns.push("normal_force_N".into());
@@ -117,7 +123,10 @@ pub fn diagnose<'py>(
     let p = &d.prepared.record;
     let series = PyDict::new(py);
     series.set_item("time_s", PyArray1::from_slice(py, &p.time_s))?;
-    series.set_item("displacement_m", PyArray1::from_slice(py, &p.displacement_m))?;
+    series.set_item(
+        "displacement_m",
+        PyArray1::from_slice(py, &p.displacement_m),
+    )?;
     series.set_item("force_N", PyArray1::from_slice(py, &p.force_n))?;
     series.set_item("baseline_force_N", PyArray1::from_vec(py, d.baseline_force))?;
     series.set_item("final_force_N", PyArray1::from_vec(py, d.final_force))?;

@@ -29,7 +29,10 @@ const CLASSES: [PixelClass; 5] = [
 ];
 
 fn class_code(c: PixelClass) -> u8 {
-    CLASSES.iter().position(|k| *k == c).expect("every class listed") as u8
+    CLASSES
+        .iter()
+        .position(|k| *k == c)
+        .expect("every class listed") as u8
 }
 
 /// A film image read into pressure: per-pixel class and pressure (Pa, NaN unless in range).
@@ -140,14 +143,24 @@ impl FilmMap {
             .detach(|| regions::detect_patches(map, min_diameter_m, rim_pixels))
             .py()?;
         Ok((
-            d.patches.into_iter().map(|inner| Region { inner }).collect(),
+            d.patches
+                .into_iter()
+                .map(|inner| Region { inner })
+                .collect(),
             d.discarded_small,
         ))
     }
 
     /// The pixels whose centres lie in the rectangle [x0_m, x1_m] × [y0_m, y1_m] (m).
     #[pyo3(signature = (x0_m, y0_m, x1_m, y1_m, id=1))]
-    fn roi_rectangle(&self, x0_m: f64, y0_m: f64, x1_m: f64, y1_m: f64, id: usize) -> PyResult<Region> {
+    fn roi_rectangle(
+        &self,
+        x0_m: f64,
+        y0_m: f64,
+        x1_m: f64,
+        y1_m: f64,
+        id: usize,
+    ) -> PyResult<Region> {
         let roi = Roi::Rectangle {
             x0: x0_m,
             y0: y0_m,
@@ -223,7 +236,11 @@ impl Region {
     }
 
     fn __repr__(&self) -> String {
-        format!("Region(id={}, {} pixels)", self.inner.id, self.inner.pixels.len())
+        format!(
+            "Region(id={}, {} pixels)",
+            self.inner.id,
+            self.inner.pixels.len()
+        )
     }
 }
 
@@ -274,7 +291,10 @@ impl PolyFit {
         }
         let xa = borrow_f64::<Ix1>(x_m, "x_m", "film x (m)")?;
         let ya = borrow_f64::<Ix1>(y_m, "y_m", "film y (m)")?;
-        let (xs, ys) = (xa.as_slice().expect("contiguous"), ya.as_slice().expect("contiguous"));
+        let (xs, ys) = (
+            xa.as_slice().expect("contiguous"),
+            ya.as_slice().expect("contiguous"),
+        );
         if xs.len() != ys.len() {
             return Err(asperity::Error::param(
                 "y_m",
@@ -282,7 +302,11 @@ impl PolyFit {
             ))
             .py();
         }
-        let v: Vec<f64> = xs.iter().zip(ys).map(|(&x, &y)| self.inner.eval(x, y)).collect();
+        let v: Vec<f64> = xs
+            .iter()
+            .zip(ys)
+            .map(|(&x, &y)| self.inner.eval(x, y))
+            .collect();
         Ok(PyArray1::from_vec(py, v).into_any().unbind())
     }
 
@@ -300,14 +324,25 @@ impl PolyFit {
 pub fn read_nodes(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
     let n = nodes::read_nodes_csv(&path).py()?;
     let d = PyDict::new(py);
-    d.set_item("id", PyArray1::from_vec(py, n.iter().map(|n| n.id).collect::<Vec<u64>>()))?;
-    d.set_item("x_m", PyArray1::from_vec(py, n.iter().map(|n| n.x_m).collect::<Vec<f64>>()))?;
-    d.set_item("y_m", PyArray1::from_vec(py, n.iter().map(|n| n.y_m).collect::<Vec<f64>>()))?;
+    d.set_item(
+        "id",
+        PyArray1::from_vec(py, n.iter().map(|n| n.id).collect::<Vec<u64>>()),
+    )?;
+    d.set_item(
+        "x_m",
+        PyArray1::from_vec(py, n.iter().map(|n| n.x_m).collect::<Vec<f64>>()),
+    )?;
+    d.set_item(
+        "y_m",
+        PyArray1::from_vec(py, n.iter().map(|n| n.y_m).collect::<Vec<f64>>()),
+    )?;
     d.set_item(
         "area_m2",
         PyArray1::from_vec(
             py,
-            n.iter().map(|n| n.area_m2.unwrap_or(f64::NAN)).collect::<Vec<f64>>(),
+            n.iter()
+                .map(|n| n.area_m2.unwrap_or(f64::NAN))
+                .collect::<Vec<f64>>(),
         ),
     )?;
     Ok(d)
@@ -317,7 +352,11 @@ fn nodes_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Node>> {
     let py = columns.py();
     let get = |name: &str| -> PyResult<Bound<'_, PyAny>> {
         columns.get_item(name)?.ok_or_else(|| {
-            crate::errors::parameter(py, "nodes", format!("missing column `{name}` (need id, x_m, y_m[, area_m2])"))
+            crate::errors::parameter(
+                py,
+                "nodes",
+                format!("missing column `{name}` (need id, x_m, y_m[, area_m2])"),
+            )
         })
     };
     let ids: Vec<u64> = get("id")?.extract()?;
@@ -336,8 +375,15 @@ fn nodes_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Node>> {
         ),
         None => None,
     };
-    if x.len() != ids.len() || y.len() != ids.len() || area.as_ref().is_some_and(|a| a.len() != ids.len()) {
-        return Err(crate::errors::parameter(py, "nodes", "columns of different lengths".into()));
+    if x.len() != ids.len()
+        || y.len() != ids.len()
+        || area.as_ref().is_some_and(|a| a.len() != ids.len())
+    {
+        return Err(crate::errors::parameter(
+            py,
+            "nodes",
+            "columns of different lengths".into(),
+        ));
     }
     Ok((0..ids.len())
         .map(|i| Node {

@@ -47,13 +47,21 @@ fn detrend(text: &str) -> PyResult<Detrend> {
 }
 
 /// Statistics and PSD of any topography, as dicts (SI units).
-fn stats_dict<'py>(py: Python<'py>, topo: &Topography, detrend_: &str) -> PyResult<Bound<'py, PyAny>> {
+fn stats_dict<'py>(
+    py: Python<'py>,
+    topo: &Topography,
+    detrend_: &str,
+) -> PyResult<Bound<'py, PyAny>> {
     let d = detrend(detrend_)?;
     let s = py.detach(|| stats::stats(topo, d)).py()?;
     to_python(py, &s)
 }
 
-fn psd_dict<'py>(py: Python<'py>, topo: &Topography, detrend_: &str) -> PyResult<Bound<'py, PyDict>> {
+fn psd_dict<'py>(
+    py: Python<'py>,
+    topo: &Topography,
+    detrend_: &str,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = detrend(detrend_)?;
     let psd = py.detach(|| stats::power_spectrum(topo, d)).py()?;
     let out = PyDict::new(py);
@@ -76,9 +84,20 @@ impl Surface {
     /// `dx_m` and `dy_m` (m; default `dx_m`). Copies the heights once.
     #[new]
     #[pyo3(signature = (heights, dx_m, dy_m=None, periodic=false))]
-    fn new(heights: &Bound<'_, PyAny>, dx_m: f64, dy_m: Option<f64>, periodic: bool) -> PyResult<Self> {
+    fn new(
+        heights: &Bound<'_, PyAny>,
+        dx_m: f64,
+        dy_m: Option<f64>,
+        periodic: bool,
+    ) -> PyResult<Self> {
         let h = borrow_f64::<Ix2>(heights, "heights", "heights (m), shape (nx, ny)")?;
-        let grid = Grid2::new(h.as_array().to_owned(), dx_m, dy_m.unwrap_or(dx_m), periodic).py()?;
+        let grid = Grid2::new(
+            h.as_array().to_owned(),
+            dx_m,
+            dy_m.unwrap_or(dx_m),
+            periodic,
+        )
+        .py()?;
         Ok(Self::from_grid(grid))
     }
 
@@ -111,7 +130,10 @@ impl Surface {
             seed,
         };
         let grid = py
-            .detach(|| spec.validate().and_then(|_| asperity::surface::generate(&spec)))
+            .detach(|| {
+                spec.validate()
+                    .and_then(|_| asperity::surface::generate(&spec))
+            })
             .py()?;
         Ok(Self::from_grid(grid))
     }
@@ -266,7 +288,11 @@ impl Profile {
             "Profile({} points, dx_m={:e}, {})",
             p.len(),
             p.dx,
-            if p.is_uniform() { "uniform" } else { "nonuniform" }
+            if p.is_uniform() {
+                "uniform"
+            } else {
+                "nonuniform"
+            }
         )
     }
 }
