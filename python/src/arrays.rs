@@ -41,9 +41,9 @@ pub fn borrow_f64<'py, D: Dimension>(
             py,
             name,
             format!(
-                "expected a {ndim}-D array ({what}), got a {}-D array of shape {:?}",
+                "expected a {ndim}-D array ({what}), got a {}-D array of shape ({})",
                 arr.ndim(),
-                arr.shape()
+                python_shape(arr.shape())
             ),
         ));
     }
@@ -72,6 +72,18 @@ pub fn borrow_f64<'py, D: Dimension>(
     typed
         .try_readonly()
         .map_err(|e| parameter(py, name, format!("array is being written elsewhere: {e}")))
+}
+
+/// A shape as Python prints it: `(4,)`, `(2, 3)`.
+fn python_shape(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("{n},"),
+        _ => shape
+            .iter()
+            .map(|n| n.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
 }
 
 /// Check that every value is finite, naming the first offending index.

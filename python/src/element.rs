@@ -238,9 +238,19 @@ impl ValanisFit {
     }
 
     fn __repr__(&self) -> String {
+        let p = &self.inner.params;
         format!(
-            "ValanisFit(params={:?}, r2={}, iterations={}, converged={})",
-            self.inner.params, self.inner.r2, self.inner.iterations, self.inner.converged
+            "ValanisFit(e0={:e}, k={}, et={:e}, r2={}, iterations={}, converged={})",
+            p.e0,
+            p.k,
+            p.et,
+            self.inner.r2,
+            self.inner.iterations,
+            if self.inner.converged {
+                "True"
+            } else {
+                "False"
+            }
         )
     }
 }

@@ -295,39 +295,53 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
         shard::config_sha256(sweep)?,
         env!("CARGO_PKG_VERSION")
     );
-    let _ = writeln!(
-        csv,
-        "surface,pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3,approach_m,contact_spots,smallest_spot_points,median_spot_points,iterations,residual"
-    );
+    let mut rows = vec![[
+        "surface",
+        "pressure_Pa",
+        "contact_area_ratio",
+        "mean_gap_m",
+        "kn_N_per_m3",
+        "approach_m",
+        "contact_spots",
+        "smallest_spot_points",
+        "median_spot_points",
+        "iterations",
+        "residual",
+    ]
+    .map(String::from)
+    .to_vec()];
     for u in units {
         for p in &u.result.points {
-            let _ = writeln!(
-                csv,
-                "{},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{:e}",
-                csv_field(&u.label),
-                p.pressure_pa,
-                p.contact_area_ratio,
-                p.mean_gap_m,
-                p.kn_n_per_m3,
-                p.approach_m,
-                p.contact_spots,
-                p.smallest_spot_points,
-                p.median_spot_points,
-                p.iterations,
-                p.residual,
-            );
+            rows.push(vec![
+                u.label.clone(),
+                format!("{:e}", p.pressure_pa),
+                format!("{:e}", p.contact_area_ratio),
+                format!("{:e}", p.mean_gap_m),
+                format!("{:e}", p.kn_n_per_m3),
+                format!("{:e}", p.approach_m),
+                p.contact_spots.to_string(),
+                p.smallest_spot_points.to_string(),
+                p.median_spot_points.to_string(),
+                p.iterations.to_string(),
+                format!("{:e}", p.residual),
+            ]);
         }
     }
+    csv.push_str(&csv_records(&rows)?);
     Ok(csv)
 }
 
-/// A CSV field, quoted when it holds a separator, quote or line break (file paths).
-fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
+/// Records as CSV text (fields quoted where needed, e.g. file paths holding commas).
+fn csv_records(rows: &[Vec<String>]) -> Result<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.write_record(r)
+            .map_err(|e| Error::Data(format!("CSV: {e}")))?;
     }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| Error::Data(format!("CSV: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| Error::Data(format!("CSV: {e}")))
 }
 
 /// Every output of a whole sweep into `out_dir`: the table, the timings, the statistics over
@@ -338,20 +352,21 @@ pub fn write_outputs(
     out_dir: &Path,
 ) -> Result<()> {
     let table = sweep_table(sweep, units)?;
-    let mut timings = String::from(
-        "# asperity contact normal: wall time of the three solves of each point (s); not reproducible\nsurface,pressure_Pa,wall_time_s\n",
-    );
+    let mut timings = vec![["surface", "pressure_Pa", "wall_time_s"]
+        .map(String::from)
+        .to_vec()];
     for u in units {
         for p in &u.result.points {
-            let _ = writeln!(
-                timings,
-                "{},{:e},{:.3}",
-                csv_field(&u.label),
-                p.pressure_pa,
-                p.wall_time_s
-            );
+            timings.push(vec![
+                u.label.clone(),
+                format!("{:e}", p.pressure_pa),
+                format!("{:.3}", p.wall_time_s),
+            ]);
         }
     }
+    let timings = String::from(
+        "# asperity contact normal: wall time of the three solves of each point (s); not reproducible\n",
+    ) + &csv_records(&timings)?;
     let results: Vec<&SurfaceResult> = units.iter().map(|u| &u.result).collect();
     let stats = surface_sweep::statistics(&results)?;
     asperity::output::write_string_atomic(&out_dir.join("normal_sweep.csv"), &table)?;
