@@ -193,19 +193,21 @@ pub fn preloads_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Preloa
 }
 
 fn element_columns<'py>(py: Python<'py>, rows: &[ElementRow]) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
+    let nodes: Vec<Preload> = rows
+        .iter()
+        .map(|r| Preload {
+            id: r.id,
+            x_m: r.x_m,
+            y_m: r.y_m,
+            area_m2: r.area_m2,
+            pressure_pa: r.pressure_pa,
+            n0_n: r.n0_n,
+        })
+        .collect();
+    let d = preload_columns(py, &nodes)?;
     let col = |f: fn(&ElementRow) -> f64| {
         PyArray1::from_vec(py, rows.iter().map(f).collect::<Vec<f64>>())
     };
-    d.set_item(
-        "id",
-        PyArray1::from_vec(py, rows.iter().map(|r| r.id).collect::<Vec<u64>>()),
-    )?;
-    d.set_item("x_m", col(|r| r.x_m))?;
-    d.set_item("y_m", col(|r| r.y_m))?;
-    d.set_item("area_m2", col(|r| r.area_m2))?;
-    d.set_item("pressure_Pa", col(|r| r.pressure_pa))?;
-    d.set_item("N0_N", col(|r| r.n0_n))?;
     d.set_item("kn_N_per_m", col(|r| r.kn_n_per_m))?;
     d.set_item("E0_N_per_m", col(|r| r.e0_n_per_m))?;
     d.set_item("k", col(|r| r.k))?;
