@@ -12,9 +12,11 @@
 #     python examples/reference_calibration.py              # the reference case, 1024² (about a minute on 2 cores)
 #     python examples/reference_calibration.py --grid 256   # a quick look (seconds), NOT the README's numbers
 #
-# At 1024² the numbers are compared with calib/calibration_table.csv; they agree bit for bit
-# (the same library code runs, composed here in Python). A coarser grid changes the surface
-# discretisation and hence the numbers (contact spots are under-resolved at 256²). Units: SI.
+# At 1024² the numbers are compared with calib/calibration_table.csv (the README's table): they
+# agree to 2.1e-11 relative, and bit for bit with a fresh `asperity calibrate` run (the same
+# library code runs, composed here in Python; the committed table predates a change of summation
+# order in the tangential solver). A coarser grid changes the surface discretisation and hence
+# the numbers (contact spots are under-resolved at 256²). Units: SI.
 
 # %%
 import argparse
@@ -125,7 +127,7 @@ def main():
     print(f"\nagainst {args.compare}: {'identical, bit for bit' if same else f'largest relative difference {worst:.2e}'}")
     at = reference.interpolate(3e6)
     print(f"at 3 MPa: kn {at['kn_N_per_m3']:.3e} N/m³, E0 {at['E0_N_per_m3']:.3e} N/m³, k {at['k']:.3f}")
-    return 0 if same else 1
+    return 0 if same or worst < 1e-9 else 1
 
 
 if __name__ == "__main__":
