@@ -16,7 +16,7 @@
 # Prints the two job ids.
 set -euo pipefail
 
-usage() { sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 2; }
 
 here=$(cd "$(dirname "$0")" && pwd)
 shards="" out="" bin="" cpus=1 time_limit="" partition=""
