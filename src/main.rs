@@ -31,6 +31,8 @@ enum Command {
     Diagnose(cli::diagnose::DiagnoseArgs),
     /// Nonlinear forced response (harmonic balance, AFT, continuation) driven by element tables.
     Response(cli::response::ResponseArgs),
+    /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
+    Merge(cli::merge::MergeArgs),
 }
 
 fn main() {
@@ -43,6 +45,7 @@ fn main() {
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
         Command::Response(a) => cli::response::run(a),
+        Command::Merge(a) => cli::merge::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");
