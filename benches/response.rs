@@ -97,7 +97,9 @@ fn model() -> (Structure, DVector<f64>, DVector<f64>) {
 /// Peak of sampled (frequency, amplitude) points refined by a parabola through the largest
 /// sample and its neighbours.
 fn refined_peak(f: &[f64], a: &[f64]) -> (f64, f64) {
-    let i = (0..a.len()).max_by(|&i, &j| a[i].partial_cmp(&a[j]).unwrap()).unwrap();
+    let i = (0..a.len())
+        .max_by(|&i, &j| a[i].partial_cmp(&a[j]).unwrap())
+        .unwrap();
     if i == 0 || i + 1 == a.len() {
         return (f[i], a[i]);
     }
@@ -165,7 +167,16 @@ fn peer(case: &PeerCase) {
     let h = Harmonics::new(hmax, false, Some(nt)).unwrap();
     let mut f = DVector::zeros(n);
     f[0] = 1.0;
-    let sys = HbmSystem::new(&st, h, Excitation { force: f, harmonic: 1 }, FormulationChoice::Coordinates).unwrap();
+    let sys = HbmSystem::new(
+        &st,
+        h,
+        Excitation {
+            force: f,
+            harmonic: 1,
+        },
+        FormulationChoice::Coordinates,
+    )
+    .unwrap();
     let mut settings = ContinuationSettings::new(case.f0, case.f1);
     settings.points = 100;
     let mut best = f64::INFINITY;
@@ -181,7 +192,11 @@ fn peer(case: &PeerCase) {
     }
     let b = branch.unwrap();
     let (ci, si) = sys.harmonics.index_of(1).unwrap();
-    let fr: Vec<f64> = b.points.iter().map(|p| p.omega / (2.0 * std::f64::consts::PI)).collect();
+    let fr: Vec<f64> = b
+        .points
+        .iter()
+        .map(|p| p.omega / (2.0 * std::f64::consts::PI))
+        .collect();
     let am: Vec<f64> = b.points.iter().map(|p| p.z[ci].hypot(p.z[si])).collect();
     let (fpk, apk) = refined_peak(&fr, &am);
     println!(
@@ -206,15 +221,32 @@ fn peer(case: &PeerCase) {
         .to_string(),
     )
     .unwrap();
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peers/pyharm_jenkins.py");
-    let o = std::process::Command::new(python).arg(&script).arg(&case_json).arg(&out).output().unwrap();
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peers/pyharm_jenkins.py");
+    let o = std::process::Command::new(python)
+        .arg(&script)
+        .arg(&case_json)
+        .arg(&out)
+        .output()
+        .unwrap();
     if !o.status.success() {
         println!("pyHarm failed: {}", String::from_utf8_lossy(&o.stderr));
         return;
     }
-    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    let pf: Vec<f64> = r["frequency_Hz"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    let pa: Vec<f64> = r["amplitude_m"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let pf: Vec<f64> = r["frequency_Hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let pa: Vec<f64> = r["amplitude_m"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     let (pfpk, papk) = refined_peak(&pf, &pa);
     let (pw, pc) = (r["wall_s"].as_f64().unwrap(), r["cpu_s"].as_f64().unwrap());
     println!("pyHarm:   {} points, peak {papk:.6e} m at {pfpk:.4} Hz; analysis wall {pw:.4} s, CPU {pc:.4} s (second run, after JIT)", pf.len());
@@ -231,7 +263,12 @@ fn peer(case: &PeerCase) {
 /// CPU time of this process (s).
 fn cpu_time() -> f64 {
     let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let f: Vec<&str> = s.rsplit(')').next().unwrap_or("").split_whitespace().collect();
+    let f: Vec<&str> = s
+        .rsplit(')')
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect();
     let tick = 100.0;
     (f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)
         + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0))

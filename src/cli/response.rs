@@ -65,10 +65,7 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         let branch = sweep(&system, level, &settings, &mut |frac| {
             bar.set_position(base + (frac * 1000.0) as u64);
         })
-        .map_err(|e| {
-            bar.abandon();
-            e
-        })?;
+        .inspect_err(|_| bar.abandon())?;
         results.push(report::summarise(
             &system,
             level,

@@ -21,11 +21,13 @@ use nalgebra::{Complex, DMatrix, DVector};
 
 type C64 = Complex<f64>;
 
+/// Per retained order `k`: `(k, G_k, ∂G_k/∂ω, H(kω))`.
+type OrderBlock = (usize, DMatrix<C64>, DMatrix<C64>, DMatrix<C64>);
+
 /// The condensed linear structure at one frequency, for every retained harmonic.
 pub struct Receptance {
     omega: f64,
-    /// Per retained order: (k, G_k, ∂G_k/∂ω, H_k).
-    blocks: Vec<(usize, DMatrix<C64>, DMatrix<C64>, DMatrix<C64>)>,
+    blocks: Vec<OrderBlock>,
 }
 
 fn complex(a: &DMatrix<f64>) -> DMatrix<C64> {

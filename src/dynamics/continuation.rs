@@ -304,11 +304,7 @@ fn correct(
     let mut y = yp.clone();
     let mut first_residual = f64::NAN;
     let mut prev_residual = f64::INFINITY;
-    let mut lu: Option<(
-        nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
-        DMatrix<f64>,
-        DVector<f64>,
-    )> = None;
+    let mut lu: Option<Factorised> = None;
     let mut jacobians = 0;
     for it in 0..=settings.max_corrector_iterations {
         let z = y.rows(0, n) * zs;
@@ -383,6 +379,13 @@ fn correct(
     }
     Err("corrector: no iteration".into())
 }
+
+/// LU of the bordered matrix with the Jacobian blocks it was built from.
+type Factorised = (
+    nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    DMatrix<f64>,
+    DVector<f64>,
+);
 
 /// `[jz·zs, jw·ws; tᵀ]`.
 fn bordered_matrix(

@@ -11,6 +11,9 @@
 //! time_integration: reference steady state by Newmark time stepping (validation)
 //! ```
 
+// Index loops over DOFs, harmonics and samples read like the equations they implement.
+#![allow(clippy::needless_range_loop)]
+
 pub mod aft;
 pub mod condensation;
 pub mod contact;

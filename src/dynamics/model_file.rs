@@ -256,7 +256,7 @@ impl ModelFile {
         if s.points < 2 {
             return Err(Error::param("sweep.points", "must be ≥ 2"));
         }
-        if e.harmonic > s.harmonics || (s.odd_only && e.harmonic % 2 == 0) {
+        if e.harmonic > s.harmonics || (s.odd_only && e.harmonic.is_multiple_of(2)) {
             return Err(Error::param(
                 "excitation.harmonic",
                 "must be one of the retained harmonics",
