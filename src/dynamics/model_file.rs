@@ -158,13 +158,7 @@ fn key_line(text: &str, key: &str) -> usize {
 impl ModelFile {
     /// Parse and validate TOML text (`path` names it in errors).
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let f: Self = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
-                .unwrap_or(0);
-            Error::parse(path, line, e.message().trim().to_string())
-        })?;
+        let f: Self = toml::from_str(text).map_err(|e| crate::input::toml_error(path, text, e))?;
         f.validate().map_err(|e| match e {
             Error::InvalidParameter { name, message } => {
                 let key = name.rsplit('.').next().unwrap_or(&name).to_string();
