@@ -9,6 +9,7 @@ pub mod diagnose;
 pub mod elements;
 pub mod film;
 pub mod merge;
+pub mod response;
 pub mod surface;
 
 use asperity::surface::combine::Material;
