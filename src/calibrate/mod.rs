@@ -1,5 +1,6 @@
 //! Calibration of element parameters (kn, E0, k, Et versus pressure) from BEM hysteresis loops.
 
+pub mod amplitudes;
 pub mod table;
 
 pub use table::{CalibrationRow, CalibrationTable, Interpolated, RangeFlag};
