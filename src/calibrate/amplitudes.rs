@@ -199,7 +199,7 @@ pub fn run(
 ) -> Result<AmplitudeSweep> {
     check_factors(factors)?;
     let n = steps_per_cycle;
-    if n < 8 || n % 4 != 0 {
+    if n < 8 || !n.is_multiple_of(4) {
         return Err(Error::param(
             "steps_per_cycle",
             format!("must be a multiple of 4 and at least 8, got {n}"),
