@@ -174,6 +174,35 @@ mod tests {
         assert!((welch - 0.95).abs() < 0.01, "Welch coverage {welch}");
     }
 
+    /// The expected half-width is `t₀.₉₇₅,N−1 · c₄(N) σ/√N` with `c₄(N) = E[s]/σ =
+    /// √(2/(N−1)) Γ(N/2)/Γ((N−1)/2)`: over 4000 normal samples each, N = 4, 16, 64 give it within
+    /// 2 % (the interval narrows as 1/√N once t has settled).
+    #[test]
+    fn expected_half_width_narrows_as_one_over_root_n() {
+        use statrs::function::gamma::ln_gamma;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let sigma = 2.0;
+        let normal = Normal::new(0.0, sigma).unwrap();
+        for n in [4usize, 16, 64] {
+            let trials = 4000;
+            let mean_hw = (0..trials)
+                .map(|_| {
+                    let x: Vec<f64> = (0..n).map(|_| normal.sample(&mut rng)).collect();
+                    summarise(&x).ci95
+                })
+                .sum::<f64>()
+                / trials as f64;
+            let nf = n as f64;
+            let c4 =
+                (2.0 / (nf - 1.0)).sqrt() * (ln_gamma(nf / 2.0) - ln_gamma((nf - 1.0) / 2.0)).exp();
+            let want = student_t_975(nf - 1.0) * c4 * sigma / nf.sqrt();
+            assert!(
+                (mean_hw / want - 1.0).abs() < 0.02,
+                "N = {n}: {mean_hw} vs {want}"
+            );
+        }
+    }
+
     #[test]
     fn paired_difference_removes_the_common_part() {
         let x = [10.0, 20.0, 30.0];
