@@ -306,39 +306,35 @@ fn check_specs(
 ) {
     let s = config.surface;
     let mut notes = Vec::new();
-    let grid = GaussianSurfaceSpec {
-        nx: s.nx / 2,
-        ny: s.ny / 2,
-        ..s
-    };
-    let grid = match grid.validate() {
-        Ok(()) => Some(grid),
+    let mut admissible = |spec: GaussianSurfaceSpec, what: &str| match spec.validate() {
+        Ok(()) => Some(spec),
         Err(e) => {
             notes.push(format!(
-                "grid check not run: the {}x{} grid is not admissible ({e})",
-                grid.nx, grid.ny
+                "{what} check not run: {}x{} points over {:e} m x {:e} m is not admissible ({e})",
+                spec.nx, spec.ny, spec.lx_m, spec.ly_m
             ));
             None
         }
     };
-    let patch = GaussianSurfaceSpec {
-        nx: s.nx / 2,
-        ny: s.ny / 2,
-        lx_m: s.lx_m * (s.nx / 2) as f64 / s.nx as f64,
-        ly_m: s.ly_m * (s.ny / 2) as f64 / s.ny as f64,
-        seed: s.seed.wrapping_add(config.realisations.count as u64),
-        ..s
-    };
-    let patch = match patch.validate() {
-        Ok(()) => Some(patch),
-        Err(e) => {
-            notes.push(format!(
-                "patch check not run: the {:e} m x {:e} m patch is not admissible ({e})",
-                patch.lx_m, patch.ly_m
-            ));
-            None
-        }
-    };
+    let grid = admissible(
+        GaussianSurfaceSpec {
+            nx: s.nx / 2,
+            ny: s.ny / 2,
+            ..s
+        },
+        "grid",
+    );
+    let patch = admissible(
+        GaussianSurfaceSpec {
+            nx: s.nx / 2,
+            ny: s.ny / 2,
+            lx_m: s.lx_m * (s.nx / 2) as f64 / s.nx as f64,
+            ly_m: s.ly_m * (s.ny / 2) as f64 / s.ny as f64,
+            seed: s.seed.wrapping_add(config.realisations.count as u64),
+            ..s
+        },
+        "patch",
+    );
     (grid, patch, notes)
 }
 

@@ -99,16 +99,8 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
             surface,
             description,
         } => eprintln!(
-            "calibrate: {description}, {}×{} points, spacing {:e} m × {:e} m, {}",
-            surface.nx(),
-            surface.ny(),
-            surface.dx,
-            surface.dy,
-            if surface.periodic {
-                "periodic"
-            } else {
-                "non-periodic (zero-padded kernels)"
-            }
+            "calibrate: {description}, {}",
+            super::surface_summary(surface)
         ),
     }
     eprintln!("calibrate: {}", output::describe_config(&config));

@@ -100,17 +100,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
         options,
     )?;
     eprintln!(
-        "surface: {source}, {} × {} points, spacing {:.4e} × {:.4e} m, {}; E* = {:.4e} Pa",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        if surface.periodic {
-            "periodic"
-        } else {
-            "non-periodic (zero-padded)"
-        },
-        e_star
+        "surface: {source}, {}; E* = {e_star:.4e} Pa",
+        super::surface_summary(&surface)
     );
 
     let bar = super::progress_bar("normal contact (pressures)", pressures.len() as u64);
@@ -127,15 +118,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
         "# asperity contact normal: Polonsky–Keer pressure sweep"
     );
     let _ = writeln!(csv, "# surface: {source}");
-    let _ = writeln!(
-        csv,
-        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        surface.periodic
-    );
+    let _ = writeln!(csv, "{}", super::grid_header(&surface));
     let _ = writeln!(
         csv,
         "# youngs_modulus_Pa = {:e} (both bodies), poisson_ratio = {}, e_star_Pa = {:e}",

@@ -158,15 +158,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         Boundary::ZeroPadded
     };
     eprintln!(
-        "surface: {source}; {} × {} points, spacing {:.4e} m, {}; E* = {e_star:.4e} Pa, μ = {mu}",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        if surface.periodic {
-            "periodic"
-        } else {
-            "non-periodic (zero-padded kernels)"
-        }
+        "surface: {source}; {}; E* = {e_star:.4e} Pa, μ = {mu}",
+        super::surface_summary(&surface)
     );
 
     let steps_per_pressure = (args.cycles * args.steps_per_cycle) as u64;
@@ -254,15 +247,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     );
     let _ = writeln!(head, "# assumption: {}", results[0].metadata.assumption);
     let _ = writeln!(head, "# surface: {source}");
-    let _ = writeln!(
-        head,
-        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        surface.periodic
-    );
+    let _ = writeln!(head, "{}", super::grid_header(&surface));
     let _ = writeln!(
         head,
         "# youngs_modulus_Pa = {:e}, poisson_ratio = {} (both bodies), friction_coefficient = {mu}",
