@@ -14,7 +14,7 @@
 //!    history of increasing displacement amplitudes `factor × δ_gs(p̄)` along x (δ_gs the
 //!    gross-slip displacement of monotonic loading at that pressure), from microslip to gross
 //!    slip, giving the steady loop at each amplitude (Masing; checked by each loop's closure
-//!    error and by `tests/calibrate_amplitudes.rs`).
+//!    error and by the tests of [`crate::calibrate::amplitudes`]).
 //! 4. **Fits** ([`crate::calibrate::fit`]): one Valanis element (E0, k, optionally Et; μ fixed,
 //!    `Fz = p̄`) fitted to all amplitudes together (the table's values), and one per amplitude (to
 //!    show how much the best element depends on the amplitude).
