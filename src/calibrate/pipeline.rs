@@ -880,3 +880,18 @@ fn warnings_of(
     }
     w
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn k_bounds_are_flagged_with_their_reading() {
+        assert_eq!(KBound::of(7.8e-11), KBound::Lower);
+        assert_eq!(KBound::of(0.9999996), KBound::Upper);
+        assert_eq!(KBound::of(0.5), KBound::Inside);
+        assert!(k_bound_reading(KBound::Lower).contains("gradually"));
+        assert!(k_bound_reading(KBound::Upper).contains("Jenkins"));
+        assert!(k_bound_reading(KBound::Inside).is_empty());
+    }
+}
