@@ -114,7 +114,7 @@ fn interpolate(x: &[f64], f: &[f64], a: usize, b: usize, dir: f64, x0: f64) -> O
         }
     }
     let (s_lo, s_hi) = (dir * x[lo], dir * x[hi]);
-    if !(s_hi > s_lo) || s0 < s_lo || s0 > s_hi {
+    if s_hi <= s_lo || s0 < s_lo || s0 > s_hi {
         return None;
     }
     let th = (s0 - s_lo) / (s_hi - s_lo);
@@ -266,7 +266,7 @@ pub fn estimate(x: &[f64], f: &[f64], cycles: &Cycles, force_scale: f64) -> Nois
         ));
         (high_pass, 0.0)
     };
-    if !(sigma >= resolution) {
+    if sigma.is_nan() || sigma < resolution {
         notes.push(format!(
             "scatter below the resolution floor ({:.0e} of the force amplitude): the floor is \
              set there",

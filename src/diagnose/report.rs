@@ -200,7 +200,20 @@ impl Report {
             .into_iter()
             .map(Self::effect_sentence)
             .collect();
-        match self.verdict {
+        // A floor set by slow, cycle-to-cycle scatter is that of any periodic model, not of the
+        // measurement: say so beside every verdict.
+        let fast = self.noise.high_pass_n;
+        let caveat = if fast > 0.0 && fast < 0.5 * sigma {
+            format!(
+                "; note: the record is not repeatable cycle to cycle — its scatter σ is {:.1}× \
+                 the fast measurement noise ({fast:.3e} N), so the floor is that of any \
+                 periodic model, not of the instrument",
+                sigma / fast
+            )
+        } else {
+            String::new()
+        };
+        let verdict = match self.verdict {
             Verdict::ModelAdequate => format!(
                 "model adequate: the baseline's held-out residual is {r:.2}× the noise floor \
                  (σ = {sigma:.4e} N){}; no effect needed",
@@ -259,7 +272,8 @@ impl Report {
                 }
                 s
             }
-        }
+        };
+        verdict + &caveat
     }
 
     /// Findings beside the verdict: drift, clearance, noise notes.

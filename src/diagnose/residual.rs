@@ -309,7 +309,7 @@ fn moving_average(x: &[f64], len: usize) -> Vec<f64> {
 /// the fast part of the scatter, not against slow cycle-to-cycle variation.
 pub fn ringing(r: &[f64], dt: f64, cycles_in_window: f64, sigma: f64) -> Option<Ringing> {
     let n = r.len();
-    if n < 64 || !(dt > 0.0) {
+    if n < 64 || dt.is_nan() || dt <= 0.0 {
         return None;
     }
     let mean = r.iter().sum::<f64>() / n as f64;
