@@ -25,8 +25,10 @@ pub mod film;
 pub mod grid;
 pub mod halfspace;
 pub mod input;
+pub mod limits;
 pub mod output;
 pub mod plot;
+pub mod sanity;
 pub mod surface;
 pub mod testdata;
 
