@@ -338,6 +338,25 @@ impl OutputSet {
         self.stage(&dir.join(name), &format!("{flag} file `{name}`"))
     }
 
+    /// The staging directory standing for the output directory of [`OutputSet::in_dir`], for
+    /// library functions that write a set of files into a directory: everything written below
+    /// it appears in the output directory on [`OutputSet::commit`].
+    pub fn staging_dir(&mut self) -> Result<PathBuf> {
+        let (dir, flag) = self
+            .dir
+            .clone()
+            .ok_or_else(|| Error::Data("output set has no directory".into()))?;
+        let marker = with_dir(&dir.join("x"));
+        let (anchor, staging) = self.staging_for(&marker, &flag)?;
+        let rel = with_dir(&dir)
+            .strip_prefix(&anchor)
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let staged = staging.join(rel);
+        std::fs::create_dir_all(&staged).map_err(|e| Error::io(&dir, e))?;
+        Ok(staged)
+    }
+
     /// Where a staged file will appear (for messages written before the commit).
     pub fn final_path(&self, staged: &Path) -> PathBuf {
         for (anchor, staging) in &self.stagings {

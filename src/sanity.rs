@@ -145,7 +145,25 @@ pub fn contact_pressures(
     surface: &Grid2,
 ) -> Result<()> {
     let (lo, hi) = height_range(surface);
-    let size = surface.lx().max(surface.ly());
+    contact_pressures_for(
+        name,
+        pressures_pa,
+        e_star_pa,
+        surface.lx().max(surface.ly()),
+        hi - lo,
+    )
+}
+
+/// [`contact_pressures`] for a surface known by its size `size_m` (larger side) and height
+/// range `height_range_m` (for a generated Gaussian surface, about 8 Rq), before it exists.
+pub fn contact_pressures_for(
+    name: &str,
+    pressures_pa: &[f64],
+    e_star_pa: f64,
+    size_m: f64,
+    height_range_m: f64,
+) -> Result<()> {
+    let (lo, hi, size) = (0.0, height_range_m, size_m);
     for &p in pressures_pa {
         if p > MAX_STRAIN * e_star_pa {
             return Err(Error::param(

@@ -24,6 +24,8 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(args: CalibrateArgs) -> Result<()> {
+    // Refused now, before the computation: an --out-dir that is a file or not writable.
+    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let (mut config, source) = match &args.config {
         Some(path) => {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -42,6 +44,7 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
         config.surface.ny = n;
         config.validate().map_err(|e| match e {
             Error::InvalidParameter { message, .. } => Error::param("--grid", message),
+            Error::Limit { message, .. } => Error::limit("--grid", message),
             other => other,
         })?;
     }
@@ -60,7 +63,9 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
     let bar = super::progress_bar("calibrate", pipeline::progress_units(&config));
     let result = pipeline::run(&config, &bar)?;
     bar.finish_and_clear();
-    let written = pipeline::write_outputs(&result, &source, &args.out_dir)?;
+    // Every file is staged and appears at once (or not at all, on an error or an interrupt).
+    pipeline::write_outputs(&result, &source, &out.staging_dir()?)?;
+    let written = out.commit()?;
 
     println!(
         "pressure_MPa  area_ratio   kn_N_per_m3   E0_N_per_m3       k   fit_R2  nrmse   energy_err"

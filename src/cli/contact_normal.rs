@@ -1,11 +1,14 @@
 //! `asperity contact normal`: pressure sweep of the normal contact solver on a rough surface.
 //! Writes `normal_sweep.csv` (SI units in the column names), `area_ratio.png`, `mean_gap.png`,
-//! `kn.png` (log axes) and, with `--pressure-maps`, one pressure map PNG per load.
+//! `kn.png` (log axes) and, with `--pressure-maps`, one pressure map PNG per load: all of
+//! them, or none (`asperity::output::OutputSet`).
 
 use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
 use asperity::contact::sweep::{self, SweepOptions, REFERENCE_PRESSURES_PA};
+use asperity::output::OutputSet;
 use asperity::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
 use asperity::surface::combine::composite_modulus;
+use asperity::surface::missing::Fill;
 use asperity::{Error, Grid2, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -14,8 +17,16 @@ use std::path::{Path, PathBuf};
 pub struct NormalArgs {
     /// Surface height file (heights in m; the format is recognised from the extension).
     /// Default: the reference generated surface (Rq 0.177 µm, cl 6.6 µm, 250 µm, 1024²).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "grid")]
     surface: Option<PathBuf>,
+    /// Fill missing points of --surface first: `harmonic` (Laplace interpolation) or
+    /// `nearest`. Without it a surface with missing points is refused.
+    #[arg(long, requires = "surface")]
+    fill: Option<Fill>,
+    /// Grid points per side of the reference surface (same 250 µm patch and statistics;
+    /// default 1024). Smaller values give a quick, coarser look.
+    #[arg(long)]
+    grid: Option<usize>,
     /// Nominal pressures (Pa), comma separated. Default: the reference sweep
     /// 0.1, 0.2, 1, 2, 5, 10 MPa.
     #[arg(long, value_delimiter = ',', num_args = 1..)]
@@ -43,28 +54,60 @@ pub struct NormalArgs {
     derivative_step: f64,
 }
 
-/// Load the surface: a file, or the reference generated surface.
-fn load_surface(path: Option<&Path>) -> Result<(Grid2, String)> {
-    match path {
+/// Load the surface: a file (its missing points filled when asked), or the reference
+/// generated surface (on `grid` points per side). Checked against the grid limit and for a
+/// usable contact surface (`asperity::sanity::contact_surface`).
+fn load_surface(path: Option<&Path>, fill: Option<Fill>, grid: Option<usize>) -> Result<(Grid2, String)> {
+    let (grid, source) = match path {
         Some(p) => {
-            let grid = asperity::surface::io::read(p)?.into_area(&p.display().to_string())?;
-            Ok((grid, p.display().to_string()))
+            let (grid, report) = asperity::surface::missing::load_area(p, fill)?;
+            let mut source = p.display().to_string();
+            if let Some(r) = report {
+                eprintln!("{source}: {}", r.describe());
+                source = format!("{source} ({})", r.describe());
+            }
+            asperity::limits::check_grid(
+                &p.display().to_string(),
+                grid.nx(),
+                grid.ny(),
+                asperity::limits::CONTACT_BYTES_PER_POINT,
+            )?;
+            (grid, source)
         }
         None => {
-            let spec = asperity::surface::generate::GaussianSurfaceSpec::reference();
-            Ok((
+            let mut spec = asperity::surface::generate::GaussianSurfaceSpec::reference();
+            if let Some(n) = grid {
+                spec.nx = n;
+                spec.ny = n;
+                spec.validate()
+                    .map_err(|e| super::rename_param(e, "--grid"))?;
+            }
+            asperity::limits::check_grid(
+                "--grid",
+                spec.nx,
+                spec.ny,
+                asperity::limits::CONTACT_BYTES_PER_POINT,
+            )?;
+            (
                 asperity::surface::generate::generate(&spec)?,
                 format!(
                     "reference generated surface (Rq {} m, correlation length {} m, {} m, {}², seed {})",
                     spec.rq_m, spec.clx_m, spec.lx_m, spec.nx, spec.seed
                 ),
-            ))
+            )
         }
-    }
+    };
+    asperity::sanity::contact_surface(&grid, &source)?;
+    Ok((grid, source))
 }
 
 pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output.
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    asperity::sanity::tolerance("--tolerance", args.tolerance)?;
+    if let Some(p) = &args.pressures_pa {
+        asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
+    }
     let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
     let e_star = composite_modulus(material, material)?;
     let pressures = sweep::checked_pressures(
@@ -91,7 +134,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
     sweep_options
         .validate()
         .map_err(|e| super::rename_param(e, "--derivative-step"))?;
-    let (surface, source) = load_surface(args.surface.as_deref())?;
+    let (surface, source) = load_surface(args.surface.as_deref(), args.fill, args.grid)?;
+    asperity::sanity::contact_pressures("--pressures-pa", &pressures, e_star, &surface)?;
     let mut solver = NormalSolver::new(
         &NormalProblem {
             surface: &surface,
@@ -119,6 +163,14 @@ pub fn run(args: NormalArgs) -> Result<()> {
     });
     bar.finish_and_clear();
     let result = result?;
+    // Non-finite or non-physical results are refused, never written.
+    for p in &result.points {
+        let at = |q: &str| format!("{q} at {} Pa", asperity::error::num(p.pressure_pa));
+        asperity::sanity::positive_result(&at("kn"), p.kn_n_per_m3)?;
+        asperity::sanity::finite_result(&at("the mean gap"), p.mean_gap_m)?;
+        asperity::sanity::finite_result(&at("the approach"), p.approach_m)?;
+        asperity::sanity::positive_result(&at("the contact area ratio"), p.contact_area_ratio)?;
+    }
 
     // CSV with a provenance header.
     let mut csv = String::new();
@@ -167,8 +219,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
             p.wall_time_s
         );
     }
-    let csv_path = args.out_dir.join("normal_sweep.csv");
-    asperity::output::write_string_atomic(&csv_path, &csv)?;
+    asperity::output::write_string_atomic(&out.path("normal_sweep.csv")?, &csv)?;
 
     let mpa = |f: fn(&sweep::SweepPoint) -> f64| -> Vec<(f64, f64)> {
         result
@@ -200,7 +251,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
     ];
     for (file, title, y_label, pts) in plots {
         line_plot(
-            &args.out_dir.join(file),
+            &out.path(file)?,
             &LinePlot {
                 title,
                 x_label: "nominal pressure (MPa)",
@@ -220,9 +271,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
             sol.mean_pressure_pa / 1e6
         );
         heatmap(
-            &args
-                .out_dir
-                .join(format!("pressure_map_{:e}Pa.png", sol.mean_pressure_pa)),
+            &out.path(&format!("pressure_map_{:e}Pa.png", sol.mean_pressure_pa))?,
             &sol.pressure,
             sol.dx,
             sol.dy,
@@ -261,6 +310,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
     if let Ok((beta, _)) = sweep::power_law_fit(&result.points) {
         println!("kn ∝ p^β fit over the sweep: β = {beta:.4}");
     }
-    println!("wrote {}", args.out_dir.display());
+    let written = out.commit()?;
+    println!("wrote {} files in {}", written.len(), args.out_dir.display());
     Ok(())
 }

@@ -68,6 +68,16 @@ pub struct TangentialArgs {
 
 pub fn run(args: TangentialArgs) -> Result<()> {
     // Every input is checked before any work or output.
+    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    asperity::limits::check_steps(
+        "--cycles",
+        args.cycles,
+        "--steps-per-cycle",
+        args.steps_per_cycle,
+    )?;
+    if let Some(p) = &args.pressures_pa {
+        asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
+    }
     let mu = args.friction_coefficient;
     if !(mu.is_finite() && mu > 0.0) {
         return Err(Error::param(
@@ -113,7 +123,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         max_iterations: args.max_iterations,
         operator,
     };
-    asperity::error::require_positive("--tolerance", args.tolerance)?;
+    asperity::sanity::tolerance("--tolerance", args.tolerance)?;
     let mut spec = GaussianSurfaceSpec::reference();
     if let Some(n) = args.grid {
         if n < 8 {
@@ -127,6 +137,12 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     }
     spec.validate()
         .map_err(|e| super::rename_param(e, "--grid"))?;
+    asperity::limits::check_grid(
+        "--grid",
+        spec.nx,
+        spec.ny,
+        asperity::limits::CONTACT_BYTES_PER_POINT,
+    )?;
 
     let started = std::time::Instant::now();
     let surface = generate(&spec)?;
@@ -134,6 +150,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         "reference generated surface (Rq {} m, correlation length {} m, {} m, {}², seed {})",
         spec.rq_m, spec.clx_m, spec.lx_m, spec.nx, spec.seed
     );
+    asperity::sanity::contact_surface(&surface, &source)?;
+    asperity::sanity::contact_pressures("--pressures-pa", &pressures, e_star, &surface)?;
     eprintln!(
         "surface: {source}; spacing {:.4e} m, periodic; E* = {e_star:.4e} Pa, μ = {mu}",
         surface.dx
@@ -212,6 +230,16 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             },
             |i, _| bar.set_position(done + i as u64),
         )?;
+        for c in &r.cycles {
+            asperity::sanity::finite_result(
+                &format!(
+                    "the energy of cycle {} at {} Pa",
+                    c.cycle,
+                    asperity::error::num(p)
+                ),
+                c.dissipated_j_per_m2,
+            )?;
+        }
         results.push(r);
     }
     bar.finish_and_clear();
@@ -295,8 +323,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             );
         }
     }
-    asperity::output::write_string_atomic(&args.out_dir.join("tangential_loops.csv"), &loops)?;
-    asperity::output::write_string_atomic(&args.out_dir.join("tangential_energy.csv"), &energy)?;
+    asperity::output::write_string_atomic(&out.path("tangential_loops.csv")?, &loops)?;
+    asperity::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
 
     let series = |norm: bool| -> Vec<Series> {
         pressures
@@ -315,7 +343,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             .collect()
     };
     line_plot(
-        &args.out_dir.join("tangential_loops.png"),
+        &out.path("tangential_loops.png")?,
         &LinePlot {
             title: "Tangential hysteresis loops (mean shear stress vs displacement)",
             x_label: "tangential displacement (µm)",
@@ -326,7 +354,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         &series(false),
     )?;
     line_plot(
-        &args.out_dir.join("tangential_loops_normalised.png"),
+        &out.path("tangential_loops_normalised.png")?,
         &LinePlot {
             title: "Tangential hysteresis loops, normalised by μ p",
             x_label: "tangential displacement (µm)",
@@ -348,8 +376,10 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             r.wall_time_s + r.metadata.setup_time_s
         );
     }
+    let written = out.commit()?;
     println!(
-        "wrote {} (total {:.1} s)",
+        "wrote {} files in {} (total {:.1} s)",
+        written.len(),
         args.out_dir.display(),
         started.elapsed().as_secs_f64()
     );
