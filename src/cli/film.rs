@@ -57,8 +57,9 @@ pub struct FilmOptions {
     /// (the channel in which the stain, --stain-rgb, is darkest: green for a magenta-red stain).
     #[arg(long, default_value = "luma", requires = "density_calibration")]
     channel: String,
-    /// Colour of the stain `R,G,B` (0–255), for --channel complement.
-    #[arg(long, value_delimiter = ',')]
+    /// Colour of the stain `R,G,B` (0–255) in density mode: selects --channel complement, and
+    /// makes pixels of another hue (black or blue pen ink) off-curve instead of stain.
+    #[arg(long, value_delimiter = ',', requires = "density_calibration")]
     stain_rgb: Option<Vec<f64>>,
     /// Density of unstained paper (density mode): at or below it a pixel is unstained, above it
     /// and below the first calibration point below range. Default: estimated from the scan
@@ -259,6 +260,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
     let mut paper = None;
     if let ColourToPressure::Density(d) = &mut reader {
         d.channel = channel;
+        if let Some(st) = &args.stain_rgb {
+            if st.len() != 3 || st.iter().any(|v| !(v.is_finite() && (0.0..=255.0).contains(v))) {
+                return Err(Error::param("--stain-rgb", "needs three values R,G,B in 0–255"));
+            }
+            *d = d
+                .clone()
+                .with_stain([st[0], st[1], st[2]])
+                .map_err(|e| super::rename_param(e, "--stain-rgb"))?;
+        }
         let first = d.points[0].0;
         let level = match args.unstained_density {
             Some(u) => {
@@ -411,6 +421,37 @@ pub fn run(args: FilmArgs) -> Result<()> {
         }
         (d.patches, d.discarded_small, d.rejected_marks)
     };
+    // Stained patches entirely below the measuring range (not regions: no pressure is known).
+    let mut below_range_patches = Vec::new();
+    if args.roi_rect_mm.is_none() && args.roi_polygon_mm.is_none() {
+        let taken: std::collections::HashSet<(usize, usize)> =
+            regions.iter().flat_map(|r| r.pixels.iter().copied()).collect();
+        for r in detect_below_range(&map, &patch_options)?.patches {
+            if r.pixels.iter().any(|p| taken.contains(p)) {
+                continue;
+            }
+            let n = r.pixels.len() as f64;
+            let (cx, cy) = r.pixels.iter().fold((0.0, 0.0), |(a, b), &(i, j)| {
+                (a + i as f64 / n, b + j as f64 / n)
+            });
+            below_range_patches.push(serde_json::json!({
+                "centre_x_m": cx * pixel_size_m,
+                "centre_y_m": cy * pixel_size_m,
+                "equivalent_diameter_m": (4.0 * n / std::f64::consts::PI).sqrt() * pixel_size_m,
+            }));
+        }
+        if !below_range_patches.is_empty() {
+            eprintln!(
+                "note: {} stained components of at least {} mm lie entirely below the film's \
+                 measuring range (< {:.3} MPa): patches loaded below the range, or tape and \
+                 marks; no pressure is known there (centres and sizes in film.json, \
+                 `below_range_patches`)",
+                below_range_patches.len(),
+                args.min_patch_diameter_mm,
+                lo / 1e6
+            );
+        }
+    }
 
     // Fits and summaries: a region that cannot be fitted is skipped with a warning, the others
     // are written.
@@ -674,6 +715,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
         "image_pixels": all,
         "discarded_small_components": discarded,
         "rejected_marks": rejected_marks,
+        "below_range_patches": below_range_patches,
         "regions_not_fitted": skipped,
         "regions": summaries,
         "fits": fits,

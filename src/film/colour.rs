@@ -423,7 +423,16 @@ pub struct DensityCalibration {
     /// Densities at or below this are unstained paper (default: the first point's density,
     /// i.e. no below-range class until the paper level is set).
     pub unstained_density: f64,
+    /// Hue check against marks: `(weak channel, limit)`. A stained pixel whose density in the
+    /// channel the stain hardly absorbs exceeds `limit ×` its density in the read channel is not
+    /// stain but ink (black or blue pen), and is off-curve (see [`Self::with_stain`]).
+    pub hue_check: Option<(crate::film::scan::Channel, f64)>,
 }
+
+/// A stained pixel is ink, not stain, when its density in the channel the stain absorbs least
+/// exceeds this fraction of its density in the read channel (Prescale's magenta-red: ≈ 0.12;
+/// black ink ≈ 1).
+pub const INK_DENSITY_RATIO: f64 = 0.5;
 
 impl DensityCalibration {
     /// Build from points; checks both columns increase strictly.
@@ -446,7 +455,30 @@ impl DensityCalibration {
             points,
             channel: crate::film::scan::Channel::Luma,
             unstained_density,
+            hue_check: None,
         })
+    }
+
+    /// Enable the hue check for a stain of colour `stain_rgb` (0–255): the weak channel is the
+    /// one in which the stain is brightest. Refused when the stain itself is nearly neutral
+    /// (its own ratio at least [`INK_DENSITY_RATIO`]): ink could not be told from it.
+    pub fn with_stain(mut self, stain_rgb: [f64; 3]) -> Result<Self> {
+        use crate::film::scan::Channel;
+        let weak = [Channel::Red, Channel::Green, Channel::Blue][(0..3)
+            .max_by(|&a, &b| stain_rgb[a].total_cmp(&stain_rgb[b]))
+            .unwrap_or(0)];
+        let ratio = weak.density(stain_rgb) / self.channel.density(stain_rgb).max(1e-12);
+        if !(ratio < INK_DENSITY_RATIO) {
+            return Err(Error::param(
+                "stain colour",
+                format!(
+                    "the stain {stain_rgb:?} is too neutral to tell from ink (density ratio {ratio:.2} \
+                     ≥ {INK_DENSITY_RATIO}): read it in a channel where it is coloured"
+                ),
+            ));
+        }
+        self.hue_check = Some((weak, INK_DENSITY_RATIO));
+        Ok(self)
     }
 
     /// Read a density calibration CSV (format above).
@@ -507,6 +539,11 @@ impl DensityCalibration {
         let (first, last) = (self.points[0], self.points[self.points.len() - 1]);
         if d <= self.unstained_density && d < first.0 {
             return PixelReading::of(PixelClass::Unstained);
+        }
+        if let Some((weak, limit)) = self.hue_check {
+            if weak.density(rgb) > limit * d {
+                return PixelReading::of(PixelClass::OffCurve);
+            }
         }
         if d < first.0 {
             // Stained, but paler than the film's first calibrated density.
@@ -663,6 +700,12 @@ mod tests {
         d.unstained_density = 0.02;
         assert_eq!(d.read([faint; 3]).class, PixelClass::BelowRange);
         assert_eq!(d.read([255.0; 3]).class, PixelClass::Unstained);
+        // A magenta stain read in green; black and blue ink are off-curve, the stain is not.
+        d.channel = crate::film::scan::Channel::Green;
+        let d = d.with_stain([230.0, 110.0, 125.0]).unwrap();
+        assert_eq!(d.read([240.0, 120.0, 130.0]).class, PixelClass::InRange);
+        assert_eq!(d.read([60.0, 60.0, 60.0]).class, PixelClass::OffCurve);
+        assert_eq!(d.read([40.0, 60.0, 160.0]).class, PixelClass::OffCurve);
         assert_eq!(d.read([0.0; 3]).class, PixelClass::AboveRange);
         let grey = 255.0 / 10f64.powf(0.3);
         let r = d.read([grey; 3]);

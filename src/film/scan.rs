@@ -17,11 +17,12 @@
 //!   largest (luma dilutes it with the red channel, in which the stain hardly absorbs).
 //! - [`smooth`]: a Gaussian filter of standard deviation σ pixels on every channel (separable,
 //!   truncated at 3σ, mirrored at the border), against speckle that fragments the patches.
-//! - [`paper_level`]: the density of the unstained paper, as the mode of the density
-//!   histogram (bins of 0.002), and its noise, from the spread of the pixels below the mode
-//!   (which stains cannot reach): `σ = 1.4826 · median(mode − D)`. Densities above
-//!   `mode + max(5σ, 0.01)` are stained; stained pixels below the first calibration point are
-//!   *below range* (not unstained), and counted.
+//! - [`paper_level`]: the density of the unstained background (paper, or the scanner lid where
+//!   it dominates), as the mode of the density histogram (bins of 0.002), and its noise, from
+//!   the half width at half maximum of the mode's peak on its low side (which stains cannot
+//!   reach, and which a second, paler background does not widen): `σ = HWHM / 1.1774`.
+//!   Densities above `mode + max(5σ, 0.01)` are stained; stained pixels below the first
+//!   calibration point are *below range* (not unstained), and counted.
 
 use crate::error::{num, Error, Result};
 use ndarray::Array2;
@@ -415,16 +416,19 @@ pub fn paper_level(densities: impl Iterator<Item = f64> + Clone) -> PaperLevel {
     }
     let mode_bin = (0..nb).max_by_key(|&k| (hist[k], usize::MAX - k)).unwrap_or(0);
     let mode = (mode_bin as f64 + 0.5) * BIN;
-    let mut below: Vec<f64> = densities
-        .filter(|&d| d <= mode)
-        .map(|d| mode - d)
-        .collect();
-    below.sort_by(f64::total_cmp);
-    let noise = if below.is_empty() {
-        0.0
-    } else {
-        1.4826 * below[below.len() / 2]
-    };
+    // Half width at half maximum on the low side, interpolated between bins.
+    let half = hist[mode_bin] as f64 / 2.0;
+    let mut hwhm = 0.0;
+    for k in (0..mode_bin).rev() {
+        if (hist[k] as f64) < half {
+            let (a, b) = (hist[k] as f64, hist[k + 1] as f64);
+            let t = if b > a { (b - half) / (b - a) } else { 0.0 };
+            hwhm = ((mode_bin - k - 1) as f64 + t) * BIN;
+            break;
+        }
+    }
+    let _ = densities;
+    let noise = hwhm / (2.0 * std::f64::consts::LN_2).sqrt();
     PaperLevel {
         density: mode,
         noise,
