@@ -123,7 +123,10 @@ pub fn require_finite(name: &str, value: f64) -> Result<f64> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(Error::param(name, format!("must be finite, got {}", num(value))))
+        Err(Error::param(
+            name,
+            format!("must be finite, got {}", num(value)),
+        ))
     }
 }
 

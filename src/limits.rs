@@ -187,7 +187,9 @@ mod tests {
     fn oversized_requests_are_named_errors() {
         let e = check_grid("--n", 65536, 65536, 8).unwrap_err().to_string();
         assert!(e.contains("--n") && e.contains("resource limit"), "{e}");
-        let e = check_grid("--nx", usize::MAX, 3, 8).unwrap_err().to_string();
+        let e = check_grid("--nx", usize::MAX, 3, 8)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("--nx"), "{e}");
         assert!(check_grid("--n", 64, 64, 8).is_ok());
         let e = check_steps("--cycles", 1_000_000, "--steps-per-cycle", 40)

@@ -513,7 +513,10 @@ mod tests {
             v
         };
         assert_eq!(names(&out), vec!["a.csv", "old.csv"]);
-        assert_eq!(std::fs::read_to_string(out.join("a.csv")).unwrap(), "previous a");
+        assert_eq!(
+            std::fs::read_to_string(out.join("a.csv")).unwrap(),
+            "previous a"
+        );
         // A commit: both appear.
         let mut set = OutputSet::in_dir(&out.join("sub"), "--out-dir").unwrap();
         write_string_atomic(&set.path("a.csv").unwrap(), "new a").unwrap();
@@ -559,10 +562,8 @@ mod tests {
     fn files_via_path_are_readable_by_others() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("x.bin");
-        write_atomic_via_path(&p, |t| {
-            std::fs::write(t, b"x").map_err(|e| Error::io(t, e))
-        })
-        .unwrap();
+        write_atomic_via_path(&p, |t| std::fs::write(t, b"x").map_err(|e| Error::io(t, e)))
+            .unwrap();
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;

@@ -15,7 +15,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn surfaces(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("surfaces").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("surfaces")
+        .join(name)
 }
 
 fn stats(file: &Path, extra: &[&str]) -> serde_json::Value {
@@ -55,13 +57,25 @@ const REFERENCE: [Reference; 4] = [
     (
         "missing-points-matrix.csv",
         62,
-        [7.688766141944543e-08, 0.10604066681197791, 0.08449342450954102],
-        [7.607385066802141e-08, 0.1032336471199715, 0.0826317049450782],
+        [
+            7.688766141944543e-08,
+            0.10604066681197791,
+            0.08449342450954102,
+        ],
+        [
+            7.607385066802141e-08,
+            0.1032336471199715,
+            0.0826317049450782,
+        ],
     ),
     (
         "missing-points-periodic.csv",
         32,
-        [4.851409652601028e-07, 0.46967605571128884, 0.335581316558742],
+        [
+            4.851409652601028e-07,
+            0.46967605571128884,
+            0.335581316558742,
+        ],
         [
             4.749435836894495e-07,
             0.46954437839192775,
@@ -127,8 +141,8 @@ fn missing_points_survive_conversion_to_every_format() {
         assert_eq!(got, want, "{ext}");
     }
     // The x3p written by asperity carries a validity mask.
-    let mut z = zip::ZipArchive::new(std::fs::File::open(dir.path().join("m.x3p")).unwrap())
-        .unwrap();
+    let mut z =
+        zip::ZipArchive::new(std::fs::File::open(dir.path().join("m.x3p")).unwrap()).unwrap();
     assert!(z.by_name("bindata/valid.bin").is_ok());
 }
 

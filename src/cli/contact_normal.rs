@@ -57,7 +57,11 @@ pub struct NormalArgs {
 /// Load the surface: a file (its missing points filled when asked), or the reference
 /// generated surface (on `grid` points per side). Checked against the grid limit and for a
 /// usable contact surface (`asperity::sanity::contact_surface`).
-fn load_surface(path: Option<&Path>, fill: Option<Fill>, grid: Option<usize>) -> Result<(Grid2, String)> {
+fn load_surface(
+    path: Option<&Path>,
+    fill: Option<Fill>,
+    grid: Option<usize>,
+) -> Result<(Grid2, String)> {
     let (grid, source) = match path {
         Some(p) => {
             let (grid, report) = asperity::surface::missing::load_area(p, fill)?;
@@ -311,6 +315,10 @@ pub fn run(args: NormalArgs) -> Result<()> {
         println!("kn ∝ p^β fit over the sweep: β = {beta:.4}");
     }
     let written = out.commit()?;
-    println!("wrote {} files in {}", written.len(), args.out_dir.display());
+    println!(
+        "wrote {} files in {}",
+        written.len(),
+        args.out_dir.display()
+    );
     Ok(())
 }

@@ -91,7 +91,9 @@ fn check_slip_force(baseline: &BaselineSource, record: &Record) -> Result<()> {
     let (lo, hi) = record
         .force_n
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &f| (a.min(f), c.max(f)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &f| {
+            (a.min(f), c.max(f))
+        });
     let amplitude = 0.5 * (hi - lo);
     let ratio = slip / amplitude;
     if !(ratio.is_finite() && (1e-2..=1e2).contains(&ratio)) {

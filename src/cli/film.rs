@@ -190,7 +190,10 @@ fn channel_from_flags(name: &str, stain: Option<&[f64]>) -> Result<Channel> {
                     "`complement` needs the stain's colour: give --stain-rgb R,G,B",
                 )
             })?;
-            if s.len() != 3 || s.iter().any(|v| !(v.is_finite() && (0.0..=255.0).contains(v))) {
+            if s.len() != 3
+                || s.iter()
+                    .any(|v| !(v.is_finite() && (0.0..=255.0).contains(v)))
+            {
                 return Err(Error::param(
                     "--stain-rgb",
                     "needs three values R,G,B in 0–255",
@@ -229,15 +232,19 @@ pub fn run(args: FilmArgs) -> Result<()> {
     };
     let channel = channel_from_flags(&args.channel, args.stain_rgb.as_deref())?;
     let mut img = scan::read_rgb(&args.image)?;
-    let (pixel_size_mm, pixel_source) = match args.pixel_size_mm {
+    let (pixel_size_m, pixel_source) = match args.pixel_size_mm {
         Some(v) => (
-            asperity::error::require_positive("--pixel-size-mm", v)?,
+            asperity::error::require_positive("--pixel-size-mm", v)? * 1e-3,
             "--pixel-size-mm".to_string(),
         ),
         None => match scan::resolution(&args.image)? {
             Some(r) => (
-                r.pixel_size_mm(),
-                format!("{} dpi declared by the image ({})", r.dpi, r.source),
+                r.pixel_size_m,
+                format!(
+                    "{} dpi declared by the image ({})",
+                    asperity::error::num((r.dpi * 1e6).round() / 1e6),
+                    r.source
+                ),
             ),
             None => {
                 return Err(Error::param(
@@ -250,7 +257,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
             }
         },
     };
-    let pixel_size_m = pixel_size_mm * 1e-3;
+    let pixel_size_mm = pixel_size_m * 1e3;
     if let Some(s) = args.smooth_mm {
         asperity::error::require_positive("--smooth-mm", s)?;
         scan::smooth(&mut img, s / pixel_size_mm)
@@ -261,8 +268,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
     if let ColourToPressure::Density(d) = &mut reader {
         d.channel = channel;
         if let Some(st) = &args.stain_rgb {
-            if st.len() != 3 || st.iter().any(|v| !(v.is_finite() && (0.0..=255.0).contains(v))) {
-                return Err(Error::param("--stain-rgb", "needs three values R,G,B in 0–255"));
+            if st.len() != 3
+                || st
+                    .iter()
+                    .any(|v| !(v.is_finite() && (0.0..=255.0).contains(v)))
+            {
+                return Err(Error::param(
+                    "--stain-rgb",
+                    "needs three values R,G,B in 0–255",
+                ));
             }
             *d = d
                 .clone()
@@ -288,7 +302,8 @@ pub fn run(args: FilmArgs) -> Result<()> {
             }
             None => {
                 let (w, h) = img.dim();
-                let p = scan::paper_level((0..w * h).map(|k| channel.density(img.rgb(k % w, k / w))));
+                let p =
+                    scan::paper_level((0..w * h).map(|k| channel.density(img.rgb(k % w, k / w))));
                 paper = Some(p);
                 p.stained_above.min(first)
             }
@@ -393,8 +408,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
                     .patches
                     .iter()
                     .map(|r| {
-                        (4.0 * r.pixels.len() as f64 / std::f64::consts::PI).sqrt()
-                            * pixel_size_mm
+                        (4.0 * r.pixels.len() as f64 / std::f64::consts::PI).sqrt() * pixel_size_mm
                     })
                     .collect();
                 let (dmin, dmax) = diam
@@ -424,8 +438,10 @@ pub fn run(args: FilmArgs) -> Result<()> {
     // Stained patches entirely below the measuring range (not regions: no pressure is known).
     let mut below_range_patches = Vec::new();
     if args.roi_rect_mm.is_none() && args.roi_polygon_mm.is_none() {
-        let taken: std::collections::HashSet<(usize, usize)> =
-            regions.iter().flat_map(|r| r.pixels.iter().copied()).collect();
+        let taken: std::collections::HashSet<(usize, usize)> = regions
+            .iter()
+            .flat_map(|r| r.pixels.iter().copied())
+            .collect();
         for r in detect_below_range(&map, &patch_options)?.patches {
             if r.pixels.iter().any(|p| taken.contains(p)) {
                 continue;
@@ -523,7 +539,10 @@ pub fn run(args: FilmArgs) -> Result<()> {
         let fit = fits[region_idx].as_ref().ok_or_else(|| {
             Error::param(
                 "--nodes-region",
-                format!("region {} could not be fitted (see the warning above)", region.id),
+                format!(
+                    "region {} could not be fitted (see the warning above)",
+                    region.id
+                ),
             )
         })?;
         let nodes = read_nodes_csv(nodes_path)?;

@@ -37,7 +37,6 @@ pub struct ConvertArgs {
     fill: Option<Fill>,
 }
 
-
 #[derive(clap::Args)]
 pub struct CombineArgs {
     /// Height map of body 1 (any readable area format).
@@ -314,7 +313,10 @@ fn stats(a: StatsArgs) -> Result<()> {
         None => None,
     };
     let mut out = match &psd_paths {
-        Some((csv, png)) => Some(OutputSet::for_files(&[csv.clone(), png.clone()], "--psd-out")?),
+        Some((csv, png)) => Some(OutputSet::for_files(
+            &[csv.clone(), png.clone()],
+            "--psd-out",
+        )?),
         None => None,
     };
     let pb = spinner(&format!("reading {}", a.file.display()));
@@ -339,9 +341,9 @@ fn stats(a: StatsArgs) -> Result<()> {
                 ),
             ))
         }
-        Some(_) => Some(
-            surface::stats::power_spectrum(&topo, detrend).map_err(|e| e.in_file(&a.file))?,
-        ),
+        Some(_) => {
+            Some(surface::stats::power_spectrum(&topo, detrend).map_err(|e| e.in_file(&a.file))?)
+        }
         None => None,
     };
     let t_stats = t1.elapsed().as_secs_f64();
@@ -622,7 +624,10 @@ fn convert(a: ConvertArgs) -> Result<()> {
         .unwrap_or_default();
     for p in &a.out {
         let staged = out.file(p, "--out")?;
-        match (&topo, p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))) {
+        match (
+            &topo,
+            p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
+        ) {
             (Topography::Area(g), true) => surface::io::png::write(&staged, g, &title)?,
             _ => surface::io::write_topography(&staged, &topo)?,
         }

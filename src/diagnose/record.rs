@@ -240,7 +240,10 @@ impl Record {
                     return Err(Error::parse(
                         path,
                         line,
-                        format!("column `{name}`: a normal force must be > 0, got {}", crate::error::num(n)),
+                        format!(
+                            "column `{name}`: a normal force must be > 0, got {}",
+                            crate::error::num(n)
+                        ),
                     ));
                 }
                 v.push(n);

@@ -83,11 +83,19 @@ impl FilmMap {
         if width == 0 || height == 0 {
             return Err(Error::Data("film image has no pixels".into()));
         }
-        Self::from_image(&RgbImage::from_fn(width, height, rgb_at), reader, pixel_size_m)
+        Self::from_image(
+            &RgbImage::from_fn(width, height, rgb_at),
+            reader,
+            pixel_size_m,
+        )
     }
 
     /// Build the map from an image in the film frame.
-    pub fn from_image(img: &RgbImage, reader: &ColourToPressure, pixel_size_m: f64) -> Result<Self> {
+    pub fn from_image(
+        img: &RgbImage,
+        reader: &ColourToPressure,
+        pixel_size_m: f64,
+    ) -> Result<Self> {
         crate::error::require_positive("pixel_size_m", pixel_size_m)?;
         let (width, height) = img.dim();
         if width == 0 || height == 0 {
@@ -371,7 +379,9 @@ fn convex_hull_area(mut p: Vec<(f64, f64)>) -> f64 {
             Box::new(p.iter().rev())
         };
         for &q in iter {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0 {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(q);
@@ -438,7 +448,10 @@ fn detect_components(
     if !(opts.min_solidity.is_finite() && (0.0..=1.0).contains(&opts.min_solidity)) {
         return Err(Error::param(
             "min_solidity",
-            format!("must lie in [0, 1], got {}", crate::error::num(opts.min_solidity)),
+            format!(
+                "must lie in [0, 1], got {}",
+                crate::error::num(opts.min_solidity)
+            ),
         ));
     }
     let (nx, ny) = map.dim();

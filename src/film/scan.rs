@@ -134,6 +134,8 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
 pub struct Resolution {
     /// Dots per inch (square pixels).
     pub dpi: f64,
+    /// Pixel size (m), from the unit the file uses (exact for pixels per metre).
+    pub pixel_size_m: f64,
     /// Where it was read: `"PNG pHYs"`, `"TIFF XResolution"`, `"JPEG JFIF"`.
     pub source: &'static str,
 }
@@ -141,11 +143,18 @@ pub struct Resolution {
 impl Resolution {
     /// Pixel size in mm.
     pub fn pixel_size_mm(&self) -> f64 {
-        25.4 / self.dpi
+        self.pixel_size_m * 1e3
     }
 }
 
-fn square(path: &Path, x: f64, y: f64, source: &'static str) -> Result<Option<Resolution>> {
+/// Square pixels of `x`, `y` dots per `unit_m` metres.
+fn square(
+    path: &Path,
+    x: f64,
+    y: f64,
+    unit_m: f64,
+    source: &'static str,
+) -> Result<Option<Resolution>> {
     if !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0) {
         return Ok(None);
     }
@@ -156,12 +165,16 @@ fn square(path: &Path, x: f64, y: f64, source: &'static str) -> Result<Option<Re
             format!(
                 "the image declares non-square pixels ({} × {} dpi, {source}): give \
                  --pixel-size-mm or rescan with square pixels",
-                num(x),
-                num(y)
+                num(x * 0.0254 / unit_m),
+                num(y * 0.0254 / unit_m)
             ),
         ));
     }
-    Ok(Some(Resolution { dpi: x, source }))
+    Ok(Some(Resolution {
+        dpi: x * 0.0254 / unit_m,
+        pixel_size_m: unit_m / x,
+        source,
+    }))
 }
 
 fn png_resolution(path: &Path, b: &[u8]) -> Result<Option<Resolution>> {
@@ -175,7 +188,7 @@ fn png_resolution(path: &Path, b: &[u8]) -> Result<Option<Resolution>> {
             let y = u32::from_be_bytes([d[4], d[5], d[6], d[7]]) as f64;
             // Unit 1: pixels per metre; 0: aspect ratio only.
             return if d[8] == 1 {
-                square(path, x * 0.0254, y * 0.0254, "PNG pHYs")
+                square(path, x, y, 1.0, "PNG pHYs")
             } else {
                 Ok(None)
             };
@@ -199,8 +212,8 @@ fn jpeg_resolution(path: &Path, b: &[u8]) -> Result<Option<Resolution>> {
             let x = u16::from_be_bytes([d[3], d[4]]) as f64;
             let y = u16::from_be_bytes([d[5], d[6]]) as f64;
             return match units {
-                1 => square(path, x, y, "JPEG JFIF"),
-                2 => square(path, x * 2.54, y * 2.54, "JPEG JFIF"),
+                1 => square(path, x, y, 0.0254, "JPEG JFIF"),
+                2 => square(path, x, y, 0.01, "JPEG JFIF"),
                 _ => Ok(None),
             };
         }
@@ -253,13 +266,13 @@ fn tiff_resolution(path: &Path, b: &[u8]) -> Result<Option<Resolution>> {
             _ => {}
         }
     }
-    let f = match unit {
-        2 => 1.0,
-        3 => 2.54,
+    let unit_m = match unit {
+        2 => 0.0254,
+        3 => 0.01,
         _ => return Ok(None),
     };
     match (x, y) {
-        (Some(x), Some(y)) => square(path, x * f, y * f, "TIFF XResolution"),
+        (Some(x), Some(y)) => square(path, x, y, unit_m, "TIFF XResolution"),
         _ => Ok(None),
     }
 }
@@ -414,7 +427,9 @@ pub fn paper_level(densities: impl Iterator<Item = f64> + Clone) -> PaperLevel {
         let k = ((d.max(0.0) / BIN) as usize).min(nb - 1);
         hist[k] += 1;
     }
-    let mode_bin = (0..nb).max_by_key(|&k| (hist[k], usize::MAX - k)).unwrap_or(0);
+    let mode_bin = (0..nb)
+        .max_by_key(|&k| (hist[k], usize::MAX - k))
+        .unwrap_or(0);
     let mode = (mode_bin as f64 + 0.5) * BIN;
     // Half width at half maximum on the low side, interpolated between bins.
     let half = hist[mode_bin] as f64 / 2.0;
@@ -452,7 +467,12 @@ mod tests {
     fn smoothing_keeps_constants_and_the_mean() {
         let f = Array2::from_shape_fn((20, 15), |(i, j)| ((i * 3 + j) % 7) as f64);
         let s = smooth_field(&f, 1.5);
-        assert!((s.sum() - f.sum()).abs() < 1e-6 * f.sum(), "{} {}", s.sum(), f.sum());
+        assert!(
+            (s.sum() - f.sum()).abs() < 1e-6 * f.sum(),
+            "{} {}",
+            s.sum(),
+            f.sum()
+        );
         let c = smooth_field(&Array2::from_elem((9, 9), 4.0), 2.0);
         assert!(c.iter().all(|v| (v - 4.0).abs() < 1e-12));
     }
@@ -484,7 +504,7 @@ mod tests {
         let p = dir.path().join("a.jpg");
         std::fs::write(&p, &jpg).unwrap();
         let r = resolution(&p).unwrap().unwrap();
-        assert_eq!(r.dpi, 200.0);
+        assert!((r.dpi - 200.0).abs() < 1e-12);
         assert!((r.pixel_size_mm() - 0.127).abs() < 1e-12);
         // A PNG written with pHYs: 11811 px/m = 300 dpi (to 0.01 %).
         let png = dir.path().join("a.png");
@@ -497,7 +517,10 @@ mod tests {
                 yppu: 11811,
                 unit: ::png::Unit::Meter,
             }));
-            e.write_header().unwrap().write_image_data(&[255; 12]).unwrap();
+            e.write_header()
+                .unwrap()
+                .write_image_data(&[255; 12])
+                .unwrap();
         }
         let r = resolution(&png).unwrap().unwrap();
         assert!((r.dpi - 300.0).abs() < 0.05, "{r:?}");

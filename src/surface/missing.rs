@@ -170,7 +170,11 @@ fn neighbours(
     periodic: bool,
 ) -> impl Iterator<Item = (usize, usize)> {
     let mut v: Vec<(usize, usize)> = Vec::with_capacity(4);
-    let axes: &[(usize, usize)] = if ny == 1 { &[(0, nx)] } else { &[(0, nx), (1, ny)] };
+    let axes: &[(usize, usize)] = if ny == 1 {
+        &[(0, nx)]
+    } else {
+        &[(0, nx), (1, ny)]
+    };
     for &(axis, n) in axes {
         let k = if axis == 0 { i } else { j };
         for step in [1isize, -1] {
@@ -385,7 +389,13 @@ fn fill_nearest(h: &mut Array2<f64>, dx: f64, dy: f64, periodic: bool) {
     let mut src_i = Array2::from_elem((nx, ny), usize::MAX);
     for j in 0..ny {
         let f: Vec<f64> = (0..nx)
-            .map(|i| if h[[i, j]].is_nan() { f64::INFINITY } else { 0.0 })
+            .map(|i| {
+                if h[[i, j]].is_nan() {
+                    f64::INFINITY
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let (d, a) = edt_1d(&f, dx, periodic);
         for i in 0..nx {

@@ -617,7 +617,8 @@ fn check_not_flat(rq: f64, rku: f64, max_abs: f64) -> Result<()> {
 
 /// Largest |height| of the measured (non-NaN) values.
 fn max_abs<'a>(h: impl Iterator<Item = &'a f64>) -> f64 {
-    h.filter(|v| !v.is_nan()).fold(0.0f64, |m, v| m.max(v.abs()))
+    h.filter(|v| !v.is_nan())
+        .fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
 /// Zero-mean, detrended uniform heights of a profile (resampled when nonuniform) for ACF / PSD.
@@ -976,8 +977,16 @@ fn acf_area_masked(h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> (Acf, A
             if c[[i, j]] < 0.5 {
                 continue;
             }
-            let di = if i <= hx { i as f64 } else { i as f64 - nx as f64 };
-            let dj = if j <= hy { j as f64 } else { j as f64 - ny as f64 };
+            let di = if i <= hx {
+                i as f64
+            } else {
+                i as f64 - nx as f64
+            };
+            let dj = if j <= hy {
+                j as f64
+            } else {
+                j as f64 - ny as f64
+            };
             bins.add((di * dx).hypot(dj * dy), v / c[[i, j]] / c0, 1);
         }
     } else {
@@ -1062,11 +1071,7 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
     let (gx, gy) = masked_slopes_area(&h, m.dx, m.dy, m.periodic);
     let sx = rms_finite(gx.iter().copied());
     let sy = rms_finite(gy.iter().copied());
-    let grad = rms_finite(
-        gx.iter()
-            .zip(&gy)
-            .map(|(a, b)| (a * a + b * b).sqrt()),
-    );
+    let grad = rms_finite(gx.iter().zip(&gy).map(|(a, b)| (a * a + b * b).sqrt()));
     if !(sx.is_finite() && sy.is_finite() && grad.is_finite()) {
         return Err(Error::Data(
             "no two neighbouring points are both measured: slopes cannot be computed".into(),

@@ -83,7 +83,10 @@ pub fn read(path: &Path, text: &str) -> Result<Profile> {
         let span = last - first;
         if span + 2.0 * step < length * (1.0 - 1e-3) {
             let expected = if step > 0.0 {
-                format!(" (about {:.0} samples at the header's Resolution)", length / step)
+                format!(
+                    " (about {:.0} samples at the header's Resolution)",
+                    length / step
+                )
             } else {
                 String::new()
             };

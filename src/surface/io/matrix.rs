@@ -19,9 +19,9 @@ use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::output::write_atomic;
 use crate::surface::io::text::{comment_pairs, fields, height_or_missing, number, numbered_lines};
+use crate::surface::io::units::metres_per_unit;
 use crate::surface::missing::MaskedGrid;
 use crate::surface::topography::Topography;
-use crate::surface::io::units::metres_per_unit;
 use ndarray::Array2;
 use std::path::Path;
 
@@ -122,11 +122,7 @@ pub fn write_values(path: &Path, h: &Array2<f64>, dx: f64, dy: f64, periodic: bo
     write_atomic(path, |w| {
         let io = |e| Error::io(path, e);
         writeln!(w, "# asperity height matrix").map_err(io)?;
-        writeln!(
-            w,
-            "# unit: m, dx_m: {dx}, dy_m: {dy}, periodic: {periodic}"
-        )
-        .map_err(io)?;
+        writeln!(w, "# unit: m, dx_m: {dx}, dy_m: {dy}, periodic: {periodic}").map_err(io)?;
         writeln!(
             w,
             "# rows: y (j = 0..{}), columns: x (i = 0..{})",

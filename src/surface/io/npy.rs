@@ -48,7 +48,15 @@ pub fn sidecar_path(path: &Path) -> PathBuf {
 
 /// Write `grid` to `path` (.npy) and its sidecar.
 pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
-    write_field(path, &grid.heights, grid.dx, grid.dy, grid.periodic, "m", None)
+    write_field(
+        path,
+        &grid.heights,
+        grid.dx,
+        grid.dy,
+        grid.periodic,
+        "m",
+        None,
+    )
 }
 
 /// Write any field on a regular grid (NaN allowed: missing points) to `path` (.npy) and its
@@ -136,8 +144,8 @@ pub fn read_header(path: &Path) -> Result<NpyHeader> {
     let fortran_order = header_value(&dict, "fortran_order")
         .map(|v| v == "True")
         .ok_or_else(|| bad("the .npy header has no 'fortran_order'".into()))?;
-    let shape_text = header_value(&dict, "shape")
-        .ok_or_else(|| bad("the .npy header has no 'shape'".into()))?;
+    let shape_text =
+        header_value(&dict, "shape").ok_or_else(|| bad("the .npy header has no 'shape'".into()))?;
     let shape = shape_text
         .trim_matches(|c| c == '(' || c == ')')
         .split(',')
@@ -145,7 +153,11 @@ pub fn read_header(path: &Path) -> Result<NpyHeader> {
         .filter(|t| !t.is_empty())
         .map(|t| t.parse::<usize>())
         .collect::<std::result::Result<Vec<usize>, _>>()
-        .map_err(|_| bad(format!("the .npy shape `{shape_text}` is not a tuple of sizes")))?;
+        .map_err(|_| {
+            bad(format!(
+                "the .npy shape `{shape_text}` is not a tuple of sizes"
+            ))
+        })?;
     Ok(NpyHeader {
         descr,
         fortran_order,
@@ -171,9 +183,13 @@ fn check_header(path: &Path) -> Result<(usize, usize)> {
         )));
     }
     let (nx, ny) = (h.shape[0], h.shape[1]);
-    let file_len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let file_len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
     let data = file_len.saturating_sub(h.data_offset);
-    let want = (nx as u64).checked_mul(ny as u64).and_then(|n| n.checked_mul(8));
+    let want = (nx as u64)
+        .checked_mul(ny as u64)
+        .and_then(|n| n.checked_mul(8));
     if want != Some(data) {
         return Err(bad(format!(
             "the header promises {nx} × {ny} float64 values ({} bytes) but the file holds {data} \

@@ -258,7 +258,10 @@ fn read_entry(
             return Err(Error::parse(
                 path,
                 0,
-                format!("x3p {what} `{name}` truncated: {} of {want} bytes", buf.len()),
+                format!(
+                    "x3p {what} `{name}` truncated: {} of {want} bytes",
+                    buf.len()
+                ),
             ));
         }
     }
@@ -305,7 +308,14 @@ pub fn read_topography(path: &Path) -> Result<Topography> {
     let n = d.nx * d.ny;
     let w = bytes_per_value(d.data_type);
     let expected = (n * w) as u64;
-    let bin = read_entry(path, &mut zip, &d.link, "point data", Some(expected), expected)?;
+    let bin = read_entry(
+        path,
+        &mut zip,
+        &d.link,
+        "point data",
+        Some(expected),
+        expected,
+    )?;
     check_md5(path, &bin, d.md5.as_ref(), "point data")?;
     let valid: Option<Vec<u8>> = match &d.valid_link {
         None => None,
