@@ -206,11 +206,12 @@ pub struct OutputSet {
     committed: bool,
 }
 
-/// `path` with an explicit `./` when it has no directory part.
+/// A relative `path` with an explicit leading `./` (so that it lies below the anchor `.`).
 fn with_dir(path: &Path) -> PathBuf {
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => path.to_path_buf(),
-        _ => Path::new(".").join(path),
+    if path.is_relative() && !path.starts_with(".") {
+        Path::new(".").join(path)
+    } else {
+        path.to_path_buf()
     }
 }
 

@@ -32,10 +32,10 @@ pub struct NormalArgs {
     #[arg(long, value_delimiter = ',', num_args = 1..)]
     pressures_pa: Option<Vec<f64>>,
     /// Young's modulus of both bodies (Pa).
-    #[arg(long, default_value_t = 210e9)]
+    #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
     youngs_modulus_pa: f64,
     /// Poisson's ratio of both bodies (-).
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     poisson_ratio: f64,
     /// Output directory.
     #[arg(long, default_value = "out/contact-normal")]
@@ -44,13 +44,13 @@ pub struct NormalArgs {
     #[arg(long)]
     pressure_maps: bool,
     /// Tolerance on the relative gap error of the Polonsky–Keer solver.
-    #[arg(long, default_value_t = NormalOptions::DEFAULT_TOLERANCE)]
+    #[arg(long, default_value_t = NormalOptions::DEFAULT_TOLERANCE, allow_hyphen_values = true)]
     tolerance: f64,
     /// Iteration cap per solve (exceeding it is an error).
     #[arg(long, default_value_t = NormalOptions::default().max_iterations)]
     max_iterations: usize,
     /// Relative pressure step ε of the central difference giving kn.
-    #[arg(long, default_value_t = sweep::DEFAULT_DERIVATIVE_STEP)]
+    #[arg(long, default_value_t = sweep::DEFAULT_DERIVATIVE_STEP, allow_hyphen_values = true)]
     derivative_step: f64,
 }
 

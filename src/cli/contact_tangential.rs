@@ -47,16 +47,16 @@ pub struct TangentialArgs {
     #[arg(long)]
     grid: Option<usize>,
     /// Young's modulus of both bodies (Pa).
-    #[arg(long, default_value_t = 210e9)]
+    #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
     youngs_modulus_pa: f64,
     /// Poisson's ratio of both bodies (-).
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     poisson_ratio: f64,
     /// Compliance operator of the tangential solver: auto, dense or fft.
     #[arg(long, default_value = "auto")]
     operator: String,
     /// Tolerance of the tangential solver (relative natural residual).
-    #[arg(long, default_value_t = TangentialOptions::default().tolerance)]
+    #[arg(long, default_value_t = TangentialOptions::default().tolerance, allow_hyphen_values = true)]
     tolerance: f64,
     /// Iteration cap per step (exceeding it is an error).
     #[arg(long, default_value_t = TangentialOptions::default().max_iterations)]

@@ -38,10 +38,10 @@ pub struct Flags {
     #[arg(long, requires_all = ["pressure_pa", "area_m2"])]
     pub table: Option<PathBuf>,
     /// Nominal contact pressure (Pa) at which the table is read.
-    #[arg(long, requires = "table")]
+    #[arg(long, requires = "table", allow_hyphen_values = true)]
     pub pressure_pa: Option<f64>,
     /// Nominal contact area (m²): per-area stiffnesses × area give the element's (N/m).
-    #[arg(long, requires = "table")]
+    #[arg(long, requires = "table", allow_hyphen_values = true)]
     pub area_m2: Option<f64>,
     /// Maximum number of effects to add (each must be supported by the held-out evidence).
     #[arg(long, default_value_t = 2)]
@@ -56,6 +56,7 @@ pub struct Flags {
 fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String)> {
     require_positive("--pressure-pa", p)?;
     require_positive("--area-m2", a)?;
+    asperity::limits::check_file_size(path, asperity::limits::MAX_TEXT_FILE_BYTES)?;
     let table = CalibrationTable::read_csv(path)?;
     let row = table.interpolate(p);
     let valanis = ValanisParams::new(row.e0_n_per_m3 * a, row.k, row.et_n_per_m3 * a, row.mu)?;

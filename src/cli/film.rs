@@ -176,6 +176,16 @@ fn plot_region(
     )
 }
 
+/// A region-of-interest error named by its flag.
+fn roi_error(e: Error, flag: &str) -> Error {
+    match e {
+        Error::InvalidParameter { message, .. } | Error::Data(message) => {
+            Error::param(flag, message)
+        }
+        other => other,
+    }
+}
+
 /// The channel of `--channel` (with `--stain-rgb` for `complement`).
 fn channel_from_flags(name: &str, stain: Option<&[f64]>) -> Result<Channel> {
     Ok(match name {
@@ -372,14 +382,14 @@ pub fn run(args: FilmArgs) -> Result<()> {
             y1: r[3] * 1e-3,
         };
         (
-            vec![roi_region(&map, &roi, 1).map_err(|e| super::rename_param(e, "--roi-rect-mm"))?],
+            vec![roi_region(&map, &roi, 1).map_err(|e| roi_error(e, "--roi-rect-mm"))?],
             0,
             0,
         )
     } else if let Some(p) = &args.roi_polygon_mm {
         (
             vec![roi_region(&map, &Roi::Polygon(parse_polygon(p)?), 1)
-                .map_err(|e| super::rename_param(e, "--roi-polygon-mm"))?],
+                .map_err(|e| roi_error(e, "--roi-polygon-mm"))?],
             0,
             0,
         )
