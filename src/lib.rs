@@ -29,6 +29,7 @@ pub mod limits;
 pub mod output;
 pub mod plot;
 pub mod sanity;
+pub mod shard;
 pub mod surface;
 pub mod testdata;
 

@@ -468,7 +468,7 @@ impl DensityCalibration {
             .max_by(|&a, &b| stain_rgb[a].total_cmp(&stain_rgb[b]))
             .unwrap_or(0)];
         let ratio = weak.density(stain_rgb) / self.channel.density(stain_rgb).max(1e-12);
-        if !(ratio < INK_DENSITY_RATIO) {
+        if ratio.is_nan() || ratio >= INK_DENSITY_RATIO {
             return Err(Error::param(
                 "stain colour",
                 format!(

@@ -101,7 +101,7 @@ impl MaskedGrid {
 }
 
 /// How missing points are filled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Fill {
     /// Harmonic (Laplace) interpolation from the measured neighbours.
@@ -308,7 +308,7 @@ fn fill_harmonic(h: &mut Array2<f64>, periodic: bool) -> Result<(usize, f64)> {
             .sqrt()
             / bnorm;
         rel = rel.max(true_res);
-        if !(rel <= 1e-10) {
+        if rel.is_nan() || rel > 1e-10 {
             return Err(Error::NonConvergence {
                 solver: "harmonic fill of missing points (conjugate gradients)".into(),
                 iterations,
