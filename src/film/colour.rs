@@ -700,16 +700,17 @@ mod tests {
         d.unstained_density = 0.02;
         assert_eq!(d.read([faint; 3]).class, PixelClass::BelowRange);
         assert_eq!(d.read([255.0; 3]).class, PixelClass::Unstained);
-        // A magenta stain read in green; black and blue ink are off-curve, the stain is not.
-        d.channel = crate::film::scan::Channel::Green;
-        let d = d.with_stain([230.0, 110.0, 125.0]).unwrap();
-        assert_eq!(d.read([240.0, 120.0, 130.0]).class, PixelClass::InRange);
-        assert_eq!(d.read([60.0, 60.0, 60.0]).class, PixelClass::OffCurve);
-        assert_eq!(d.read([40.0, 60.0, 160.0]).class, PixelClass::OffCurve);
         assert_eq!(d.read([0.0; 3]).class, PixelClass::AboveRange);
         let grey = 255.0 / 10f64.powf(0.3);
         let r = d.read([grey; 3]);
         assert!((r.pressure_pa - 3e6).abs() < 1e-3, "{r:?}");
         assert!(DensityCalibration::new(vec![(0.1, 1e6), (0.5, 0.5e6)], "d").is_err());
+        // A magenta stain read in green; black and blue ink are off-curve, the stain is not.
+        let mut m = DensityCalibration::new(vec![(0.1, 1e6), (0.5, 5e6)], "d").unwrap();
+        m.channel = crate::film::scan::Channel::Green;
+        let m = m.with_stain([230.0, 110.0, 125.0]).unwrap();
+        assert_eq!(m.read([240.0, 120.0, 130.0]).class, PixelClass::InRange);
+        assert_eq!(m.read([60.0, 60.0, 60.0]).class, PixelClass::OffCurve);
+        assert_eq!(m.read([40.0, 60.0, 160.0]).class, PixelClass::OffCurve);
     }
 }

@@ -632,6 +632,76 @@ fn uniform_profile_heights(p: &Profile, detrend: Detrend) -> Vec<f64> {
     }
 }
 
+/// Statistics of a profile from its moments `(Ra, Rq, Rsk, Rku)`, rms slope and ACF.
+fn profile_result(
+    p: &Profile,
+    detrend: Detrend,
+    (ra, rq, rsk, rku): (f64, f64, f64, f64),
+    slope: f64,
+    acf: &Acf,
+) -> SurfaceStats {
+    SurfaceStats {
+        kind: "profile",
+        uniform: p.is_uniform(),
+        periodic: p.periodic,
+        detrend,
+        nx: p.len(),
+        ny: 1,
+        missing_points: p.missing(),
+        dx_m: p.dx,
+        dy_m: None,
+        lx_m: p.length(),
+        ly_m: None,
+        ra_m: ra,
+        rq_m: rq,
+        rsk,
+        rku,
+        rms_slope: slope,
+        rms_slope_y: None,
+        rms_gradient: None,
+        correlation_length_1_over_e_m: acf.crossing((-1.0f64).exp()),
+        correlation_length_0_2_m: acf.crossing(0.2),
+        correlation_length_x_1_over_e_m: None,
+        correlation_length_y_1_over_e_m: None,
+    }
+}
+
+/// Statistics of an area (`nx × ny` points of spacing `dx × dy`, `missing` of them missing) from
+/// its moments, slopes `(x, y, gradient)` and ACFs `(radial, x, y)`.
+fn area_result(
+    (nx, ny, dx, dy, periodic, missing): (usize, usize, f64, f64, bool, usize),
+    detrend: Detrend,
+    (ra, rq, rsk, rku): (f64, f64, f64, f64),
+    (sx, sy, grad): (f64, f64, f64),
+    (radial, ax, ay): (&Acf, &Acf, &Acf),
+) -> SurfaceStats {
+    let e = (-1.0f64).exp();
+    SurfaceStats {
+        kind: "area",
+        uniform: true,
+        periodic,
+        detrend,
+        nx,
+        ny,
+        missing_points: missing,
+        dx_m: dx,
+        dy_m: Some(dy),
+        lx_m: nx as f64 * dx,
+        ly_m: Some(ny as f64 * dy),
+        ra_m: ra,
+        rq_m: rq,
+        rsk,
+        rku,
+        rms_slope: sx,
+        rms_slope_y: Some(sy),
+        rms_gradient: Some(grad),
+        correlation_length_1_over_e_m: radial.crossing(e),
+        correlation_length_0_2_m: radial.crossing(0.2),
+        correlation_length_x_1_over_e_m: ax.crossing(e),
+        correlation_length_y_1_over_e_m: ay.crossing(e),
+    }
+}
+
 fn profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
     if p.missing() > 0 {
         return masked_profile_stats(p, detrend);
@@ -658,30 +728,7 @@ fn profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
     };
     check_not_flat(rq, rku, max_abs(p.heights.iter()))?;
     let acf = acf_profile(&uniform_profile_heights(p, detrend), p.dx, p.periodic);
-    Ok(SurfaceStats {
-        kind: "profile",
-        uniform: p.is_uniform(),
-        periodic: p.periodic,
-        detrend,
-        nx: p.len(),
-        ny: 1,
-        missing_points: 0,
-        dx_m: p.dx,
-        dy_m: None,
-        lx_m: p.length(),
-        ly_m: None,
-        ra_m: ra,
-        rq_m: rq,
-        rsk,
-        rku,
-        rms_slope: slope,
-        rms_slope_y: None,
-        rms_gradient: None,
-        correlation_length_1_over_e_m: acf.crossing((-1.0f64).exp()),
-        correlation_length_0_2_m: acf.crossing(0.2),
-        correlation_length_x_1_over_e_m: None,
-        correlation_length_y_1_over_e_m: None,
-    })
+    Ok(profile_result(p, detrend, (ra, rq, rsk, rku), slope, &acf))
 }
 
 fn area_stats(g: &Grid2, detrend: Detrend) -> Result<SurfaceStats> {
@@ -696,31 +743,13 @@ fn area_stats(g: &Grid2, detrend: Detrend) -> Result<SurfaceStats> {
     check_not_flat(rq, rku, max_abs(g.heights.iter()))?;
     let (sx, sy, grad) = rms_slopes_area(&h, g.dx, g.dy, g.periodic);
     let (radial, ax, ay) = acf_area(&h, g.dx, g.dy, g.periodic);
-    let e = (-1.0f64).exp();
-    Ok(SurfaceStats {
-        kind: "area",
-        uniform: true,
-        periodic: g.periodic,
+    Ok(area_result(
+        (nx, ny, g.dx, g.dy, g.periodic, 0),
         detrend,
-        nx,
-        ny,
-        missing_points: 0,
-        dx_m: g.dx,
-        dy_m: Some(g.dy),
-        lx_m: g.lx(),
-        ly_m: Some(g.ly()),
-        ra_m: ra,
-        rq_m: rq,
-        rsk,
-        rku,
-        rms_slope: sx,
-        rms_slope_y: Some(sy),
-        rms_gradient: Some(grad),
-        correlation_length_1_over_e_m: radial.crossing(e),
-        correlation_length_0_2_m: radial.crossing(0.2),
-        correlation_length_x_1_over_e_m: ax.crossing(e),
-        correlation_length_y_1_over_e_m: ay.crossing(e),
-    })
+        (ra, rq, rsk, rku),
+        (sx, sy, grad),
+        (&radial, &ax, &ay),
+    ))
 }
 
 /// Statistics of a topography after removing the mean (or the plane).
@@ -1032,30 +1061,7 @@ fn masked_profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
     let hv: Vec<f64> = h.iter().copied().collect();
     let slope = rms_finite(masked_slopes_profile(&hv, p.dx, p.periodic).into_iter());
     let acf = acf_profile_masked(&h, p.dx, p.periodic);
-    Ok(SurfaceStats {
-        kind: "profile",
-        uniform: true,
-        periodic: p.periodic,
-        detrend,
-        nx: p.len(),
-        ny: 1,
-        missing_points: p.missing(),
-        dx_m: p.dx,
-        dy_m: None,
-        lx_m: p.length(),
-        ly_m: None,
-        ra_m: ra,
-        rq_m: rq,
-        rsk,
-        rku,
-        rms_slope: slope,
-        rms_slope_y: None,
-        rms_gradient: None,
-        correlation_length_1_over_e_m: acf.crossing((-1.0f64).exp()),
-        correlation_length_0_2_m: acf.crossing(0.2),
-        correlation_length_x_1_over_e_m: None,
-        correlation_length_y_1_over_e_m: None,
-    })
+    Ok(profile_result(p, detrend, (ra, rq, rsk, rku), slope, &acf))
 }
 
 fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
@@ -1078,31 +1084,13 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
         ));
     }
     let (radial, ax, ay) = acf_area_masked(&h, m.dx, m.dy, m.periodic);
-    let e = (-1.0f64).exp();
-    Ok(SurfaceStats {
-        kind: "area",
-        uniform: true,
-        periodic: m.periodic,
+    Ok(area_result(
+        (nx, ny, m.dx, m.dy, m.periodic, m.missing()),
         detrend,
-        nx,
-        ny,
-        missing_points: m.missing(),
-        dx_m: m.dx,
-        dy_m: Some(m.dy),
-        lx_m: nx as f64 * m.dx,
-        ly_m: Some(ny as f64 * m.dy),
-        ra_m: ra,
-        rq_m: rq,
-        rsk,
-        rku,
-        rms_slope: sx,
-        rms_slope_y: Some(sy),
-        rms_gradient: Some(grad),
-        correlation_length_1_over_e_m: radial.crossing(e),
-        correlation_length_0_2_m: radial.crossing(0.2),
-        correlation_length_x_1_over_e_m: ax.crossing(e),
-        correlation_length_y_1_over_e_m: ay.crossing(e),
-    })
+        (ra, rq, rsk, rku),
+        (sx, sy, grad),
+        (&radial, &ax, &ay),
+    ))
 }
 
 #[cfg(test)]

@@ -169,6 +169,21 @@ impl Topography {
         }
     }
 
+    /// A height map from a reader: [`Topography::MaskedArea`] when any height is NaN (a
+    /// missing point), [`Topography::Area`] otherwise; checked by the grid constructors.
+    pub fn from_heights(
+        heights: ndarray::Array2<f64>,
+        dx: f64,
+        dy: f64,
+        periodic: bool,
+    ) -> Result<Self> {
+        if heights.iter().any(|v| v.is_nan()) {
+            MaskedGrid::new(heights, dx, dy, periodic).map(Topography::MaskedArea)
+        } else {
+            Grid2::new(heights, dx, dy, periodic).map(Topography::Area)
+        }
+    }
+
     /// Number of missing points (0 for a complete topography).
     pub fn missing(&self) -> usize {
         match self {

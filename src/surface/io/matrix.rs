@@ -20,7 +20,6 @@ use crate::grid::Grid2;
 use crate::output::write_atomic;
 use crate::surface::io::text::{comment_pairs, fields, height_or_missing, number, numbered_lines};
 use crate::surface::io::units::metres_per_unit;
-use crate::surface::missing::MaskedGrid;
 use crate::surface::topography::Topography;
 use ndarray::Array2;
 use std::path::Path;
@@ -99,16 +98,8 @@ pub fn read(path: &Path, text: &str) -> Result<Topography> {
     }
     let (ny, nx) = (rows.len(), rows[0].len());
     let heights = Array2::from_shape_fn((nx, ny), |(i, j)| rows[j][i] * unit);
-    let wrap = |e: Error| Error::parse(path, 0, e.to_string());
-    if heights.iter().any(|v| v.is_nan()) {
-        MaskedGrid::new(heights, dx, dy, periodic)
-            .map(Topography::MaskedArea)
-            .map_err(wrap)
-    } else {
-        Grid2::new(heights, dx, dy, periodic)
-            .map(Topography::Area)
-            .map_err(wrap)
-    }
+    Topography::from_heights(heights, dx, dy, periodic)
+        .map_err(|e| Error::parse(path, 0, e.to_string()))
 }
 
 /// Write a height matrix (comma-separated, heights in m) atomically.

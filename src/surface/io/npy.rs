@@ -15,7 +15,6 @@
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::output::write_atomic;
-use crate::surface::missing::MaskedGrid;
 use crate::surface::topography::Topography;
 use ndarray::Array2;
 use ndarray_npy::{ReadNpyExt, WriteNpyExt};
@@ -258,16 +257,8 @@ pub fn read_topography(path: &Path) -> Result<Topography> {
             ),
         ));
     }
-    let wrap = |e: Error| Error::parse(path, 0, e.to_string());
-    if heights.iter().any(|v| v.is_nan()) {
-        MaskedGrid::new(heights, meta.dx_m, meta.dy_m, meta.periodic)
-            .map(Topography::MaskedArea)
-            .map_err(wrap)
-    } else {
-        Grid2::new(heights, meta.dx_m, meta.dy_m, meta.periodic)
-            .map(Topography::Area)
-            .map_err(wrap)
-    }
+    Topography::from_heights(heights, meta.dx_m, meta.dy_m, meta.periodic)
+        .map_err(|e| Error::parse(path, 0, e.to_string()))
 }
 
 /// Read a complete `.npy` height map (an error when points are missing).

@@ -343,16 +343,8 @@ pub fn read_topography(path: &Path) -> Result<Topography> {
             format!("x3p height at point ({i}, {j}) is {v}"),
         ));
     }
-    let wrap = |e: Error| Error::parse(path, 0, e.to_string());
-    if heights.iter().any(|v| v.is_nan()) {
-        MaskedGrid::new(heights, d.dx, d.dy, d.periodic)
-            .map(Topography::MaskedArea)
-            .map_err(wrap)
-    } else {
-        Grid2::new(heights, d.dx, d.dy, d.periodic)
-            .map(Topography::Area)
-            .map_err(wrap)
-    }
+    Topography::from_heights(heights, d.dx, d.dy, d.periodic)
+        .map_err(|e| Error::parse(path, 0, e.to_string()))
 }
 
 /// Read a complete x3p height map (an error when points are missing).
