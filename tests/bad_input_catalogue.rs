@@ -485,7 +485,7 @@ fn defaults_that_no_longer_surprise() {
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains("normal contact (pressures):"), "{err}");
+    assert!(err.contains("normal contact: seed-1"), "{err}");
     assert!(d.join("cn/normal_sweep.csv").exists());
     assert!(!tree(d)
         .iter()

@@ -266,7 +266,7 @@ fn bad_x3p_is_refused() {
     let nan = d.join("nan.x3p");
     rewrite_x3p(&good, &nan, |n, mut b| {
         if n == "main.xml" {
-            // Drop the checksum so the NaN itself is what is caught.
+            // Drop the checksum so the NaN itself is what is read.
             let x = String::from_utf8(b).unwrap();
             let start = x.find("<MD5ChecksumPointData>").unwrap();
             let end = x.find("</MD5ChecksumPointData>").unwrap() + "</MD5ChecksumPointData>".len();
@@ -277,7 +277,11 @@ fn bad_x3p_is_refused() {
         }
         b
     });
-    assert_stats_fails(&nan, &["nan.x3p", "(1, 0)", "missing data"]);
+    // A NaN height is a missing point: the statistics exclude it, the PSD needs it filled.
+    assert_stats_fails(
+        &nan,
+        &["--psd-out", "nan.x3p", "1 missing points", "--fill"],
+    );
 
     let noxml = d.join("noxml.x3p");
     rewrite_x3p(&good, &noxml, |n, b| {
