@@ -3,6 +3,8 @@
 //!     cargo bench --bench response                 # full case: 4 levels × 200 points
 //!     cargo bench --bench response -- --quick      # one level, ≥ 10 points
 //!     cargo bench --bench response -- --peer-only  # the Jenkins SDOF against pyHarm only
+//!     cargo bench --bench response -- --costs      # costs of one evaluation only
+//!     cargo bench --bench response -- --skip-peers --levels 0.05,0.5  # chosen levels only
 //!
 //! The pyHarm comparison runs when the venv of benches/peers/setup_pyharm.sh exists.
 //!
@@ -13,7 +15,7 @@
 //! 128 samples per period). Prints the cost of one AFT evaluation (all elements, residual only)
 //! and of one Jacobian, the formulation used, and the sweep times. Units: SI, times in seconds.
 
-use asperity::dynamics::aft::{self, AftSettings, Harmonics};
+use asperity::dynamics::aft::{self, Harmonics};
 use asperity::dynamics::continuation::{sweep, ContinuationSettings};
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use asperity::dynamics::model::Structure;
@@ -260,23 +262,51 @@ fn peer(case: &PeerCase) {
     );
 }
 
-/// CPU time of this process (s).
+/// CPU time of this process (s): the sum over its threads of the nanoseconds on CPU in
+/// /proc/self/task/*/schedstat (rayon workers included).
 fn cpu_time() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let f: Vec<&str> = s
-        .rsplit(')')
-        .next()
-        .unwrap_or("")
-        .split_whitespace()
-        .collect();
-    let tick = 100.0;
-    (f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)
-        + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0))
-        / tick
+    let mut total = 0.0;
+    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
+        for t in dir.flatten() {
+            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
+                total += s
+                    .split_whitespace()
+                    .next()
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .unwrap_or(0.0)
+                    * 1e-9;
+            }
+        }
+    }
+    total
+}
+
+/// Wall and CPU time (s) of one call of `f`, averaged over `reps` calls.
+fn timed(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
+    let (c0, t0) = (cpu_time(), Instant::now());
+    for _ in 0..reps {
+        f();
+    }
+    (
+        t0.elapsed().as_secs_f64() / reps as f64,
+        (cpu_time() - c0) / reps as f64,
+    )
 }
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
+    let only_costs = std::env::args().any(|a| a == "--costs");
+    if !only_costs && !std::env::args().any(|a| a == "--skip-peers") {
+        peers();
+    }
+    if std::env::args().any(|a| a == "--peer-only") {
+        return;
+    }
+    upd_size(quick);
+}
+
+/// The two friction cases shared with pyHarm.
+fn peers() {
     peer(&PeerCase {
         name: "Jenkins SDOF",
         m: vec![1.0],
@@ -303,9 +333,10 @@ fn main() {
         f0: 30.0,
         f1: 70.0,
     });
-    if std::env::args().any(|a| a == "--peer-only") {
-        return;
-    }
+}
+
+/// The underplatform-damper-size case: 4 levels × 200 points (`quick`: one level, 10 points).
+fn upd_size(quick: bool) {
     let (s, force, response) = model();
     let h = Harmonics::new(7, false, Some(128)).unwrap();
     let sys = HbmSystem::new(
@@ -330,19 +361,36 @@ fn main() {
         rayon::current_num_threads(),
         std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
     );
-    let levels: Vec<f64> = if quick {
-        vec![0.05]
-    } else {
-        vec![0.05, 0.5, 2.0, 8.0]
+    if std::env::args().any(|a| a == "--costs") {
+        // Costs only, at two states near the first resonance: microslip and slip.
+        for level in [0.05, 0.5] {
+            let p = sys
+                .solve(2.0 * std::f64::consts::PI * 876.0, level, None)
+                .unwrap();
+            costs(&sys, &s, &p);
+        }
+        return;
+    }
+    // `--levels 0.05,0.5`: a subset of the levels (N).
+    let args: Vec<String> = std::env::args().collect();
+    let levels: Vec<f64> = match args.iter().position(|a| a == "--levels") {
+        Some(i) => args[i + 1]
+            .split(',')
+            .map(|v| v.parse().expect("--levels: comma-separated forces in N"))
+            .collect(),
+        None if quick => vec![0.05],
+        None => vec![0.05, 0.5, 2.0, 8.0],
     };
     let mut settings = ContinuationSettings::new(550.0, 1100.0);
     settings.points = if quick { 10 } else { 200 };
     let t_all = Instant::now();
     let mut peak_point = None;
     let len = sys.harmonics.len();
-    println!("\n| level (N) | points | Jacobians | rejected steps | peak (m) | peak (Hz) | time (s) |\n|---|---|---|---|---|---|---|");
+    println!("\n| level (N) | points | corrector iterations | Jacobians | rejected steps | peak (m) | peak (Hz) | time (s) | CPU (s) |\n|---|---|---|---|---|---|---|---|---|");
     for level in levels {
+        let c0 = cpu_time();
         let b = sweep(&sys, level, &settings, &mut |_| {}).unwrap();
+        let cpu = cpu_time() - c0;
         let (ci, si) = sys.harmonics.index_of(1).unwrap();
         let (mut amax, mut fpk) = (0.0, 0.0);
         for p in &b.points {
@@ -362,101 +410,110 @@ fn main() {
             }
         }
         println!(
-            "| {level} | {} | {} | {} | {amax:.4e} | {fpk:.2} | {:.2} |",
+            "| {level} | {} | {} | {} | {} | {amax:.4e} | {fpk:.2} | {:.2} | {cpu:.2} |",
             b.points.len(),
+            b.points.iter().map(|p| p.iterations).sum::<usize>(),
             b.jacobians,
             b.rejected_steps,
-            b.wall_time_s
+            b.wall_time_s,
         );
     }
     println!("\ntotal sweep time {:.2} s", t_all.elapsed().as_secs_f64());
     // Cost of one evaluation at a representative state: the peak of the last sweep.
-    let p = peak_point.expect("a sweep ran");
+    costs(&sys, &s, &peak_point.expect("a sweep ran"));
+}
+
+/// Costs at one solution point: one AFT evaluation of all elements (residual only), one with
+/// the Jacobian (AFT Jacobians and their assembly), the LU solve of the Newton system, and one
+/// element alone. Wall and CPU time (all threads).
+fn costs(sys: &HbmSystem<'_>, s: &Structure, p: &asperity::dynamics::hbm::HbmPoint) {
     let (w, lv) = (p.omega, p.level);
-    let reps = 5;
-    let t = Instant::now();
-    for _ in 0..reps {
-        std::hint::black_box(sys.evaluate(&p.z, w, lv, false));
-    }
-    let t_res = t.elapsed().as_secs_f64() / reps as f64;
-    let t = Instant::now();
-    for _ in 0..reps {
-        std::hint::black_box(sys.evaluate(&p.z, w, lv, true));
-    }
-    let t_jac = t.elapsed().as_secs_f64() / reps as f64;
-    // One element alone.
-    let e = &s.elements[0];
     let len = sys.harmonics.len();
-    let u: Vec<f64> = {
+    let (res_w, res_c) = timed(10, || {
+        std::hint::black_box(sys.evaluate(&p.z, w, lv, false));
+    });
+    let (jac_w, jac_c) = timed(5, || {
+        std::hint::black_box(sys.evaluate(&p.z, w, lv, true));
+    });
+    let ev = sys.evaluate(&p.z, w, lv, true);
+    let (lu_w, lu_c) = timed(5, || {
+        std::hint::black_box(
+            asperity::dynamics::hbm::solve_linear(&ev.jacobian, &ev.residual, w).unwrap(),
+        );
+    });
+    let element_u = |e: &asperity::dynamics::model::AttachedElement| -> Vec<f64> {
         let um = &e.map * DMatrix::from_row_slice(MODES, len, p.z.as_slice());
         (0..3)
             .flat_map(|c| (0..len).map(move |hh| (c, hh)))
             .map(|(c, hh)| um[(c, hh)])
             .collect()
     };
-    let n1 = 200;
-    let t = Instant::now();
-    for _ in 0..n1 {
+    let e = &s.elements[0];
+    let u = element_u(e);
+    let settings = sys.aft;
+    let (el_w, _) = timed(200, || {
         std::hint::black_box(aft::evaluate(
             e.element.as_ref(),
             &sys.harmonics,
             &u,
             false,
-            &AftSettings::default(),
+            &settings,
         ));
-    }
-    let t_el = t.elapsed().as_secs_f64() / n1 as f64;
-    let t = Instant::now();
-    for _ in 0..n1 {
+    });
+    let (elj_w, _) = timed(200, || {
         std::hint::black_box(aft::evaluate(
             e.element.as_ref(),
             &sys.harmonics,
             &u,
             true,
-            &AftSettings::default(),
+            &settings,
         ));
-    }
-    let t_elj = t.elapsed().as_secs_f64() / n1 as f64;
-    let one = aft::evaluate(
-        e.element.as_ref(),
-        &sys.harmonics,
-        &u,
-        false,
-        &AftSettings::default(),
-    );
-    println!(
-        "periods integrated by the AFT of element 0 at the peak: {} (periodicity error {:.1e})",
-        one.periods, one.periodicity_error
-    );
+    });
     let periods: Vec<usize> = s
         .elements
         .iter()
         .map(|e| {
-            let um = &e.map * DMatrix::from_row_slice(MODES, len, p.z.as_slice());
-            let u: Vec<f64> = (0..3)
-                .flat_map(|c| (0..len).map(move |hh| (c, hh)))
-                .map(|(c, hh)| um[(c, hh)])
-                .collect();
             aft::evaluate(
                 e.element.as_ref(),
                 &sys.harmonics,
-                &u,
+                &element_u(e),
                 false,
-                &AftSettings::default(),
+                &settings,
             )
             .periods
         })
         .collect();
     println!(
-        "periods over all elements: mean {:.2}, max {}",
+        "costs at {:.2} Hz, level {lv} N (load average {}):",
+        w / (2.0 * std::f64::consts::PI),
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
+    println!(
+        "  AFT periods per element: mean {:.2}, max {}",
         periods.iter().sum::<usize>() as f64 / periods.len() as f64,
         periods.iter().max().unwrap()
     );
     println!(
-        "one element: AFT {:.1} µs, AFT + Jacobian {:.1} µs; whole system: residual {:.2} ms, residual + Jacobian (AFT Jacobians + assembly) {:.2} ms",
-        t_el * 1e6,
-        t_elj * 1e6,
-        t_res * 1e3,
-        t_jac * 1e3
+        "  one element: AFT {:.1} µs, AFT + Jacobian {:.1} µs (wall, one thread)",
+        el_w * 1e6,
+        elj_w * 1e6
+    );
+    println!(
+        "  all elements, residual only (one AFT evaluation): wall {:.2} ms, CPU {:.2} ms",
+        res_w * 1e3,
+        res_c * 1e3
+    );
+    println!(
+        "  residual + Jacobian (AFT Jacobians + assembly): wall {:.2} ms, CPU {:.2} ms",
+        jac_w * 1e3,
+        jac_c * 1e3
+    );
+    println!(
+        "  LU solve of the {0}×{0} Newton system: wall {1:.2} ms, CPU {2:.2} ms",
+        sys.unknowns(),
+        lu_w * 1e3,
+        lu_c * 1e3
     );
 }

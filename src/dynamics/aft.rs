@@ -234,8 +234,10 @@ impl Harmonics {
 /// Settings of the periodic-state iteration.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct AftSettings {
-    /// Relative tolerance on `|s_N − s0|` per state component (relative to the element's
-    /// state scale).
+    /// Relative tolerance on `|s_N − s0|` and on the Newton correction of the start state
+    /// `(I − Φ)⁺·(s_N − s0)`, per state component (relative to the element's state scale). It must lie well below the harmonic-balance tolerance (the Newton
+    /// iteration sees a periodicity error as noise in the residual; element forces may be far
+    /// below the state scale, e.g. microslip against the slip force).
     pub periodicity_tolerance: f64,
     /// Cap on the periods integrated (Newton updates of the start state + 1).
     pub max_periods: usize,
@@ -244,7 +246,7 @@ pub struct AftSettings {
 impl Default for AftSettings {
     fn default() -> Self {
         Self {
-            periodicity_tolerance: 1e-10,
+            periodicity_tolerance: 1e-12,
             max_periods: 30,
         }
     }
@@ -257,9 +259,12 @@ pub struct ElementHarmonics {
     pub forces: Vec<f64>,
     /// `(d·len) × (d·len)` Jacobian `∂forces/∂u`, row-major (empty when not requested).
     pub jacobian: Vec<f64>,
+    /// State at the start of the periodic cycle (a warm start for [`evaluate_from`]).
+    pub start_state: Vec<f64>,
     /// Periods integrated.
     pub periods: usize,
-    /// Largest relative periodicity error of the state in the last period.
+    /// Largest relative periodicity error of the state in the last period (the larger of
+    /// `|s_N − s0|` and of the Newton correction of `s0`, per state scale).
     pub periodicity_error: f64,
     /// `periodicity_error ≤ tolerance`.
     pub periodic: bool,
@@ -453,6 +458,7 @@ fn periodic_cycle(
     el: &dyn HystereticElement,
     h: &Harmonics,
     u_coeffs: &[f64],
+    warm: Option<&[f64]>,
     settings: &AftSettings,
 ) -> Cycle {
     let (m, d, n, len) = (el.state_len(), el.dofs(), h.n_time(), h.len());
@@ -509,22 +515,75 @@ fn periodic_cycle(
             ds_init,
         };
     }
+    // Warm start: the caller's state (e.g. the periodic state of a nearby evaluation); the
+    // neutral components are reset to the virgin start's below, so the cycle found does not
+    // depend on where it started.
+    let s_init = p.s0.clone();
+    if let Some(w) = warm {
+        if w.len() == m && w.iter().all(|v| v.is_finite()) {
+            p.s0.copy_from_slice(w);
+        }
+    }
     let mut periods = 0;
     let mut error = f64::INFINITY;
+    let mut previous_error = f64::INFINITY;
+    // (I − Φ)⁺ and the projector P = (I − Φ)⁺·(I − Φ) of the last monodromy computed.
+    let mut newton: Option<(Vec<f64>, Vec<f64>)> = None;
+    let mut r = vec![0.0; m];
+    let mut neutral = vec![0.0; m];
+    let mut correction = vec![0.0; m];
     while periods < settings.max_periods {
         periods += 1;
-        let sens = run_sensitive(el, h, &mut p, false);
+        let (pinv, proj) = match newton.take() {
+            Some(np) => {
+                run_plain(el, n, &mut p, |_, _, _, _| {});
+                np
+            }
+            None => {
+                let sens = run_sensitive(el, h, &mut p, false);
+                let pinv = periodic_pinv(&sens.ds_end, &scales, m);
+                let proj = projector(&pinv, &sens.ds_end, m);
+                (pinv, proj)
+            }
+        };
+        for j in 0..m {
+            r[j] = p.s_end[j] - p.s0[j];
+        }
+        // Neutral part of the distance to the virgin start, (I − P)·(s_init − s0).
+        for j in 0..m {
+            neutral[j] = (0..m)
+                .map(|k| {
+                    let id = if j == k { 1.0 } else { 0.0 };
+                    (id - proj[j * m + k]) * (s_init[k] - p.s0[k])
+                })
+                .sum::<f64>();
+        }
+        // Newton correction of the start state: its size, not that of the periodicity
+        // residual, is the distance to the periodic state (they differ by (I − Φ)⁻¹, large when
+        // a Valanis element contracts slowly).
+        for j in 0..m {
+            correction[j] = (0..m).map(|k| pinv[j * m + k] * r[k]).sum::<f64>();
+        }
         error = (0..m)
-            .map(|j| (p.s_end[j] - p.s0[j]).abs() / scales[j])
+            .map(|j| r[j].abs().max(correction[j].abs()) / scales[j])
             .fold(0.0, f64::max);
-        if error <= settings.periodicity_tolerance {
+        // The neutral part is not a periodicity error (any value is periodic) but must equal the
+        // virgin start's to rounding: a state scale (e.g. a slip force far above the forces of
+        // a stuck slider) says nothing about how large an offset matters.
+        let neutral_matches =
+            (0..m).all(|j| neutral[j].abs() <= 1e-12 * s_init[j].abs().max(p.s0[j].abs()));
+        if error <= settings.periodicity_tolerance && neutral_matches {
             break;
         }
-        let pinv = periodic_pinv(&sens.ds_end, &scales, m);
-        let r: Vec<f64> = (0..m).map(|j| p.s_end[j] - p.s0[j]).collect();
         for j in 0..m {
-            p.s0[j] += (0..m).map(|k| pinv[j * m + k] * r[k]).sum::<f64>();
+            p.s0[j] += correction[j] + neutral[j];
         }
+        // Chord updates (plain periods, monodromy kept) while the error falls at least
+        // fourfold per period; a fresh monodromy otherwise.
+        if error <= 0.25 * previous_error {
+            newton = Some((pinv, proj));
+        }
+        previous_error = error;
     }
     Cycle {
         periodic: error <= settings.periodicity_tolerance,
@@ -533,6 +592,22 @@ fn periodic_cycle(
         error,
         ds_init,
     }
+}
+
+/// `P = (I − Φ)⁺·(I − Φ)`: the projector on the non-neutral directions of the monodromy.
+fn projector(pinv: &[f64], phi: &[f64], m: usize) -> Vec<f64> {
+    let mut proj = vec![0.0; m * m];
+    for r in 0..m {
+        for c in 0..m {
+            proj[r * m + c] = (0..m)
+                .map(|k| {
+                    let a = if k == c { 1.0 } else { 0.0 } - phi[k * m + c];
+                    pinv[r * m + k] * a
+                })
+                .sum();
+        }
+    }
+    proj
 }
 
 /// Force harmonics of `element` driven by the displacement harmonics `u` (`d × len`,
@@ -544,13 +619,29 @@ pub fn evaluate(
     jacobian: bool,
     settings: &AftSettings,
 ) -> ElementHarmonics {
+    evaluate_from(element, harmonics, u, None, jacobian, settings)
+}
+
+/// [`evaluate`] with the search for the periodic state started from `warm` (a state vector of
+/// the element, e.g. [`ElementHarmonics::start_state`] of a nearby evaluation) instead of the
+/// virgin start. The result is the same cycle within the periodicity tolerance: neutral
+/// directions of the monodromy are still taken from the virgin start. A warm start close to
+/// the periodic state saves periods (typically one Newton update and one check period).
+pub fn evaluate_from(
+    element: &dyn HystereticElement,
+    harmonics: &Harmonics,
+    u: &[f64],
+    warm: Option<&[f64]>,
+    jacobian: bool,
+    settings: &AftSettings,
+) -> ElementHarmonics {
     let (m, d, n, len) = (
         element.state_len(),
         element.dofs(),
         harmonics.n_time(),
         harmonics.len(),
     );
-    let mut cycle = periodic_cycle(element, harmonics, u, settings);
+    let mut cycle = periodic_cycle(element, harmonics, u, warm, settings);
     let mut jac = Vec::new();
     if jacobian {
         let nu = d * len;
@@ -568,18 +659,7 @@ pub fn evaluate(
                 *s = s.abs().max(f64::MIN_POSITIVE);
             }
             let pinv = periodic_pinv(&phi, &scales, m);
-            // P = pinv·(I − Φ): projector on the non-neutral directions.
-            let mut proj = vec![0.0; m * m];
-            for r in 0..m {
-                for c in 0..m {
-                    let mut v = 0.0;
-                    for k in 0..m {
-                        let a = if k == c { 1.0 } else { 0.0 } - phi[k * m + c];
-                        v += pinv[r * m + k] * a;
-                    }
-                    proj[r * m + c] = v;
-                }
-            }
+            let proj = projector(&pinv, &phi, m);
             for r in 0..m {
                 for col in 0..nu {
                     let mut v = 0.0;
@@ -627,6 +707,7 @@ pub fn evaluate(
         );
     }
     ElementHarmonics {
+        start_state: cycle.period.s0.clone(),
         forces,
         jacobian: jac,
         periods: cycle.periods,
@@ -643,7 +724,7 @@ pub fn cycle_summary(
     settings: &AftSettings,
 ) -> ElementCycle {
     let (d, n) = (element.dofs(), harmonics.n_time());
-    let mut cycle = periodic_cycle(element, harmonics, u, settings);
+    let mut cycle = periodic_cycle(element, harmonics, u, None, settings);
     let mut counts = [0usize; 3];
     run_plain(element, n, &mut cycle.period, |_, s, uu, f| {
         let k = match element.status(s, uu, f) {
@@ -790,6 +871,68 @@ mod tests {
         let jc = JenkinsContact::new(2e5, 0.6, 1e7, 10.0).unwrap();
         let w = check_jacobian(&jc, &h, &u3, 1e-11);
         assert!(w < 1e-5, "jenkins contact: {w}");
+    }
+
+    /// A warm start (the periodic state of a neighbouring displacement, or an arbitrary state)
+    /// finds the cold start's cycle: same forces and Jacobian, neutral directions (a fully stuck
+    /// slider, q_ref without separation) from the virgin start; and it saves periods.
+    #[test]
+    fn warm_start_finds_the_cold_cycle() {
+        let h = Harmonics::new(3, false, Some(64)).unwrap();
+        let len = h.len();
+        let (c1, s1) = h.index_of(1).unwrap();
+        let s = AftSettings::default();
+        let v = ValanisParams::new(2e5, 0.5, 0.1e5, 0.6).unwrap();
+        let micro = MicroslipContact::new(v, 1e7, 10.0).unwrap();
+        let jenkins = Jenkins::new(1e5, 1.0).unwrap();
+        // A slider that never slips: its force state's scale (the slip force) is far above
+        // its forces, the neutral offset must still be the virgin start's.
+        let linked = Jenkins::new(1e5, 1e9).unwrap();
+        let mut u3 = vec![0.0; 3 * len];
+        u3[c1] = 2e-5;
+        u3[len + s1] = 1.5e-5;
+        u3[2 * len + c1] = 1.5e-6; // separates part of the cycle
+        let mut u3_closed = u3.clone();
+        u3_closed[2 * len + c1] = 1e-7;
+        let mut u1 = vec![0.0; len];
+        u1[c1] = 3e-5;
+        u1[0] = 1e-6;
+        let stuck: Vec<f64> = u1.iter().map(|x| x * 0.1).collect();
+        let cases: [(&dyn HystereticElement, &[f64]); 5] = [
+            (&micro, &u3),
+            (&micro, &u3_closed),
+            (&jenkins, &u1),
+            (&jenkins, &stuck),
+            (&linked, &u1),
+        ];
+        for (el, u) in cases {
+            let cold = evaluate(el, &h, u, true, &s);
+            let near: Vec<f64> = u.iter().map(|x| x * 1.001).collect();
+            let neighbour = evaluate(el, &h, &near, false, &s).start_state;
+            let arbitrary: Vec<f64> = (0..el.state_len()).map(|k| 0.3 * k as f64).collect();
+            for warm in [&neighbour, &arbitrary] {
+                let w = evaluate_from(el, &h, u, Some(warm), true, &s);
+                assert!(w.periodic);
+                let fscale = cold.forces.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                for (a, b) in w.forces.iter().zip(&cold.forces) {
+                    assert!((a - b).abs() < 1e-8 * fscale, "{}: {a} vs {b}", el.name());
+                }
+                let jscale = cold.jacobian.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                for (a, b) in w.jacobian.iter().zip(&cold.jacobian) {
+                    assert!((a - b).abs() < 1e-6 * jscale, "{}: {a} vs {b}", el.name());
+                }
+            }
+            let w = evaluate_from(el, &h, u, Some(&neighbour), false, &s);
+            // (A fully stuck slider is periodic from any start: one period to find that
+            // and reset its neutral force, one to check.)
+            assert!(
+                w.periods <= cold.periods.max(2),
+                "{}: {} periods warm, {} cold",
+                el.name(),
+                w.periods,
+                cold.periods
+            );
+        }
     }
 
     #[test]

@@ -89,12 +89,13 @@ impl Receptance {
         z: &DVector<f64>,
         level: f64,
         jacobian: bool,
+        warm: Option<&[Vec<f64>]>,
     ) -> Evaluation {
         let len = system.harmonics.len();
         let p = stacked(system);
         let nc = p.nrows();
         let u = DMatrix::from_row_slice(nc, len, z.as_slice());
-        let forces = system.element_forces(&u, jacobian);
+        let forces = system.element_forces(&u, warm, jacobian);
         let fe = system.stacked_forces(&forces);
         let fex = system.excitation_harmonics();
         let fexm = DMatrix::from_row_slice(system.structure.n(), len, fex.as_slice());
@@ -166,6 +167,7 @@ impl Receptance {
                 .map(|f| f.periodicity_error)
                 .fold(0.0, f64::max),
             non_periodic: forces.iter().filter(|f| !f.periodic).count(),
+            element_states: crate::dynamics::hbm::element_states(&forces),
         }
     }
 
@@ -246,7 +248,7 @@ impl Receptance {
         let nc = p.nrows();
         let n = system.structure.n();
         let u = DMatrix::from_row_slice(nc, len, z.as_slice());
-        let forces = system.element_forces(&u, false);
+        let forces = system.element_forces(&u, None, false);
         let fe = system.stacked_forces(&forces);
         let total = DMatrix::from_row_slice(n, len, system.excitation_harmonics().as_slice())
             * level

@@ -15,12 +15,17 @@
 //! the step falls below its minimum the sweep stops with an error that names the frequency, the
 //! residual, and what was tried.
 
-use crate::dynamics::hbm::{solve_linear, HbmPoint, HbmSystem};
+use crate::dynamics::hbm::{HbmPoint, HbmSystem};
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
+use std::rc::Rc;
 use std::time::Instant;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// A chord corrector refreshes its Jacobian when, at the contraction seen, the tolerance is
+/// more than this many steps away (a fresh Jacobian costs several residual evaluations).
+const CHORD_STEPS_BEFORE_REFRESH: f64 = 6.0;
 
 /// Settings of a frequency sweep.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -92,32 +97,82 @@ struct Corrected {
     z: DVector<f64>,
     omega: f64,
     iterations: usize,
+    /// Iterations after the last fresh Jacobian (`None`: the previous point's Jacobian served
+    /// throughout).
+    newton_iterations: Option<usize>,
     jacobians: usize,
     residual: f64,
     periodicity: f64,
-    /// Bordered Jacobian blocks at the last iterate (for the next tangent).
-    jz: DMatrix<f64>,
-    jw: DVector<f64>,
+    /// The factorisation the corrector ended with (for the next corrector).
+    factorised: Option<Rc<Bordered>>,
+    /// Start states of the elements' periodic cycles (warm start of the next AFT).
+    states: Vec<Vec<f64>>,
 }
 
-/// Bordered solve `[jz·zs, jw·ws; tᵀ]·x = [r; g]` in scaled variables.
-#[allow(clippy::too_many_arguments)]
-fn bordered(
-    jz: &DMatrix<f64>,
-    jw: &DVector<f64>,
-    t: &DVector<f64>,
+/// LU factorisation of the bordered matrix `A = [J·z_s, (∂R/∂ω)·ω_s; bᵀ]` at the point where the
+/// Jacobian was last computed. Later corrector steps (chord iterations, also at later points)
+/// reuse it with another border row `t` and unknowns' scale `z_s'` through the
+/// Sherman–Morrison formula: with `D = diag(z_s'/z_s, …, 1)`, the matrix wanted is
+/// `(A + e_n·vᵀ)·D`, `v = D⁻¹t − b`, and `(A + e_n·vᵀ)⁻¹·r = y − w·(vᵀy)/(1 + vᵀw)` with
+/// `y = A⁻¹r`, `w = A⁻¹e_n` (Golub & Van Loan, *Matrix Computations*, 4th ed., §2.1.4).
+struct Bordered {
+    lu: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    /// `A⁻¹·e_n`.
+    w: DVector<f64>,
+    border: DVector<f64>,
     zs: f64,
-    ws: f64,
-    r: &DVector<f64>,
-    g: f64,
-    omega: f64,
-) -> Result<DVector<f64>> {
-    let n = jz.nrows();
-    let a = bordered_matrix(jz, jw, t, zs, ws);
-    let mut b = DVector::zeros(n + 1);
-    b.rows_mut(0, n).copy_from(r);
-    b[n] = g;
-    solve_linear(&a, &b, omega)
+}
+
+impl Bordered {
+    /// Factorise `[jz·zs, jw·ws; borderᵀ]`; `None` when it is singular.
+    fn new(
+        jz: &DMatrix<f64>,
+        jw: &DVector<f64>,
+        border: &DVector<f64>,
+        zs: f64,
+        ws: f64,
+    ) -> Option<Self> {
+        let n = jz.nrows();
+        let mut a = DMatrix::zeros(n + 1, n + 1);
+        a.view_mut((0, 0), (n, n)).copy_from(jz);
+        a.view_mut((0, 0), (n, n)).scale_mut(zs);
+        a.view_mut((0, n), (n, 1)).copy_from(&(jw * ws));
+        for c in 0..=n {
+            a[(n, c)] = border[c];
+        }
+        let lu = a.lu();
+        let mut e = DVector::zeros(n + 1);
+        e[n] = 1.0;
+        let w = lu.solve(&e)?;
+        w.iter().all(|v| v.is_finite()).then(|| Self {
+            lu,
+            w,
+            border: border.clone(),
+            zs,
+        })
+    }
+
+    /// Solve `[J·zs, (∂R/∂ω)·ω_s; tᵀ]·x = r`; `None` when the updated matrix is singular.
+    fn solve(&self, t: &DVector<f64>, zs: f64, r: &DVector<f64>) -> Option<DVector<f64>> {
+        let n = t.len() - 1;
+        let ratio = zs / self.zs;
+        let mut v = t - &self.border;
+        if ratio != 1.0 {
+            for k in 0..n {
+                v[k] = t[k] / ratio - self.border[k];
+            }
+        }
+        let mut y = self.lu.solve(r)?;
+        let den = 1.0 + v.dot(&self.w);
+        if den.abs() < 1e-12 * (1.0 + v.norm() * self.w.norm()) {
+            return None;
+        }
+        y.axpy(-v.dot(&y) / den, &self.w, 1.0);
+        if ratio != 1.0 {
+            y.rows_mut(0, n).unscale_mut(ratio);
+        }
+        y.iter().all(|x| x.is_finite()).then_some(y)
+    }
 }
 
 /// Follow the frequency response of `system` at excitation `level` over the settings' span.
@@ -139,25 +194,24 @@ pub fn sweep(
     let min_step = max_step * 1e-4;
     let tol = system.newton.tolerance;
     let n = system.unknowns();
+    let singular = |omega: f64| {
+        Error::Data(format!(
+            "singular bordered harmonic-balance Jacobian at {:.6} Hz",
+            omega / TWO_PI
+        ))
+    };
 
     let first = system.solve(w0, level, None)?;
     let mut jacobians = first.iterations + 1;
     let mut zs = first.z.amax().max(f64::MIN_POSITIVE);
     let ev = system.evaluate(&first.z, w0, level, true);
     jacobians += 1;
-    // Initial tangent along +ω in the sweep direction.
+    let mut states = ev.element_states;
+    // Initial tangent along +ω in the sweep direction: [J·zs, jw·ws; eᵀ]·t = [0; 1].
     let mut e = DVector::zeros(n + 1);
     e[n] = dir;
-    let mut t = bordered(
-        &ev.jacobian,
-        &ev.d_omega,
-        &e,
-        zs,
-        ws,
-        &DVector::zeros(n),
-        1.0,
-        w0,
-    )?;
+    let mut factorised = Bordered::new(&ev.jacobian, &ev.d_omega, &e, zs, ws).map(Rc::new);
+    let mut t = factorised.as_ref().ok_or_else(|| singular(w0))?.w.clone();
     t /= t.norm();
     let mut points = vec![first];
     let mut step = max_step;
@@ -165,36 +219,56 @@ pub fn sweep(
     let mut turning = 0;
     progress(0.0);
     let max_angle = settings.max_angle_deg.to_radians();
+    let scaled = |p: &HbmPoint, zs: f64| {
+        let mut y = DVector::zeros(n + 1);
+        y.rows_mut(0, n).copy_from(&(&p.z / zs));
+        y[n] = p.omega / ws;
+        y
+    };
     loop {
         let last = points.last().expect("at least the first point");
-        let y_hat = {
-            let mut y = DVector::zeros(n + 1);
-            y.rows_mut(0, n).copy_from(&(&last.z / zs));
-            y[n] = last.omega / ws;
-            y
-        };
+        let y_hat = scaled(last, zs);
         // Predictor + corrector, halving the step on failure.
         let mut halvings = 0;
         let mut last_failure: String;
         let step_tried = step;
-        let (corr, t_new) = loop {
+        let (corr, tn, angle) = loop {
             let yp = &y_hat + &t * step;
-            match correct(system, level, &yp, &t, zs, ws, settings, tol) {
+            match correct(
+                system,
+                level,
+                &yp,
+                &t,
+                zs,
+                ws,
+                settings,
+                tol,
+                factorised.clone(),
+                &states,
+            ) {
                 Ok(c) => {
                     jacobians += c.jacobians;
-                    // Next tangent.
-                    let mut tn =
-                        bordered(&c.jz, &c.jw, &t, zs, ws, &DVector::zeros(n), 1.0, c.omega)?;
-                    tn /= tn.norm();
-                    let angle = t.dot(&tn).clamp(-1.0, 1.0).acos();
-                    if angle > max_angle && step > 2.0 * min_step {
-                        last_failure = format!("tangent turned by {:.1}°", angle.to_degrees());
+                    // Next predictor direction: the secant through the last two points.
+                    let mut tn = DVector::zeros(n + 1);
+                    tn.rows_mut(0, n).copy_from(&((&c.z - &last.z) / zs));
+                    tn[n] = (c.omega - last.omega) / ws;
+                    let norm = tn.norm();
+                    if norm > 0.0 {
+                        tn /= norm;
                     } else {
-                        break (c, (tn, angle));
+                        tn.copy_from(&t);
+                    }
+                    let angle = t.dot(&tn).clamp(-1.0, 1.0).acos();
+                    factorised = c.factorised.clone();
+                    if angle > max_angle && step > 2.0 * min_step {
+                        last_failure = format!("path turned by {:.1}°", angle.to_degrees());
+                    } else {
+                        break (c, tn, angle);
                     }
                 }
                 Err(msg) => {
                     jacobians += settings.max_corrector_iterations;
+                    factorised = None;
                     last_failure = msg;
                 }
             }
@@ -216,17 +290,21 @@ pub fn sweep(
                 });
             }
         };
-        let (tn, angle) = t_new;
         if tn[n].signum() != t[n].signum() && tn[n] != 0.0 && t[n] != 0.0 {
             turning += 1;
         }
-        // Step adaptation on iterations and turning angle.
-        let mut factor = settings.target_iterations as f64 / corr.iterations.max(1) as f64;
+        // Step adaptation on the corrector's iterations with a fresh Jacobian (chord iterations
+        // on an older one say more about the Jacobian's age than about the step: such a step is
+        // kept or grown) and on the turning angle.
+        let iterations = corr
+            .newton_iterations
+            .unwrap_or(settings.target_iterations.min(corr.iterations));
+        let mut factor = settings.target_iterations as f64 / iterations.max(1) as f64;
         if angle > 0.0 {
             factor = factor.min(0.5 * max_angle / angle);
         }
         step = (step * factor.clamp(0.5, 2.0)).clamp(min_step, max_step);
-        // Rescale the tangent if the unknowns' scale grows.
+        // Rescale the direction if the unknowns' scale grows.
         let new_zs = zs.max(corr.z.amax());
         t = tn;
         if new_zs > zs {
@@ -236,6 +314,7 @@ pub fn sweep(
             t /= t.norm();
             zs = new_zs;
         }
+        states = corr.states;
         let past_end = (corr.omega - w1) * dir >= 0.0;
         let before_start = (corr.omega - w0) * dir < -0.05 * ws;
         let point = HbmPoint {
@@ -286,9 +365,11 @@ pub fn sweep(
     })
 }
 
-/// Bordered corrector from the predicted point `yp`: Newton's method with the Jacobian kept
-/// (chord iterations, residual-only AFT evaluations) while the residual falls at least by half
-/// per iteration, refreshed otherwise. `Err` carries what went wrong.
+/// Bordered corrector from the predicted point `yp` on the hyperplane `tᵀ·(ŷ − ŷ_p) = 0`:
+/// Newton's method with the Jacobian kept (chord iterations, residual-only AFT evaluations warm
+/// started from the previous iterate's periodic states) while the residual falls at least by
+/// half per iteration, refreshed otherwise. It starts from `factorised` (the last Jacobian of
+/// the previous point) when given. `Err` carries what went wrong.
 #[allow(clippy::too_many_arguments)]
 fn correct(
     system: &HbmSystem<'_>,
@@ -299,13 +380,17 @@ fn correct(
     ws: f64,
     settings: &ContinuationSettings,
     tol: f64,
+    factorised: Option<Rc<Bordered>>,
+    states: &[Vec<f64>],
 ) -> std::result::Result<Corrected, String> {
     let n = system.unknowns();
     let mut y = yp.clone();
     let mut first_residual = f64::NAN;
     let mut prev_residual = f64::INFINITY;
-    let mut lu: Option<Factorised> = None;
+    let mut lu = factorised;
+    let mut warm: Vec<Vec<f64>> = states.to_vec();
     let mut jacobians = 0;
+    let mut refreshed_at = None;
     for it in 0..=settings.max_corrector_iterations {
         let z = y.rows(0, n) * zs;
         let omega = y[n] * ws;
@@ -313,7 +398,8 @@ fn correct(
             return Err("predicted frequency ≤ 0".into());
         }
         let refresh = lu.is_none();
-        let ev = system.evaluate(&z, omega, level, refresh);
+        let mut ev = system.evaluate_from(&z, omega, level, refresh, Some(&warm));
+        warm = std::mem::take(&mut ev.element_states);
         let rel = ev.relative_residual();
         if !rel.is_finite() {
             return Err("residual not finite".into());
@@ -322,23 +408,20 @@ fn correct(
             first_residual = rel;
         }
         if rel <= tol {
-            let (_, jz, jw) = match lu {
-                Some(l) => l,
-                None => {
-                    // Converged on the first evaluation: its Jacobian is at hand.
-                    let a = bordered_matrix(&ev.jacobian, &ev.d_omega, t, zs, ws);
-                    (a.lu(), ev.jacobian, ev.d_omega)
-                }
-            };
+            if refresh {
+                jacobians += 1;
+                lu = Bordered::new(&ev.jacobian, &ev.d_omega, t, zs, ws).map(Rc::new);
+            }
             return Ok(Corrected {
                 z,
                 omega,
                 iterations: it,
-                jacobians: jacobians + usize::from(refresh),
+                newton_iterations: refreshed_at.map(|k| it - k),
+                jacobians,
                 residual: rel,
                 periodicity: ev.periodicity_error,
-                jz,
-                jw,
+                factorised: lu,
+                states: warm,
             });
         }
         if it == settings.max_corrector_iterations {
@@ -353,54 +436,48 @@ fn correct(
                 omega / TWO_PI
             ));
         }
-        // Chord step while it contracts fast enough; fresh Jacobian otherwise.
-        let (ev, refreshed) = if !refresh && rel > 0.5 * prev_residual {
-            (system.evaluate(&z, omega, level, true), true)
+        // Chord step while it contracts fast enough and the tolerance is a few steps away at
+        // the contraction seen; fresh Jacobian otherwise.
+        let ratio = rel / prev_residual;
+        let slow = ratio > 0.5
+            || (ratio > 0.0 && (tol / rel).ln() / ratio.ln() > CHORD_STEPS_BEFORE_REFRESH);
+        let (ev, refreshed) = if !refresh && slow {
+            let mut e = system.evaluate_from(&z, omega, level, true, Some(&warm));
+            warm = std::mem::take(&mut e.element_states);
+            (e, true)
         } else {
             (ev, refresh)
         };
         if refreshed {
             jacobians += 1;
-            let a = bordered_matrix(&ev.jacobian, &ev.d_omega, t, zs, ws);
-            lu = Some((a.lu(), ev.jacobian.clone(), ev.d_omega.clone()));
+            refreshed_at = Some(it);
+            lu = Some(Rc::new(
+                Bordered::new(&ev.jacobian, &ev.d_omega, t, zs, ws).ok_or_else(|| {
+                    format!("singular bordered Jacobian at {:.6} Hz", omega / TWO_PI)
+                })?,
+            ));
         }
         prev_residual = rel;
         let g = t.dot(&(&y - yp));
         let mut b = DVector::zeros(n + 1);
         b.rows_mut(0, n).copy_from(&(-&ev.residual));
         b[n] = -g;
-        let dy = lu
-            .as_ref()
-            .expect("factorised")
-            .0
-            .solve(&b)
-            .ok_or_else(|| format!("singular bordered Jacobian at {:.6} Hz", omega / TWO_PI))?;
+        let dy = match lu.as_ref().expect("factorised").solve(t, zs, &b) {
+            Some(dy) => dy,
+            None if !refreshed => {
+                // The border update broke down: refresh at the next iteration.
+                lu = None;
+                prev_residual = f64::INFINITY;
+                continue;
+            }
+            None => {
+                return Err(format!(
+                    "singular bordered Jacobian at {:.6} Hz",
+                    omega / TWO_PI
+                ))
+            }
+        };
         y += dy;
     }
     Err("corrector: no iteration".into())
-}
-
-/// LU of the bordered matrix with the Jacobian blocks it was built from.
-type Factorised = (
-    nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
-    DMatrix<f64>,
-    DVector<f64>,
-);
-
-/// `[jz·zs, jw·ws; tᵀ]`.
-fn bordered_matrix(
-    jz: &DMatrix<f64>,
-    jw: &DVector<f64>,
-    t: &DVector<f64>,
-    zs: f64,
-    ws: f64,
-) -> DMatrix<f64> {
-    let n = jz.nrows();
-    let mut a = DMatrix::zeros(n + 1, n + 1);
-    a.view_mut((0, 0), (n, n)).copy_from(&(jz * zs));
-    a.view_mut((0, n), (n, 1)).copy_from(&(jw * ws));
-    for c in 0..=n {
-        a[(n, c)] = t[c];
-    }
-    a
 }

@@ -97,6 +97,9 @@ pub struct Evaluation {
     pub periodicity_error: f64,
     /// Elements whose AFT state did not become periodic.
     pub non_periodic: usize,
+    /// Start state of each element's periodic cycle (warm start of a nearby evaluation, see
+    /// [`HbmSystem::evaluate_from`]).
+    pub element_states: Vec<Vec<f64>>,
 }
 
 impl Evaluation {
@@ -241,6 +244,7 @@ impl<'a> HbmSystem<'a> {
     pub(crate) fn element_forces(
         &self,
         u: &DMatrix<f64>,
+        warm: Option<&[Vec<f64>]>,
         jacobian: bool,
     ) -> Vec<aft::ElementHarmonics> {
         let len = self.harmonics.len();
@@ -248,7 +252,8 @@ impl<'a> HbmSystem<'a> {
             .elements
             .par_iter()
             .zip(self.offsets.par_iter())
-            .map(|(e, &off)| {
+            .enumerate()
+            .map(|(i, (e, &off))| {
                 let d = e.element.dofs();
                 let mut ue = vec![0.0; d * len];
                 for c in 0..d {
@@ -256,10 +261,11 @@ impl<'a> HbmSystem<'a> {
                         ue[c * len + h] = u[(off + c, h)];
                     }
                 }
-                aft::evaluate(
+                aft::evaluate_from(
                     e.element.as_ref(),
                     &self.harmonics,
                     &ue,
+                    warm.and_then(|w| w.get(i)).map(|v| v.as_slice()),
                     jacobian,
                     &self.aft,
                 )
@@ -393,10 +399,24 @@ impl<'a> HbmSystem<'a> {
 
     /// Residual at `(z, ω, level)`, with the Jacobian `∂R/∂z` when `jacobian` is set.
     pub fn evaluate(&self, z: &DVector<f64>, omega: f64, level: f64, jacobian: bool) -> Evaluation {
+        self.evaluate_from(z, omega, level, jacobian, None)
+    }
+
+    /// [`HbmSystem::evaluate`] with each element's search for its periodic state started from
+    /// `warm` (the [`Evaluation::element_states`] of a nearby point): the same result within
+    /// the AFT's periodicity tolerance, in fewer periods.
+    pub fn evaluate_from(
+        &self,
+        z: &DVector<f64>,
+        omega: f64,
+        level: f64,
+        jacobian: bool,
+        warm: Option<&[Vec<f64>]>,
+    ) -> Evaluation {
         match self.formulation {
-            Formulation::Coordinates => self.evaluate_coordinates(z, omega, level, jacobian),
+            Formulation::Coordinates => self.evaluate_coordinates(z, omega, level, jacobian, warm),
             Formulation::Receptance => {
-                Receptance::new(self, omega).evaluate(self, z, level, jacobian)
+                Receptance::new(self, omega).evaluate(self, z, level, jacobian, warm)
             }
         }
     }
@@ -407,9 +427,10 @@ impl<'a> HbmSystem<'a> {
         omega: f64,
         level: f64,
         jacobian: bool,
+        warm: Option<&[Vec<f64>]>,
     ) -> Evaluation {
         let u = self.element_displacements(q);
-        let forces = self.element_forces(&u, jacobian);
+        let forces = self.element_forces(&u, warm, jacobian);
         let fex = self.excitation_harmonics();
         let (lin, dlin) = self.linear_forces(q, omega);
         // Σ_e P_eᵀ f̂_e.
@@ -435,6 +456,7 @@ impl<'a> HbmSystem<'a> {
             scale,
             periodicity_error: perr,
             non_periodic: nonper,
+            element_states: element_states(&forces),
         }
     }
 
@@ -517,8 +539,9 @@ impl<'a> HbmSystem<'a> {
                 break;
             }
             let step = solve_linear(&ev.jacobian, &(-&ev.residual), omega)?;
+            let warm = std::mem::take(&mut ev.element_states);
             let (znew, evnew) = self.line_search(&z, &step, &ev, |zz, jac| {
-                self.evaluate(zz, omega, level, jac)
+                self.evaluate_from(zz, omega, level, jac, Some(&warm))
             });
             z = znew;
             ev = evnew;
@@ -681,6 +704,11 @@ pub fn amplitude(
     let a: f64 = (0..n).map(|r| observation[r] * q[r * len + ci]).sum();
     let b: f64 = (0..n).map(|r| observation[r] * q[r * len + si]).sum();
     a.hypot(b)
+}
+
+/// Start states of the elements' periodic cycles.
+pub(crate) fn element_states(forces: &[aft::ElementHarmonics]) -> Vec<Vec<f64>> {
+    forces.iter().map(|f| f.start_state.clone()).collect()
 }
 
 fn periodicity(forces: &[aft::ElementHarmonics]) -> (f64, usize) {
