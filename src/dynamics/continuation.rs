@@ -8,10 +8,13 @@
 //! points, so folds (Duffing) are followed. The next tangent solves
 //! `[∂R/∂ŷ; t̂_iᵀ]·t̂ = [0; 1]`.
 //!
-//! Step control: the step is rejected and halved when the corrector fails or when the tangent
+//! Step control: the step is rejected and halved when the corrector fails or when the path
 //! turns by more than `max_angle_deg`; after an accepted step it is scaled by
-//! `target_iterations / iterations` and by the turning angle (within ×0.5 … ×2), between
-//! `max_step / 10⁴` and `max_step = 1/points` (so a sweep has at least `points` points). When
+//! `target_iterations / iterations` and by the turning angle (within ×0.5 … ×2). Its largest
+//! value advances the frequency by at most `span/points` (so a sweep has about `points` points
+//! where the response is smooth, and more where the path turns: at resonance peaks and folds)
+//! and moves along the path by at most [`MAX_ARC_STEP`] (a tenth of the largest unknown, so a
+//! peak gets some twenty points even where it is steep); its smallest is `10⁻⁴/points`. When
 //! the step falls below its minimum the sweep stops with an error that names the frequency, the
 //! residual, and what was tried.
 
@@ -23,6 +26,10 @@ use std::time::Instant;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
+/// Largest step along the path in the scaled variables (unknowns relative to the largest seen,
+/// frequency relative to the span).
+pub const MAX_ARC_STEP: f64 = 0.1;
+
 /// A chord corrector refreshes its Jacobian when, at the contraction seen, the tolerance is
 /// more than this many steps away (a fresh Jacobian costs several residual evaluations).
 const CHORD_STEPS_BEFORE_REFRESH: f64 = 6.0;
@@ -33,7 +40,8 @@ pub struct ContinuationSettings {
     /// Start and end of the sweep (Hz); the sweep runs downwards when end < start.
     pub frequency_start_hz: f64,
     pub frequency_end_hz: f64,
-    /// Minimum number of points along the frequency span (sets the largest step).
+    /// Number of points along the frequency span where the response is smooth (sets the
+    /// largest frequency step); resonance peaks and folds get more.
     pub points: usize,
     /// Corrector iterations aimed at.
     pub target_iterations: usize,
@@ -190,8 +198,11 @@ pub fn sweep(
     let w1 = TWO_PI * settings.frequency_end_hz;
     let dir = (w1 - w0).signum();
     let ws = (w1 - w0).abs();
-    let max_step = 1.0 / settings.points as f64;
-    let min_step = max_step * 1e-4;
+    let frequency_step = 1.0 / settings.points as f64;
+    let min_step = frequency_step * 1e-4;
+    // Largest step along direction t: frequency advance ≤ span/points, path step ≤ MAX_ARC_STEP.
+    let max_step =
+        |t: &DVector<f64>| (frequency_step / t[t.len() - 1].abs()).clamp(min_step, MAX_ARC_STEP);
     let tol = system.newton.tolerance;
     let n = system.unknowns();
     let singular = |omega: f64| {
@@ -214,7 +225,7 @@ pub fn sweep(
     let mut t = factorised.as_ref().ok_or_else(|| singular(w0))?.w.clone();
     t /= t.norm();
     let mut points = vec![first];
-    let mut step = max_step;
+    let mut step = max_step(&t);
     let mut rejected = 0;
     let mut turning = 0;
     progress(0.0);
@@ -272,6 +283,8 @@ pub fn sweep(
                     last_failure = msg;
                 }
             }
+                eprintln!("reject step {step:.3e}: {last_failure}");
+            }
             rejected += 1;
             halvings += 1;
             step *= 0.5;
@@ -303,7 +316,6 @@ pub fn sweep(
         if angle > 0.0 {
             factor = factor.min(0.5 * max_angle / angle);
         }
-        step = (step * factor.clamp(0.5, 2.0)).clamp(min_step, max_step);
         // Rescale the direction if the unknowns' scale grows.
         let new_zs = zs.max(corr.z.amax());
         t = tn;
@@ -313,6 +325,18 @@ pub fn sweep(
             }
             t /= t.norm();
             zs = new_zs;
+        }
+        step = (step * factor.clamp(0.5, 2.0)).clamp(min_step, max_step(&t));
+            eprintln!(
+                "pt {} f {:.4} it {} newton {:?} jac {} step {:.3e} angle {:.2}",
+                points.len(),
+                corr.omega / TWO_PI,
+                corr.iterations,
+                corr.newton_iterations,
+                corr.jacobians,
+                step,
+                angle.to_degrees()
+            );
         }
         states = corr.states;
         let past_end = (corr.omega - w1) * dir >= 0.0;
@@ -406,6 +430,12 @@ fn correct(
         }
         if it == 0 {
             first_residual = rel;
+        }
+            eprintln!(
+                "  n {n} it {it} rel {rel:.3e} refresh {refresh} f {:.6} per {:.1e}",
+                omega / TWO_PI,
+                ev.periodicity_error
+            );
         }
         if rel <= tol {
             if refresh {

@@ -75,7 +75,7 @@ pub struct NewtonSettings {
 impl Default for NewtonSettings {
     fn default() -> Self {
         Self {
-            tolerance: 1e-9,
+            tolerance: 1e-7,
             max_iterations: 40,
         }
     }
