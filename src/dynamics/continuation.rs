@@ -283,8 +283,6 @@ pub fn sweep(
                     last_failure = msg;
                 }
             }
-                eprintln!("reject step {step:.3e}: {last_failure}");
-            }
             rejected += 1;
             halvings += 1;
             step *= 0.5;
@@ -327,17 +325,6 @@ pub fn sweep(
             zs = new_zs;
         }
         step = (step * factor.clamp(0.5, 2.0)).clamp(min_step, max_step(&t));
-            eprintln!(
-                "pt {} f {:.4} it {} newton {:?} jac {} step {:.3e} angle {:.2}",
-                points.len(),
-                corr.omega / TWO_PI,
-                corr.iterations,
-                corr.newton_iterations,
-                corr.jacobians,
-                step,
-                angle.to_degrees()
-            );
-        }
         states = corr.states;
         let past_end = (corr.omega - w1) * dir >= 0.0;
         let before_start = (corr.omega - w0) * dir < -0.05 * ws;
@@ -430,12 +417,6 @@ fn correct(
         }
         if it == 0 {
             first_residual = rel;
-        }
-            eprintln!(
-                "  n {n} it {it} rel {rel:.3e} refresh {refresh} f {:.6} per {:.1e}",
-                omega / TWO_PI,
-                ev.periodicity_error
-            );
         }
         if rel <= tol {
             if refresh {
