@@ -29,7 +29,7 @@
 //! [sweep]
 //! frequency_start_hz = 100.0
 //! frequency_end_hz = 300.0
-//! points = 200                  # at least this many points over the span
+//! points = 200                  # points over the span where the response is smooth (more at peaks)
 //! harmonics = 7                 # highest harmonic
 //! odd_only = false
 //! time_samples = 128            # optional (default: power of two ≥ 16·harmonics)
