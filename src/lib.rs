@@ -24,6 +24,7 @@ pub mod elements;
 pub mod error;
 pub mod film;
 pub mod grid;
+pub mod identify;
 pub mod halfspace;
 pub mod input;
 pub mod output;
