@@ -13,3 +13,5 @@ pub mod backbone;
 pub mod effects;
 pub mod measured;
 pub mod model;
+pub mod fit;
+pub mod select;
