@@ -29,6 +29,11 @@ enum Command {
     Elements(cli::elements::ElementsArgs),
     /// Compare a model with a measured hysteresis record; find and add the missing effect.
     Diagnose(cli::diagnose::DiagnoseArgs),
+    /// Identify a jointed structure's nonlinear mode from measured frequency responses at
+    /// several levels; find the missing effect; predict the levels not used.
+    Identify(Box<cli::identify::IdentifyArgs>),
+    /// Score an identified model on measured files (force- or response-controlled).
+    Predict(cli::identify::PredictArgs),
 }
 
 fn main() {
@@ -40,6 +45,8 @@ fn main() {
         Command::Film(a) => cli::film::run(a),
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Identify(a) => cli::identify::run_identify(*a),
+        Command::Predict(a) => cli::identify::run_predict(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");

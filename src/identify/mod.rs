@@ -11,7 +11,13 @@
 
 pub mod backbone;
 pub mod effects;
+pub mod fit;
 pub mod measured;
 pub mod model;
-pub mod fit;
+pub mod pipeline;
+pub mod predict;
+pub mod report;
 pub mod select;
+
+pub use pipeline::{identify, read_sweeps, Identification, Options, SavedModel};
+pub use predict::{predict, Control, Prediction};
