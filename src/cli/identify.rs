@@ -11,6 +11,7 @@ use std::path::PathBuf;
 pub enum FamilyArg {
     Jenkins,
     Valanis,
+    Iwan,
 }
 
 /// Identify a jointed structure's nonlinear mode from stepped-sine sweeps at several excitation
@@ -63,6 +64,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     let family = match args.family {
         FamilyArg::Jenkins => Family::Jenkins,
         FamilyArg::Valanis => Family::Valanis,
+        FamilyArg::Iwan => Family::Iwan,
     };
     let mut opts = Options::new(family);
     opts.fit_levels = args.fit_levels.clone();

@@ -15,5 +15,6 @@ pub mod aft;
 pub mod condensation;
 pub mod continuation;
 pub mod hbm;
+pub mod iwan;
 pub mod model;
 pub mod nonlinear;

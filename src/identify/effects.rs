@@ -4,7 +4,7 @@
 //! | effect | law | parameters |
 //! |---|---|---|
 //! | Valanis joint (microslip family) | the joint is a Valanis element (Gaul–Lenz form, `E0 = k_t`, `σ0 = F_s`, `Et = 0`) instead of a Jenkins slider: gradual microslip instead of an abrupt stick–slip transition | shape `k` |
-//! | Iwan joint (power-law microslip) | the joint is a four-parameter Iwan element (Segalman 2005, power-law slip-force density) instead of a Jenkins slider: dissipation `∝ A^{3+χ}` at small amplitude | exponent `χ`, strength ratio `β` |
+//! | Iwan joint (power-law microslip) | the joint is a four-parameter Iwan element (Segalman 2005, power-law slip-strength density, `crate::element::iwan`) instead of a Jenkins slider: dissipation `∝ A^{3+χ}` at small amplitude, `K_T = k_t`, `F_S = F_s` | exponent `χ ∈ [−0.9, 0]`, strength ratio `β ∈ [0, 4]` |
 //! | amplitude-dependent stiffness | cubic spring `k3·u³` on the drive-point coordinate (geometric or contact stiffening, or softening) | `ε = 3k3·A_ref²/(4k_s)`: relative change of `ω²` at the reference amplitude |
 //! | quadratic (amplitude-dependent viscous) damping | `c2·|u̇|·u̇` (air drag, acoustic radiation): a damping ratio growing `∝ A` with no loss of stiffness | `ζ_q`: equivalent damping ratio added at the reference amplitude, `c2 = 3π·m·ζ_q/(4·A_ref)` |
 //! | joint preload loss | the joint's slip force and stiffness fall with the excitation level the joint has seen (bolt relaxation from test to test; levels run from low to high): `F_s, k_t × (1 − λ·F̄/F_ref)` | `λ` |
