@@ -218,9 +218,9 @@ fn draw_panel<DB: DrawingBackend>(
         (Scale::Linear, Scale::Log) => {
             finish!(builder.build_cartesian_2d(xr.0..xr.1, (yr.0..yr.1).log_scale()))
         }
-        (Scale::Log, Scale::Log) => finish!(
-            builder.build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale())
-        ),
+        (Scale::Log, Scale::Log) => {
+            finish!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale()))
+        }
     }
     Ok(())
 }

@@ -46,6 +46,10 @@ pub struct IdentifyArgs {
     /// Swarm iterations per start.
     #[arg(long, default_value_t = 40)]
     pub swarm_iterations: u64,
+    /// Nelder–Mead iteration cap per run (each fit runs Nelder–Mead twice; a fit whose restart
+    /// hits the cap has not converged, which is an error for the final models).
+    #[arg(long, default_value_t = 600)]
+    pub local_iterations: u64,
     /// Seed of the first start (start k uses seed + k).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -92,7 +96,12 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     }
     opts.select.max_effects = args.max_effects;
     opts.select.baseline_fit.starts = args.starts;
-    for f in [&mut opts.select.baseline_fit, &mut opts.select.candidate_fit] {
+    for f in [
+        &mut opts.select.baseline_fit,
+        &mut opts.select.candidate_fit,
+        &mut opts.final_fit,
+    ] {
+        f.local_iterations = args.local_iterations;
         f.particles = args.particles;
         f.swarm_iterations = args.swarm_iterations;
         f.seed = args.seed;

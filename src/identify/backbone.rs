@@ -42,7 +42,10 @@ impl LinearMode {
     pub fn receptance(&self, omega: f64) -> Complex64 {
         let wn = TAU * self.frequency_hz;
         1.0 / (self.modal_mass_kg
-            * Complex64::new(wn * wn - omega * omega, 2.0 * self.damping_ratio * wn * omega))
+            * Complex64::new(
+                wn * wn - omega * omega,
+                2.0 * self.damping_ratio * wn * omega,
+            ))
     }
 }
 
@@ -168,7 +171,11 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
         fits.push((om, x, lin));
     }
     let lowest = (0..sweeps.len())
-        .min_by(|&a, &b| sweeps[a].mean_force_n().total_cmp(&sweeps[b].mean_force_n()))
+        .min_by(|&a, &b| {
+            sweeps[a]
+                .mean_force_n()
+                .total_cmp(&sweeps[b].mean_force_n())
+        })
         .ok_or_else(|| Error::Data("no sweep".into()))?;
     let r = 1.0 / fits[lowest].2.modal_mass_kg;
     Ok(sweeps

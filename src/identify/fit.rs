@@ -195,7 +195,11 @@ impl<'a> Objective<'a> {
 
     /// Physical values of a box point.
     pub fn values(&self, z: &[f64]) -> Vec<f64> {
-        self.params.iter().zip(z).map(|(p, &v)| p.value(v)).collect()
+        self.params
+            .iter()
+            .zip(z)
+            .map(|(p, &v)| p.value(v))
+            .collect()
     }
 
     /// Box point of physical values.
@@ -272,7 +276,11 @@ fn argmin_err(e: argmin::core::Error) -> Error {
 
 /// Nelder–Mead from `z0`, twice (restart from the first optimum). Returns the best point, its
 /// cost, the iterations and whether the restart stopped on its tolerance.
-fn nelder_mead(obj: &Objective<'_>, z0: &[f64], max_iter: u64) -> Result<(Vec<f64>, f64, u64, bool)> {
+fn nelder_mead(
+    obj: &Objective<'_>,
+    z0: &[f64],
+    max_iter: u64,
+) -> Result<(Vec<f64>, f64, u64, bool)> {
     let mut z = z0.to_vec();
     let mut cost = obj.cost(&z).map_err(argmin_err)?;
     let mut iterations = 0;
@@ -282,7 +290,11 @@ fn nelder_mead(obj: &Objective<'_>, z0: &[f64], max_iter: u64) -> Result<(Vec<f6
         let mut simplex = vec![z.clone()];
         for i in 0..z.len() {
             let mut v = z.clone();
-            v[i] = if v[i] + step <= 1.0 { v[i] + step } else { v[i] - step };
+            v[i] = if v[i] + step <= 1.0 {
+                v[i] + step
+            } else {
+                v[i] - step
+            };
             simplex.push(v);
         }
         let solver = NelderMead::new(simplex)
@@ -362,13 +374,10 @@ pub fn fit_global(
         let seed = opts.seed + k as u64;
         let pso = ParticleSwarm::new((vec![0.0; dim], vec![1.0; dim]), opts.particles)
             .with_rng_generator(rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed));
-        let res = Executor::new(
-            Objective::new(spec.clone(), levels, masks, progress),
-            pso,
-        )
-        .configure(|s| s.max_iters(opts.swarm_iterations))
-        .run()
-        .map_err(argmin_err)?;
+        let res = Executor::new(Objective::new(spec.clone(), levels, masks, progress), pso)
+            .configure(|s| s.max_iters(opts.swarm_iterations))
+            .run()
+            .map_err(argmin_err)?;
         obj.evaluations.fetch_add(
             res.problem
                 .problem

@@ -176,13 +176,21 @@ fn find_column(
 fn field(path: &Path, rec: &csv::StringRecord, line: usize, col: usize, name: &str) -> Result<f64> {
     let s = rec.get(col).unwrap_or("").trim();
     if s.is_empty() {
-        return Err(Error::parse(path, line, format!("missing value of `{name}`")));
+        return Err(Error::parse(
+            path,
+            line,
+            format!("missing value of `{name}`"),
+        ));
     }
     let v: f64 = s
         .parse()
         .map_err(|_| Error::parse(path, line, format!("`{name}` = {s:?} is not a number")))?;
     if !v.is_finite() {
-        return Err(Error::parse(path, line, format!("`{name}` = {s} is not finite")));
+        return Err(Error::parse(
+            path,
+            line,
+            format!("`{name}` = {s} is not finite"),
+        ));
     }
     Ok(v)
 }
@@ -542,12 +550,24 @@ mod tests {
                 "missing value of `force_amplitude_N`",
             ),
             (
-                &["10,1,1,0", "11,1,1,0", "12,-0.2,1,0", "13,1,1,0", "14,1,1,0"],
+                &[
+                    "10,1,1,0",
+                    "11,1,1,0",
+                    "12,-0.2,1,0",
+                    "13,1,1,0",
+                    "14,1,1,0",
+                ],
                 ":5:",
                 "force amplitude -0.2 N must be > 0",
             ),
             (
-                &["10,1,1,-5", "11,1,1,-20", "12,1,1,-90", "13,1,1,-160", "14,1,1,-175"],
+                &[
+                    "10,1,1,-5",
+                    "11,1,1,-20",
+                    "12,1,1,-90",
+                    "13,1,1,-160",
+                    "14,1,1,-175",
+                ],
                 ":4:",
                 "look like degrees",
             ),
@@ -561,7 +581,10 @@ mod tests {
         for (lines, at, msg) in cases {
             let p = write(d.path(), "b.csv", &rows(lines));
             let e = Sweep::read_csv(&p).unwrap_err().to_string();
-            assert!(e.contains("b.csv") && e.contains(at) && e.contains(msg), "{e}");
+            assert!(
+                e.contains("b.csv") && e.contains(at) && e.contains(msg),
+                "{e}"
+            );
         }
         let p = write(
             d.path(),
@@ -569,7 +592,10 @@ mod tests {
             "frequency_Hz,force_amplitude_N,phase_rad\n1,1,0\n",
         );
         let e = Sweep::read_csv(&p).unwrap_err().to_string();
-        assert!(e.contains("c.csv:1:") && e.contains("no response amplitude column"), "{e}");
+        assert!(
+            e.contains("c.csv:1:") && e.contains("no response amplitude column"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -598,10 +624,8 @@ mod tests {
                         time_sign,
                         inverted,
                     };
-                    let mut text = format!(
-                        "frequency_Hz,force_amplitude_N,{},phase_rad\n",
-                        q.column()
-                    );
+                    let mut text =
+                        format!("frequency_Hz,force_amplitude_N,{},phase_rad\n", q.column());
                     for i in 0..21 {
                         let f = 76.0 + 0.4 * i as f64;
                         let w = TAU * f;
@@ -615,7 +639,10 @@ mod tests {
                     assert_eq!(got, conv, "{q:?}");
                     // Round trip to the model's complex response.
                     let h0 = q.from_displacement(TAU * 76.0)
-                        / Complex64::new(wn * wn - (TAU * 76.0f64).powi(2), 2.0 * z * wn * TAU * 76.0);
+                        / Complex64::new(
+                            wn * wn - (TAU * 76.0f64).powi(2),
+                            2.0 * z * wn * TAU * 76.0,
+                        );
                     assert!((s.frf(&got)[0] - h0).norm() < 1e-9 * h0.norm());
                 }
             }

@@ -58,7 +58,8 @@ impl Options {
 
     /// Model evaluations the whole run is expected to take (progress-bar length).
     pub fn estimated_evaluations(&self) -> u64 {
-        let swarm = |o: &FitOptions| o.starts as u64 * o.particles as u64 * (o.swarm_iterations + 1);
+        let swarm =
+            |o: &FitOptions| o.starts as u64 * o.particles as u64 * (o.swarm_iterations + 1);
         let local = |o: &FitOptions| o.local_iterations;
         let b = &self.select.baseline_fit;
         let c = &self.select.candidate_fit;
@@ -194,7 +195,10 @@ fn require_converged(fit: &FitResult, what: &str, levels: &[LevelData]) -> Resul
                  iterations per run)",
                 fit.starts.first().map_or(0, |s| s.local_iterations)
             ),
-            iterations: fit.starts.first().map_or(0, |s| s.local_iterations as usize),
+            iterations: fit
+                .starts
+                .first()
+                .map_or(0, |s| s.local_iterations as usize),
             residual: fit.cost,
             tolerance: 1e-7 * fit.cost,
         });
@@ -218,7 +222,10 @@ fn require_converged(fit: &FitResult, what: &str, levels: &[LevelData]) -> Resul
 /// Mean force at a drive-point amplitude, interpolated between the levels' (peak amplitude,
 /// mean force) pairs (for the preload-loss effect on backbones).
 fn force_at_amplitude(bb: &[LevelBackbone], a: f64) -> f64 {
-    let mut pts: Vec<(f64, f64)> = bb.iter().map(|b| (b.peak_amplitude_m, b.mean_force_n)).collect();
+    let mut pts: Vec<(f64, f64)> = bb
+        .iter()
+        .map(|b| (b.peak_amplitude_m, b.mean_force_n))
+        .collect();
     pts.sort_by(|x, y| x.0.total_cmp(&y.0));
     if a <= pts[0].0 {
         return pts[0].1;
@@ -235,7 +242,11 @@ fn force_at_amplitude(bb: &[LevelBackbone], a: f64) -> f64 {
 /// Model backbone over the measured amplitude range (40 points, log-spaced from half the
 /// smallest to 1.5 × the largest level peak amplitude).
 pub fn model_backbone(model: &Model, bb: &[LevelBackbone]) -> Result<Vec<BackbonePoint>> {
-    let lo = bb.iter().map(|b| b.peak_amplitude_m).fold(f64::INFINITY, f64::min) * 0.5;
+    let lo = bb
+        .iter()
+        .map(|b| b.peak_amplitude_m)
+        .fold(f64::INFINITY, f64::min)
+        * 0.5;
     let hi = bb.iter().map(|b| b.peak_amplitude_m).fold(0.0, f64::max) * 1.5;
     (0..40)
         .map(|i| {
@@ -322,12 +333,22 @@ pub fn identify(
     let fit_data: Vec<LevelData> = fit_levels.iter().map(|&i| levels[i].clone()).collect();
     let baseline = ModelSpec::baseline(opts.family, scales);
     let selection = select::select(&baseline, &fit_data, &opts.select, progress)?;
-    let before = refit_all_rows(&selection.baseline_train_fit, &fit_data, &opts.final_fit, progress)?;
+    let before = refit_all_rows(
+        &selection.baseline_train_fit,
+        &fit_data,
+        &opts.final_fit,
+        progress,
+    )?;
     require_converged(&before, "baseline", &levels)?;
     let after = if selection.final_spec == baseline {
         before.clone()
     } else {
-        let a = refit_all_rows(&selection.final_train_fit, &fit_data, &opts.final_fit, progress)?;
+        let a = refit_all_rows(
+            &selection.final_train_fit,
+            &fit_data,
+            &opts.final_fit,
+            progress,
+        )?;
         require_converged(&a, "final", &levels)?;
         a
     };
@@ -346,21 +367,17 @@ pub fn identify(
             })
             .collect(),
     };
-    let (flo, fhi) = sweeps.iter().flat_map(|s| &s.rows).fold(
-        (f64::INFINITY, 0.0f64),
-        |(a, b), r| (a.min(r.frequency_hz), b.max(r.frequency_hz)),
-    );
+    let (flo, fhi) = sweeps
+        .iter()
+        .flat_map(|s| &s.rows)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), r| {
+            (a.min(r.frequency_hz), b.max(r.frequency_hz))
+        });
     let response_controlled = amplitudes
         .iter()
         .map(|&a| {
             crate::error::require_positive("--response-amplitude", a)?;
-            response_controlled(
-                &after.model,
-                quantity,
-                a,
-                (flo, fhi),
-                scales.force_n,
-            )
+            response_controlled(&after.model, quantity, a, (flo, fhi), scales.force_n)
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(Identification {
@@ -516,7 +533,9 @@ pub fn verdict_text(v: &Verdict) -> String {
 impl Identification {
     /// Human-readable report.
     pub fn text(&self) -> String {
-        let mut s = String::from("asperity identify — single-nonlinear-mode model from measured frequency responses\n\n");
+        let mut s = String::from(
+            "asperity identify — single-nonlinear-mode model from measured frequency responses\n\n",
+        );
         s += "levels (by increasing mean force):\n";
         for (i, sw) in self.sweeps.iter().enumerate() {
             s += &format!(
@@ -527,10 +546,17 @@ impl Identification {
                 sw.quantity.column(),
                 sw.mean_force_n(),
                 &sw.sha256[..16],
-                if self.fit_levels.contains(&i) { "fit" } else { "predicted" }
+                if self.fit_levels.contains(&i) {
+                    "fit"
+                } else {
+                    "predicted"
+                }
             );
         }
-        s += &format!("phase convention detected: {}\n", self.convention.describe());
+        s += &format!(
+            "phase convention detected: {}\n",
+            self.convention.describe()
+        );
         s += &format!(
             "objective: complex response per unit force, residual / each level's peak, levels \
              weighted alike; training rows = even rows of the fit levels, held-out = odd rows\n\
@@ -558,7 +584,8 @@ impl Identification {
             b.wall_time_s
         );
         for (k, r) in self.selection.rounds.iter().enumerate() {
-            s += &format!(
+            s +=
+                &format!(
                 "\nround {}: base effects [{}], held-out J = {:.4e}, lag-1 autocorrelation {:.2}, \
                  n_eff = {:.1}\n",
                 k + 1,
@@ -579,8 +606,16 @@ impl Identification {
                     c.train_cost,
                     c.held_out.cost,
                     c.delta_bic,
-                    if c.improves_every_level { "better" } else { "not all" },
-                    if r.accepted == Some(c.effect) { "  ← accepted" } else { "" }
+                    if c.improves_every_level {
+                        "better"
+                    } else {
+                        "not all"
+                    },
+                    if r.accepted == Some(c.effect) {
+                        "  ← accepted"
+                    } else {
+                        ""
+                    }
                 );
             }
         }
@@ -672,7 +707,11 @@ impl Identification {
         for (i, (l, sw)) in levels.iter().zip(&self.sweeps).enumerate() {
             let (yb, _) = l.model_frf(&self.before.model)?;
             let (ya, _) = l.model_frf(&self.after.model)?;
-            let role = if self.fit_levels.contains(&i) { "fit" } else { "predicted" };
+            let role = if self.fit_levels.contains(&i) {
+                "fit"
+            } else {
+                "predicted"
+            };
             for (k, r) in sw.rows.iter().enumerate() {
                 rows.push(CurveRow {
                     file: l.name.clone(),
@@ -697,13 +736,20 @@ impl Identification {
         written.push(p);
         // Figures per level.
         for (i, l) in levels.iter().enumerate() {
-            let role = if self.fit_levels.contains(&i) { "fitted" } else { "predicted" };
+            let role = if self.fit_levels.contains(&i) {
+                "fitted"
+            } else {
+                "predicted"
+            };
             let curves = vec![
                 (
                     format!("baseline ({role})"),
                     fine_curve(&self.before.model, l, 4),
                 ),
-                (format!("final ({role})"), fine_curve(&self.after.model, l, 4)),
+                (
+                    format!("final ({role})"),
+                    fine_curve(&self.after.model, l, 4),
+                ),
             ];
             let p = dir.join(format!("identify-level{}.png", i + 1));
             let title = format!("level {} ({}), {role}", i + 1, l.name);
@@ -727,14 +773,32 @@ impl Identification {
             writeln!(w, "# backbone: drive-point displacement amplitude (m), natural frequency (Hz), damping ratio (-)").map_err(io)?;
             writeln!(w, "source,amplitude_m,frequency_Hz,damping_ratio").map_err(io)?;
             for b in &self.data_backbone {
-                writeln!(w, "data-level-{},{:.6e},{:.6},{:.6e}", b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio).map_err(io)?;
+                writeln!(
+                    w,
+                    "data-level-{},{:.6e},{:.6},{:.6e}",
+                    b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio
+                )
+                .map_err(io)?;
                 for q in &b.points {
-                    writeln!(w, "data-pointwise-{},{:.6e},{:.6},{:.6e}", b.file, q.amplitude_m, q.frequency_hz, q.damping_ratio).map_err(io)?;
+                    writeln!(
+                        w,
+                        "data-pointwise-{},{:.6e},{:.6},{:.6e}",
+                        b.file, q.amplitude_m, q.frequency_hz, q.damping_ratio
+                    )
+                    .map_err(io)?;
                 }
             }
-            for (name, bb) in [("baseline-model", &self.backbone_before), ("final-model", &self.backbone_after)] {
+            for (name, bb) in [
+                ("baseline-model", &self.backbone_before),
+                ("final-model", &self.backbone_after),
+            ] {
                 for q in bb.iter() {
-                    writeln!(w, "{name},{:.6e},{:.6},{:.6e}", q.amplitude_m, q.frequency_hz, q.damping_ratio).map_err(io)?;
+                    writeln!(
+                        w,
+                        "{name},{:.6e},{:.6},{:.6e}",
+                        q.amplitude_m, q.frequency_hz, q.damping_ratio
+                    )
+                    .map_err(io)?;
                 }
             }
             Ok(())
@@ -748,7 +812,17 @@ impl Identification {
             writeln!(w, "response_amplitude,unit,frequency_Hz,force_amplitude_N,frf_amplitude,frf_phase_rad").map_err(io)?;
             for r in &self.response_controlled {
                 for k in 0..r.frequency_hz.len() {
-                    writeln!(w, "{},{},{},{:.6e},{:.6e},{:.6e}", r.amplitude, r.quantity.unit(), r.frequency_hz[k], r.force_n[k], r.frf_amplitude[k], r.frf[k].arg()).map_err(io)?;
+                    writeln!(
+                        w,
+                        "{},{},{},{:.6e},{:.6e},{:.6e}",
+                        r.amplitude,
+                        r.quantity.unit(),
+                        r.frequency_hz[k],
+                        r.force_n[k],
+                        r.frf_amplitude[k],
+                        r.frf[k].arg()
+                    )
+                    .map_err(io)?;
                 }
             }
             Ok(())

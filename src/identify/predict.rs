@@ -152,7 +152,8 @@ impl Prediction {
             self.model_file.display(),
             match self.control {
                 Control::Force => "force: the measured force of each row applied",
-                Control::Response => "response: the measured response of each row held, force solved for",
+                Control::Response =>
+                    "response: the measured response of each row held, force solved for",
             },
             self.convention.describe(),
             self.convention_source

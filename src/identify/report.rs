@@ -79,7 +79,10 @@ impl LevelErrors {
         let (flo, fhi) = (f[lo].min(f[hi]), f[lo].max(f[hi]));
         let mut regions = Vec::new();
         for (name, keep) in [
-            ("below resonance", Box::new(|x: f64| x < flo) as Box<dyn Fn(f64) -> bool>),
+            (
+                "below resonance",
+                Box::new(|x: f64| x < flo) as Box<dyn Fn(f64) -> bool>,
+            ),
             ("at resonance", Box::new(|x: f64| x >= flo && x <= fhi)),
             ("above resonance", Box::new(|x: f64| x > fhi)),
         ] {
@@ -132,11 +135,21 @@ pub fn fine_curve(model: &Model, level: &LevelData, per_interval: usize) -> Vec<
     drives.push(*level.drives.last().expect("rows"));
     let (x, _) = model
         .receptance_tolerant(&drives, level.mean_force_n, true)
-        .unwrap_or_else(|_| (vec![Complex64::new(f64::NAN, f64::NAN); drives.len()], vec![]));
+        .unwrap_or_else(|_| {
+            (
+                vec![Complex64::new(f64::NAN, f64::NAN); drives.len()],
+                vec![],
+            )
+        });
     drives
         .iter()
         .zip(x)
-        .map(|(d, xi)| (d.omega / TAU, xi * level.quantity.from_displacement(d.omega)))
+        .map(|(d, xi)| {
+            (
+                d.omega / TAU,
+                xi * level.quantity.from_displacement(d.omega),
+            )
+        })
         .collect()
 }
 
@@ -174,7 +187,9 @@ pub fn plot_level(
         ));
         phase.push(Series::line(
             label.clone(),
-            c.iter().map(|(f, y)| (*f, conv.to_file_phase(*y))).collect(),
+            c.iter()
+                .map(|(f, y)| (*f, conv.to_file_phase(*y)))
+                .collect(),
         ));
     }
     let t2 = format!("{title}: phase (the file's convention)");
@@ -217,7 +232,9 @@ pub fn plot_backbone(
     let pts: Vec<&BackbonePoint> = data.iter().flat_map(|b| &b.points).collect();
     fr.push(Series::markers(
         "data, pointwise (half-power rows)",
-        pts.iter().map(|p| (p.amplitude_m * 1e6, p.frequency_hz)).collect(),
+        pts.iter()
+            .map(|p| (p.amplitude_m * 1e6, p.frequency_hz))
+            .collect(),
     ));
     zr.push(Series::markers(
         "data, pointwise (half-power rows)",
@@ -240,7 +257,9 @@ pub fn plot_backbone(
     for (label, m) in models {
         fr.push(Series::line(
             label.clone(),
-            m.iter().map(|p| (p.amplitude_m * 1e6, p.frequency_hz)).collect(),
+            m.iter()
+                .map(|p| (p.amplitude_m * 1e6, p.frequency_hz))
+                .collect(),
         ));
         zr.push(Series::line(
             label.clone(),
@@ -355,7 +374,13 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
     let mut s = format!("{title}\n");
     s += &format!(
         "{:<34} {:>9} {:>8} {:>10} {:>21} {:>19} {:>17}\n",
-        "level", "role", "F (N)", "f_res (Hz)", "Δf_res (Hz) bef→aft", "peak err bef→aft", "RMS cplx bef→aft"
+        "level",
+        "role",
+        "F (N)",
+        "f_res (Hz)",
+        "Δf_res (Hz) bef→aft",
+        "peak err bef→aft",
+        "RMS cplx bef→aft"
     );
     for (b, a) in rows {
         let pair = |x: f64, y: Option<f64>, scale: f64, prec: usize| match y {
@@ -368,7 +393,12 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
             b.role,
             b.mean_force_n,
             b.resonance_measured_hz,
-            pair(b.resonance_error_hz, a.map(|a| a.resonance_error_hz), 1.0, 3),
+            pair(
+                b.resonance_error_hz,
+                a.map(|a| a.resonance_error_hz),
+                1.0,
+                3
+            ),
             pair(b.peak_error, a.map(|a| a.peak_error), 100.0, 1),
             match a {
                 Some(a) => format!("{:.3} → {:.3}", b.rms_complex, a.rms_complex),

@@ -10,7 +10,9 @@
 //! 2. **Candidates.** Each admissible effect ([`super::model::ModelSpec::admits`]) is added and
 //!    the model refitted: a particle swarm over the whole box (one start) and Nelder–Mead from
 //!    the current model's optimum with the effect's parameters at their neutral values; the
-//!    better of the two is kept (a candidate never loses to its own neutral point).
+//!    better of the two is kept. An effect with a neutral value (zero stiffness change, zero
+//!    delay, ...) therefore never fits worse than the current model; a joint family has none
+//!    (its joint replaces the Jenkins slider), so its fit rests on the swarm.
 //! 3. **Evidence.** On the held-out rows, `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)`
 //!    (Schwarz 1978), `J` the objective of [`super::fit`] on held-out rows, `n = 2·rows`
 //!    (real and imaginary parts), `n_eff = n·(1 − ρ)/(1 + ρ)` with `ρ` the lag-1
@@ -167,11 +169,17 @@ pub struct Round {
 pub enum Verdict {
     /// Effects accepted on held-out evidence; `at_scatter`: the final residual is within the
     /// scatter.
-    EffectsFound { effects: Vec<Effect>, at_scatter: bool },
+    EffectsFound {
+        effects: Vec<Effect>,
+        at_scatter: bool,
+    },
     /// The baseline's residual is already at the scatter.
     NoEffectNeeded,
     /// The residual stays above the scatter and no candidate explains it.
-    Unexplained { held_out_cost: f64, scatter_floor: f64 },
+    Unexplained {
+        held_out_cost: f64,
+        scatter_floor: f64,
+    },
 }
 
 /// Result of the effect search.
@@ -217,7 +225,11 @@ fn fit_candidate(
         return Ok(local);
     }
     let global = fit_global(spec, levels, train, &opts.candidate_fit, progress)?;
-    Ok(if global.cost < local.cost { global } else { local })
+    Ok(if global.cost < local.cost {
+        global
+    } else {
+        local
+    })
 }
 
 /// Run the search on the fit levels.
