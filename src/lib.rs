@@ -29,6 +29,7 @@ pub mod identify;
 pub mod input;
 pub mod output;
 pub mod plot;
+pub mod shard;
 pub mod surface;
 pub mod testdata;
 

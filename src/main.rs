@@ -29,6 +29,10 @@ enum Command {
     Elements(cli::elements::ElementsArgs),
     /// Compare a model with a measured hysteresis record; find and add the missing effect.
     Diagnose(cli::diagnose::DiagnoseArgs),
+    /// Nonlinear forced response (harmonic balance, AFT, continuation) driven by element tables.
+    Response(cli::response::ResponseArgs),
+    /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
+    Merge(cli::merge::MergeArgs),
     /// Identify a jointed structure's nonlinear mode from measured frequency responses at
     /// several levels; find the missing effect; predict the levels not used.
     Identify(Box<cli::identify::IdentifyArgs>),
@@ -45,6 +49,8 @@ fn main() {
         Command::Film(a) => cli::film::run(a),
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Response(a) => cli::response::run(a),
+        Command::Merge(a) => cli::merge::run(a),
         Command::Identify(a) => cli::identify::run_identify(*a),
         Command::Predict(a) => cli::identify::run_predict(a),
     };

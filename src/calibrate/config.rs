@@ -138,13 +138,8 @@ impl CalibrationConfig {
     }
 
     fn parse(text: &str, path: &Path) -> Result<Self> {
-        let cfg: Self = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
-                .unwrap_or(0);
-            Error::parse(path, line, e.message().trim().to_string())
-        })?;
+        let cfg: Self =
+            toml::from_str(text).map_err(|e| crate::input::toml_error(path, text, e))?;
         cfg.validate().map_err(|e| match e {
             Error::InvalidParameter { name, message } => {
                 let line = key_line(text, &name);

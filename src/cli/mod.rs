@@ -9,6 +9,8 @@ pub mod diagnose;
 pub mod elements;
 pub mod film;
 pub mod identify;
+pub mod merge;
+pub mod response;
 pub mod surface;
 
 use asperity::surface::combine::Material;

@@ -2,5 +2,6 @@
 //! partial slip with history), and pressure sweeps.
 pub mod analytic;
 pub mod normal;
+pub mod surface_sweep;
 pub mod sweep;
 pub mod tangential;

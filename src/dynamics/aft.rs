@@ -48,6 +48,8 @@ pub struct Harmonics {
     synthesis: Vec<f64>,
     /// `len × n_time` analysis matrix: `X_c = Σ_i D[c][i]·x_i`.
     analysis: Vec<f64>,
+    /// The same as a matrix (for products with sensitivities).
+    analysis_matrix: DMatrix<f64>,
     forward: Arc<dyn realfft::RealToComplex<f64>>,
     inverse: Arc<dyn realfft::ComplexToReal<f64>>,
 }
@@ -112,11 +114,13 @@ impl Harmonics {
             }
         }
         let mut planner = RealFftPlanner::<f64>::new();
+        let analysis_matrix = DMatrix::from_row_slice(len, n, &analysis);
         Ok(Self {
             orders,
             n_time: n,
             synthesis,
             analysis,
+            analysis_matrix,
             forward: planner.plan_fft_forward(n),
             inverse: planner.plan_fft_inverse(n),
         })
@@ -588,27 +592,29 @@ pub fn evaluate(
                 }
             }
         }
-        // Total force sensitivity per sample, then its harmonics.
-        jac = vec![0.0; d * len * nu];
-        let mut total = vec![0.0; nu];
+        // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU (rows (i, c)), then its
+        // harmonics J = D·T, both as matrix products.
+        let dfm = DMatrix::from_row_slice(n * d, ncol, &sens.df);
+        let mut t = dfm.columns(0, nu).into_owned();
+        if m > 0 {
+            let ds0m = DMatrix::from_row_slice(m, nu, &ds0);
+            t += dfm.columns(nu, m) * ds0m;
+        }
+        // Rows (i, c) → row i, column block c.
+        let mut t2 = DMatrix::zeros(n, d * nu);
         for i in 0..n {
             for c in 0..d {
-                let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
-                total.copy_from_slice(&row[..nu]);
-                for k in 0..m {
-                    let g = row[nu + k];
-                    if g != 0.0 {
-                        for (t, v) in total.iter_mut().zip(&ds0[k * nu..(k + 1) * nu]) {
-                            *t += g * v;
-                        }
-                    }
+                for col in 0..nu {
+                    t2[(i, c * nu + col)] = t[(i * d + c, col)];
                 }
-                for hc in 0..len {
-                    let w = harmonics.analysis_row(hc)[i];
-                    let out = &mut jac[(c * len + hc) * nu..(c * len + hc + 1) * nu];
-                    for (o, t) in out.iter_mut().zip(&total) {
-                        *o += w * t;
-                    }
+            }
+        }
+        let j2 = &harmonics.analysis_matrix * t2;
+        jac = vec![0.0; d * len * nu];
+        for c in 0..d {
+            for hc in 0..len {
+                for col in 0..nu {
+                    jac[(c * len + hc) * nu + col] = j2[(hc, c * nu + col)];
                 }
             }
         }

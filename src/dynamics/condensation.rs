@@ -21,11 +21,13 @@ use nalgebra::{Complex, DMatrix, DVector};
 
 type C64 = Complex<f64>;
 
+/// Per retained order `k`: `(k, G_k, ∂G_k/∂ω, H(kω))`.
+type OrderBlock = (usize, DMatrix<C64>, DMatrix<C64>, DMatrix<C64>);
+
 /// The condensed linear structure at one frequency, for every retained harmonic.
 pub struct Receptance {
     omega: f64,
-    /// Per retained order: (k, G_k, ∂G_k/∂ω, H_k).
-    blocks: Vec<(usize, DMatrix<C64>, DMatrix<C64>, DMatrix<C64>)>,
+    blocks: Vec<OrderBlock>,
 }
 
 fn complex(a: &DMatrix<f64>) -> DMatrix<C64> {
@@ -92,19 +94,8 @@ impl Receptance {
         let p = stacked(system);
         let nc = p.nrows();
         let u = DMatrix::from_row_slice(nc, len, z.as_slice());
-        let forces = system_forces(system, &u, jacobian);
-        // f̂ (n_c × len) in the stacked ordering.
-        let mut fe = DMatrix::zeros(nc, len);
-        let mut row = 0;
-        for (e, r) in system.structure.elements.iter().zip(&forces) {
-            let d = e.element.dofs();
-            for c in 0..d {
-                for h in 0..len {
-                    fe[(row + c, h)] = r.forces[c * len + h];
-                }
-            }
-            row += d;
-        }
+        let forces = system.element_forces(&u, jacobian);
+        let fe = system.stacked_forces(&forces);
         let fex = system.excitation_harmonics();
         let fexm = DMatrix::from_row_slice(system.structure.n(), len, fex.as_slice());
         let mut ulin = DMatrix::zeros(nc, len);
@@ -255,18 +246,8 @@ impl Receptance {
         let nc = p.nrows();
         let n = system.structure.n();
         let u = DMatrix::from_row_slice(nc, len, z.as_slice());
-        let forces = system_forces(system, &u, false);
-        let mut fe = DMatrix::zeros(nc, len);
-        let mut row = 0;
-        for (e, r) in system.structure.elements.iter().zip(&forces) {
-            let d = e.element.dofs();
-            for c in 0..d {
-                for h in 0..len {
-                    fe[(row + c, h)] = r.forces[c * len + h];
-                }
-            }
-            row += d;
-        }
+        let forces = system.element_forces(&u, false);
+        let fe = system.stacked_forces(&forces);
         let total = DMatrix::from_row_slice(n, len, system.excitation_harmonics().as_slice())
             * level
             - p.transpose() * fe;
@@ -307,41 +288,4 @@ fn stacked(system: &HbmSystem<'_>) -> DMatrix<f64> {
         row += e.element.dofs();
     }
     p
-}
-
-fn system_forces(
-    system: &HbmSystem<'_>,
-    u: &DMatrix<f64>,
-    jacobian: bool,
-) -> Vec<crate::dynamics::aft::ElementHarmonics> {
-    use rayon::prelude::*;
-    let len = system.harmonics.len();
-    let mut offsets = Vec::new();
-    let mut row = 0;
-    for e in &system.structure.elements {
-        offsets.push(row);
-        row += e.element.dofs();
-    }
-    system
-        .structure
-        .elements
-        .par_iter()
-        .zip(offsets.par_iter())
-        .map(|(e, &off)| {
-            let d = e.element.dofs();
-            let mut ue = vec![0.0; d * len];
-            for c in 0..d {
-                for h in 0..len {
-                    ue[c * len + h] = u[(off + c, h)];
-                }
-            }
-            crate::dynamics::aft::evaluate(
-                e.element.as_ref(),
-                &system.harmonics,
-                &ue,
-                jacobian,
-                &system.aft,
-            )
-        })
-        .collect()
 }

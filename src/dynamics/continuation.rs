@@ -92,6 +92,7 @@ struct Corrected {
     z: DVector<f64>,
     omega: f64,
     iterations: usize,
+    jacobians: usize,
     residual: f64,
     periodicity: f64,
     /// Bordered Jacobian blocks at the last iterate (for the next tangent).
@@ -100,6 +101,7 @@ struct Corrected {
 }
 
 /// Bordered solve `[jz·zs, jw·ws; tᵀ]·x = [r; g]` in scaled variables.
+#[allow(clippy::too_many_arguments)]
 fn bordered(
     jz: &DMatrix<f64>,
     jw: &DVector<f64>,
@@ -111,12 +113,7 @@ fn bordered(
     omega: f64,
 ) -> Result<DVector<f64>> {
     let n = jz.nrows();
-    let mut a = DMatrix::zeros(n + 1, n + 1);
-    a.view_mut((0, 0), (n, n)).copy_from(&(jz * zs));
-    a.view_mut((0, n), (n, 1)).copy_from(&(jw * ws));
-    for c in 0..=n {
-        a[(n, c)] = t[c];
-    }
+    let a = bordered_matrix(jz, jw, t, zs, ws);
     let mut b = DVector::zeros(n + 1);
     b.rows_mut(0, n).copy_from(r);
     b[n] = g;
@@ -184,7 +181,7 @@ pub fn sweep(
             let yp = &y_hat + &t * step;
             match correct(system, level, &yp, &t, zs, ws, settings, tol) {
                 Ok(c) => {
-                    jacobians += c.iterations + 1;
+                    jacobians += c.jacobians;
                     // Next tangent.
                     let mut tn =
                         bordered(&c.jz, &c.jw, &t, zs, ws, &DVector::zeros(n), 1.0, c.omega)?;
@@ -289,7 +286,9 @@ pub fn sweep(
     })
 }
 
-/// Bordered Newton corrector from the predicted point `yp`; `Err` carries what went wrong.
+/// Bordered corrector from the predicted point `yp`: Newton's method with the Jacobian kept
+/// (chord iterations, residual-only AFT evaluations) while the residual falls at least by half
+/// per iteration, refreshed otherwise. `Err` carries what went wrong.
 #[allow(clippy::too_many_arguments)]
 fn correct(
     system: &HbmSystem<'_>,
@@ -304,13 +303,17 @@ fn correct(
     let n = system.unknowns();
     let mut y = yp.clone();
     let mut first_residual = f64::NAN;
+    let mut prev_residual = f64::INFINITY;
+    let mut lu: Option<Factorised> = None;
+    let mut jacobians = 0;
     for it in 0..=settings.max_corrector_iterations {
         let z = y.rows(0, n) * zs;
         let omega = y[n] * ws;
         if omega <= 0.0 {
             return Err("predicted frequency ≤ 0".into());
         }
-        let ev = system.evaluate(&z, omega, level, true);
+        let refresh = lu.is_none();
+        let ev = system.evaluate(&z, omega, level, refresh);
         let rel = ev.relative_residual();
         if !rel.is_finite() {
             return Err("residual not finite".into());
@@ -319,14 +322,23 @@ fn correct(
             first_residual = rel;
         }
         if rel <= tol {
+            let (_, jz, jw) = match lu {
+                Some(l) => l,
+                None => {
+                    // Converged on the first evaluation: its Jacobian is at hand.
+                    let a = bordered_matrix(&ev.jacobian, &ev.d_omega, t, zs, ws);
+                    (a.lu(), ev.jacobian, ev.d_omega)
+                }
+            };
             return Ok(Corrected {
                 z,
                 omega,
                 iterations: it,
+                jacobians: jacobians + usize::from(refresh),
                 residual: rel,
                 periodicity: ev.periodicity_error,
-                jz: ev.jacobian,
-                jw: ev.d_omega,
+                jz,
+                jw,
             });
         }
         if it == settings.max_corrector_iterations {
@@ -341,19 +353,54 @@ fn correct(
                 omega / TWO_PI
             ));
         }
+        // Chord step while it contracts fast enough; fresh Jacobian otherwise.
+        let (ev, refreshed) = if !refresh && rel > 0.5 * prev_residual {
+            (system.evaluate(&z, omega, level, true), true)
+        } else {
+            (ev, refresh)
+        };
+        if refreshed {
+            jacobians += 1;
+            let a = bordered_matrix(&ev.jacobian, &ev.d_omega, t, zs, ws);
+            lu = Some((a.lu(), ev.jacobian.clone(), ev.d_omega.clone()));
+        }
+        prev_residual = rel;
         let g = t.dot(&(&y - yp));
-        let dy = bordered(
-            &ev.jacobian,
-            &ev.d_omega,
-            t,
-            zs,
-            ws,
-            &(-&ev.residual),
-            -g,
-            omega,
-        )
-        .map_err(|e| e.to_string())?;
+        let mut b = DVector::zeros(n + 1);
+        b.rows_mut(0, n).copy_from(&(-&ev.residual));
+        b[n] = -g;
+        let dy = lu
+            .as_ref()
+            .expect("factorised")
+            .0
+            .solve(&b)
+            .ok_or_else(|| format!("singular bordered Jacobian at {:.6} Hz", omega / TWO_PI))?;
         y += dy;
     }
     Err("corrector: no iteration".into())
+}
+
+/// LU of the bordered matrix with the Jacobian blocks it was built from.
+type Factorised = (
+    nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    DMatrix<f64>,
+    DVector<f64>,
+);
+
+/// `[jz·zs, jw·ws; tᵀ]`.
+fn bordered_matrix(
+    jz: &DMatrix<f64>,
+    jw: &DVector<f64>,
+    t: &DVector<f64>,
+    zs: f64,
+    ws: f64,
+) -> DMatrix<f64> {
+    let n = jz.nrows();
+    let mut a = DMatrix::zeros(n + 1, n + 1);
+    a.view_mut((0, 0), (n, n)).copy_from(&(jz * zs));
+    a.view_mut((0, n), (n, 1)).copy_from(&(jw * ws));
+    for c in 0..=n {
+        a[(n, c)] = t[c];
+    }
+    a
 }

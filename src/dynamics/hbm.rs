@@ -238,7 +238,11 @@ impl<'a> HbmSystem<'a> {
 
     /// Force harmonics (and Jacobians) of every element for the element displacements `u`
     /// (`n_c × len`).
-    fn element_forces(&self, u: &DMatrix<f64>, jacobian: bool) -> Vec<aft::ElementHarmonics> {
+    pub(crate) fn element_forces(
+        &self,
+        u: &DMatrix<f64>,
+        jacobian: bool,
+    ) -> Vec<aft::ElementHarmonics> {
         let len = self.harmonics.len();
         self.structure
             .elements
@@ -261,6 +265,21 @@ impl<'a> HbmSystem<'a> {
                 )
             })
             .collect()
+    }
+
+    /// Element force harmonics stacked like the element displacements (`n_c × len`).
+    pub(crate) fn stacked_forces(&self, forces: &[aft::ElementHarmonics]) -> DMatrix<f64> {
+        let len = self.harmonics.len();
+        let mut fe = DMatrix::zeros(self.stacked_map.nrows(), len);
+        for (e, r) in forces.iter().enumerate() {
+            let d = self.structure.elements[e].element.dofs();
+            for c in 0..d {
+                for h in 0..len {
+                    fe[(self.offsets[e] + c, h)] = r.forces[c * len + h];
+                }
+            }
+        }
+        fe
     }
 
     /// `Z(ω)·Q` and `∂(Z·Q)/∂ω` for coordinate harmonics `q` (`n × len`, coordinate-major).
@@ -389,22 +408,12 @@ impl<'a> HbmSystem<'a> {
         level: f64,
         jacobian: bool,
     ) -> Evaluation {
-        let len = self.harmonics.len();
         let u = self.element_displacements(q);
         let forces = self.element_forces(&u, jacobian);
         let fex = self.excitation_harmonics();
         let (lin, dlin) = self.linear_forces(q, omega);
         // Σ_e P_eᵀ f̂_e.
-        let mut fe = DMatrix::zeros(self.stacked_map.nrows(), len);
-        for (e, r) in forces.iter().enumerate() {
-            let d = self.structure.elements[e].element.dofs();
-            for c in 0..d {
-                for h in 0..len {
-                    fe[(self.offsets[e] + c, h)] = r.forces[c * len + h];
-                }
-            }
-        }
-        let fnl = self.stacked_map.transpose() * fe;
+        let fnl = self.stacked_map.transpose() * self.stacked_forces(&forces);
         let fnl = DVector::from_row_slice(fnl.transpose().as_slice());
         let residual = &lin + &fnl - &fex * level;
         let scale = (&fex * level).norm() + fnl.norm();

@@ -11,10 +11,17 @@
 //! time_integration: reference steady state by Newmark time stepping (validation)
 //! ```
 
+// Index loops over DOFs, harmonics and samples read like the equations they implement.
+#![allow(clippy::needless_range_loop)]
+
 pub mod aft;
 pub mod condensation;
+pub mod contact;
 pub mod continuation;
 pub mod hbm;
 pub mod iwan;
 pub mod model;
+pub mod model_file;
 pub mod nonlinear;
+pub mod report;
+pub mod time_integration;

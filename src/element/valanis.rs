@@ -326,7 +326,15 @@ pub fn implicit_euler_step_partials(
     let dq = q1 - qs;
     // Unprojected force and its derivative.
     let (force, mut dforce) = if dq == 0.0 {
-        (fs, dfs)
+        // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
+        let lam = p.lambda(fz1);
+        let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
+        let slope = force_slope(p, x);
+        let mut df = dfs;
+        for i in 0..6 {
+            df[i] += slope * (dq1[i] - dqs[i]);
+        }
+        (fs, df)
     } else {
         let lam = p.lambda(fz1);
         let s = dq.signum();
@@ -919,6 +927,11 @@ mod tests {
             [0.0, 0.2 * slip, 0.1 * slip, -3.0, 0.6 * slip, 7.0],
             [1.0, 0.0, 0.2 * slip, 10.0, 5.0 * slip, 10.0],
         ];
+        // At Δq = 0 the derivative with respect to q1 is the slope for Δq → 0+ (E0 on a virgin
+        // element).
+        let st = ValanisState::virgin(0.0, 10.0);
+        let (_, d0) = implicit_euler_step_partials(&p, &st, 0.0, 10.0);
+        assert!((d0.force[4] - p.e0).abs() < 1e-9 * p.e0 && d0.force[2] == -d0.force[4]);
         for c in cases {
             let eval = |v: &[f64; 6]| {
                 let st = ValanisState {
