@@ -14,6 +14,11 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Draw markers instead of a line (measured or sampled data).
     pub markers: bool,
+    /// A shaded band instead: the polygon `points` (upper edge left to right, then the lower
+    /// edge right to left), see [`Series::band`].
+    pub band: bool,
+    /// Colour index into [`series_colour`]; by default the series' position in the plot.
+    pub colour: Option<usize>,
 }
 
 impl Series {
@@ -23,6 +28,8 @@ impl Series {
             label: label.into(),
             points,
             markers: false,
+            band: false,
+            colour: None,
         }
     }
 
@@ -32,7 +39,29 @@ impl Series {
             label: label.into(),
             points,
             markers: true,
+            band: false,
+            colour: None,
         }
+    }
+
+    /// A shaded band between `lower` and `upper` at each `x`: `(x, lower, upper)` (e.g. a 95 %
+    /// confidence interval), drawn translucent in the series colour.
+    pub fn band(label: impl Into<String>, points: &[(f64, f64, f64)]) -> Self {
+        let upper = points.iter().map(|&(x, _, hi)| (x, hi));
+        let lower = points.iter().rev().map(|&(x, lo, _)| (x, lo));
+        Self {
+            label: label.into(),
+            points: upper.chain(lower).collect(),
+            markers: false,
+            band: true,
+            colour: None,
+        }
+    }
+
+    /// The same series drawn in colour `i` of [`series_colour`] (e.g. a band and its mean line).
+    pub fn with_colour(mut self, i: usize) -> Self {
+        self.colour = Some(i);
+        self
     }
 }
 
@@ -140,14 +169,24 @@ where
     Y: Ranged<ValueType = f64>,
 {
     for (i, s) in series.iter().enumerate() {
-        let colour = series_colour(i);
+        let colour = series_colour(s.colour.unwrap_or(i));
         let pts: Vec<(f64, f64)> = s
             .points
             .iter()
             .copied()
             .filter(|(x, y)| x.is_finite() && y.is_finite())
             .collect();
-        if s.markers {
+        if s.band {
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    pts,
+                    colour.mix(0.25).filled(),
+                )))?
+                .label(s.label.clone())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 20, y + 5)], colour.mix(0.25).filled())
+                });
+        } else if s.markers {
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))?
                 .label(s.label.clone())
@@ -278,6 +317,12 @@ mod tests {
         let s = vec![
             Series::line("x²", (1..50).map(|i| (i as f64, (i * i) as f64)).collect()),
             Series::markers("x", (1..50).map(|i| (i as f64, i as f64)).collect()),
+            Series::band(
+                "x ± 10 %",
+                &(1..50)
+                    .map(|i| (i as f64, 0.9 * i as f64, 1.1 * i as f64))
+                    .collect::<Vec<_>>(),
+            ),
         ];
         let layout = LinePlot {
             title: "test",

@@ -64,13 +64,18 @@ fn measured(name: &str) {
             "`{needle}` not in {conclusion}"
         );
     }
-    // The free play is seen in the measured force itself, model-free.
+    // The free play is seen in the measured force itself, model-free, in most half-cycles,
+    // and the clearance is among the effects that explain part of the residual.
+    let c = &json["clearance"];
     assert!(
-        json["clearance"]["half_cycles_with_plateau"]
-            .as_u64()
-            .unwrap()
-            >= 10
+        2 * c["half_cycles_with_plateau"].as_u64().unwrap() >= c["half_cycles"].as_u64().unwrap(),
+        "{c}"
     );
+    assert!(json["effects_added"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|e| e == "backlash"));
     let text = std::fs::read_to_string(out.join("diagnose.txt")).unwrap();
     assert!(text.contains("verdict: model inadequate"), "{text}");
     assert!(!text.contains("-0.0000e0"), "{text}");

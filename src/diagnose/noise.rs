@@ -24,12 +24,15 @@
 //! few samples at a kink do not dominate.
 //!
 //! # High-pass cross-check
-//! Gasser, Sroka & Jennen-Steinmetz (1986, *Biometrika* 73:625) pseudo-residuals along time,
-//! `ẽ_i = (F_{i−1} − 2F_i + F_{i+1})/√6`, which have variance σ² for white noise on a signal
-//! that is locally linear over three samples; robust scale as above. It sees only the
-//! high-frequency part of the scatter. For noise with lag-1 autocorrelation ρ (AR(1)),
-//! `σ_hp²/σ_rep² = (1 − ρ)(3 − ρ)/3`, which is solved for ρ: the noise correlation used by
-//! the selection ([`super::select`]) comes from the noise, never from a model's residual.
+//! Difference-based pseudo-residuals along time (Gasser, Sroka & Jennen-Steinmetz 1986,
+//! *Biometrika* 73:625, with the higher-order differences of Hall, Kay & Titterington 1990,
+//! *Biometrika* 77:521): `ẽ_i = (F_{i−2} − 4F_{i−1} + 6F_i − 4F_{i+1} + F_{i+2})/√70`, which
+//! has variance σ² for white noise and removes any signal that is locally cubic over five
+//! samples (a loop, and a ringing of many samples per period, pass almost untouched); robust
+//! scale as above. It sees only the high-frequency part of the scatter. For noise with lag-1
+//! autocorrelation ρ (AR(1)), `σ_hp²/σ_rep² = (70 − 112ρ + 56ρ² − 16ρ³ + 2ρ⁴)/70`, which is
+//! solved for ρ: the noise correlation used by the selection ([`super::select`]) comes from
+//! the noise, never from a model's residual.
 //! A ratio σ_hp/σ_rep above 1.5 means high-frequency content that repeats from cycle to cycle
 //! (phase-locked ringing, quantisation steps); below 0.5, scatter that is slow (coloured noise
 //! or cycle-to-cycle variation that is not a linear drift). Both are reported.
@@ -111,7 +114,7 @@ fn interpolate(x: &[f64], f: &[f64], a: usize, b: usize, dir: f64, x0: f64) -> O
         }
     }
     let (s_lo, s_hi) = (dir * x[lo], dir * x[hi]);
-    if !(s_hi > s_lo) || s0 < s_lo || s0 > s_hi {
+    if s_hi <= s_lo || s0 < s_lo || s0 > s_hi {
         return None;
     }
     let th = (s0 - s_lo) / (s_hi - s_lo);
@@ -176,22 +179,50 @@ pub fn repeatability_differences(x: &[f64], f: &[f64], cycles: &Cycles, span: us
     out
 }
 
-/// Gasser–Sroka–Jennen-Steinmetz pseudo-residuals over the samples `a..b`.
+/// Weights of the fourth-order difference pseudo-residual, normalised to unit sum of squares
+/// (`1 + 16 + 36 + 16 + 1 = 70`).
+const DIFF4: [f64; 5] = [1.0, -4.0, 6.0, -4.0, 1.0];
+
+/// Fourth-order difference pseudo-residuals over the samples `a..b`:
+/// `ẽ_i = (F_{i−2} − 4F_{i−1} + 6F_i − 4F_{i+1} + F_{i+2})/√70`.
 pub fn pseudo_residuals(f: &[f64], a: usize, b: usize) -> Vec<f64> {
-    let (a, b) = (a.max(1), b.min(f.len().saturating_sub(1)));
+    let (a, b) = (a.max(2), b.min(f.len().saturating_sub(2)));
+    let norm = 70f64.sqrt();
     (a..b)
-        .map(|i| (f[i - 1] - 2.0 * f[i] + f[i + 1]) / 6f64.sqrt())
+        .map(|i| {
+            DIFF4
+                .iter()
+                .enumerate()
+                .map(|(j, w)| w * f[i + j - 2])
+                .sum::<f64>()
+                / norm
+        })
         .collect()
 }
 
-/// Lag-1 autocorrelation of AR(1) noise from `r = σ_hp²/σ_rep² = (1 − ρ)(3 − ρ)/3`, i.e.
-/// `ρ = 2 − √(1 + 3r)`, clamped to `[0, 0.95]` (a high-pass estimate above the repeatability
-/// one is not noise correlation).
+/// `E[ẽ²]/σ²` of the fourth-order pseudo-residual for AR(1) noise with lag-1 correlation ρ:
+/// `(70 − 112ρ + 56ρ² − 16ρ³ + 2ρ⁴)/70` (the weights' lag products times `ρ^lag`).
+pub fn high_pass_variance_ratio(rho: f64) -> f64 {
+    (70.0 - 112.0 * rho + 56.0 * rho.powi(2) - 16.0 * rho.powi(3) + 2.0 * rho.powi(4)) / 70.0
+}
+
+/// Lag-1 autocorrelation of AR(1) noise from `r = σ_hp²/σ_rep²` (inverse of
+/// [`high_pass_variance_ratio`], decreasing from 1 at ρ = 0 to 0 at ρ = 1; bisection), clamped
+/// to `[0, 0.95]` (a high-pass estimate above the repeatability one is not noise correlation).
 pub fn ar1_from_variance_ratio(r: f64) -> f64 {
-    if !r.is_finite() {
+    if !r.is_finite() || r >= 1.0 {
         return 0.0;
     }
-    (2.0 - (1.0 + 3.0 * r.max(0.0)).sqrt()).clamp(0.0, 0.95)
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if high_pass_variance_ratio(mid) > r {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (0.5 * (lo + hi)).min(0.95)
 }
 
 /// Estimate the noise floor of the force `f` (N) driven by the smoothed displacement `x` (m)
@@ -235,7 +266,7 @@ pub fn estimate(x: &[f64], f: &[f64], cycles: &Cycles, force_scale: f64) -> Nois
         ));
         (high_pass, 0.0)
     };
-    if !(sigma >= resolution) {
+    if sigma.is_nan() || sigma < resolution {
         notes.push(format!(
             "scatter below the resolution floor ({:.0e} of the force amplitude): the floor is \
              set there",
@@ -326,9 +357,10 @@ mod tests {
     #[test]
     fn ar1_inversion() {
         for rho in [0.0, 0.3, 0.7] {
-            let r = (1.0 - rho) * (3.0 - rho) / 3.0;
+            let r = high_pass_variance_ratio(rho);
             assert!((ar1_from_variance_ratio(r) - rho).abs() < 1e-12);
         }
         assert_eq!(ar1_from_variance_ratio(2.0), 0.0);
+        assert_eq!(high_pass_variance_ratio(1.0), 0.0);
     }
 }

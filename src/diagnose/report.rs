@@ -200,20 +200,36 @@ impl Report {
             .into_iter()
             .map(Self::effect_sentence)
             .collect();
-        match self.verdict {
+        // A floor set by slow, cycle-to-cycle scatter is that of any periodic model, not of the
+        // measurement: say so beside every verdict.
+        let fast = self.noise.high_pass_n;
+        let caveat = if fast > 0.0 && fast < 0.5 * sigma {
+            format!(
+                "; note: the record is not repeatable cycle to cycle — its scatter σ is {:.1}× \
+                 the fast measurement noise ({fast:.3e} N), so the floor is that of any \
+                 periodic model, not of the instrument",
+                sigma / fast
+            )
+        } else {
+            String::new()
+        };
+        let verdict = match self.verdict {
             Verdict::ModelAdequate => format!(
                 "model adequate: the baseline's held-out residual is {r:.2}× the noise floor \
-                 (σ = {sigma:.4e} N); no effect needed"
+                 (σ = {sigma:.4e} N){}; no effect needed",
+                worst(after)
             ),
             Verdict::EffectsFound => format!(
                 "effect(s) found: {}; the held-out residual is now {r:.2}× the noise floor \
-                 (σ = {sigma:.4e} N)",
-                found.join("; then ")
+                 (σ = {sigma:.4e} N){}",
+                found.join("; then "),
+                worst(after)
             ),
             Verdict::ModelInadequate => {
                 let mut s = format!(
                     "model inadequate, residual unexplained: the held-out residual is {r:.1}× \
-                     the noise floor (σ = {sigma:.4e} N)"
+                     the noise floor (σ = {sigma:.4e} N){}",
+                    worst(after)
                 );
                 let shares: Vec<String> = after
                     .concentrated_at
@@ -256,7 +272,8 @@ impl Report {
                 }
                 s
             }
-        }
+        };
+        verdict + &caveat
     }
 
     /// Findings beside the verdict: drift, clearance, noise notes.
@@ -337,7 +354,7 @@ impl Report {
             self.baseline_fit.wall_time_s
         );
         s += &format!(
-            "residual before (measured − baseline): held-out RMS {:.2}× the noise floor\n",
+            "residual before (measured − baseline, held-out cycles): RMS {:.2}× the noise floor\n",
             self.residual_before.held_out_rms_over_noise
         );
         s += &phase_table(&self.residual_before.phases);
@@ -430,10 +447,19 @@ impl Report {
             100.0 * self.nrms_reduction
         );
         if !self.effects_added.is_empty() {
-            s += "\nresidual after (measured − final model):\n";
+            s += "\nresidual after (measured − final model, held-out cycles):\n";
             s += &phase_table(&self.residual_after.phases);
         }
         s
+    }
+}
+
+/// ", at most 1.4× in any phase" / ", 3.1× in microslip".
+fn worst(c: &Character) -> String {
+    match c.worst_phase {
+        Some((ph, r)) if c.adequate => format!(", at most {r:.1}× in any phase ({})", ph.name()),
+        Some((ph, r)) => format!(", {r:.1}× {}", ph.description()),
+        None => String::new(),
     }
 }
 

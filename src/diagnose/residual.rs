@@ -4,8 +4,9 @@
 //!
 //! **Where.** Samples are classified by phase: reversal, stick, microslip, macroslip from the
 //! model force (`super::cycles::classify_phases`), and clearance / closing from the measured
-//! force ([`clearance_regions`]). Per phase: RMS residual in N and as a multiple of the noise
-//! floor σ, and the phase's share of the *excess* residual energy `Σ max(r² − σ², 0)`. The
+//! force ([`clearance_regions`]). Per phase, over the held-out cycles: RMS residual in N and as
+//! a multiple of the noise floor σ, and the phase's share of the *excess* residual energy
+//! `Σ max(r² − σ², 0)`. The
 //! residual is "concentrated at" the phases whose RMS exceeds 2σ and that carry at least 20 %
 //! of the excess, in decreasing share.
 //!
@@ -13,17 +14,20 @@
 //! change of the contact force. Its signature in the residual is a local maximum of the
 //! spectrum well above the drive's low harmonics, and an autocorrelation that oscillates and
 //! decays. (1) Periodogram of the Hann-windowed residual over the complete cycles, smoothed
-//! over two harmonic spacings of the drive; between 8× the drive frequency and 0.8× Nyquist,
+//! over two harmonic spacings of the drive; between 5× the drive frequency and 0.8× Nyquist,
 //! the largest ratio of the spectrum to its local background (the median within a factor 1.4
-//! in frequency) must be ≥ 8 and a true peak (half-power points on both sides within that
-//! window). (2) The residual is high-passed by subtracting its moving
+//! in frequency) must be ≥ 8, and the top of its hill (the largest value within a factor 1.4)
+//! a true peak (half-power points on both sides within a factor 1.4). (2) The residual is high-passed by subtracting its moving
 //! average over one period of the peak frequency (which removes slow misfit and leaves that
 //! frequency untouched); its autocorrelation, whose envelope decays as `exp(−ζωτ)` for a
 //! lightly damped mode under impulsive or broadband excitation (the basis of the Natural
 //! Excitation Technique; James, Carne & Lauffer 1993), gives the frequency from the spacing of
-//! its peaks and the damping ratio from the decay of the peaks, `ζ = a/(2πf)`, over lags up to
-//! a quarter of the drive period; the envelope model accounts for the ringing being restarted
-//! at every reversal ([`envelope_decay_rate`]). (3) A ringing is reported when the first autocorrelation peak is
+//! its peaks (up to 0.4 of the drive period: a ringing restarted at every reversal makes the
+//! autocorrelation rise again towards half the period). The damping ratio comes from the free
+//! decays in time, the logarithmic decrement of successive peak amplitudes
+//! ([`free_decay_damping`]): an autocorrelation envelope mixes the decay with the interference
+//! of successive restarts and was 10× off on a synthetic record. (3) A ringing is reported
+//! when the first autocorrelation peak is
 //! ≥ 0.3 and the high-passed residual's RMS is ≥ 1.5σ_hp (the high-pass noise estimate).
 
 use super::cycles::{classify_phases, Cycles, Phase};
@@ -45,6 +49,10 @@ pub struct PhaseStats {
     pub excess_share: f64,
 }
 
+/// Smallest share of the zero-crossing band (`|F| < 0.15·F̂`) that a clearance's plateau
+/// (`|F| < 0.05·F̂`) spans.
+pub const CLEARANCE_DWELL: f64 = 0.5;
+
 /// A zero-force plateau of the measured force after a reversal: the drive crosses a clearance.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct ClearanceRegion {
@@ -59,21 +67,16 @@ pub struct ClearanceRegion {
     pub span_m: f64,
 }
 
-/// Slope of `y` against `x` over samples `i−2 … i+2` within `a..=b`, signed with `dir`.
-fn local_slope(x: &[f64], y: &[f64], i: usize, a: usize, b: usize) -> Option<f64> {
-    let (l, r) = (i.saturating_sub(2).max(a), (i + 2).min(b));
-    let dx = x[r] - x[l];
-    (dx != 0.0).then(|| (y[r] - y[l]) / dx)
-}
-
 /// Zero-force plateaus of the (smoothed) measured force `y` (N) against displacement `x` (m).
 ///
-/// In each half-cycle, over the band `|F| < 0.15·F̂` where the force crosses zero towards the
-/// direction of motion, the median slope is compared with the largest slope in the first 5 %
-/// of the stroke (the reversal stiffness `k_r`). Below `0.1·k_r` (a Valanis, Jenkins or Iwan
-/// loop has at least `(1+k)/2·k_r ≥ 0.5·k_r` there), the plateau is the longest run of samples
-/// in the band with slope below `0.2·k_r`, widened to the samples within 2 % of `F̂` of its
-/// median force; it must span at least 1 % of the stroke.
+/// In each half-cycle, the band `|F| < 0.15·F̂` where the force crosses zero towards the
+/// direction of motion is found; the plateau runs from the first to the last sample of the
+/// band within `0.05·F̂` of zero. It is a clearance when it spans at least [`CLEARANCE_DWELL`]
+/// (half) of the band's displacement and at least 1 % of the stroke: a contact without play
+/// crosses the band at a finite, nearly constant slope and spends about a third of it within
+/// `±0.05·F̂` (Valanis, Jenkins, Iwan, rough-patch loops alike), whereas behind a free play the
+/// force dwells at zero while the drive crosses it. Displacement spans rather than local
+/// slopes: at a few hundred samples per cycle a plateau may hold only a handful of samples.
 pub fn clearance_regions(
     x: &[f64],
     y: &[f64],
@@ -88,11 +91,6 @@ pub fn clearance_regions(
         if stroke <= 0.0 || d * y[a] >= 0.0 {
             continue;
         }
-        let travel = |i: usize| (x[i] - x[a]) * d;
-        let k_r = (a..=b)
-            .take_while(|&i| travel(i) <= 0.05 * stroke)
-            .filter_map(|i| local_slope(x, y, i, a, b))
-            .fold(0.0_f64, f64::max);
         // The band |F| < 0.15 F̂ where the force crosses zero towards the direction of motion.
         let Some(s0) = (a..=b).find(|&i| d * y[i] > -0.15 * force_scale) else {
             continue;
@@ -100,49 +98,18 @@ pub fn clearance_regions(
         let e0 = (s0..=b)
             .find(|&i| d * y[i] > 0.15 * force_scale)
             .unwrap_or(b);
-        let slopes: Vec<Option<f64>> = (s0..=e0).map(|i| local_slope(x, y, i, a, b)).collect();
-        let mut sorted: Vec<f64> = slopes.iter().flatten().copied().collect();
-        if k_r <= 0.0 || sorted.is_empty() {
+        // The plateau: from the first to the last sample of the band within 5 % of F̂ of zero.
+        let near: Vec<usize> = (s0..=e0)
+            .filter(|&i| y[i].abs() < 0.05 * force_scale)
+            .collect();
+        let (Some(&s), Some(&e)) = (near.first(), near.last()) else {
             continue;
-        }
-        sorted.sort_by(|p, q| p.total_cmp(q));
-        if sorted[sorted.len() / 2] >= 0.1 * k_r {
+        };
+        // The force dwells at zero over most of the crossing: a contact without play crosses
+        // the band at a finite slope and spends about a third of it within ±0.05·F̂.
+        let band = (x[e0] - x[s0]).abs();
+        if band <= 0.0 || (x[e] - x[s]).abs() < CLEARANCE_DWELL * band {
             continue;
-        }
-        // Longest run of soft samples in the band.
-        let (mut best, mut run_start) = ((0, 0, 0usize), None);
-        for (j, sl) in slopes.iter().enumerate() {
-            let soft = sl.is_some_and(|v| v < 0.2 * k_r);
-            match (soft, run_start) {
-                (true, None) => run_start = Some(j),
-                (false, Some(r)) => {
-                    if j - r > best.2 {
-                        best = (r, j - 1, j - r);
-                    }
-                    run_start = None;
-                }
-                _ => {}
-            }
-        }
-        if let Some(r) = run_start {
-            if slopes.len() - r > best.2 {
-                best = (r, slopes.len() - 1, slopes.len() - r);
-            }
-        }
-        if best.2 == 0 {
-            continue;
-        }
-        // Widen the run (its ends lose the ±2 samples of the slope stencil) to the samples whose
-        // force stays within 2 % of the force amplitude of the plateau's median force.
-        let (mut s, mut e) = (s0 + best.0, s0 + best.1);
-        let mut level: Vec<f64> = y[s..=e].to_vec();
-        level.sort_by(|p, q| p.total_cmp(q));
-        let med = level[level.len() / 2];
-        while s > a && (y[s - 1] - med).abs() < 0.02 * force_scale {
-            s -= 1;
-        }
-        while e < b && (y[e + 1] - med).abs() < 0.02 * force_scale {
-            e += 1;
         }
         let span = (x[e] - x[s]).abs();
         if span < 0.01 * stroke {
@@ -250,8 +217,8 @@ pub const MIN_PROMINENCE: f64 = 8.0;
 pub struct Ringing {
     /// Frequency (Hz), from the autocorrelation peaks.
     pub frequency_hz: f64,
-    /// Damping ratio ζ from the decay of the autocorrelation peaks (`None` with fewer than
-    /// three peaks).
+    /// Damping ratio ζ from the free decays (logarithmic decrement; `None` without a free
+    /// decay of at least five half-periods above 3σ).
     pub damping_ratio: Option<f64>,
     /// RMS of the ringing above the noise, `√(RMS_hp² − σ²)` (N).
     pub rms_n: f64,
@@ -263,62 +230,61 @@ pub struct Ringing {
     pub first_correlation_peak: f64,
 }
 
-/// Decay rate `a = ζω` (1/s) of the autocorrelation envelope from its peaks `(τ_m, ρ_m)`.
-///
-/// A ringing excited at every reversal repeats each half drive period `P`; the autocorrelation
-/// of a train of responses `e^{−at}·sin ωt` restarted every `P` has the envelope
-/// `A·e^{−aτ} + B·e^{−a(P−τ)}` (the second term: the tail of one response meeting the start of
-/// the next; `B = A` for bursts of one sign, `B = −A` for bursts alternating in sign, as after
-/// up- and down-reversals, `B = 0` for random excitation). For each trial `a` the model is
-/// linear in `(A, B)` (least squares); `a` minimises the residual (golden-section search on
-/// `ln a`, 1e-3 … 10³ 1/s).
-fn envelope_decay_rate(peaks: &[(f64, f64)], p: f64) -> f64 {
-    let sse = |a: f64| -> f64 {
-        let (mut s11, mut s12, mut s22, mut s1y, mut s2y) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        let basis = |t: f64| ((-a * t).exp(), (-a * (p - t)).exp());
-        for &(t, y) in peaks {
-            let (u, v) = basis(t);
-            s11 += u * u;
-            s12 += u * v;
-            s22 += v * v;
-            s1y += u * y;
-            s2y += v * y;
+/// Damping ratio from the free decays of the high-passed residual `hp` (sampled at `dt`,
+/// ringing period `period` samples, frequency `f` Hz): the largest |hp| in each half-period
+/// window; runs of at least five successive falling peaks, all above `3σ`, are free decays
+/// (logarithmic decrement): the slope of `ln peak` against time is `−ζ·2πf`. The median over
+/// runs (a run cut short by the next excitation, whose ringing may cancel the last one, gives
+/// a too steep decay; the median is robust to a few). `None` without such a run.
+fn free_decay_damping(hp: &[f64], dt: f64, period: f64, f: f64, sigma: f64) -> Option<f64> {
+    let half = 0.5 * period;
+    let mut peaks: Vec<(f64, f64)> = Vec::new();
+    let mut start = 0.0;
+    while start + half < hp.len() as f64 {
+        let (a, b) = (
+            start as usize,
+            ((start + half) as usize).max(start as usize + 1),
+        );
+        let (j, v) = (a..b.min(hp.len()))
+            .map(|i| (i, hp[i].abs()))
+            .max_by(|p, q| p.1.total_cmp(&q.1))?;
+        peaks.push((j as f64 * dt, v));
+        start += half;
+    }
+    let mut rates = Vec::new();
+    let mut run: Vec<(f64, f64)> = Vec::new();
+    let mut close = |run: &mut Vec<(f64, f64)>| {
+        if run.len() >= 5 {
+            let n = run.len() as f64;
+            let (mt, ml) = (
+                run.iter().map(|p| p.0).sum::<f64>() / n,
+                run.iter().map(|p| p.1.ln()).sum::<f64>() / n,
+            );
+            let slope = run
+                .iter()
+                .map(|p| (p.0 - mt) * (p.1.ln() - ml))
+                .sum::<f64>()
+                / run.iter().map(|p| (p.0 - mt).powi(2)).sum::<f64>();
+            rates.push(-slope / (std::f64::consts::TAU * f));
         }
-        let det = s11 * s22 - s12 * s12;
-        let (ca, cb) = if det.abs() > 1e-12 * s11 * s22 {
-            ((s22 * s1y - s12 * s2y) / det, (s11 * s2y - s12 * s1y) / det)
-        } else {
-            (s1y / s11, 0.0)
-        };
-        peaks
-            .iter()
-            .map(|&(t, y)| {
-                let (u, v) = basis(t);
-                (y - ca * u - cb * v).powi(2)
-            })
-            .sum()
+        run.clear();
     };
-    // Golden-section search on ln a.
-    let (mut lo, mut hi) = (1e-3_f64.ln(), 1e3_f64.ln());
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut d) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut fc, mut fd) = (sse(c.exp()), sse(d.exp()));
-    for _ in 0..80 {
-        if fc < fd {
-            hi = d;
-            d = c;
-            fd = fc;
-            c = hi - g * (hi - lo);
-            fc = sse(c.exp());
+    for p in peaks {
+        if p.1 > 3.0 * sigma && run.last().is_some_and(|q| p.1 < q.1) {
+            run.push(p);
         } else {
-            lo = c;
-            c = d;
-            fc = fd;
-            d = lo + g * (hi - lo);
-            fd = sse(d.exp());
+            close(&mut run);
+            if p.1 > 3.0 * sigma {
+                run.push(p);
+            }
         }
     }
-    (0.5 * (lo + hi)).exp()
+    close(&mut run);
+    if rates.is_empty() {
+        return None;
+    }
+    rates.sort_by(|a, b| a.total_cmp(b));
+    Some(rates[rates.len() / 2])
 }
 
 /// Centred moving average over `len` samples (shrinking at the ends).
@@ -343,7 +309,7 @@ fn moving_average(x: &[f64], len: usize) -> Vec<f64> {
 /// the fast part of the scatter, not against slow cycle-to-cycle variation.
 pub fn ringing(r: &[f64], dt: f64, cycles_in_window: f64, sigma: f64) -> Option<Ringing> {
     let n = r.len();
-    if n < 64 || !(dt > 0.0) {
+    if n < 64 || dt.is_nan() || dt <= 0.0 {
         return None;
     }
     let mean = r.iter().sum::<f64>() / n as f64;
@@ -360,9 +326,10 @@ pub fn ringing(r: &[f64], dt: f64, cycles_in_window: f64, sigma: f64) -> Option<
     fft.process(&mut buf, &mut spec).ok()?;
     let power: Vec<f64> = spec.iter().map(|c| c.norm_sqr()).collect();
     // Bin k is at k/(n dt) Hz; drive harmonic m at m·cycles_in_window.
-    let width = ((2.0 * cycles_in_window).round() as usize).max(1) * 2 + 1;
+    // Two harmonic spacings of the drive (an odd number of bins).
+    let width = ((cycles_in_window).round() as usize).max(1) * 2 + 1;
     let smooth = moving_average(&power, width);
-    let k_lo = (8.0 * cycles_in_window).ceil() as usize;
+    let k_lo = (5.0 * cycles_in_window).ceil() as usize;
     let k_hi = (0.8 * (power.len() - 1) as f64) as usize;
     if k_hi <= k_lo + 2 * width {
         return None;
@@ -378,9 +345,16 @@ pub fn ringing(r: &[f64], dt: f64, cycles_in_window: f64, sigma: f64) -> Option<
         w.sort_by(|p, q| p.total_cmp(q));
         w[w.len() / 2]
     };
-    let (k, prominence) = (k_lo + width..=k_hi - width)
+    let (k, prominence) = (k_lo + width / 2..=k_hi - width / 2)
         .map(|k| (k, smooth[k] / background(k).max(f64::MIN_POSITIVE)))
         .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    // The top of the hill holding the most prominent bin: the largest value within a factor
+    // 1.4 in frequency (the prominence is largest on the flank where the background falls).
+    let (lo, hi) = (
+        ((k as f64 / 1.4) as usize).max(k_lo),
+        ((k as f64 * 1.4) as usize).min(k_hi),
+    );
+    let k = (lo..=hi).max_by(|&p, &q| smooth[p].total_cmp(&smooth[q]))?;
     let peak = smooth[k];
     let (a, b) = (
         ((k as f64 / 1.4) as usize).max(k_lo),
@@ -401,10 +375,10 @@ pub fn ringing(r: &[f64], dt: f64, cycles_in_window: f64, sigma: f64) -> Option<
     let hp: Vec<f64> = r.iter().zip(&ma).map(|(a, b)| a - b).collect();
     let var0 = hp.iter().map(|v| v * v).sum::<f64>() / n as f64;
     let rms_hp = var0.sqrt();
-    // Lags up to a quarter of the drive period: ringing excited at every reversal repeats each
-    // half-period, which would make the autocorrelation rise again towards that lag.
-    let quarter_drive = (n as f64 / cycles_in_window / 4.0) as usize;
-    let max_lag = ((25.0 * period) as usize).min(quarter_drive).min(n / 2);
+    // Lags up to 0.4 of the drive period: a ringing excited at every reversal restarts each
+    // half-period, which the envelope model ([`envelope_decay_rate`]) describes up to there.
+    let restart = (0.4 * n as f64 / cycles_in_window) as usize;
+    let max_lag = ((25.0 * period) as usize).min(restart).min(n / 2);
     let acf: Vec<f64> = (0..=max_lag)
         .map(|l| (0..n - l).map(|i| hp[i] * hp[i + l]).sum::<f64>() / (n as f64 * var0))
         .collect();
@@ -443,12 +417,7 @@ pub fn ringing(r: &[f64], dt: f64, cycles_in_window: f64, sigma: f64) -> Option<
         (a + m * p.0, b + m * m)
     });
     let frequency = 1.0 / (smt / smm * dt);
-    let omega = std::f64::consts::TAU * frequency;
-    let half_period_s = 0.5 * n as f64 * dt / cycles_in_window;
-    let damping_ratio = (peaks.len() >= 3).then(|| {
-        let pts: Vec<(f64, f64)> = peaks.iter().map(|p| (p.0 * dt, p.1)).collect();
-        envelope_decay_rate(&pts, half_period_s) / omega
-    });
+    let damping_ratio = free_decay_damping(&hp, dt, 1.0 / (frequency * dt), frequency, sigma);
     Some(Ringing {
         frequency_hz: frequency,
         damping_ratio,

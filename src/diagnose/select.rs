@@ -18,6 +18,10 @@
 //!      already at the floor).
 //!    - **consistency**: the residual falls in every held-out cycle.
 //!    - **physical parameters**: none of its parameters on a bound ([`super::effects`]).
+//!    - **signature in the data**: a clearance (backlash) only where the measured force itself
+//!      shows zero-force plateaus in at least half of the half-cycles
+//!      ([`super::residual::clearance_regions`], model-free). Without this check a gap of
+//!      2 µm in a 1 mm stroke was "found" in an Iwan loop, where it only bent the reversals.
 //!
 //!    Why not the previous `ΔBIC` with `n_eff` from the residual's lag-1 autocorrelation: a
 //!    systematic misfit is smooth, so its residual has ρ → 1 and `n_eff = n(1−ρ)/(1+ρ)` falls
@@ -26,12 +30,20 @@
 //!    signature of the misfit, not of the noise; the noise's correlation is a property of the
 //!    data and is estimated from the data alone.
 //! 3. The eligible candidate with the largest `ΔRSS` is accepted and the search repeats for a
-//!    further effect, up to `max_effects`.
-//! 4. **Verdict** from the held-out residual of the final model, `R = RMS_H/σ`:
-//!    `R ≤ 2`: *effects found* (if any were accepted) or *model adequate* (none needed);
-//!    `R > 2`: *model inadequate, residual unexplained*, with where the residual sits, whether
-//!    it rings, and the drift findings ([`super::residual`], [`super::stationarity`]). No
-//!    verdict says that no effect is needed while the residual is above twice the noise floor.
+//!    further effect, up to `max_effects`, as long as the model is not yet adequate (below):
+//!    once the residual is at the noise floor, what a further candidate could "explain" is as
+//!    likely the baseline's own shape error as a physical effect (measured on the project's
+//!    BEM loops of a rough patch: without this stop, a static friction peak and viscous
+//!    damping were "found" in a quasi-static Coulomb contact).
+//! 4. **Verdict** from the held-out residual of the final model: it is *adequate* when its
+//!    RMS is at most 2σ overall **and** in every phase of the loop (stick, microslip,
+//!    macroslip, clearance, closing; the reversal phase only overall, see [`Character`]) that
+//!    holds at least 5 % of the held-out samples (a misfit concentrated in microslip is not
+//!    diluted by a long macroslip); then *effects found* (if any were accepted) or *model
+//!    adequate* (none needed). Otherwise *model inadequate, residual unexplained*, with where
+//!    the residual sits, whether it rings, and the drift findings ([`super::residual`],
+//!    [`super::stationarity`]). No verdict says that no effect is needed while the residual is
+//!    above twice the noise floor.
 
 use super::cycles::{segment, Cycles, Phase};
 use super::effects::{Baseline, Bound, Drive, Effect, Model, ParamSpec};
@@ -53,6 +65,8 @@ pub const MIN_EXPLAINED: f64 = 0.25;
 /// A model is adequate when its held-out RMS residual is at most this multiple of the noise
 /// floor.
 pub const ADEQUATE_RATIO: f64 = 2.0;
+/// A phase holding at least this share of the held-out samples counts in the adequacy rule.
+pub const MIN_PHASE_SHARE: f64 = 0.05;
 /// Records are block-averaged to at most this many samples per cycle before fitting.
 pub const SAMPLES_PER_CYCLE: usize = 400;
 
@@ -187,12 +201,23 @@ pub fn prepare(record: &Record) -> Result<Prepared> {
     // noise on the drive would otherwise make the element trace spurious minor loops).
     let per_cycle = (cycles.cycles[0].1 - cycles.cycles[0].0).max(1);
     let (xs, dxs) = savitzky_golay(x, (per_cycle / 64).max(2));
-    let velocity: Vec<f64> = (0..n)
+    let mut velocity: Vec<f64> = (0..n)
         .map(|i| {
             let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
             dxs[i] * (b - a) as f64 / (t[b] - t[a])
         })
         .collect();
+    // Within a half-cycle the drive moves one way: near the reversals the smoothed derivative
+    // is noise-sized and can take the wrong sign, which would flip direction-dependent
+    // friction for a few samples of microslip. There the speed is ~0: keep the stroke's sign.
+    for h in &cycles.half_cycles {
+        let dir = f64::from(h.direction);
+        for v in &mut velocity[h.start + 1..=h.end.min(n - 1)] {
+            if *v * dir <= 0.0 {
+                *v = dir * f64::MIN_POSITIVE;
+            }
+        }
+    }
     let t0 = t[cycles.reversals[0]];
     let tau = std::f64::consts::TAU;
     let normal_ratio = record.normal_force_n.as_ref().map(|nf| {
@@ -536,8 +561,14 @@ impl Verdict {
 pub struct Character {
     /// Held-out RMS residual / noise floor.
     pub held_out_rms_over_noise: f64,
-    /// Per-phase statistics over all complete cycles.
+    /// Per-phase statistics over the held-out cycles.
     pub phases: Vec<PhaseStats>,
+    /// The phase (other than the reversal, with at least [`MIN_PHASE_SHARE`] of the samples)
+    /// with the largest RMS residual, and that RMS / noise floor.
+    pub worst_phase: Option<(Phase, f64)>,
+    /// At the noise floor: held-out RMS ≤ 2σ overall and in every phase (but the reversal)
+    /// that holds at least [`MIN_PHASE_SHARE`] of the held-out samples.
+    pub adequate: bool,
     /// Phases carrying the excess residual, largest share first.
     pub concentrated_at: Vec<Phase>,
     /// A ringing in the residual, if any.
@@ -691,15 +722,35 @@ fn characterise(prep: &Prepared, f: &[f64], clearances: &[ClearanceRegion]) -> C
         prep.cycles.cycles[0].0,
         prep.cycles.cycles.last().map_or(y.len(), |c| c.1),
     );
-    let mut all = vec![false; y.len()];
-    all[a..b].iter_mut().for_each(|m| *m = true);
-    let stats = residual::phase_stats(y, f, &prep.drive.velocity_m_per_s, &phases, &all, sigma);
+    let stats = residual::phase_stats(
+        y,
+        f,
+        &prep.drive.velocity_m_per_s,
+        &phases,
+        &prep.held_out,
+        sigma,
+    );
+    let total: usize = stats.iter().map(|p| p.samples).sum();
+    // The reversal phase (the first 2 % of the stroke) is reported but not judged per phase:
+    // there the force is most sensitive to the displacement (stick stiffness × the drive's
+    // measurement noise and smoothing), a scatter that the force repeatability, measured at
+    // 3–97 % of the stroke, does not contain (1 µm of displacement noise at 1 mm gave 2–2.8σ
+    // there with an exact model). It still counts in the overall RMS.
+    let worst_phase = stats
+        .iter()
+        .filter(|p| p.phase != Phase::Reversal)
+        .filter(|p| p.samples as f64 >= MIN_PHASE_SHARE * total as f64)
+        .filter_map(|p| p.rms_over_noise.map(|r| (p.phase, r)))
+        .max_by(|p, q| p.1.total_cmp(&q.1));
+    let held = masked_mse(f, y, &prep.held_out).sqrt() / sigma;
     let r: Vec<f64> = (a..b).map(|i| y[i] - f[i]).collect();
     let t = &prep.record.time_s;
     let dt = (t[b - 1] - t[a]) / (b - 1 - a) as f64;
     Character {
-        held_out_rms_over_noise: masked_mse(f, y, &prep.held_out).sqrt() / sigma,
+        held_out_rms_over_noise: held,
         concentrated_at: residual::concentrated_at(&stats),
+        adequate: held <= ADEQUATE_RATIO && worst_phase.is_none_or(|w| w.1 <= ADEQUATE_RATIO),
+        worst_phase,
         phases: stats,
         ringing: residual::ringing(
             &r,
@@ -839,9 +890,20 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
         bound_hits(&specs, &values[..specs.len()])
     };
 
+    let clearances = residual::clearance_regions(
+        &prep.drive.q_m,
+        &prep.smooth_force_n,
+        &prep.cycles,
+        prep.drive.force_scale_n,
+    );
     let mut current = (base_structure.clone(), z_b.clone(), baseline_force.clone());
     let mut rounds = Vec::new();
     for _ in 0..options.max_effects {
+        // A model at the noise floor needs no further effect: what a candidate could still
+        // "explain" is then as likely the baseline's own shape error as a physical effect.
+        if characterise(&prep, &current.2, &clearances).adequate {
+            break;
+        }
         let remaining: Vec<Effect> = options
             .candidates
             .iter()
@@ -852,6 +914,7 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
             break;
         }
         let current_model = current.0.decode(&current.1);
+        let half_cycles = prep.cycles.half_cycles.len();
         let candidates: Vec<Candidate> = remaining
             .par_iter()
             .map(|&effect| {
@@ -876,7 +939,7 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
                     .unwrap_or_default();
                 let spec_refs: Vec<&ParamSpec> = specs.iter().collect();
                 let at_bound = bound_hits(&spec_refs, &params);
-                let decision = if !(ev >= EVIDENCE_Z) {
+                let decision = if ev.is_nan() || ev < EVIDENCE_Z {
                     format!("evidence z = {ev:.1} < {EVIDENCE_Z}")
                 } else if explained.is_some_and(|e| e < MIN_EXPLAINED) {
                     format!(
@@ -891,6 +954,8 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
                     )
                 } else if let Some((name, b)) = at_bound.first() {
                     format!("{name} on its {} bound", b.name())
+                } else if effect == Effect::Backlash && 2 * clearances.len() < half_cycles {
+                    "no zero-force plateau in the measured force".to_string()
                 } else {
                     "eligible".to_string()
                 };
@@ -947,17 +1012,11 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
     }
     let final_model = current.0.decode(&current.1);
     let final_force = current.2;
-    let clearances = residual::clearance_regions(
-        &prep.drive.q_m,
-        &prep.smooth_force_n,
-        &prep.cycles,
-        prep.drive.force_scale_n,
-    );
     let before = characterise(&prep, &baseline_force, &clearances);
     let after = characterise(&prep, &final_force, &clearances);
     let stationarity = stationarity(&prep, &baseline.baseline, options.max_iterations);
     let added = rounds.iter().any(|r| r.accepted.is_some());
-    let verdict = if after.held_out_rms_over_noise > ADEQUATE_RATIO {
+    let verdict = if !after.adequate {
         Verdict::ModelInadequate
     } else if added {
         Verdict::EffectsFound
