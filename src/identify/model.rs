@@ -205,7 +205,8 @@ impl ModelSpec {
     /// Whether `e` may be added: not already present, a family change only from Jenkins, and
     /// no effect whose implementation is not available.
     pub fn admits(&self, e: Effect) -> bool {
-        !self.effects.contains(&e) && !(e.is_family() && self.joint_family() != Family::Jenkins)
+        let family_change_allowed = !e.is_family() || self.joint_family() == Family::Jenkins;
+        !self.effects.contains(&e) && family_change_allowed
     }
 
     /// Parameters, in order: the mode, the family's shape, then each effect's.
