@@ -31,15 +31,17 @@ const TRUTH: [f64; 5] = [80.0, 1e-3, 2.0, 0.02, 3e-5];
 /// Nominal force of each level (N): the joint stuck, slipping, well slipping.
 const LEVELS_N: [f64; 3] = [0.02, 0.15, 0.6];
 
-/// A force-controlled sweep of `model`: 41 rows from 78.9 to 80.9 Hz (the Brake–Reuss beam's
-/// sampling: 0.05 Hz steps), the force dipping by up to 20 % near 79.6 Hz (as a shaker's does at resonance), acceleration amplitude and phase
-/// with 1 % relative amplitude noise and 0.01 rad phase noise.
+/// A force-controlled sweep of `model`: 31 rows from 79.0 to 80.5 Hz (the Brake–Reuss beam's
+/// 0.05 Hz steps, over a band that holds every level's resonance: 0.1 Hz steps lose the
+/// lowest level's peak, 0.16 Hz wide at ζ0 = 0.1 %, and the global search then fails), the force
+/// dipping by up to 20 % near 79.6 Hz (as a shaker's does at resonance), acceleration amplitude
+/// and phase with 1 % relative amplitude noise and 0.01 rad phase noise.
 fn sweep(model: &Model, force: f64, seed: u64) -> Sweep {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let n = Normal::new(0.0, 0.01).unwrap();
-    let drives: Vec<Drive> = (0..41)
+    let drives: Vec<Drive> = (0..31)
         .map(|i| {
-            let f = 78.9 + 0.05 * i as f64;
+            let f = 79.0 + 0.05 * i as f64;
             let dip = 0.2 / (1.0 + ((f - 79.6) / 0.3).powi(2));
             Drive {
                 omega: TAU * f,
@@ -77,12 +79,13 @@ fn options(candidates: Vec<Effect>) -> Options {
     o.fit_levels = Some(vec![1, 3]);
     o.select.candidates = candidates;
     o.select.max_effects = 1;
-    // Affordable settings: two small swarms for the baseline, local refinement only for the
-    // candidates (from the baseline optimum with the effect at its neutral value).
+    // Affordable settings: one small swarm for the baseline (beside its start from the data's
+    // scales), local refinement only for the candidates (from the baseline optimum with the
+    // effect at its neutral value).
     o.select.baseline_fit = FitOptions {
         particles: 12,
         swarm_iterations: 10,
-        starts: 2,
+        starts: 1,
         seed: 1,
         local_iterations: 600,
     };
@@ -131,7 +134,7 @@ fn parameters_come_back_and_no_effect_is_invented() {
             );
         }
         // The level not used is predicted: against the noise-free truth at the same rows and
-        // forces, peak within 0.5 % and resonance within 0.01 Hz.
+        // forces, peak within 2 % (the parameters' tolerance) and resonance within 0.01 Hz.
         let l = &id.sweeps[1];
         let drives: Vec<Drive> = l
             .rows
@@ -153,7 +156,7 @@ fn parameters_come_back_and_no_effect_is_invented() {
         };
         let ((ft, pt), (fm, pm)) = (peak(&truth), peak(&id.after.model));
         assert!(
-            (pm / pt - 1.0).abs() < 0.005 && (fm - ft).abs() < 0.01,
+            (pm / pt - 1.0).abs() < 0.02 && (fm - ft).abs() < 0.01,
             "realisation {r}: predicted level: model {fm:.4} Hz {pm:.4}, truth {ft:.4} Hz {pt:.4}"
         );
     }
@@ -161,34 +164,54 @@ fn parameters_come_back_and_no_effect_is_invented() {
 
 #[test]
 fn the_effect_put_in_is_chosen() {
-    // Hardening: +0.5 % in ω² at 200 µm (k3 = 4·0.005·k_s/(3·A²)), about +0.7 Hz at the
-    // highest level.
-    let mut v = TRUTH.to_vec();
-    v.push(0.005);
-    let spec = ModelSpec::baseline(Family::Jenkins, SCALES).with(Effect::AmplitudeStiffness);
-    let truth = Model::new(spec, v).unwrap();
-    let k3 = truth.cubic_stiffness().unwrap();
+    // Two effects that compete for the same misfit, each put in alone, alternating over the
+    // ten noise realisations: hardening, +0.5 % in ω² at 200 µm (k3 = 4·0.005·k_s/(3·A²)),
+    // about +0.7 Hz at the highest level; quadratic damping, ζ_q = 0.1 % at 200 µm (the
+    // damping doubled there without any loss of stiffness).
+    let truths = [
+        (Effect::AmplitudeStiffness, 0.005),
+        (Effect::QuadraticDamping, 1e-3),
+    ]
+    .map(|(e, value)| {
+        let mut v = TRUTH.to_vec();
+        v.push(value);
+        let spec = ModelSpec::baseline(Family::Jenkins, SCALES).with(e);
+        (e, Model::new(spec, v).unwrap())
+    });
     for r in 0..10u64 {
+        let (effect, truth) = &truths[r as usize % 2];
         let sweeps = LEVELS_N
             .iter()
             .enumerate()
-            .map(|(k, &f)| sweep(&truth, f, 1000 + 100 * r + k as u64))
+            .map(|(k, &f)| sweep(truth, f, 1000 + 100 * r + k as u64))
             .collect();
         let id = identify(sweeps, &options(CANDIDATES.to_vec()), None).unwrap();
         match &id.selection.verdict {
             Verdict::EffectsFound { effects, .. } => {
-                assert_eq!(
-                    effects,
-                    &vec![Effect::AmplitudeStiffness],
-                    "realisation {r}"
-                )
+                assert_eq!(effects, &vec![*effect], "realisation {r}")
             }
-            v => panic!("realisation {r}: {v:?}"),
+            v => panic!("realisation {r} ({}): {v:?}", effect.id()),
         }
-        let got = id.after.model.cubic_stiffness().unwrap();
+        // The effect's strength comes back within 10 %.
+        let (got, want) = match effect {
+            Effect::AmplitudeStiffness => (
+                id.after.model.cubic_stiffness().unwrap(),
+                truth.cubic_stiffness().unwrap(),
+            ),
+            _ => (
+                id.after.model.quadratic_damping().unwrap(),
+                truth.quadratic_damping().unwrap(),
+            ),
+        };
+        eprintln!(
+            "realisation {r}: {} found, strength {:+.1}%",
+            effect.id(),
+            100.0 * (got / want - 1.0)
+        );
         assert!(
-            (got / k3 - 1.0).abs() < 0.1,
-            "realisation {r}: k3 {got:.4e} vs {k3:.4e}"
+            (got / want - 1.0).abs() < 0.1,
+            "realisation {r}: {} strength {got:.4e} vs {want:.4e}",
+            effect.id()
         );
     }
 }
