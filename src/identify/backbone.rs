@@ -265,6 +265,8 @@ mod tests {
         let y: Vec<f64> = f.iter().map(|x| 3.0 - (x - 2.13) * (x - 2.13)).collect();
         let (fr, yr) = resonance(&f, &y);
         assert!((fr - 2.13).abs() < 1e-12 && (yr - 3.0).abs() < 1e-12);
-        assert_eq!(half_power_rows(&[1.0, 2.0, 3.0, 2.5, 1.0]), (1, 3));
+        // Limit 3/√2 = 2.12: row 1 (2.2) in, row 3 (2.0) out, and row 4 (2.5) out because the
+        // band is the contiguous run around the peak.
+        assert_eq!(half_power_rows(&[1.0, 2.2, 3.0, 2.0, 2.5]), (1, 2));
     }
 }

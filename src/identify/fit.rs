@@ -211,6 +211,12 @@ impl<'a> Objective<'a> {
             .collect()
     }
 
+    /// Add the evaluations made by an optimiser's own copy of the objective.
+    fn add_evaluations_of(&self, run: Option<&Objective<'_>>) {
+        let n = run.map_or(0, |p| p.evaluations.load(Ordering::Relaxed));
+        self.evaluations.fetch_add(n, Ordering::Relaxed);
+    }
+
     /// `J` of a model and the number of failed rows.
     pub fn cost_of(&self, model: &Model) -> (f64, usize) {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
@@ -309,13 +315,7 @@ fn nelder_mead(
         .map_err(argmin_err)?;
         let st = res.state();
         iterations += st.get_iter();
-        obj.evaluations.fetch_add(
-            res.problem
-                .problem
-                .as_ref()
-                .map_or(0, |p| p.evaluations.load(Ordering::Relaxed)),
-            Ordering::Relaxed,
-        );
+        obj.add_evaluations_of(res.problem.problem.as_ref());
         if st.get_best_cost() <= cost {
             cost = st.get_best_cost();
             if let Some(p) = st.get_best_param() {
@@ -378,13 +378,7 @@ pub fn fit_global(
             .configure(|s| s.max_iters(opts.swarm_iterations))
             .run()
             .map_err(argmin_err)?;
-        obj.evaluations.fetch_add(
-            res.problem
-                .problem
-                .as_ref()
-                .map_or(0, |p| p.evaluations.load(Ordering::Relaxed)),
-            Ordering::Relaxed,
-        );
+        obj.add_evaluations_of(res.problem.problem.as_ref());
         let st = res.state();
         let swarm_cost = st.get_best_cost();
         let z0 = st
