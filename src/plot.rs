@@ -83,6 +83,36 @@ pub struct LinePlot<'a> {
     pub y_scale: Scale,
 }
 
+/// The length unit that shows a displacement of magnitude `max_abs_m` (m) with 1–3 digits
+/// before the decimal point: `(factor from m, unit)`, one of nm, µm, mm, m.
+pub fn length_unit(max_abs_m: f64) -> (f64, &'static str) {
+    match max_abs_m.abs() {
+        v if v < 1e-6 => (1e9, "nm"),
+        v if v < 1e-3 => (1e6, "µm"),
+        v if v < 1.0 => (1e3, "mm"),
+        _ => (1.0, "m"),
+    }
+}
+
+/// Tick label of `v` on a linear axis spanning `span`: as many decimals as the tick spacing
+/// (about a tenth of the span) needs, and never a negative zero ("-0.0").
+pub fn tick_label(v: f64, span: f64) -> String {
+    let step = (span.abs() / 10.0).max(f64::MIN_POSITIVE);
+    if !(1e-4..1e6).contains(&step) && v != 0.0 {
+        return format!("{v:.2e}");
+    }
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s
+    }
+}
+
 fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Data(format!("{}: plotting failed: {e}", path.display()))
 }
@@ -196,15 +226,22 @@ pub fn line_plot(path: &Path, layout: &LinePlot<'_>, series: &[Series]) -> Resul
             .margin(15)
             .x_label_area_size(50)
             .y_label_area_size(80);
+        // Linear axes: labels without "-0.0" and with the decimals the ticks need.
+        let (xs, ys) = (xr.1 - xr.0, yr.1 - yr.0);
+        let x_fmt = |v: &f64| tick_label(*v, xs);
+        let y_fmt = |v: &f64| tick_label(*v, ys);
         macro_rules! finish {
             ($chart:expr) => {{
                 let mut chart = $chart.map_err(|e| plot_err(path, e))?;
-                chart
-                    .configure_mesh()
-                    .x_desc(layout.x_label)
-                    .y_desc(layout.y_label)
-                    .draw()
-                    .map_err(|e| plot_err(path, e))?;
+                let mut mesh = chart.configure_mesh();
+                mesh.x_desc(layout.x_label).y_desc(layout.y_label);
+                if layout.x_scale == Scale::Linear {
+                    mesh.x_label_formatter(&x_fmt);
+                }
+                if layout.y_scale == Scale::Linear {
+                    mesh.y_label_formatter(&y_fmt);
+                }
+                mesh.draw().map_err(|e| plot_err(path, e))?;
                 draw_series(&mut chart, series).map_err(|e| plot_err(path, e))?;
             }};
         }
@@ -230,6 +267,19 @@ pub fn line_plot(path: &Path, layout: &LinePlot<'_>, series: &[Series]) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_have_no_negative_zero() {
+        assert_eq!(tick_label(-1e-17, 1.0), "0.0");
+        assert_eq!(tick_label(-0.0, 10.0), "0");
+        assert_eq!(tick_label(-0.25, 1.0), "-0.2");
+        assert_eq!(tick_label(150.0, 400.0), "150");
+        assert_eq!(tick_label(2e-5, 1e-4), "2.00e-5");
+        assert_eq!(tick_label(0.002, 0.01), "0.002");
+        assert_eq!(length_unit(1e-7), (1e9, "nm"));
+        assert_eq!(length_unit(2e-5), (1e6, "µm"));
+        assert_eq!(length_unit(0.02), (1e3, "mm"));
+    }
 
     #[test]
     fn writes_png() {

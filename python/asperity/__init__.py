@@ -67,6 +67,7 @@ from .errors import (
     FileError,
     ParameterError,
     ParseError,
+    ResourceLimitError,
 )
 
 __all__ = [

@@ -10,9 +10,10 @@ use asperity::calibrate::convergence::Verdict;
 use asperity::calibrate::output::{self, describe_shape, ConfigSource};
 use asperity::calibrate::pipeline::{self, CalibrationRun, RealisationChains, SurfaceSource};
 use asperity::calibrate::sweep::CalibrationSweep;
+use asperity::output::OutputSet;
 use asperity::shard::{self, Shard, ShardedSweep, UnitRecord};
 use asperity::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct CalibrateArgs {
@@ -46,6 +47,8 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(args: CalibrateArgs) -> Result<()> {
+    // Refused now, before the computation: an --out-dir that is a file or not writable.
+    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let (mut config, source) = match &args.config {
         Some(path) => {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -65,9 +68,10 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
         }
         config.surface.nx = n;
         config.surface.ny = n;
-        config
-            .validate()
-            .map_err(|e| super::rename_param(e, "--grid"))?;
+        config.validate().map_err(|e| match e {
+            Error::Limit { message, .. } => Error::limit("--grid", message),
+            e => super::rename_param(e, "--grid"),
+        })?;
     }
     if let Some(n) = args.realisations {
         if !args.surface.is_empty() && n != 1 {
@@ -121,16 +125,16 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
     }
     eprintln!("calibrate: {}", output::describe_config(&config));
     if let Some(shard) = shard {
-        return run_shard(CalibrationSweep { config, source }, shard, &args.out_dir);
+        return run_shard(CalibrationSweep { config, source }, shard, out);
     }
     let bar = super::progress_bar("calibrate", pipeline::progress_units(&config, &surfaces));
     let result = pipeline::run(&config, &surfaces, &bar);
     bar.finish_and_clear();
-    write_and_report(&result?, &source, &args.out_dir)
+    write_and_report(&result?, &source, out)
 }
 
 /// `--shard i/n`: the chains of the shard's realisations → `calibrate.shard-i-of-n.json`.
-fn run_shard(sweep: CalibrationSweep, shard: Shard, out_dir: &Path) -> Result<()> {
+fn run_shard(sweep: CalibrationSweep, shard: Shard, mut out: OutputSet) -> Result<()> {
     let labels = sweep.unit_labels();
     shard::check_labels(&labels)?;
     let block = shard.units(labels.len());
@@ -167,7 +171,9 @@ fn run_shard(sweep: CalibrationSweep, shard: Shard, out_dir: &Path) -> Result<()
             result: c,
         })
         .collect();
-    let path = shard::write_shard(out_dir, &sweep, shard, &units)?;
+    let staged = out.staging_dir()?;
+    let path = out.final_path(&shard::write_shard(&staged, &sweep, shard, &units)?);
+    out.commit()?;
     println!(
         "wrote {} (shard {shard}: {} of {} realisations); merge all {} shards with `asperity merge`",
         path.display(),
@@ -178,13 +184,15 @@ fn run_shard(sweep: CalibrationSweep, shard: Shard, out_dir: &Path) -> Result<()
     Ok(())
 }
 
-/// Write the files of a calibration run (single or merged) and print its summary.
+/// Write the files of a calibration run (single or merged) into `out` and print its summary.
 pub fn write_and_report(
     result: &CalibrationRun,
     source: &ConfigSource,
-    out_dir: &Path,
+    mut out: OutputSet,
 ) -> Result<()> {
-    let (written, output_s) = output::write_outputs(result, source, out_dir)?;
+    // Every file is staged and appears at once (or not at all, on an error or an interrupt).
+    let (_, output_s) = output::write_outputs(result, source, &out.staging_dir()?)?;
+    let written = out.commit()?;
 
     let n = result.realisations.len();
     println!(

@@ -39,7 +39,8 @@ pub fn run(args: MergeArgs) -> Result<()> {
             // The run's wall time: the realisations' chains summed (they ran in other jobs).
             let chains_s = merged.units.iter().map(|u| u.wall_time_s).sum();
             let run = merged.config.assemble(&merged.units, chains_s)?;
-            super::calibrate::write_and_report(&run, &merged.config.source, &args.out_dir)?;
+            let out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+            super::calibrate::write_and_report(&run, &merged.config.source, out)?;
             println!(
                 "merged {} shards ({} realisations, configuration {}) into {}",
                 merged.shards,

@@ -417,6 +417,37 @@ pub fn reference_step(
     adaptive_step(p, &start, q1, fz1)
 }
 
+/// One increment that is exact for a piecewise-linear displacement path when the normal load
+/// steps to `fz1` at the start of the increment and is held over it: the start force is
+/// projected onto the band of `fz1` (the falling-load policy) and the monotonic branch is then
+/// integrated in closed form ([`closed_form_branch`]).
+///
+/// Where the load changes continuously this differs from [`reference_step`] only by the
+/// load change within one increment (`O(ΔFz·Δq)`), at the cost of a few Newton iterations
+/// instead of an adaptive integration. It carries none of the first-order lag of
+/// [`implicit_euler_step`], whose error at coarse sampling (a drive increment comparable to
+/// the stick range `μFz/E0`) is a systematic phase lag of the whole loop — the error that an
+/// identification must not mistake for a physical effect (see `crate::diagnose::effects`).
+pub fn frozen_load_step(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> ValanisState {
+    let start = match contact_transition(state, q1, fz1) {
+        Ok(s) => s,
+        Err(separated) => return separated,
+    };
+    let f0 = project(p, start.force, start.q, start.q_ref, fz1);
+    let force = closed_form_branch(p, fz1, start.q_ref, start.q, f0, q1);
+    ValanisState {
+        force: project(p, force, q1, start.q_ref, fz1),
+        q: q1,
+        fz: fz1,
+        q_ref: start.q_ref,
+    }
+}
+
 /// One increment by adaptive Dormand–Prince 5(4) (see [`reference_step`]); `state` must be in
 /// contact (`fz > 0`, or `0` at the re-contact point) and `fz1 > 0`.
 pub fn adaptive_step(
@@ -798,6 +829,45 @@ mod tests {
         let ee = dissipated_energy(&q[last..], &fe[last..]);
         let er = dissipated_energy(&q[last..], &fr[last..]);
         assert!((ee - er).abs() / er < 0.005, "{ee} vs {er}");
+    }
+
+    /// At constant load the frozen-load step is the exact branch (equal to the reference to
+    /// round-off at any sampling, where implicit Euler lags by O(Δq)); under a varying load it
+    /// converges to the reference as the increments shrink.
+    #[test]
+    fn frozen_load_step_is_exact_at_constant_load() {
+        let p = params();
+        let fz = 1.0e6;
+        let q = sine_history(3.0 * p.mu * fz / p.e0, 2, 40);
+        let fzs = vec![fz; q.len()];
+        let fr = integrate_reference(&p, &q, &fzs).unwrap();
+        let fe = integrate_implicit_euler(&p, &q, &fzs).unwrap();
+        let mut st = ValanisState::virgin(q[0], fz);
+        let (mut dev, mut dev_euler) = (0.0_f64, 0.0_f64);
+        for i in 1..q.len() {
+            st = frozen_load_step(&p, &st, q[i], fz);
+            dev = dev.max((st.force - fr[i]).abs());
+            dev_euler = dev_euler.max((fe[i] - fr[i]).abs());
+        }
+        assert!(dev < 1e-9 * p.mu * fz, "{dev}");
+        assert!(dev_euler > 0.05 * p.mu * fz, "{dev_euler}");
+        // Varying load: error falls at least linearly with the increment.
+        let err = |per: usize| {
+            let q = sine_history(2.0 * p.mu * fz / p.e0, 1, per);
+            let fzv: Vec<f64> = (0..q.len())
+                .map(|i| fz * (1.0 + 0.3 * (std::f64::consts::TAU * i as f64 / per as f64).cos()))
+                .collect();
+            let fr = integrate_reference(&p, &q, &fzv).unwrap();
+            let mut st = ValanisState::virgin(q[0], fzv[0]);
+            let mut e = 0.0_f64;
+            for i in 1..q.len() {
+                st = frozen_load_step(&p, &st, q[i], fzv[i]);
+                e = e.max((st.force - fr[i]).abs());
+            }
+            e
+        };
+        let (e1, e2) = (err(200), err(400));
+        assert!(e2 < 0.6 * e1 && e1 < 0.02 * p.mu * fz, "{e1} {e2}");
     }
 
     #[test]

@@ -3,9 +3,11 @@
 pub mod combine;
 pub mod generate;
 pub mod io;
+pub mod missing;
 pub mod stats;
 pub mod topography;
 
 pub use generate::{generate, GaussianSurfaceSpec};
+pub use missing::{Fill, MaskedGrid};
 pub use stats::{stats, Detrend, SurfaceStats};
 pub use topography::{Profile, Topography};
