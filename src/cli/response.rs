@@ -8,7 +8,9 @@ use asperity::dynamics::report::{self, LevelResult};
 use asperity::elements::{provenance_json, InputFile};
 use asperity::output::write_string_atomic;
 use asperity::{Error, Result};
+use rayon::prelude::*;
 use std::path::PathBuf;
+use std::sync::atomic::Ordering;
 
 /// Frequency response of a structure with contact elements: multi-harmonic balance with the
 /// alternating frequency–time method and pseudo-arclength continuation, one sweep per excitation
@@ -58,21 +60,47 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     );
     let levels = f.excitation.levels_n.clone();
     let bar = super::progress_bar("response", (levels.len() * 1000) as u64);
-    let mut results: Vec<LevelResult> = Vec::new();
-    for (i, &level) in levels.iter().enumerate() {
-        bar.set_message(format!("{level} N"));
-        let base = (i * 1000) as u64;
-        let branch = sweep(&system, level, &settings, &mut |frac| {
-            bar.set_position(base + (frac * 1000.0) as u64);
+    bar.set_message(format!("{} levels", levels.len()));
+    // The levels are independent sweeps: they run concurrently (rayon tasks; the element loop
+    // inside each evaluation is parallel too and rayon shares the cores between both), so the
+    // slow gross-slip level overlaps the fast microslip ones. Progress: the sum of the levels'
+    // fractions of their span.
+    let progress: Vec<std::sync::atomic::AtomicU64> = levels
+        .iter()
+        .map(|_| std::sync::atomic::AtomicU64::new(0))
+        .collect();
+    let results: Vec<LevelResult> = levels
+        .par_iter()
+        .enumerate()
+        .map(|(i, &level)| {
+            let branch = sweep(&system, level, &settings, &mut |frac| {
+                progress[i].store((frac * 1000.0) as u64, Ordering::Relaxed);
+                bar.set_position(progress.iter().map(|p| p.load(Ordering::Relaxed)).sum());
+            })
+            .map_err(|e| match e {
+                Error::Data(m) => Error::Data(format!("excitation level {level} N: {m}")),
+                Error::NonConvergence {
+                    solver,
+                    iterations,
+                    residual,
+                    tolerance,
+                } => Error::NonConvergence {
+                    solver: format!("{solver} (excitation level {level} N)"),
+                    iterations,
+                    residual,
+                    tolerance,
+                },
+                other => other,
+            })?;
+            Ok(report::summarise(
+                &system,
+                level,
+                branch,
+                &model.responses[0].1,
+            ))
         })
+        .collect::<Result<Vec<_>>>()
         .inspect_err(|_| bar.abandon())?;
-        results.push(report::summarise(
-            &system,
-            level,
-            branch,
-            &model.responses[0].1,
-        ));
-    }
     bar.finish_and_clear();
     // Everything computed: write the files.
     let header = format!(
