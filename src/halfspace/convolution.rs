@@ -310,11 +310,9 @@ impl FftPlan {
         }
     }
 
-    /// `out = kernel ⊛ field` on the grid, like [`FftPlan::convolve`] but without allocating:
-    /// real row transforms → blocked transpose → per y-frequency: x-transform, kernel
-    /// multiplication and inverse x-transform fused in one pass → transpose back → inverse row
-    /// transforms of the `nx` rows that are kept. With zero padding, the padded rows are never
-    /// transformed (their spectrum is zero). `field` and `out` have the grid shape `(nx, ny)`.
+    /// `out = kernel ⊛ field` on the grid, like [`FftPlan::convolve`] but without allocating
+    /// (see [`FftPlan::convolve_fused`] for the steps). `field` and `out` have the grid shape
+    /// `(nx, ny)`.
     pub fn convolve_into(
         &self,
         kernel: &KernelSpectrum,
@@ -322,33 +320,84 @@ impl FftPlan {
         out: &mut Array2<f64>,
         ws: &mut ConvolutionWorkspace,
     ) {
+        assert_eq!(
+            field.dim(),
+            (self.nx, self.ny),
+            "convolve_into: field shape"
+        );
+        let field = field.as_standard_layout();
+        let field = field.as_slice().expect("standard layout");
+        let ny = self.ny;
+        self.convolve_fused::<0, 0>(
+            kernel,
+            ws,
+            out,
+            |i, buf| {
+                buf.copy_from_slice(&field[i * ny..(i + 1) * ny]);
+                []
+            },
+            |_| true,
+            |_, result, out_row| {
+                out_row.copy_from_slice(result);
+                []
+            },
+        );
+    }
+
+    /// One convolution with the passes before and after it fused into the transforms, so that
+    /// an iterative solver touches each grid row once while it is in cache:
+    ///
+    /// 1. for every grid row `i` (in parallel): `load(i, row)` writes row `i` of the field to be
+    ///    convolved into `row` (length `ny`) and may update the caller's own arrays for that row;
+    ///    it returns `A` partial sums; the row is transformed at once (real-to-complex along y);
+    /// 2. `proceed(&sums)` sees the sums of step 1 (added in row order, so they do not depend
+    ///    on the thread count) and may stop here (returns `None`): the caller found that the
+    ///    field it was building is not needed after all (e.g. converged, or contact set changed);
+    /// 3. blocked transpose → per y-frequency: x-transform, kernel product, inverse x-transform
+    ///    → transpose back → inverse real transforms of the `nx` rows that are kept;
+    /// 4. for every grid row `i`: `store(i, result, out_row)` receives the scaled result row and
+    ///    row `i` of `out`, returns `B` partial sums (added in row order).
+    ///
+    /// With zero padding, the padded rows are never transformed (their spectrum is zero).
+    pub fn convolve_fused<const A: usize, const B: usize>(
+        &self,
+        kernel: &KernelSpectrum,
+        ws: &mut ConvolutionWorkspace,
+        out: &mut Array2<f64>,
+        load: impl Fn(usize, &mut [f64]) -> [f64; A] + Sync,
+        proceed: impl FnOnce(&[f64; A]) -> bool,
+        store: impl Fn(usize, &[f64], &mut [f64]) -> [f64; B] + Sync,
+    ) -> ([f64; A], Option<[f64; B]>) {
         let (nx, ny, nfx, nfy) = (self.nx, self.ny, self.nfx, self.nfy);
         let nh = nfy / 2 + 1;
-        assert_eq!(field.dim(), (nx, ny), "convolve_into: field shape");
-        assert_eq!(out.dim(), (nx, ny), "convolve_into: output shape");
+        assert_eq!(out.dim(), (nx, ny), "convolve_fused: output shape");
         assert_eq!(
             kernel.values.dim(),
             (nh, nfx),
-            "convolve_into: kernel shape"
+            "convolve_fused: kernel shape"
         );
-        assert_eq!(ws.rows.dim(), (nfx, nh), "convolve_into: workspace shape");
-        let field = field.as_standard_layout();
-        let field = field.as_slice().expect("standard layout");
-        // 1. Real transforms of the nx data rows (rows nx.. of `ws.rows` stay zero forever).
+        assert_eq!(ws.rows.dim(), (nfx, nh), "convolve_fused: workspace shape");
+        // 1. Load and real-transform the nx data rows (rows nx.. of `ws.rows` stay zero).
+        let mut load_parts = vec![[0.0; A]; nx];
         let rows = ws.rows.as_slice_mut().expect("standard layout");
         rows[..nx * nh]
             .par_chunks_mut(nh)
-            .zip(field.par_chunks(ny))
+            .zip(load_parts.par_iter_mut())
+            .enumerate()
             .for_each_init(
                 || (vec![0.0; nfy], self.r2c.make_scratch_vec()),
-                |(buf, scratch), (row_out, row_in)| {
-                    buf[..ny].copy_from_slice(row_in);
+                |(buf, scratch), (i, (row_out, part))| {
+                    *part = load(i, &mut buf[..ny]);
                     buf[ny..].fill(0.0);
                     self.r2c
                         .process_with_scratch(buf, row_out, scratch)
                         .expect("r2c sizes match the plan");
                 },
             );
+        let load_sums = sum_in_order(&load_parts);
+        if !proceed(&load_sums) {
+            return (load_sums, None);
+        }
         // 2. Blocked transpose rows (nfx, nh) → spec (nh, nfx).
         let rows = ws.rows.as_slice().expect("standard layout");
         ws.spec
@@ -391,17 +440,19 @@ impl FftPlan {
                     self.inv.process_with_scratch(row, scratch);
                 },
             );
-        // 4. Transpose back the nx rows that are kept, 5. inverse real transforms, scaled.
+        // 4. Transpose back the nx rows that are kept, inverse real transforms, scale, store.
         let spec = ws.spec.as_slice().expect("standard layout");
         let scale = 1.0 / (nfx * nfy) as f64;
         let out = out.as_slice_mut().expect("output in standard layout");
+        let mut store_parts = vec![[0.0; B]; nx];
         ws.rows.as_slice_mut().expect("standard layout")[..nx * nh]
             .par_chunks_mut(TILE * nh)
             .zip(out.par_chunks_mut(TILE * ny))
+            .zip(store_parts.par_chunks_mut(TILE))
             .enumerate()
             .for_each_init(
                 || (vec![0.0; nfy], self.c2r.make_scratch_vec()),
-                |(buf, scratch), (b, (block, out_block))| {
+                |(buf, scratch), (b, ((block, out_block), parts))| {
                     let k0 = b * TILE;
                     let kb = block.len() / nh;
                     for m in 0..nh {
@@ -410,7 +461,12 @@ impl FftPlan {
                             block[dk * nh + m] = *v;
                         }
                     }
-                    for (row, orow) in block.chunks_mut(nh).zip(out_block.chunks_mut(ny)) {
+                    for (dk, ((row, orow), part)) in block
+                        .chunks_mut(nh)
+                        .zip(out_block.chunks_mut(ny))
+                        .zip(parts.iter_mut())
+                        .enumerate()
+                    {
                         // Imaginary parts of the DC (and Nyquist) terms of a real signal are
                         // round-off; realfft insists they are zero.
                         row[0].im = 0.0;
@@ -420,13 +476,26 @@ impl FftPlan {
                         self.c2r
                             .process_with_scratch(row, buf, scratch)
                             .expect("c2r sizes match the plan");
-                        for (o, v) in orow.iter_mut().zip(&buf[..ny]) {
-                            *o = v * scale;
+                        for v in &mut buf[..ny] {
+                            *v *= scale;
                         }
+                        *part = store(k0 + dk, &buf[..ny], orow);
                     }
                 },
             );
+        (load_sums, Some(sum_in_order(&store_parts)))
     }
+}
+
+/// Sum of per-row partial sums in row order (the result does not depend on the thread count).
+fn sum_in_order<const K: usize>(parts: &[[f64; K]]) -> [f64; K] {
+    let mut total = [0.0; K];
+    for p in parts {
+        for k in 0..K {
+            total[k] += p[k];
+        }
+    }
+    total
 }
 
 /// `spec *= kernel` element-wise (parallel).
