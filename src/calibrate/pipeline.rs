@@ -154,7 +154,6 @@ pub fn run(config: &CalibrationConfig, bar: &ProgressBar) -> Result<CalibrationR
         &config.loading.pressures_pa,
         SweepOptions {
             keep_solutions: true,
-            ..SweepOptions::default()
         },
         |_| bar.inc(1),
     )?;

@@ -2,7 +2,7 @@
 //! Writes `normal_sweep.csv` (SI units in the column names), `area_ratio.png`, `mean_gap.png`,
 //! `kn.png` (log axes) and, with `--pressure-maps`, one pressure map PNG per load.
 
-use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
+use asperity::contact::normal::{NormalMethod, NormalOptions, NormalProblem, NormalSolver};
 use asperity::contact::sweep::{self, SweepOptions, REFERENCE_PRESSURES_PA};
 use asperity::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
 use asperity::surface::combine::composite_modulus;
@@ -32,15 +32,16 @@ pub struct NormalArgs {
     /// Also write a pressure map PNG per load.
     #[arg(long)]
     pressure_maps: bool,
-    /// Tolerance on the relative gap error of the Polonsky–Keer solver.
+    /// Tolerance on the relative gap error of the contact solver.
     #[arg(long, default_value_t = NormalOptions::DEFAULT_TOLERANCE)]
     tolerance: f64,
     /// Iteration cap per solve (exceeding it is an error).
     #[arg(long, default_value_t = NormalOptions::default().max_iterations)]
     max_iterations: usize,
-    /// Relative pressure step ε of the central difference giving kn.
-    #[arg(long, default_value_t = sweep::DEFAULT_DERIVATIVE_STEP)]
-    derivative_step: f64,
+    /// Iteration: `auto` (by the expected contact fraction), `preconditioned` (projected CG
+    /// preconditioned by the inverse half-space compliance) or `polonsky-keer`.
+    #[arg(long, default_value = "auto")]
+    method: String,
 }
 
 /// Load the surface: a file, or the reference generated surface.
@@ -73,13 +74,17 @@ pub fn run(args: NormalArgs) -> Result<()> {
             .unwrap_or(&REFERENCE_PRESSURES_PA),
     )
     .map_err(|e| super::rename_param(e, "--pressures-pa"))?;
+    let method: NormalMethod = args
+        .method
+        .parse()
+        .map_err(|e| super::rename_param(e, "--method"))?;
     let options = NormalOptions {
         tolerance: args.tolerance,
         max_iterations: args.max_iterations,
+        method,
         ..NormalOptions::default()
     };
     let sweep_options = SweepOptions {
-        derivative_step: args.derivative_step,
         keep_solutions: args.pressure_maps,
     };
     options.validate().map_err(|e| match e {
@@ -88,9 +93,6 @@ pub fn run(args: NormalArgs) -> Result<()> {
         }
         other => other,
     })?;
-    sweep_options
-        .validate()
-        .map_err(|e| super::rename_param(e, "--derivative-step"))?;
     let (surface, source) = load_surface(args.surface.as_deref())?;
     let mut solver = NormalSolver::new(
         &NormalProblem {
@@ -124,7 +126,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
     let mut csv = String::new();
     let _ = writeln!(
         csv,
-        "# asperity contact normal: Polonsky–Keer pressure sweep"
+        "# asperity contact normal: pressure sweep, method {}",
+        args.method
     );
     let _ = writeln!(csv, "# surface: {source}");
     let _ = writeln!(
@@ -143,17 +146,18 @@ pub fn run(args: NormalArgs) -> Result<()> {
     );
     let _ = writeln!(
         csv,
-        "# tolerance = {:e} (relative gap error), kn = -dp/d(mean gap) by central difference at p(1 +- {})",
-        args.tolerance, args.derivative_step
+        "# tolerance = {:e} (relative gap error); kn = dp/d(approach) from the tangent problem on the contact set; points_across_* = 4 x points / interface edges (resolved when the smaller is >= {})",
+        args.tolerance,
+        asperity::contact::resolution::RESOLVED_POINTS_ACROSS
     );
     let _ = writeln!(
         csv,
-        "pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3,approach_m,contact_spots,smallest_spot_points,median_spot_points,iterations,residual,wall_time_s"
+        "pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3,approach_m,contact_spots,smallest_spot_points,median_spot_points,points_across_contact,points_across_free,method,iterations,stiffness_iterations,residual,wall_time_s"
     );
     for p in &result.points {
         let _ = writeln!(
             csv,
-            "{:e},{:e},{:e},{:e},{:e},{},{},{},{},{:e},{:.3}",
+            "{:e},{:e},{:e},{:e},{:e},{},{},{},{:.3},{:.3},{},{},{},{:e},{:.3}",
             p.pressure_pa,
             p.contact_area_ratio,
             p.mean_gap_m,
@@ -162,7 +166,11 @@ pub fn run(args: NormalArgs) -> Result<()> {
             p.contact_spots,
             p.smallest_spot_points,
             p.median_spot_points,
+            p.resolution.points_across_contact,
+            p.resolution.points_across_free,
+            p.method.name(),
             p.iterations,
+            p.stiffness_iterations,
             p.residual,
             p.wall_time_s
         );
@@ -238,23 +246,26 @@ pub fn run(args: NormalArgs) -> Result<()> {
 
     println!(
         "{:>12} {:>12} {:>12} {:>12} {:>7} {:>9} {:>9} {:>6}",
-        "p (MPa)", "area ratio", "gap (µm)", "kn (N/m³)", "spots", "min spot", "med spot", "iter"
+        "p (MPa)", "area ratio", "gap (µm)", "kn (N/m³)", "spots", "across c", "across f", "iter"
     );
     for p in &result.points {
+        let r = &p.resolution;
         println!(
-            "{:>12.4} {:>12.5} {:>12.5} {:>12.4e} {:>7} {:>9} {:>9} {:>6}{}",
+            "{:>12.4} {:>12.5} {:>12.5} {:>12.4e} {:>7} {:>9.1} {:>9.1} {:>6}{}",
             p.pressure_pa / 1e6,
             p.contact_area_ratio,
             p.mean_gap_m * 1e6,
             p.kn_n_per_m3,
             p.contact_spots,
-            p.smallest_spot_points,
-            p.median_spot_points,
+            r.points_across_contact,
+            r.points_across_free,
             p.iterations,
-            if p.under_resolved() {
-                "  (spots under-resolved: refine the grid)"
-            } else {
+            if !p.under_resolved() {
                 ""
+            } else if r.points_across_contact <= r.points_across_free {
+                "  (contact spots under-resolved: refine the grid)"
+            } else {
+                "  (free islands under-resolved: refine the grid)"
             }
         );
     }

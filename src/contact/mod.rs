@@ -2,5 +2,6 @@
 //! partial slip with history), and pressure sweeps.
 pub mod analytic;
 pub mod normal;
+pub mod resolution;
 pub mod sweep;
 pub mod tangential;

@@ -52,6 +52,7 @@
 //! warm-started load-controlled solve. This works identically for periodic patches (whose mean
 //! pressure is not set by the zero-mean periodic kernel) and zero-padded (finite) contacts.
 
+use crate::contact::resolution::ContactResolution;
 use crate::error::{require_positive, Error, Result};
 use crate::grid::Grid2;
 use crate::halfspace::convolution::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum};
@@ -59,7 +60,7 @@ use crate::halfspace::influence::boussinesq_spectrum;
 use ndarray::Array2;
 use std::time::Instant;
 
-pub mod projected_cg;
+mod projected_cg;
 pub mod stiffness;
 
 pub use stiffness::ContactStiffness;
@@ -122,6 +123,32 @@ pub enum NormalMethod {
     Preconditioned,
 }
 
+impl NormalMethod {
+    /// The name used on the command line and in CSV files.
+    pub fn name(self) -> &'static str {
+        match self {
+            NormalMethod::Auto => "auto",
+            NormalMethod::PolonskyKeer => "polonsky-keer",
+            NormalMethod::Preconditioned => "preconditioned",
+        }
+    }
+}
+
+impl std::str::FromStr for NormalMethod {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(NormalMethod::Auto),
+            "polonsky-keer" => Ok(NormalMethod::PolonskyKeer),
+            "preconditioned" => Ok(NormalMethod::Preconditioned),
+            _ => Err(Error::param(
+                "method",
+                format!("must be `auto`, `polonsky-keer` or `preconditioned`, got `{s}`"),
+            )),
+        }
+    }
+}
+
 impl NormalOptions {
     /// Default tolerance on ε: well below the discretisation error of any practical grid.
     pub const DEFAULT_TOLERANCE: f64 = 1e-10;
@@ -171,11 +198,13 @@ pub struct NormalSolution {
     /// Number of contact spots (4-connected clusters of contact points; clusters touching across
     /// a periodic boundary count once).
     pub contact_spots: usize,
-    /// Grid points of the smallest contact spot (0 without contact). Spots of a few points are
-    /// not resolved by the grid: refine it when this is small at the loads of interest.
+    /// Grid points of the smallest contact spot (0 without contact).
     pub smallest_spot_points: usize,
     /// Median spot size in grid points.
     pub median_spot_points: usize,
+    /// Grid points across the contact spots and the free regions: whether the grid resolves
+    /// this contact (see [`crate::contact::resolution`]).
+    pub resolution: ContactResolution,
     /// Mean gap (mean separation of the mean planes for a periodic patch) (m).
     pub mean_gap_m: f64,
     /// Rigid approach δ from first contact of the highest grid point (m).
@@ -681,6 +710,7 @@ impl NormalSolver {
             contact_spots: spots.len(),
             smallest_spot_points: sorted.first().copied().unwrap_or(0),
             median_spot_points: sorted.get(sorted.len() / 2).copied().unwrap_or(0),
+            resolution: ContactResolution::of(&contact, self.boundary == Boundary::Periodic),
             approach_m: approach,
             elastic_energy_j: energy,
             method,

@@ -40,7 +40,7 @@ use rustfft::num_complex::Complex64;
 
 /// How the pass after a direction step finds the new gap.
 #[derive(Debug, Clone, Copy)]
-pub enum Update {
+enum Update {
     /// The gap was just recomputed by convolution (`g = K⊛p + h0`): centre it by `δ`.
     Centre { approach: f64 },
     /// Step `τ` along the direction: `p ← p − τ t` (projected, penetrating points enter with
@@ -130,12 +130,8 @@ pub(super) fn precond_spectrum(
     (spec, diag)
 }
 
-/// Lanes of the row loops: sums are kept per lane (added in a fixed order at the end of the
-/// row), so that the loops compile to branch-free vector code.
-
 /// One row of the update pass (see [`Update`]): new `p` and `g`, and the sums of the new state.
-/// (A branch-free, lane-summed version measured 2× slower: the pass is memory-bound.)
-pub fn update_row(
+fn update_row(
     update: Update,
     p: &mut [f64],
     g: &mut [f64],

@@ -100,7 +100,7 @@ impl NormalSolver {
         let mut rho_old = 1.0;
         let mut residual = f64::INFINITY;
         for it in 0..=MAX_ITERATIONS {
-            if !(approach > 0.0) {
+            if approach.is_nan() || approach <= 0.0 {
                 return Err(Error::Data(format!(
                     "contact stiffness: non-positive approach increment {approach:e} m/Pa"
                 )));
@@ -184,7 +184,7 @@ impl NormalSolver {
                 },
             );
             let [sum_r, sum_rt] = store.expect("proceeds");
-            if !(sum_rt > 0.0) {
+            if sum_rt.is_nan() || sum_rt <= 0.0 {
                 return Err(Error::NonConvergence {
                     solver: "normal contact stiffness (tangent CG)".into(),
                     iterations: it,
