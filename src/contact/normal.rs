@@ -73,6 +73,10 @@ pub const REFRESH_INTERVAL: usize = 25;
 /// (where its cheaper iterations win: BENCHMARKS.md).
 pub const AUTO_PRECONDITIONED_FRACTION: f64 = 0.005;
 
+/// The preconditioned method uses a warm start at a load within this factor of the warm
+/// start's, the nested coarse-to-fine start otherwise.
+pub const WARM_START_LOAD_RATIO: f64 = 2.0;
+
 /// Nested iteration stops coarsening below this many points a side.
 pub const COARSEST_GRID: usize = 64;
 
@@ -449,7 +453,10 @@ impl NormalSolver {
 
     /// Load control: solve for the imposed mean pressure `mean_pressure_pa` (Pa, over the whole
     /// patch). `warm_start` (a previous solution on the same grid) gives the initial pressure
-    /// shape, scaled to the new load; otherwise the iteration starts from uniform pressure.
+    /// shape, scaled to the new load (the preconditioned method uses it only within a factor
+    /// [`WARM_START_LOAD_RATIO`] of its load); otherwise the iteration starts from uniform
+    /// pressure, or (preconditioned method) from the solution on the grid coarsened 2 × 2
+    /// (nested iteration, recursively down to [`COARSEST_GRID`] points a side).
     pub fn solve_load(
         &mut self,
         mean_pressure_pa: f64,
@@ -459,7 +466,7 @@ impl NormalSolver {
         let p_mean = require_positive("mean_pressure_pa", mean_pressure_pa)?;
         let n = (self.nx * self.ny) as f64;
         let mut coarse_iterations = 0;
-        let method = match warm_start {
+        let warm = match warm_start {
             Some(w) => {
                 self.check_shape("warm_start", w.pressure.dim())?;
                 let s = w.pressure.sum();
@@ -470,24 +477,35 @@ impl NormalSolver {
                         "pressure must be finite, non-negative and not all zero",
                     ));
                 }
+                Some((w, s))
+            }
+            None => None,
+        };
+        // The contact fraction grows about in proportion to the load.
+        let method = self.method_for(match warm {
+            Some((w, _)) => w.contact_area_ratio * p_mean / w.mean_pressure_pa,
+            None => self.predicted_contact_fraction(p_mean),
+        });
+        // The preconditioned method converges in about as many iterations from the nested
+        // coarse-to-fine start as from a solution at half or twice the load (BENCHMARKS.md):
+        // a warm start is used within that range, the nested start beyond it.
+        let near = |w: &NormalSolution| {
+            let ratio = p_mean / w.mean_pressure_pa;
+            (1.0 / WARM_START_LOAD_RATIO..=WARM_START_LOAD_RATIO).contains(&ratio)
+        };
+        match warm {
+            Some((w, s)) if method != NormalMethod::Preconditioned || near(w) => {
                 let scale = p_mean * n / s;
                 self.p.zip_mut_with(&w.pressure, |p, w| *p = w * scale);
-                // The contact fraction grows about in proportion to the load.
-                let fraction = w.contact_area_ratio * p_mean / w.mean_pressure_pa;
-                self.method_for(fraction)
             }
-            None => {
-                let method = self.method_for(self.predicted_contact_fraction(p_mean));
-                match (method, self.coarse_start(p_mean)) {
-                    (NormalMethod::Preconditioned, Some((p, its))) => {
-                        self.p.assign(&p);
-                        coarse_iterations = its;
-                    }
-                    _ => self.p.fill(p_mean),
+            _ => match (method, self.coarse_start(p_mean)) {
+                (NormalMethod::Preconditioned, Some((p, its))) => {
+                    self.p.assign(&p);
+                    coarse_iterations = its;
                 }
-                method
-            }
-        };
+                _ => self.p.fill(p_mean),
+            },
+        }
         let (iterations, residual, approach) = self.iterate(p_mean, method)?;
         let mut sol = self.solution(p_mean, approach, method, iterations, residual, start);
         sol.coarse_iterations = coarse_iterations;

@@ -320,25 +320,27 @@ impl FftPlan {
         out: &mut Array2<f64>,
         ws: &mut ConvolutionWorkspace,
     ) {
-        assert_eq!(
-            field.dim(),
-            (self.nx, self.ny),
-            "convolve_into: field shape"
-        );
+        let (nx, ny) = (self.nx, self.ny);
+        assert_eq!(field.dim(), (nx, ny), "convolve_into: field shape");
+        assert_eq!(out.dim(), (nx, ny), "convolve_into: output shape");
         let field = field.as_standard_layout();
         let field = field.as_slice().expect("standard layout");
-        let ny = self.ny;
-        self.convolve_fused::<0, 0>(
+        let out = RowWriter(
+            out.as_slice_mut()
+                .expect("output in standard layout")
+                .as_mut_ptr(),
+        );
+        self.convolve_fused::<0, 0, ()>(
             kernel,
             ws,
-            out,
             |i, buf| {
                 buf.copy_from_slice(&field[i * ny..(i + 1) * ny]);
                 []
             },
-            |_| true,
-            |_, result, out_row| {
-                out_row.copy_from_slice(result);
+            |_| Some(()),
+            |_, _, i, result| {
+                // SAFETY: each output row is written by one call only, nothing reads it meanwhile.
+                unsafe { out.row(i, ny) }.copy_from_slice(result);
                 []
             },
         );
@@ -347,30 +349,32 @@ impl FftPlan {
     /// One convolution with the passes before and after it fused into the transforms, so that
     /// an iterative solver touches each grid row once while it is in cache:
     ///
-    /// 1. for every grid row `i` (in parallel): `load(i, row)` writes row `i` of the field to be
-    ///    convolved into `row` (length `ny`) and may update the caller's own arrays for that row;
-    ///    it returns `A` partial sums; the row is transformed at once (real-to-complex along y);
-    /// 2. `proceed(&sums)` sees the sums of step 1 (added in row order, so they do not depend
-    ///    on the thread count) and may stop here (returns `None`): the caller found that the
-    ///    field it was building is not needed after all (e.g. converged, or contact set changed);
+    /// 1. for every grid row `i` (in parallel): `load(i, row)` writes row `i` of the field `f`
+    ///    to be convolved into `row` (length `ny`) and may update the caller's own arrays for
+    ///    that row; it returns `A` partial sums; the row is transformed at once (real-to-complex
+    ///    along y);
+    /// 2. `mid(&sums)` sees the sums of step 1 (added in row order, so they do not depend on the
+    ///    thread count) and returns the context `M` of step 4, or `None` to stop here: the caller
+    ///    found that the convolution is not needed after all (e.g. converged);
     /// 3. blocked transpose → per y-frequency: x-transform, kernel product, inverse x-transform
-    ///    → transpose back → inverse real transforms of the `nx` rows that are kept;
-    /// 4. for every grid row `i`: `store(i, result, out_row)` receives the scaled result row and
-    ///    row `i` of `out`, returns `B` partial sums (added in row order).
+    ///    → transpose back → inverse real transforms of the `nx` rows that are kept; step 3 also
+    ///    sums the energy `E = Σ_x f·(K⊛f) = (1/N_fft) Σ_q K̃(q)|f̂(q)|²` (Parseval; the kernel
+    ///    spectrum is taken as real, as for every even kernel);
+    /// 4. for every grid row `i`: `store(&context, E, i, result)` receives the scaled result row
+    ///    and returns `B` partial sums (added in row order).
     ///
     /// With zero padding, the padded rows are never transformed (their spectrum is zero).
-    pub fn convolve_fused<const A: usize, const B: usize>(
+    /// Returns the sums of step 1, and `(E, sums of step 4)` unless `mid` stopped.
+    pub fn convolve_fused<const A: usize, const B: usize, M: Sync>(
         &self,
         kernel: &KernelSpectrum,
         ws: &mut ConvolutionWorkspace,
-        out: &mut Array2<f64>,
         load: impl Fn(usize, &mut [f64]) -> [f64; A] + Sync,
-        proceed: impl FnOnce(&[f64; A]) -> bool,
-        store: impl Fn(usize, &[f64], &mut [f64]) -> [f64; B] + Sync,
-    ) -> ([f64; A], Option<[f64; B]>) {
+        mid: impl FnOnce(&[f64; A]) -> Option<M>,
+        store: impl Fn(&M, f64, usize, &[f64]) -> [f64; B] + Sync,
+    ) -> ([f64; A], Option<(f64, [f64; B])>) {
         let (nx, ny, nfx, nfy) = (self.nx, self.ny, self.nfx, self.nfy);
         let nh = nfy / 2 + 1;
-        assert_eq!(out.dim(), (nx, ny), "convolve_fused: output shape");
         assert_eq!(
             kernel.values.dim(),
             (nh, nfx),
@@ -395,9 +399,9 @@ impl FftPlan {
                 },
             );
         let load_sums = sum_in_order(&load_parts);
-        if !proceed(&load_sums) {
+        let Some(context) = mid(&load_sums) else {
             return (load_sums, None);
-        }
+        };
         // 2. Blocked transpose rows (nfx, nh) → spec (nh, nfx).
         let rows = ws.rows.as_slice().expect("standard layout");
         ws.spec
@@ -417,13 +421,18 @@ impl FftPlan {
                     }
                 }
             });
-        // 3. Per y-frequency: forward x-transform, kernel product, inverse x-transform.
+        // 3. Per y-frequency: forward x-transform, kernel product (and energy), inverse
+        // x-transform. The half spectrum holds y-frequencies 0..=nfy/2; all but 0 and (even
+        // nfy) nfy/2 stand for their mirror images too.
         let kern = kernel.values.as_slice().expect("standard layout");
+        let mut energy_parts = vec![[0.0; 1]; nh];
         ws.spec
             .as_slice_mut()
             .expect("standard layout")
             .par_chunks_mut(nfx)
             .zip(kern.par_chunks(nfx))
+            .zip(energy_parts.par_iter_mut())
+            .enumerate()
             .for_each_init(
                 || {
                     let n = self
@@ -432,27 +441,35 @@ impl FftPlan {
                         .max(self.inv.get_inplace_scratch_len());
                     vec![Complex64::default(); n]
                 },
-                |scratch, (row, krow)| {
+                |scratch, (m, ((row, krow), energy))| {
                     self.fwd.process_with_scratch(row, scratch);
+                    let mut e = 0.0;
                     for (s, k) in row.iter_mut().zip(krow) {
+                        e += s.norm_sqr() * k.re;
                         *s *= k;
                     }
+                    let weight = if m == 0 || (nfy % 2 == 0 && m == nfy / 2) {
+                        1.0
+                    } else {
+                        2.0
+                    };
+                    energy[0] = weight * e;
                     self.inv.process_with_scratch(row, scratch);
                 },
             );
+        let scale = 1.0 / (nfx * nfy) as f64;
+        let energy = sum_in_order(&energy_parts)[0] * scale;
         // 4. Transpose back the nx rows that are kept, inverse real transforms, scale, store.
         let spec = ws.spec.as_slice().expect("standard layout");
-        let scale = 1.0 / (nfx * nfy) as f64;
-        let out = out.as_slice_mut().expect("output in standard layout");
         let mut store_parts = vec![[0.0; B]; nx];
+        let context = &context;
         ws.rows.as_slice_mut().expect("standard layout")[..nx * nh]
             .par_chunks_mut(TILE * nh)
-            .zip(out.par_chunks_mut(TILE * ny))
             .zip(store_parts.par_chunks_mut(TILE))
             .enumerate()
             .for_each_init(
                 || (vec![0.0; nfy], self.c2r.make_scratch_vec()),
-                |(buf, scratch), (b, ((block, out_block), parts))| {
+                |(buf, scratch), (b, (block, parts))| {
                     let k0 = b * TILE;
                     let kb = block.len() / nh;
                     for m in 0..nh {
@@ -461,11 +478,7 @@ impl FftPlan {
                             block[dk * nh + m] = *v;
                         }
                     }
-                    for (dk, ((row, orow), part)) in block
-                        .chunks_mut(nh)
-                        .zip(out_block.chunks_mut(ny))
-                        .zip(parts.iter_mut())
-                        .enumerate()
+                    for (dk, (row, part)) in block.chunks_mut(nh).zip(parts.iter_mut()).enumerate()
                     {
                         // Imaginary parts of the DC (and Nyquist) terms of a real signal are
                         // round-off; realfft insists they are zero.
@@ -479,11 +492,24 @@ impl FftPlan {
                         for v in &mut buf[..ny] {
                             *v *= scale;
                         }
-                        *part = store(k0 + dk, &buf[..ny], orow);
+                        *part = store(context, energy, k0 + dk, &buf[..ny]);
                     }
                 },
             );
-        (load_sums, Some(sum_in_order(&store_parts)))
+        (load_sums, Some((energy, sum_in_order(&store_parts))))
+    }
+}
+
+/// Raw row pointer of [`FftPlan::convolve_into`]'s output (rows written by disjoint calls).
+#[derive(Clone, Copy)]
+struct RowWriter(*mut f64);
+unsafe impl Send for RowWriter {}
+unsafe impl Sync for RowWriter {}
+impl RowWriter {
+    /// Row `i` of length `ny`. Safety: rows are disjoint and written by one caller at a time.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn row(&self, i: usize, ny: usize) -> &mut [f64] {
+        std::slice::from_raw_parts_mut(self.0.add(i * ny), ny)
     }
 }
 
@@ -621,6 +647,67 @@ mod tests {
                     assert!((g - w).abs() < 1e-11 * (1.0 + w.abs()), "{g} vs {w}");
                 }
             }
+        }
+    }
+
+    /// The fused convolution: load sums, the energy Σ f·(K⊛f) from the spectrum (Parseval),
+    /// the store sees the result rows, and `mid` can stop before the transforms.
+    #[test]
+    fn convolve_fused_energy_sums_and_stop() {
+        for (nx, ny, boundary) in [
+            (7, 8, Boundary::ZeroPadded),
+            (6, 5, Boundary::ZeroPadded),
+            (8, 6, Boundary::Periodic),
+            (9, 7, Boundary::Periodic),
+        ] {
+            let plan = FftPlan::new(nx, ny, boundary);
+            // An even kernel (real spectrum), as for every half-space kernel.
+            let ks = plan.kernel_spectrum(|di, dj| {
+                1.0 / (1.0 + (di as f64).powi(2) + 2.0 * (dj as f64).powi(2))
+            });
+            let f = test_field(nx, ny);
+            let want = plan.convolve(&ks, &f);
+            let want_energy: f64 = f.iter().zip(want.iter()).map(|(a, b)| a * b).sum();
+            let mut ws = plan.workspace();
+            let got = std::sync::Mutex::new(Array2::<f64>::zeros((nx, ny)));
+            let (load, rest) = plan.convolve_fused::<1, 1, f64>(
+                &ks,
+                &mut ws,
+                |i, buf| {
+                    buf.copy_from_slice(f.row(i).as_slice().unwrap());
+                    [buf.iter().sum()]
+                },
+                |s| Some(2.0 * s[0]),
+                |twice_sum, _, i, row| {
+                    got.lock()
+                        .unwrap()
+                        .row_mut(i)
+                        .assign(&ndarray::ArrayView1::from(row));
+                    [row.iter().sum::<f64>() + *twice_sum * 0.0]
+                },
+            );
+            assert!((load[0] - f.sum()).abs() < 1e-12);
+            let (energy, store) = rest.unwrap();
+            assert!(
+                (energy - want_energy).abs() < 1e-10 * want_energy.abs(),
+                "{energy} {want_energy}"
+            );
+            assert!((store[0] - want.sum()).abs() < 1e-10 * (1.0 + want.sum().abs()));
+            let got = got.into_inner().unwrap();
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert!((g - w).abs() < 1e-11 * (1.0 + w.abs()));
+            }
+            let (_, stopped) = plan.convolve_fused::<0, 0, ()>(
+                &ks,
+                &mut ws,
+                |_, buf| {
+                    buf.fill(1.0);
+                    []
+                },
+                |_| None,
+                |_, _, _, _| unreachable!("stopped before the transforms"),
+            );
+            assert!(stopped.is_none());
         }
     }
 }

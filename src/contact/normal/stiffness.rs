@@ -114,17 +114,19 @@ impl NormalSolver {
             }
             // z = P M⁻¹ P res.
             let g = &self.g;
+            let zp = Ptr::of(&mut self.z);
             let m = self.precond.as_mut().expect("preconditioner built");
-            let (_, z_sums) = m.plan.convolve_fused::<0, 2>(
+            let (_, z_sums) = m.plan.convolve_fused::<0, 2, ()>(
                 &m.spectrum,
                 &mut m.ws,
-                &mut self.z,
                 |i, buf| {
                     buf.copy_from_slice(row(g, i));
                     []
                 },
-                |_| true,
-                |i, res, z| {
+                |_| Some(()),
+                |_, _, i, res| {
+                    // SAFETY: row i of z is touched by this call only.
+                    let z = unsafe { zp.row(i, ny) };
                     let g = row(g, i);
                     let mut s = [0.0; 2];
                     for k in 0..ny {
@@ -139,18 +141,18 @@ impl NormalSolver {
                     s
                 },
             );
-            let [sum_z, sum_gz] = z_sums.expect("proceeds");
+            let (_, [sum_z, sum_gz]) = z_sums.expect("proceeds");
             let z_mean = sum_z / n_c;
             let rho = sum_gz; // Σ_S res = 0, so Σ res·(z − z̄) = Σ res·z.
             let beta = if it == 0 { 0.0 } else { rho / rho_old };
             rho_old = rho;
             // t = (z − z̄) + β t (Σ_S t = 0 kept), r = K⊛t.
             let tp = Ptr::of(&mut self.t);
+            let rp = Ptr::of(&mut self.r);
             let (z, g) = (&self.z, &self.g);
-            let (load, store) = self.plan.convolve_fused::<1, 2>(
+            let (load, store) = self.plan.convolve_fused::<1, 2, ()>(
                 &self.kernel,
                 &mut self.ws,
-                &mut self.r,
                 |i, buf| {
                     // SAFETY: row i of t is touched by this call only.
                     let t = unsafe { tp.row(i, ny) };
@@ -168,10 +170,10 @@ impl NormalSolver {
                     }
                     s
                 },
-                |_| true,
-                |i, res, r| {
-                    // SAFETY: the load phase is over; rows are only read here.
-                    let t = unsafe { tp.row(i, ny) };
+                |_| Some(()),
+                |_, _, i, res| {
+                    // SAFETY: the load phase is over; row i of r is written by this call only.
+                    let (t, r) = unsafe { (tp.row(i, ny), rp.row(i, ny)) };
                     let mut s = [0.0; 2];
                     for k in 0..ny {
                         r[k] = res[k];
@@ -183,7 +185,7 @@ impl NormalSolver {
                     s
                 },
             );
-            let [sum_r, sum_rt] = store.expect("proceeds");
+            let (_, [sum_r, sum_rt]) = store.expect("proceeds");
             if sum_rt.is_nan() || sum_rt <= 0.0 {
                 return Err(Error::NonConvergence {
                     solver: "normal contact stiffness (tangent CG)".into(),
@@ -252,16 +254,18 @@ impl NormalSolver {
     fn tangent_refresh(&mut self, mask: &[bool]) -> Result<f64> {
         let ny = self.ny;
         let x = &self.p;
-        let (_, sums) = self.plan.convolve_fused::<0, 2>(
+        let gp = Ptr::of(&mut self.g);
+        let (_, sums) = self.plan.convolve_fused::<0, 2, ()>(
             &self.kernel,
             &mut self.ws,
-            &mut self.g,
             |i, buf| {
                 buf.copy_from_slice(row(x, i));
                 []
             },
-            |_| true,
-            |i, res, g| {
+            |_| Some(()),
+            |_, _, i, res| {
+                // SAFETY: row i of g is written by this call only.
+                let g = unsafe { gp.row(i, ny) };
                 let mut s = [0.0; 2];
                 for k in 0..ny {
                     g[k] = res[k];
@@ -273,7 +277,7 @@ impl NormalSolver {
                 s
             },
         );
-        let [sum, count] = sums.expect("proceeds");
+        let (_, [sum, count]) = sums.expect("proceeds");
         Ok(sum / count)
     }
 }
