@@ -63,7 +63,8 @@ pub struct SelfAffineSpec {
 impl SelfAffineSpec {
     /// The benchmark surface of the normal contact solver (BENCHMARKS.md): H = 0.8, rms
     /// gradient 0.1, a square periodic patch of side `l_m` on `n × n` points, roll-off at L/4,
-    /// cut-off at 16 grid spacings (so the same relative bandwidth on every grid).
+    /// cut-off at 16 grid spacings (so the same relative bandwidth on every grid; valid for
+    /// `n > 64`, where the cut-off is shorter than the roll-off).
     pub fn benchmark(n: usize, l_m: f64, seed: u64) -> Self {
         Self {
             hurst: 0.8,
