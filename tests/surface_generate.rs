@@ -11,6 +11,15 @@ fn asperity(args: &[&str]) -> std::process::Output {
         .expect("run asperity")
 }
 
+/// The area written by a successful run.
+fn written_area(o: &std::process::Output, path: &Path) -> asperity::Grid2 {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    asperity::surface::io::read(path)
+        .unwrap()
+        .into_area("test")
+        .unwrap()
+}
+
 #[test]
 fn generate_writes_npy_with_requested_rq() {
     let dir = tempfile::tempdir().unwrap();
@@ -31,11 +40,7 @@ fn generate_writes_npy_with_requested_rq() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let g = asperity::surface::io::read(&out)
-        .unwrap()
-        .into_area("test")
-        .unwrap();
+    let g = written_area(&o, &out);
     assert_eq!((g.nx(), g.ny()), (128, 128));
     assert!(g.periodic);
     assert!((g.dx - 1e-4 / 128.0).abs() < 1e-18);
@@ -206,11 +211,7 @@ fn self_affine_writes_npy_and_rejects_bad_flags() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let g = asperity::surface::io::read(&out)
-        .unwrap()
-        .into_area("test")
-        .unwrap();
+    let g = written_area(&o, &out);
     let lib = asperity::surface::generate_self_affine(&asperity::surface::SelfAffineSpec {
         hurst: 0.7,
         rms_gradient: 0.2,

@@ -5,8 +5,8 @@
 //!
 //! 1. **Surface**: the Gaussian-correlated patch of the configuration
 //!    ([`crate::surface::generate`]).
-//! 2. **Normal sweep** ([`crate::contact::sweep`]): Polonsky–Keer at each nominal pressure,
-//!    warm-started, with `kn = −dp̄/dḡ` by a central difference (two extra solves at `p̄(1 ± 2%)`).
+//! 2. **Normal sweep** ([`crate::contact::sweep`]): the normal contact solver at each nominal
+//!    pressure, with `kn = dp̄/dδ` from the tangent problem on the contact set.
 //! 3. **Tangential loops** ([`crate::contact::tangential`]): on each pressure field, the rigid
 //!    shift `δ(t) = δa·sin(2πt)` along x from the virgin state over a quarter cycle (initial
 //!    loading) and one full cycle: the **steady cycle** runs from the first peak `+δa` through
@@ -653,7 +653,7 @@ pub fn write_outputs(
         "method": {
             "loading": "virgin quarter cycle + one steady cycle (peak to peak) of delta = amplitude*sin(2 pi t) along x, amplitude = amplitude_factor x gross-slip displacement at each pressure",
             "fit": "Valanis element per unit area, Fz = nominal pressure, mu fixed; Nelder-Mead (argmin) on E0 = E0ref*exp(t0), k = logistic(t1), Et = E0*logistic(t2); cost 1 - R^2 on the steady cycle; element driven by the exact closed-form branch solution",
-            "kn": "central difference -dp/d(mean gap) at p(1 +/- 2%)",
+            "kn": "dp/d(approach) from the tangent problem on the contact set",
             "tangential_assumption": crate::contact::tangential::QUASI_IDENTICAL_ASSUMPTION,
         },
         "summary": {

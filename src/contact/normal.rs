@@ -1,5 +1,7 @@
-//! Frictionless normal contact of a rough surface with an elastic half-space: the projected
-//! conjugate-gradient method of Polonsky & Keer (Wear 231 (1999) 206–219).
+//! Frictionless normal contact of a rough surface with an elastic half-space: projected conjugate
+//! gradients, plain (Polonsky & Keer, Wear 231 (1999) 206–219) or preconditioned by the inverse
+//! of the half-space compliance (after Vollebregt, J. Comput. Phys. 257 (2014) 333–351), and the
+//! normal contact stiffness from the tangent problem ([`stiffness`]).
 //!
 //! Units: lengths and gaps in m, pressures and moduli in Pa, energy in J.
 //!
@@ -17,19 +19,33 @@
 //! imposed, `mean(p) = p̄` (load control). `δ` is the Lagrange multiplier of the load: it is the
 //! rigid approach measured from first contact of the highest grid point.
 //!
-//! # Algorithm (Polonsky & Keer 1999, §3, load control)
-//! Each iteration: `g = K⊛p + h0`, centred by its mean over the contact set `Ic = {p > 0}`
-//! (that mean is the current approach δ); conjugate direction `t = g + β t_old` on `Ic`
-//! (`β = G/G_old`, `G = Σ_Ic g²`, reset to steepest descent when points were added);
-//! `r = K⊛t` centred on `Ic`; step `τ = Σ_Ic g·t / Σ_Ic r·t`; `p ← max(p − τ t, 0)`;
-//! non-contact points that penetrate (`p = 0`, `g < 0`) enter with `p = −τ g`; finally `p` is
-//! scaled to the imposed mean pressure.
+//! # Algorithm (load control)
+//! Both methods minimise the elastic energy `½ p·K⊛p + p·h0` over `p ≥ 0`, `mean(p) = p̄` by
+//! conjugate gradients on the contact set `Ic = {p > 0}`, with the gap centred by its mean over
+//! `Ic` (the current δ), the direction kept at zero sum (the load is kept), points leaving the
+//! set by projection (`p ← max(p − τ t, 0)`) and penetrating points entering it; see
+//! `normal/projected_cg.rs` for the steps. They differ in the search direction:
 //!
-//! Only one convolution per iteration is needed in the common case: when no point was clipped
-//! or added, `K⊛p_new = s·(K⊛p − τ K⊛t)` exactly (linearity; `s` is the load scaling), so the
-//! displacement is updated instead of recomputed. It is recomputed from `p` whenever the active
-//! set changed, every [`REFRESH_INTERVAL`] iterations against round-off drift, and always before
-//! convergence is accepted.
+//! - [`NormalMethod::PolonskyKeer`]: the centred gap itself (Fletcher–Reeves). The condition
+//!   number of `K` on the contact set grows with the grid (its eigenvalues are those of
+//!   `2/(E*|q|)` from `q ~ 1/L` to `q ~ 1/dx`), and so does the iteration count: 64–1005 on
+//!   512²–2048² self-affine surfaces (BENCHMARKS.md). Cheapest per iteration (one transform pair).
+//! - [`NormalMethod::Preconditioned`]: the gap filtered by `E*|q|/2` (the exact inverse of the
+//!   periodic compliance) and restricted to `Ic`, the FFT preconditioner of Vollebregt (2014);
+//!   Polak–Ribière+ with a restart test; penetrating points join the line search. Two transform
+//!   pairs per iteration (one preconditioner, one `K⊛t`), but 20–50 iterations, nearly
+//!   independent of the grid and of the contact fraction; cold solves start from the solution
+//!   on the grid coarsened 2 × 2 (nested iteration down to [`COARSEST_GRID`]). For zero-padded
+//!   windows the preconditioner is the periodic `E*|q|/2` of the window (the iteration counts on
+//!   Hertz windows equal those of the padded `|q|` at a quarter of its cost).
+//! - [`NormalMethod::Auto`] (default): preconditioned when the expected contact fraction
+//!   ([`NormalSolver::predicted_contact_fraction`], or that of the warm start) is at least
+//!   [`AUTO_PRECONDITIONED_FRACTION`], Polonsky–Keer below, where its cheaper iterations win.
+//!
+//! Both give the same contact set and mean gap (to 1e-9 relative) with the same criterion
+//! (`tests/normal_contact.rs`). The displacement is updated by linearity when no point left or
+//! entered the contact set, recomputed from `p` otherwise, every [`REFRESH_INTERVAL`] iterations,
+//! and always before convergence is accepted.
 //!
 //! # Convergence criterion
 //! The residual is the pressure-weighted relative gap error

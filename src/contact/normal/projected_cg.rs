@@ -325,45 +325,32 @@ impl NormalSolver {
             let refresh_due = since_refresh >= REFRESH_INTERVAL;
             let at_cap = iterations >= self.options.max_iterations;
             let mut verdict = Verdict::Continue;
-            let step_sums = if preconditioned {
+            let stepped = if preconditioned {
                 // z = P M⁻¹ P g, with the residual of the current state in its input pass.
                 let (r, z_sums) = self.precondition(c, |r| {
                     residual = judge.residual(r[R_COMPL], r[R_PEN]);
                     verdict = judge.verdict(residual, exact, refresh_due);
                     verdict == Verdict::Continue && !at_cap
                 });
-                if verdict == Verdict::Continue && at_cap {
-                    return Err(non_convergence(iterations, residual));
-                }
-                let Some([sum_z, sum_gz, sum_gz_old]) = z_sums else {
-                    match verdict {
-                        Verdict::Converged => return Ok((iterations, residual, approach)),
-                        _ => {
-                            state = self.refresh(judge.total_load / sum_p, approach)?;
-                            exact = true;
-                            since_refresh = 0;
-                            continue;
-                        }
+                z_sums.map(|[sum_z, sum_gz, sum_gz_old]| {
+                    let z_mean = sum_z / n_c;
+                    // With Σ_Ic g = 0: g·(z − z̄) = g·z, and likewise for z_old and t_old.
+                    let (rho, rho_cross) = (sum_gz, sum_gz_old);
+                    let mut beta = if conjugate && rho_old > 0.0 {
+                        ((rho - rho_cross) / rho_old).max(0.0)
+                    } else {
+                        0.0
+                    };
+                    // Restart when the old direction would cancel most of the descent of the
+                    // new one: g·t = ρ + β g·t_old on the contact set.
+                    if rho + beta * gt_old < 0.2 * rho {
+                        beta = 0.0;
                     }
-                };
-                let pen = r[R_PEN];
-                let z_mean = sum_z / n_c;
-                // With Σ_Ic g = 0: g·(z − z̄) = g·z, and likewise for z_old and t_old.
-                let (rho, rho_cross) = (sum_gz, sum_gz_old);
-                let mut beta = if conjugate && rho_old > 0.0 {
-                    ((rho - rho_cross) / rho_old).max(0.0)
-                } else {
-                    0.0
-                };
-                // Restart when the old direction would cancel most of the descent of the new
-                // one: g·t = ρ + β g·t_old on the contact set.
-                if rho + beta * gt_old < 0.2 * rho {
-                    beta = 0.0;
-                }
-                rho_old = rho;
-                // Σ_E t = γ Σ_E g = −γ·pen: the contact part is shifted to keep Σ t = 0.
-                let offset = z_mean + beta * t_mean - gamma * pen / n_c;
-                self.step_preconditioned(c, beta, offset, gamma)
+                    rho_old = rho;
+                    // Σ_E t = γ Σ_E g = −γ·pen: the contact part is shifted to keep Σ t = 0.
+                    let offset = z_mean + beta * t_mean - gamma * r[R_PEN] / n_c;
+                    self.step_preconditioned(c, beta, offset, gamma)
+                })
             } else {
                 let beta = if conjugate && rho_old > 0.0 {
                     g2 / rho_old
@@ -372,8 +359,7 @@ impl NormalSolver {
                 };
                 let vanished = g2 == 0.0 && self.self_compliance > 0.0;
                 let self_compliance = self.self_compliance;
-                let offset = beta * t_mean;
-                let stepped = self.step_polonsky_keer(c, beta, offset, |r, gt| {
+                let stepped = self.step_polonsky_keer(c, beta, beta * t_mean, |r, gt| {
                     residual = judge.residual(r[R_COMPL], r[R_PEN]);
                     verdict = judge.verdict(residual, exact, refresh_due);
                     if verdict != Verdict::Continue || at_cap {
@@ -392,26 +378,23 @@ impl NormalSolver {
                         }),
                     })
                 });
-                if verdict == Verdict::Continue && at_cap {
-                    return Err(non_convergence(iterations, residual));
+                if stepped.is_some() {
+                    rho_old = g2;
                 }
-                match stepped {
-                    Some(s) => {
-                        rho_old = g2;
-                        s
-                    }
-                    None => match verdict {
-                        Verdict::Converged => return Ok((iterations, residual, approach)),
-                        _ => {
-                            state = self.refresh(judge.total_load / sum_p, approach)?;
-                            exact = true;
-                            since_refresh = 0;
-                            continue;
-                        }
-                    },
-                }
+                stepped
             };
-            let (energy, sums) = step_sums;
+            if verdict == Verdict::Continue && at_cap {
+                return Err(non_convergence(iterations, residual));
+            }
+            let Some((energy, sums)) = stepped else {
+                if verdict == Verdict::Converged {
+                    return Ok((iterations, residual, approach));
+                }
+                state = self.refresh(judge.total_load / sum_p, approach)?;
+                exact = true;
+                since_refresh = 0;
+                continue;
+            };
             if energy.is_nan() || energy < 0.0 {
                 // K is positive definite on zero-sum fields: a negative curvature means the
                 // data are broken (the step was not taken).
