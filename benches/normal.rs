@@ -487,8 +487,8 @@ fn resolution_study() {
                 println!(
                     "| {seed} | {load} | {n}² | {:.4} | {:.2} | {:.2} | {:.2} | {} | {:+.1}% | {:+.1}% | {:+.1}% | {} |",
                     sol.contact_area_ratio,
-                    r.points_across_contact,
-                    r.points_across_free,
+                    r.points_across_contact(),
+                    r.points_across_free(),
                     r.points_across(),
                     sol.median_spot_points,
                     100.0 * (sol.contact_area_ratio / a0 - 1.0),
@@ -541,8 +541,8 @@ fn reference() {
             p.mean_gap_m * 1e6,
             p.kn_n_per_m3,
             p.contact_spots,
-            p.resolution.points_across_contact,
-            p.resolution.points_across_free,
+            p.resolution.points_across_contact(),
+            p.resolution.points_across_free(),
             p.method.name(),
             p.iterations
         );

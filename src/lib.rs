@@ -27,6 +27,7 @@ pub mod halfspace;
 pub mod input;
 pub mod output;
 pub mod plot;
+pub mod shard;
 pub mod surface;
 pub mod testdata;
 

@@ -29,6 +29,8 @@ enum Command {
     Elements(cli::elements::ElementsArgs),
     /// Compare a model with a measured hysteresis record; find and add the missing effect.
     Diagnose(cli::diagnose::DiagnoseArgs),
+    /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
+    Merge(cli::merge::MergeArgs),
 }
 
 fn main() {
@@ -40,6 +42,7 @@ fn main() {
         Command::Film(a) => cli::film::run(a),
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Merge(a) => cli::merge::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");

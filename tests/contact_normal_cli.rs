@@ -114,9 +114,18 @@ fn sweep_on_a_surface_file_writes_csv_and_plots() {
     let csv = std::fs::read_to_string(out.join("normal_sweep.csv")).unwrap();
     let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
     let header = lines.next().unwrap();
-    assert!(header.starts_with("pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3"));
+    assert!(header.starts_with("surface,pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3"));
+    let label = surf.to_str().unwrap();
     let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').take(4).map(|v| v.parse().unwrap()).collect())
+        .map(|l| {
+            let (surface, values) = l.split_once(',').unwrap();
+            assert_eq!(surface, label);
+            values
+                .split(',')
+                .take(4)
+                .map(|v| v.parse().unwrap())
+                .collect()
+        })
         .collect();
     assert_eq!(rows.len(), 3);
     // Sorted by pressure; area grows, mean gap closes, kn rises.

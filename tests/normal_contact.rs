@@ -357,19 +357,20 @@ fn resolution_report_near_full_contact_and_coarse_light_contact() {
         full.contact_area_ratio,
         full.contact_spots,
         full.median_spot_points,
-        r.points_across_contact,
-        r.points_across_free
+        r.points_across_contact(),
+        r.points_across_free()
     );
     assert!(full.contact_area_ratio > 0.7 && full.median_spot_points < 4);
-    assert!(r.points_across_free < r.points_across_contact);
+    assert!(r.points_across_free() < r.points_across_contact());
     assert!(r.resolved(), "{r:?}");
     let light = solver(&sampled(64), e_star)
         .solve_load(0.005 * e_star * 0.1, None)
         .unwrap();
     eprintln!(
         "64², contact {:.4}: across contact {:.1}",
-        light.contact_area_ratio, light.resolution.points_across_contact
+        light.contact_area_ratio,
+        light.resolution.points_across_contact()
     );
     assert!(!light.resolution.resolved(), "{:?}", light.resolution);
-    assert!(light.resolution.points_across_contact < light.resolution.points_across_free);
+    assert!(light.resolution.points_across_contact() < light.resolution.points_across_free());
 }

@@ -1,21 +1,39 @@
-//! `asperity contact normal`: pressure sweep of the normal contact solver on a rough surface.
-//! Writes `normal_sweep.csv` (SI units in the column names), `area_ratio.png`, `mean_gap.png`,
-//! `kn.png` (log axes) and, with `--pressure-maps`, one pressure map PNG per load.
+//! `asperity contact normal`: pressure sweep of the normal contact solver on one or several
+//! rough surfaces (generated seeds or files). Writes `normal_sweep.csv` (one row per surface and
+//! pressure, SI units in the column names, reproducible bit for bit), `normal_sweep_timings.csv`
+//! (wall times), with several surfaces `normal_sweep_statistics.csv` (mean and sample standard
+//! deviation over the surfaces), `area_ratio.png`, `mean_gap.png`, `kn.png` (log axes) and, with
+//! `--pressure-maps`, one pressure map PNG per surface and load.
+//!
+//! With `--shard i/n` only the surfaces of shard i are solved and their results go to
+//! `<out-dir>/contact-normal.shard-i-of-n.json`; `asperity merge` turns the n files into the
+//! same outputs a single run writes (see [`asperity::shard`]).
 
-use asperity::contact::normal::{NormalMethod, NormalOptions, NormalProblem, NormalSolver};
-use asperity::contact::sweep::{self, SweepOptions, REFERENCE_PRESSURES_PA};
+use asperity::contact::normal::{NormalMethod, NormalOptions, NormalSolution};
+use asperity::contact::surface_sweep::{self, SurfaceResult, SurfaceSource, SurfaceSweep};
+use asperity::contact::sweep::{self, REFERENCE_PRESSURES_PA};
 use asperity::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
-use asperity::surface::combine::composite_modulus;
-use asperity::{Error, Grid2, Result};
+use asperity::shard::{self, Shard, ShardedSweep, UnitRecord};
+use asperity::surface::generate::GaussianSurfaceSpec;
+use asperity::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct NormalArgs {
-    /// Surface height file (heights in m; the format is recognised from the extension).
-    /// Default: the reference generated surface (Rq 0.177 µm, cl 6.6 µm, 250 µm, 1024²).
+    /// Surface height file (heights in m; the format is recognised from the extension). Repeat
+    /// the flag for several surfaces. Default: the reference generated surface (Rq 0.177 µm,
+    /// cl 6.6 µm, 250 µm, 1024², seed 1).
+    #[arg(long, conflicts_with_all = ["seeds", "grid"])]
+    surface: Vec<PathBuf>,
+    /// Seeds of generated reference surfaces, one surface each: a list and/or ranges, e.g.
+    /// `1-8` or `1,2,5-7`.
     #[arg(long)]
-    surface: Option<PathBuf>,
+    seeds: Option<String>,
+    /// Grid points per side of the generated surfaces (same 250 µm patch and statistics;
+    /// default 1024). Smaller values give a quick, coarser look.
+    #[arg(long)]
+    grid: Option<usize>,
     /// Nominal pressures (Pa), comma separated. Default: the reference sweep
     /// 0.1, 0.2, 1, 2, 5, 10 MPa.
     #[arg(long, value_delimiter = ',', num_args = 1..)]
@@ -29,7 +47,7 @@ pub struct NormalArgs {
     /// Output directory.
     #[arg(long, default_value = "out/contact-normal")]
     out_dir: PathBuf,
-    /// Also write a pressure map PNG per load.
+    /// Also write a pressure map PNG per load (and surface).
     #[arg(long)]
     pressure_maps: bool,
     /// Tolerance on the relative gap error of the contact solver.
@@ -42,33 +60,72 @@ pub struct NormalArgs {
     /// preconditioned by the inverse half-space compliance) or `polonsky-keer`.
     #[arg(long, default_value = "auto")]
     method: String,
+    /// Solve only shard i of n (1-based, e.g. `3/8`; the surfaces are split into n contiguous
+    /// blocks) and write `<out-dir>/contact-normal.shard-i-of-n.json` for `asperity merge`.
+    #[arg(long)]
+    shard: Option<String>,
 }
 
-/// Load the surface: a file, or the reference generated surface.
-fn load_surface(path: Option<&Path>) -> Result<(Grid2, String)> {
-    match path {
-        Some(p) => {
-            let grid = asperity::surface::io::read(p)?.into_area(&p.display().to_string())?;
-            Ok((grid, p.display().to_string()))
-        }
-        None => {
-            let spec = asperity::surface::generate::GaussianSurfaceSpec::reference();
-            Ok((
-                asperity::surface::generate::generate(&spec)?,
-                format!(
-                    "reference generated surface (Rq {} m, correlation length {} m, {} m, {}², seed {})",
-                    spec.rq_m, spec.clx_m, spec.lx_m, spec.nx, spec.seed
-                ),
-            ))
+/// Seeds from `1-8`, `1,2,5-7`, ...: each once, in the order given.
+fn parse_seeds(text: &str) -> Result<Vec<u64>> {
+    let bad = |m: String| Error::param("--seeds", m);
+    let mut seeds = Vec::new();
+    for part in text.split(',').map(str::trim) {
+        let num = |t: &str| {
+            t.trim()
+                .parse::<u64>()
+                .map_err(|_| bad(format!("`{t}` is not a seed (a non-negative integer)")))
+        };
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b) = (num(a)?, num(b)?);
+                if a > b {
+                    return Err(bad(format!("range `{part}` is empty")));
+                }
+                seeds.extend(a..=b);
+            }
+            None => seeds.push(num(part)?),
         }
     }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(s) = seeds.iter().find(|s| !seen.insert(**s)) {
+        return Err(bad(format!("seed {s} given twice")));
+    }
+    Ok(seeds)
 }
 
-pub fn run(args: NormalArgs) -> Result<()> {
-    // Check every input before any work or output.
+/// The surfaces of the sweep: files, or generated reference surfaces (seeds, grid).
+fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
+    if !args.surface.is_empty() {
+        return args
+            .surface
+            .iter()
+            .map(|p| SurfaceSource::file(p))
+            .collect();
+    }
+    let seeds = match &args.seeds {
+        Some(s) => parse_seeds(s)?,
+        None => vec![GaussianSurfaceSpec::REFERENCE_SEED],
+    };
+    let mut spec = GaussianSurfaceSpec::reference();
+    if let Some(n) = args.grid {
+        spec.nx = n;
+        spec.ny = n;
+        spec.validate()
+            .map_err(|e| super::rename_param(e, "--grid"))?;
+    }
+    Ok(seeds
+        .into_iter()
+        .map(|seed| SurfaceSource::Generated {
+            spec: GaussianSurfaceSpec { seed, ..spec },
+        })
+        .collect())
+}
+
+/// The sweep from the flags, every input checked, errors naming the flag.
+fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
     let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
-    let e_star = composite_modulus(material, material)?;
-    let pressures = sweep::checked_pressures(
+    let pressures_pa = sweep::checked_pressures(
         args.pressures_pa
             .as_deref()
             .unwrap_or(&REFERENCE_PRESSURES_PA),
@@ -84,153 +141,53 @@ pub fn run(args: NormalArgs) -> Result<()> {
         method,
         ..NormalOptions::default()
     };
-    let sweep_options = SweepOptions {
-        keep_solutions: args.pressure_maps,
-    };
     options.validate().map_err(|e| match e {
         Error::InvalidParameter { name, message } => {
             Error::param(format!("--{}", name.replace('_', "-")), message)
         }
         other => other,
     })?;
-    let (surface, source) = load_surface(args.surface.as_deref())?;
-    let mut solver = NormalSolver::new(
-        &NormalProblem {
-            surface: &surface,
-            e_star_pa: e_star,
-        },
+    let sweep = SurfaceSweep {
+        surfaces: surfaces(args)?,
+        pressures_pa,
+        material,
         options,
-    )?;
-    eprintln!(
-        "surface: {source}, {} × {} points, spacing {:.4e} × {:.4e} m, {}; E* = {:.4e} Pa",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        if surface.periodic {
-            "periodic"
-        } else {
-            "non-periodic (zero-padded)"
-        },
-        e_star
-    );
-
-    let bar = super::progress_bar("normal contact (pressures)", pressures.len() as u64);
-    let result = sweep::run(&mut solver, &pressures, sweep_options, |k| {
-        bar.set_position(k as u64)
-    });
-    bar.finish_and_clear();
-    let result = result?;
-
-    // CSV with a provenance header.
-    let mut csv = String::new();
-    let _ = writeln!(
-        csv,
-        "# asperity contact normal: pressure sweep, method {}",
-        args.method
-    );
-    let _ = writeln!(csv, "# surface: {source}");
-    let _ = writeln!(
-        csv,
-        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        surface.periodic
-    );
-    let _ = writeln!(
-        csv,
-        "# youngs_modulus_Pa = {:e} (both bodies), poisson_ratio = {}, e_star_Pa = {:e}",
-        args.youngs_modulus_pa, args.poisson_ratio, e_star
-    );
-    let _ = writeln!(
-        csv,
-        "# tolerance = {:e} (relative gap error); kn = dp/d(approach) from the tangent problem on the contact set; points_across_* = 4 x points / interface edges (resolved when the smaller is >= {})",
-        args.tolerance,
-        asperity::contact::resolution::RESOLVED_POINTS_ACROSS
-    );
-    let _ = writeln!(
-        csv,
-        "pressure_Pa,contact_area_ratio,mean_gap_m,kn_N_per_m3,approach_m,contact_spots,smallest_spot_points,median_spot_points,points_across_contact,points_across_free,method,iterations,stiffness_iterations,residual,wall_time_s"
-    );
-    for p in &result.points {
-        let _ = writeln!(
-            csv,
-            "{:e},{:e},{:e},{:e},{:e},{},{},{},{:.3},{:.3},{},{},{},{:e},{:.3}",
-            p.pressure_pa,
-            p.contact_area_ratio,
-            p.mean_gap_m,
-            p.kn_n_per_m3,
-            p.approach_m,
-            p.contact_spots,
-            p.smallest_spot_points,
-            p.median_spot_points,
-            p.resolution.points_across_contact,
-            p.resolution.points_across_free,
-            p.method.name(),
-            p.iterations,
-            p.stiffness_iterations,
-            p.residual,
-            p.wall_time_s
-        );
-    }
-    let csv_path = args.out_dir.join("normal_sweep.csv");
-    asperity::output::write_string_atomic(&csv_path, &csv)?;
-
-    let mpa = |f: fn(&sweep::SweepPoint) -> f64| -> Vec<(f64, f64)> {
-        result
-            .points
-            .iter()
-            .map(|p| (p.pressure_pa / 1e6, f(p)))
-            .collect()
     };
-    type Plot<'a> = (&'a str, &'a str, &'a str, Vec<(f64, f64)>);
-    let plots: [Plot; 3] = [
-        (
-            "area_ratio.png",
-            "Real contact area ratio",
-            "A_real / A_nominal (-)",
-            mpa(|p| p.contact_area_ratio),
-        ),
-        (
-            "mean_gap.png",
-            "Mean gap",
-            "mean gap (µm)",
-            mpa(|p| p.mean_gap_m * 1e6),
-        ),
-        (
-            "kn.png",
-            "Normal contact stiffness per unit area",
-            "kn (10¹² N/m³)",
-            mpa(|p| p.kn_n_per_m3 * 1e-12),
-        ),
-    ];
-    for (file, title, y_label, pts) in plots {
-        line_plot(
-            &args.out_dir.join(file),
-            &LinePlot {
-                title,
-                x_label: "nominal pressure (MPa)",
-                y_label,
-                x_scale: Scale::Log,
-                y_scale: Scale::Log,
-            },
-            &[
-                Series::line("sweep", pts.clone()),
-                Series::markers("solved pressures", pts),
-            ],
-        )?;
+    sweep.validate().map_err(|e| match e {
+        Error::InvalidParameter { ref name, .. } if name == "units" => {
+            super::rename_param(e, "--surface / --seeds")
+        }
+        e => e,
+    })?;
+    Ok(sweep)
+}
+
+/// File name of the pressure map of `surface` (index `k` of `n`) at `pressure_pa`.
+fn pressure_map_name(sweep: &SurfaceSweep, k: usize, pressure_pa: f64) -> String {
+    if sweep.surfaces.len() == 1 {
+        return format!("pressure_map_{pressure_pa:e}Pa.png");
     }
-    for sol in &result.solutions {
+    let slug = match &sweep.surfaces[k] {
+        SurfaceSource::Generated { spec } => format!("seed-{}", spec.seed),
+        SurfaceSource::File { .. } => format!("surface-{}", k + 1),
+    };
+    format!("pressure_map_{slug}_{pressure_pa:e}Pa.png")
+}
+
+fn write_pressure_maps(
+    out_dir: &Path,
+    sweep: &SurfaceSweep,
+    k: usize,
+    solutions: &[NormalSolution],
+) -> Result<()> {
+    for sol in solutions {
         let title = format!(
-            "Contact pressure at p̄ = {:.4} MPa",
-            sol.mean_pressure_pa / 1e6
+            "Contact pressure at p̄ = {:.4} MPa ({})",
+            sol.mean_pressure_pa / 1e6,
+            sweep.surfaces[k].label()
         );
         heatmap(
-            &args
-                .out_dir
-                .join(format!("pressure_map_{:e}Pa.png", sol.mean_pressure_pa)),
+            &out_dir.join(pressure_map_name(sweep, k, sol.mean_pressure_pa)),
             &sol.pressure,
             sol.dx,
             sol.dy,
@@ -243,35 +200,356 @@ pub fn run(args: NormalArgs) -> Result<()> {
             },
         )?;
     }
+    Ok(())
+}
 
-    println!(
-        "{:>12} {:>12} {:>12} {:>12} {:>7} {:>9} {:>9} {:>6}",
-        "p (MPa)", "area ratio", "gap (µm)", "kn (N/m³)", "spots", "across c", "across f", "iter"
+pub fn run(args: NormalArgs) -> Result<()> {
+    // Check every input before any work or output.
+    let sweep = sweep_from_args(&args)?;
+    let shard = match &args.shard {
+        Some(text) => text
+            .parse::<Shard>()
+            .map_err(|e| super::rename_param(e, "--shard"))?,
+        None => Shard::WHOLE,
+    };
+    let e_star = sweep.e_star_pa()?;
+    let labels = sweep.unit_labels();
+    let block = shard.units(labels.len());
+    eprintln!(
+        "{} surface(s), E* = {e_star:.4e} Pa, {} pressures{}",
+        labels.len(),
+        sweep.pressures_pa.len(),
+        if args.shard.is_some() {
+            format!(
+                "; shard {shard}: surfaces {}..{} ({} of them)",
+                block.start + 1,
+                block.end,
+                block.len()
+            )
+        } else {
+            String::new()
+        }
     );
-    for p in &result.points {
-        let r = &p.resolution;
+    let per_unit = sweep.pressures_pa.len() as u64;
+    let bar = super::progress_bar("normal contact", block.len() as u64 * per_unit);
+    let mut done = 0;
+    let units = shard::run_units(&sweep, shard, |k| {
+        bar.set_message(labels[k].clone());
+        let (result, solutions) =
+            sweep.run_unit(k, args.pressure_maps, |j| bar.set_position(done + j as u64))?;
+        done += per_unit;
+        write_pressure_maps(&args.out_dir, &sweep, k, &solutions)?;
+        Ok(result)
+    });
+    bar.finish_and_clear();
+    let units = units?;
+    if args.shard.is_some() {
+        let path = shard::write_shard(&args.out_dir, &sweep, shard, &units)?;
         println!(
-            "{:>12.4} {:>12.5} {:>12.5} {:>12.4e} {:>7} {:>9.1} {:>9.1} {:>6}{}",
-            p.pressure_pa / 1e6,
-            p.contact_area_ratio,
-            p.mean_gap_m * 1e6,
-            p.kn_n_per_m3,
-            p.contact_spots,
-            r.points_across_contact,
-            r.points_across_free,
-            p.iterations,
-            if !p.under_resolved() {
-                ""
-            } else if r.points_across_contact <= r.points_across_free {
-                "  (contact spots under-resolved: refine the grid)"
-            } else {
-                "  (free islands under-resolved: refine the grid)"
-            }
+            "wrote {} (shard {shard}: {} of {} surfaces); merge all {} shards with `asperity merge`",
+            path.display(),
+            units.len(),
+            labels.len(),
+            shard.count
+        );
+        return Ok(());
+    }
+    write_outputs(&sweep, &units, &args.out_dir)?;
+    print_summary(&units)?;
+    println!("wrote {}", args.out_dir.display());
+    Ok(())
+}
+
+/// The table of a whole sweep (every surface, in unit order): the same bytes whether the units
+/// ran in one process or in merged shards (no wall times: they go to the timings file).
+pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) -> Result<String> {
+    let material = sweep.material;
+    let mut csv = String::new();
+    let _ = writeln!(
+        csv,
+        "# asperity contact normal: pressure sweep over {} surface(s), method {}",
+        units.len(),
+        sweep.options.method.name()
+    );
+    for (source, u) in sweep.surfaces.iter().zip(units) {
+        let g = &u.result.grid;
+        let _ = writeln!(csv, "# surface {}: {}", u.label, source.describe());
+        let _ = writeln!(
+            csv,
+            "# grid {}: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
+            u.label, g.nx, g.ny, g.dx_m, g.dy_m, g.periodic
         );
     }
-    if let Ok((beta, _)) = sweep::power_law_fit(&result.points) {
-        println!("kn ∝ p^β fit over the sweep: β = {beta:.4}");
+    let _ = writeln!(
+        csv,
+        "# youngs_modulus_Pa = {:e} (both bodies), poisson_ratio = {}, e_star_Pa = {:e}",
+        material.youngs_modulus_pa,
+        material.poisson_ratio,
+        sweep.e_star_pa()?
+    );
+    let _ = writeln!(
+        csv,
+        "# tolerance = {:e} (relative gap error); kn = dp/d(approach) from the tangent problem on the contact set; points_across_* = 4 x points / interface edges (resolved when the smaller is >= {})",
+        sweep.options.tolerance,
+        asperity::contact::resolution::RESOLVED_POINTS_ACROSS
+    );
+    let _ = writeln!(
+        csv,
+        "# configuration sha256 = {} (asperity {}); wall times in normal_sweep_timings.csv",
+        shard::config_sha256(sweep)?,
+        env!("CARGO_PKG_VERSION")
+    );
+    let mut rows = vec![[
+        "surface",
+        "pressure_Pa",
+        "contact_area_ratio",
+        "mean_gap_m",
+        "kn_N_per_m3",
+        "approach_m",
+        "contact_spots",
+        "smallest_spot_points",
+        "median_spot_points",
+        "points_across_contact",
+        "points_across_free",
+        "method",
+        "iterations",
+        "stiffness_iterations",
+        "residual",
+    ]
+    .map(String::from)
+    .to_vec()];
+    for u in units {
+        for p in &u.result.points {
+            rows.push(vec![
+                u.label.clone(),
+                format!("{:e}", p.pressure_pa),
+                format!("{:e}", p.contact_area_ratio),
+                format!("{:e}", p.mean_gap_m),
+                format!("{:e}", p.kn_n_per_m3),
+                format!("{:e}", p.approach_m),
+                p.contact_spots.to_string(),
+                p.smallest_spot_points.to_string(),
+                p.median_spot_points.to_string(),
+                format!("{:e}", p.resolution.points_across_contact()),
+                format!("{:e}", p.resolution.points_across_free()),
+                p.method.name().to_string(),
+                p.iterations.to_string(),
+                p.stiffness_iterations.to_string(),
+                format!("{:e}", p.residual),
+            ]);
+        }
     }
-    println!("wrote {}", args.out_dir.display());
+    csv.push_str(&csv_records(&rows)?);
+    Ok(csv)
+}
+
+/// Records as CSV text (fields quoted where needed, e.g. file paths holding commas).
+fn csv_records(rows: &[Vec<String>]) -> Result<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.write_record(r)
+            .map_err(|e| Error::Data(format!("CSV: {e}")))?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| Error::Data(format!("CSV: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| Error::Data(format!("CSV: {e}")))
+}
+
+/// Every output of a whole sweep into `out_dir`: the table, the timings, the statistics over
+/// the surfaces (with several) and the plots. Used by the single run and by `asperity merge`.
+pub fn write_outputs(
+    sweep: &SurfaceSweep,
+    units: &[UnitRecord<SurfaceResult>],
+    out_dir: &Path,
+) -> Result<()> {
+    let table = sweep_table(sweep, units)?;
+    let mut timings = vec![["surface", "pressure_Pa", "wall_time_s"]
+        .map(String::from)
+        .to_vec()];
+    for u in units {
+        for p in &u.result.points {
+            timings.push(vec![
+                u.label.clone(),
+                format!("{:e}", p.pressure_pa),
+                format!("{:.3}", p.wall_time_s),
+            ]);
+        }
+    }
+    let timings = String::from(
+        "# asperity contact normal: wall time of the three solves of each point (s); not reproducible\n",
+    ) + &csv_records(&timings)?;
+    let results: Vec<&SurfaceResult> = units.iter().map(|u| &u.result).collect();
+    let stats = surface_sweep::statistics(&results)?;
+    asperity::output::write_string_atomic(&out_dir.join("normal_sweep.csv"), &table)?;
+    asperity::output::write_string_atomic(&out_dir.join("normal_sweep_timings.csv"), &timings)?;
+    if units.len() > 1 {
+        let mut csv = format!(
+            "# asperity contact normal: mean and sample standard deviation over {} surfaces at each pressure\n\
+             pressure_Pa,surfaces,contact_area_ratio_mean,contact_area_ratio_std,mean_gap_m_mean,mean_gap_m_std,kn_N_per_m3_mean,kn_N_per_m3_std,approach_m_mean,approach_m_std\n",
+            units.len()
+        );
+        for s in &stats {
+            let _ = writeln!(
+                csv,
+                "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+                s.pressure_pa,
+                s.surfaces,
+                s.contact_area_ratio.mean,
+                s.contact_area_ratio.std,
+                s.mean_gap_m.mean,
+                s.mean_gap_m.std,
+                s.kn_n_per_m3.mean,
+                s.kn_n_per_m3.std,
+                s.approach_m.mean,
+                s.approach_m.std
+            );
+        }
+        asperity::output::write_string_atomic(&out_dir.join("normal_sweep_statistics.csv"), &csv)?;
+    }
+
+    type Quantity = (
+        &'static str,
+        &'static str,
+        &'static str,
+        fn(&sweep::SweepPoint) -> f64,
+        f64,
+    );
+    let quantities: [Quantity; 3] = [
+        (
+            "area_ratio.png",
+            "Real contact area ratio",
+            "A_real / A_nominal (-)",
+            |p| p.contact_area_ratio,
+            1.0,
+        ),
+        (
+            "mean_gap.png",
+            "Mean gap",
+            "mean gap (µm)",
+            |p| p.mean_gap_m,
+            1e6,
+        ),
+        (
+            "kn.png",
+            "Normal contact stiffness per unit area",
+            "kn (10¹² N/m³)",
+            |p| p.kn_n_per_m3,
+            1e-12,
+        ),
+    ];
+    for (file, title, y_label, value, scale) in quantities {
+        let curve = |r: &SurfaceResult| -> Vec<(f64, f64)> {
+            r.points
+                .iter()
+                .map(|p| (p.pressure_pa / 1e6, value(p) * scale))
+                .collect()
+        };
+        let series = if units.len() == 1 {
+            let pts = curve(&units[0].result);
+            vec![
+                Series::line("sweep", pts.clone()),
+                Series::markers("solved pressures", pts),
+            ]
+        } else {
+            let mut s: Vec<Series> = units
+                .iter()
+                .map(|u| Series::line(u.label.clone(), curve(&u.result)))
+                .collect();
+            let mean: Vec<(f64, f64)> = (0..sweep.pressures_pa.len())
+                .map(|j| {
+                    let vals: Vec<f64> = results.iter().map(|r| value(&r.points[j])).collect();
+                    (
+                        sweep.pressures_pa[j] / 1e6,
+                        surface_sweep::MeanStd::of(&vals).mean * scale,
+                    )
+                })
+                .collect();
+            s.push(Series::markers(
+                format!("mean over {} surfaces", units.len()),
+                mean,
+            ));
+            s
+        };
+        line_plot(
+            &out_dir.join(file),
+            &LinePlot {
+                title,
+                x_label: "nominal pressure (MPa)",
+                y_label,
+                x_scale: Scale::Log,
+                y_scale: Scale::Log,
+            },
+            &series,
+        )?;
+    }
+    Ok(())
+}
+
+/// The console summary: each surface's sweep, its kn power law, and the statistics.
+pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
+    for u in units {
+        if units.len() > 1 {
+            println!("surface {}", u.label);
+        }
+        println!(
+            "{:>12} {:>12} {:>12} {:>12} {:>7} {:>9} {:>9} {:>6}",
+            "p (MPa)",
+            "area ratio",
+            "gap (µm)",
+            "kn (N/m³)",
+            "spots",
+            "across c",
+            "across f",
+            "iter"
+        );
+        for p in &u.result.points {
+            let r = &p.resolution;
+            println!(
+                "{:>12.4} {:>12.5} {:>12.5} {:>12.4e} {:>7} {:>9.1} {:>9.1} {:>6}{}",
+                p.pressure_pa / 1e6,
+                p.contact_area_ratio,
+                p.mean_gap_m * 1e6,
+                p.kn_n_per_m3,
+                p.contact_spots,
+                r.points_across_contact(),
+                r.points_across_free(),
+                p.iterations,
+                if !p.under_resolved() {
+                    ""
+                } else if r.points_across_contact() <= r.points_across_free() {
+                    "  (contact spots under-resolved: refine the grid)"
+                } else {
+                    "  (free islands under-resolved: refine the grid)"
+                }
+            );
+        }
+        if let Ok((beta, _)) = sweep::power_law_fit(&u.result.points) {
+            println!("kn ∝ p^β fit over the sweep: β = {beta:.4}");
+        }
+    }
+    if units.len() > 1 {
+        let results: Vec<&SurfaceResult> = units.iter().map(|u| &u.result).collect();
+        println!(
+            "over {} surfaces (mean ± sample standard deviation):",
+            units.len()
+        );
+        println!(
+            "{:>12} {:>24} {:>24} {:>26}",
+            "p (MPa)", "area ratio", "gap (µm)", "kn (N/m³)"
+        );
+        for s in surface_sweep::statistics(&results)? {
+            println!(
+                "{:>12.4} {:>12.5} ± {:<9.3e} {:>12.5} ± {:<9.3e} {:>12.4e} ± {:<9.3e}",
+                s.pressure_pa / 1e6,
+                s.contact_area_ratio.mean,
+                s.contact_area_ratio.std,
+                s.mean_gap_m.mean * 1e6,
+                s.mean_gap_m.std * 1e6,
+                s.kn_n_per_m3.mean,
+                s.kn_n_per_m3.std
+            );
+        }
+    }
     Ok(())
 }

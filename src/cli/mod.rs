@@ -8,6 +8,7 @@ pub mod contact_tangential;
 pub mod diagnose;
 pub mod elements;
 pub mod film;
+pub mod merge;
 pub mod surface;
 
 use asperity::surface::combine::Material;

@@ -3,5 +3,6 @@
 pub mod analytic;
 pub mod normal;
 pub mod resolution;
+pub mod surface_sweep;
 pub mod sweep;
 pub mod tangential;

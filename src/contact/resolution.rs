@@ -28,8 +28,9 @@ use ndarray::Array2;
 /// finds the contact area and kn within a few per cent of the twice-finer grid above it.
 pub const RESOLVED_POINTS_ACROSS: f64 = 4.0;
 
-/// Resolution of one contact set (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+/// Resolution of one contact set (see the module documentation): the counts, from which the
+/// widths follow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ContactResolution {
     /// Grid points in contact.
     pub contact_points: usize,
@@ -37,11 +38,6 @@ pub struct ContactResolution {
     pub free_points: usize,
     /// Grid edges between a contact point and a free point (or the window's outside).
     pub interface_edges: usize,
-    /// Mean width of the contact spots in grid points, `4 A_c / P` (0 without contact,
-    /// infinite without interface).
-    pub points_across_contact: f64,
-    /// Mean width of the free regions in grid points, `4 A_f / P` (infinite without interface).
-    pub points_across_free: f64,
 }
 
 impl ContactResolution {
@@ -81,34 +77,45 @@ impl ContactResolution {
                 }
             }
         }
-        let free_points = nx * ny - contact_points;
-        let width = |points: usize| {
-            if edges == 0 {
-                f64::INFINITY
-            } else {
-                4.0 * points as f64 / edges as f64
-            }
-        };
         Self {
             contact_points,
-            free_points,
+            free_points: nx * ny - contact_points,
             interface_edges: edges,
-            points_across_contact: if contact_points == 0 {
-                0.0
-            } else {
-                width(contact_points)
-            },
-            points_across_free: if free_points == 0 {
-                f64::INFINITY
-            } else {
-                width(free_points)
-            },
+        }
+    }
+
+    /// Mean width of a phase of `points` points, `4 points / P` (infinite without interface).
+    fn width(&self, points: usize) -> f64 {
+        if self.interface_edges == 0 {
+            f64::INFINITY
+        } else {
+            4.0 * points as f64 / self.interface_edges as f64
+        }
+    }
+
+    /// Mean width of the contact spots in grid points, `4 A_c / P`: 0 without contact, infinite
+    /// without interface (full periodic contact).
+    pub fn points_across_contact(&self) -> f64 {
+        if self.contact_points == 0 {
+            0.0
+        } else {
+            self.width(self.contact_points)
+        }
+    }
+
+    /// Mean width of the free regions in grid points, `4 A_f / P`: infinite without free points
+    /// or without interface.
+    pub fn points_across_free(&self) -> f64 {
+        if self.free_points == 0 {
+            f64::INFINITY
+        } else {
+            self.width(self.free_points)
         }
     }
 
     /// Points across the narrower phase, `min(w_c, w_f)`.
     pub fn points_across(&self) -> f64 {
-        self.points_across_contact.min(self.points_across_free)
+        self.points_across_contact().min(self.points_across_free())
     }
 
     /// True when the narrower phase spans at least [`RESOLVED_POINTS_ACROSS`] points.
@@ -133,16 +140,16 @@ mod tests {
         for k in [1, 3, 8] {
             let r = ContactResolution::of(&square(20, k, (5, 6)), true);
             assert_eq!(r.interface_edges, 4 * k);
-            assert_eq!(r.points_across_contact, k as f64);
+            assert_eq!(r.points_across_contact(), k as f64);
             assert_eq!(
-                r.points_across_free,
+                r.points_across_free(),
                 4.0 * (400 - k * k) as f64 / (4 * k) as f64
             );
         }
         // The same spot at a periodic corner (split over the wrap) is unchanged; at a window's
         // corner its outside edges count.
         let r = ContactResolution::of(&square(20, 4, (18, 18)), true);
-        assert_eq!(r.points_across_contact, 4.0);
+        assert_eq!(r.points_across_contact(), 4.0);
         let w = ContactResolution::of(&square(20, 4, (0, 0)), false);
         assert_eq!(w.interface_edges, 16);
     }
@@ -156,7 +163,10 @@ mod tests {
         });
         let r = ContactResolution::of(&m, false);
         let want = std::f64::consts::PI * d / 4.0;
-        assert!((r.points_across_contact / want - 1.0).abs() < 0.03, "{r:?}");
+        assert!(
+            (r.points_across_contact() / want - 1.0).abs() < 0.03,
+            "{r:?}"
+        );
     }
 
     /// Near full contact with many isolated one-point spots beside a connected contact network
@@ -173,15 +183,15 @@ mod tests {
             !in_island || (a == 7 && b == 7)
         });
         let r = ContactResolution::of(&m, true);
-        assert!(r.points_across_free > 4.0 && r.resolved(), "{r:?}");
+        assert!(r.points_across_free() > 4.0 && r.resolved(), "{r:?}");
         let sparse = Array2::from_shape_fn((n, n), |(i, j)| i % 8 == 0 && j % 8 == 0);
         let s = ContactResolution::of(&sparse, true);
-        assert_eq!(s.points_across_contact, 1.0);
+        assert_eq!(s.points_across_contact(), 1.0);
         assert!(!s.resolved());
         let none = ContactResolution::of(&Array2::from_elem((4, 4), false), true);
-        assert_eq!(none.points_across_contact, 0.0);
+        assert_eq!(none.points_across_contact(), 0.0);
         assert!(!none.resolved());
         let full = ContactResolution::of(&Array2::from_elem((4, 4), true), true);
-        assert!(full.resolved() && full.points_across_free.is_infinite());
+        assert!(full.resolved() && full.points_across_free().is_infinite());
     }
 }

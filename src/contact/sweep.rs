@@ -36,7 +36,7 @@ pub struct SweepOptions {
 }
 
 /// One nominal pressure of a sweep.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SweepPoint {
     /// Nominal (mean) pressure p̄ (Pa).
     pub pressure_pa: f64,

@@ -1,0 +1,485 @@
+"""Type stubs of the compiled module ``asperity._native`` (re-exported by ``asperity``).
+
+Units: SI throughout — lengths and gaps in m, pressures and moduli in Pa, forces in N, energies
+in J, stiffnesses per unit area in N/m³ (per element N/m). Array arguments: C-contiguous
+``numpy.ndarray`` of dtype float64 with the stated shape; anything else raises
+``asperity.ArrayTypeError`` (wrong type/dtype) or ``asperity.ParameterError`` (wrong number of
+dimensions, not contiguous, non-finite values).
+"""
+
+from os import PathLike
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+F64Array = npt.NDArray[np.float64]
+Path = Union[str, "PathLike[str]"]
+Columns = Dict[str, np.ndarray]
+
+__version__: str
+
+# ---------------------------------------------------------------- surfaces
+
+class Surface:
+    """Heights (m) on a regular grid, ``heights[i, j]`` at ``(i·dx_m, j·dy_m)``.
+
+    ``periodic``: the patch is one period of an infinite surface (periodic contact kernel);
+    otherwise a finite window (zero-padded kernel). Immutable; ``heights`` is a read-only view.
+    """
+
+    def __init__(
+        self, heights: F64Array, dx_m: float, dy_m: Optional[float] = None, periodic: bool = False
+    ) -> None:
+        """From heights (m), shape (nx, ny), spacings (m; ``dy_m`` defaults to ``dx_m``).
+        Copies the heights once. NaN/inf raise ``ParameterError`` naming the grid point."""
+    @staticmethod
+    def generate(
+        *,
+        rq_m: float = 0.177e-6,
+        clx_m: float = 6.6e-6,
+        cly_m: Optional[float] = None,
+        lx_m: float = 250e-6,
+        ly_m: Optional[float] = None,
+        nx: int = 1024,
+        ny: Optional[int] = None,
+        seed: int = 1,
+    ) -> "Surface":
+        """Periodic Gaussian patch: RMS height ``rq_m``, 1/e correlation lengths ``clx_m``,
+        ``cly_m`` (m), size ``lx_m`` × ``ly_m`` (m), ``nx`` × ``ny`` points, ChaCha8 ``seed``.
+        Defaults: the reference case. Bit-identical to ``asperity surface generate``."""
+    @staticmethod
+    def read(path: Path) -> "Surface":
+        """Read a height map (``.npy`` + ``.npy.json`` sidecar, ``.x3p``, height-matrix text)."""
+    def write(self, path: Path) -> None:
+        """Write (``.npy``, ``.x3p``, ``.csv``/``.txt``/``.asc``, ``.png``), atomically."""
+    @property
+    def heights(self) -> F64Array:
+        """Heights (m), shape (nx, ny); read-only view, no copy."""
+    @property
+    def dx_m(self) -> float: ...
+    @property
+    def dy_m(self) -> float: ...
+    @property
+    def periodic(self) -> bool: ...
+    @property
+    def shape(self) -> Tuple[int, int]: ...
+    @property
+    def size_m(self) -> Tuple[float, float]:
+        """(nx·dx, ny·dy) (m)."""
+    def stats(self, detrend: str = "mean") -> Dict[str, Any]:
+        """Ra, Rq (m), Rsk, Rku, rms slopes/gradient, correlation lengths (m), ...: the keys of
+        ``asperity surface stats --json``. ``detrend``: "mean" or "plane"."""
+    def power_spectrum(self, detrend: str = "mean") -> Dict[str, Any]:
+        """Radially averaged PSD: ``q_rad_per_m``, ``c_m4``, ``count``, ``dim`` (= 2)."""
+
+class Profile:
+    """A 1-D line scan (heights in m), as read from a Dektak CSV or a profile text file."""
+
+    @property
+    def heights(self) -> F64Array: ...
+    @property
+    def positions_m(self) -> Optional[F64Array]:
+        """Measured positions (m) of a nonuniform profile, else None."""
+    @property
+    def dx_m(self) -> float: ...
+    @property
+    def periodic(self) -> bool: ...
+    def stats(self, detrend: str = "mean") -> Dict[str, Any]: ...
+    def power_spectrum(self, detrend: str = "mean") -> Dict[str, Any]:
+        """PSD: ``q_rad_per_m``, ``c_m3``, ``count``, ``dim`` (= 1)."""
+    def __len__(self) -> int: ...
+
+def read_topography(path: Path) -> Union[Surface, Profile]:
+    """Any readable topography file: a ``Surface`` (area) or a ``Profile`` (line scan)."""
+
+def composite_modulus(
+    youngs_modulus_pa: float,
+    poisson_ratio: float,
+    youngs_modulus_2_pa: Optional[float] = None,
+    poisson_ratio_2: Optional[float] = None,
+) -> float:
+    """E* (Pa): 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2 (body 2 defaults to body 1)."""
+
+def equivalent_surface(body1: Surface, body2: Surface) -> Surface:
+    """h1 − h2 on a common grid: the equivalent rough surface against a flat half-space."""
+
+# ---------------------------------------------------------------- normal contact
+
+class NormalSolution:
+    """A converged normal-contact solution (SI). Arrays are read-only views (no copy)."""
+
+    @property
+    def pressure(self) -> F64Array:
+        """Contact pressure (Pa), shape (nx, ny); 0 outside the contact."""
+    @property
+    def gap(self) -> F64Array:
+        """Gap g = h0 − δ + u (m), ≥ 0, 0 in contact."""
+    @property
+    def displacement(self) -> F64Array:
+        """Elastic surface displacement u = K ⊛ p (m), both bodies combined."""
+    @property
+    def spacing_m(self) -> Tuple[float, float]: ...
+    @property
+    def periodic(self) -> bool: ...
+    @property
+    def mean_pressure_pa(self) -> float: ...
+    @property
+    def contact_area_ratio(self) -> float:
+        """Real over nominal contact area (-)."""
+    @property
+    def contact_points(self) -> int: ...
+    @property
+    def contact_spots(self) -> int: ...
+    @property
+    def smallest_spot_points(self) -> int: ...
+    @property
+    def median_spot_points(self) -> int: ...
+    @property
+    def mean_gap_m(self) -> float:
+        """Mean separation of the surfaces (m)."""
+    @property
+    def approach_m(self) -> float:
+        """Rigid approach from first contact of the highest point (m)."""
+    @property
+    def elastic_energy_j(self) -> float: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float:
+        """Final relative gap error ε (-)."""
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def wall_time_s(self) -> float: ...
+    @property
+    def convergence(self) -> Dict[str, Any]:
+        """``iterations``, ``residual``, ``tolerance``, ``converged``, ``wall_time_s``."""
+
+class NormalSolver:
+    """Normal contact solver of one surface against an elastic half-space (E* in Pa):
+    projected CG, preconditioned or Polonsky–Keer (``method`` "auto", "preconditioned",
+    "polonsky-keer").
+
+    Plan and kernel are built once; solves release the GIL. Reaching ``max_iterations`` raises
+    ``ConvergenceError``."""
+
+    def __init__(
+        self,
+        surface: Surface,
+        *,
+        e_star_pa: float,
+        tolerance: float = 1e-10,
+        max_iterations: int = 5000,
+        method: str = "auto",
+    ) -> None: ...
+    def solve_load(
+        self, mean_pressure_pa: float, warm_start: Optional[NormalSolution] = None
+    ) -> NormalSolution:
+        """Load control at mean pressure p̄ (Pa) over the patch."""
+    def solve_approach(
+        self, approach_m: float, warm_start: Optional[NormalSolution] = None
+    ) -> NormalSolution:
+        """Displacement control at rigid approach δ (m) from first contact."""
+    def displacement_of(self, pressure: F64Array) -> F64Array:
+        """u = K ⊛ p (m) for a pressure field (Pa) on this grid."""
+    @property
+    def shape(self) -> Tuple[int, int]: ...
+    @property
+    def e_star_pa(self) -> float: ...
+    @property
+    def tolerance(self) -> float: ...
+    @property
+    def max_iterations(self) -> int: ...
+
+def normal_sweep(
+    surface: Surface,
+    pressures_pa: Sequence[float],
+    *,
+    e_star_pa: float,
+    tolerance: float = 1e-10,
+    max_iterations: int = 5000,
+    method: str = "auto",
+) -> Columns:
+    """Warm-started pressure sweep with kn = dp̄/dδ (N/m³) from the tangent problem.
+
+    Columns, as in ``normal_sweep.csv``: pressure_Pa, contact_area_ratio, mean_gap_m,
+    kn_N_per_m3, approach_m, contact_spots, smallest_spot_points, median_spot_points,
+    points_across_contact, points_across_free, method (list of str), iterations,
+    stiffness_iterations, residual, wall_time_s (numpy arrays)."""
+
+# ---------------------------------------------------------------- tangential contact
+
+class TangentialSolver:
+    """Coulomb partial slip with history on a fixed pressure field (quasi-identical materials)."""
+
+    def __init__(
+        self,
+        pressure: Union[NormalSolution, F64Array],
+        *,
+        friction_coefficient: float,
+        spacing_m: Optional[Tuple[float, float]] = None,
+        periodic: Optional[bool] = None,
+        youngs_modulus_pa: float = 210e9,
+        poisson_ratio: float = 0.3,
+        youngs_modulus_2_pa: Optional[float] = None,
+        poisson_ratio_2: Optional[float] = None,
+        tolerance: float = 1e-6,
+        max_iterations: int = 20000,
+        operator: str = "auto",
+    ) -> None:
+        """``pressure``: a NormalSolution, or pressures (Pa, (nx, ny)) with ``spacing_m`` and
+        ``periodic``. ``operator``: "auto", "dense" or "fft"."""
+    def step(
+        self,
+        *,
+        displacement_m: Optional[Tuple[float, float]] = None,
+        force_n: Optional[Tuple[float, float]] = None,
+    ) -> Dict[str, Any]:
+        """One step imposing a rigid shift (m) or a total tangential force (N)."""
+    def oscillate(
+        self,
+        *,
+        amplitude_m: Optional[Tuple[float, float]] = None,
+        amplitude_n: Optional[Tuple[float, float]] = None,
+        cycles: int = 3,
+        steps_per_cycle: int = 40,
+    ) -> Dict[str, Any]:
+        """Sinusoidal history from the virgin state. ``steps`` (columns: displacement_m,
+        displacement_y_m, force_N, force_y_N, mean_shear_stress_Pa, mean_shear_stress_y_Pa,
+        stick_fraction, accumulated_slip_m, frictional_work_J, iterations, residual,
+        wall_time_s; step 0 = unloaded), ``cycles`` (dissipated_J, dissipated_J_per_m2,
+        frictional_work_J per cycle), ``metadata``, ``wall_time_s``."""
+    def gross_slip_displacement(self, direction: Tuple[float, float] = (1.0, 0.0)) -> float:
+        """Shift (m) at which every contact point slips."""
+    def traction(self) -> Tuple[F64Array, F64Array]:
+        """Shear tractions (qx, qy) (Pa), shape (nx, ny)."""
+    def stick_mask(self) -> npt.NDArray[np.bool_]: ...
+    def reset(self) -> None: ...
+    @property
+    def friction_limit_n(self) -> float:
+        """μP (N)."""
+    @property
+    def metadata(self) -> Dict[str, Any]: ...
+
+# ---------------------------------------------------------------- Valanis element
+
+class ValanisParams:
+    """Valanis element: e0 (N/m³ per area or N/m per element), 0 ≤ k < 1, 0 ≤ et < e0, mu > 0."""
+
+    def __init__(self, e0: float, k: float, mu: float, et: float = 0.0) -> None: ...
+    @property
+    def e0(self) -> float: ...
+    @property
+    def k(self) -> float: ...
+    @property
+    def et(self) -> float: ...
+    @property
+    def mu(self) -> float: ...
+    @property
+    def reload_slope(self) -> float:
+        """2·E0/(1+k)."""
+    def slip_limit(self, fz: float) -> float:
+        """μ·Fz·(1 − Et/E0)."""
+
+def valanis_integrate(
+    params: ValanisParams,
+    q: F64Array,
+    fz: Union[F64Array, float],
+    method: str = "implicit-euler",
+) -> F64Array:
+    """Force history of a virgin element driven by displacements q (m) under normal load fz
+    (Pa or N; array or constant; fz ≤ 0 is separation). ``method``: "implicit-euler" or
+    "reference"."""
+
+def normal_load_history(n0: float, kn: float, uz: F64Array) -> F64Array:
+    """Fz = max(0, N0 + kn·uz)."""
+
+def dissipated_energy(q: F64Array, f: F64Array) -> float:
+    """∮ F dq over one closed cycle (trapezoidal)."""
+
+def sine_history(amplitude: float, cycles: int, points_per_cycle: int) -> F64Array:
+    """amplitude·sin(2π i / points_per_cycle), i = 0 … cycles·points_per_cycle."""
+
+class ValanisFit:
+    @property
+    def params(self) -> ValanisParams: ...
+    @property
+    def r2(self) -> float: ...
+    @property
+    def nrmse(self) -> float: ...
+    @property
+    def energy_data(self) -> float: ...
+    @property
+    def energy_model(self) -> float: ...
+    @property
+    def energy_rel_error(self) -> float: ...
+    @property
+    def model_force(self) -> F64Array: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def final_cost(self) -> float: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+def fit_valanis(
+    q: F64Array,
+    force: F64Array,
+    normal_load: Union[F64Array, float],
+    steady: Tuple[int, int],
+    *,
+    mu: float,
+    fit_et: bool = False,
+    max_iterations: int = 600,
+    k_starts: Sequence[float] = (0.1, 0.5, 0.9),
+) -> ValanisFit:
+    """Least-squares E0, k (and Et) with μ fixed, measured on samples [start, stop)."""
+
+# ---------------------------------------------------------------- calibration table, elements
+
+class CalibrationTable:
+    """kn, E0, Et (N/m³), k, μ, area ratio, fit R², energy per cycle (J/m²) versus pressure (Pa)."""
+
+    @staticmethod
+    def read_csv(path: Path) -> "CalibrationTable": ...
+    def write_csv(self, path: Path) -> None: ...
+    def columns(self) -> Columns:
+        """Columns named as in the CSV header."""
+    @property
+    def pressure_range(self) -> Tuple[float, float]: ...
+    @overload
+    def interpolate(self, pressure_pa: float) -> Dict[str, float]: ...
+    @overload
+    def interpolate(self, pressure_pa: F64Array) -> Columns: ...
+    def interpolate(self, pressure_pa: Any) -> Any:
+        """Monotone cubic in ln p; end row outside the table; ``range``: −1 below, 0 within,
+        +1 above."""
+    def __len__(self) -> int: ...
+
+def join_elements(
+    preloads: Columns, table: CalibrationTable, out: Optional[Path] = None
+) -> Tuple[Columns, Dict[str, Any]]:
+    """One element per preloaded node: kn, E0, Et (N/m) = table values × area, k, μ; columns as
+    in ``asperity elements``' CSV (id, x_m, y_m, area_m2, pressure_Pa, N0_N, kn_N_per_m,
+    E0_N_per_m, k, mu, Et_N_per_m, out_of_range) and a summary."""
+
+def read_preloads(path: Path) -> Columns:
+    """Preload CSV → columns id, x_m, y_m, area_m2, pressure_Pa, N0_N."""
+
+def write_preloads(path: Path, preloads: Columns, comment: str = "") -> None: ...
+
+# ---------------------------------------------------------------- film
+
+class Region:
+    @property
+    def id(self) -> int: ...
+    @property
+    def pixels(self) -> npt.NDArray[np.uint64]:
+        """(i, j) pixel indices, shape (n, 2)."""
+    def bounds_m(self, film_map: "FilmMap") -> List[float]:
+        """[x0, x1, y0, y1] (m), pixel edges included."""
+    def __len__(self) -> int: ...
+
+class PolyFit:
+    @property
+    def order(self) -> int: ...
+    @property
+    def coefficients_pa(self) -> F64Array: ...
+    @property
+    def exponents(self) -> List[Tuple[int, int]]: ...
+    @property
+    def r_squared(self) -> float: ...
+    @property
+    def rms_residual_pa(self) -> float: ...
+    @property
+    def n_points(self) -> int: ...
+    @overload
+    def __call__(self, x_m: float, y_m: float) -> float: ...
+    @overload
+    def __call__(self, x_m: F64Array, y_m: F64Array) -> F64Array: ...
+    def __call__(self, x_m: Any, y_m: Any) -> Any:
+        """Fitted pressure (Pa) at film points (m)."""
+
+class FilmMap:
+    """Film image → per-pixel class and pressure (Pa). Frame: x right, y up, m, origin at the
+    centre of the bottom-left pixel."""
+
+    class_names: List[str]
+    @staticmethod
+    def read(
+        image: Path,
+        pixel_size_m: float,
+        *,
+        colour_table: Optional[Path] = None,
+        density_calibration: Optional[Path] = None,
+        max_colour_distance: float = 20.0,
+    ) -> "FilmMap": ...
+    @property
+    def pressure_pa(self) -> F64Array:
+        """Pressure (Pa), shape (nx, ny); NaN unless in range. Read-only view."""
+    @property
+    def pixel_class(self) -> npt.NDArray[np.uint8]:
+        """Codes into ``class_names``."""
+    @property
+    def class_counts(self) -> Dict[str, int]: ...
+    @property
+    def pixel_size_m(self) -> float: ...
+    @property
+    def shape(self) -> Tuple[int, int]: ...
+    def detect_patches(
+        self, min_diameter_m: float = 2e-3, rim_pixels: int = 3
+    ) -> Tuple[List[Region], int]: ...
+    def roi_rectangle(
+        self, x0_m: float, y0_m: float, x1_m: float, y1_m: float, id: int = 1
+    ) -> Region: ...
+    def roi_polygon(self, vertices_m: Sequence[Tuple[float, float]], id: int = 1) -> Region: ...
+    def summarise(self, region: Region) -> Dict[str, Any]: ...
+    def fit(self, region: Region, order: int = 4) -> PolyFit: ...
+
+def read_nodes(path: Path) -> Columns:
+    """Nodes CSV (mesh frame) → id, x_m, y_m, area_m2 (NaN where absent)."""
+
+def film_preloads(
+    film_map: FilmMap,
+    region: Region,
+    fit: PolyFit,
+    nodes: Columns,
+    *,
+    offset_m: Tuple[float, float] = (0.0, 0.0),
+    rotation_rad: float = 0.0,
+    scale: float = 1.0,
+    total_load_n: Optional[float] = None,
+) -> Tuple[Columns, Dict[str, Any]]:
+    """N0 = σ_fit(x, y)·A (N) per node placed on the film; optional rescale to a total load."""
+
+def reduce_preloads(preloads: Columns, mesh_size_m: float) -> Columns:
+    """Keep one node per triangle of an h-mesh (m) with summed area and load."""
+
+# ---------------------------------------------------------------- diagnose
+
+def read_record(
+    path: Path,
+    *,
+    time_column: str = "time_s",
+    displacement_column: str = "displacement_m",
+    force_column: str = "friction_force_N",
+    normal_force_column: Optional[str] = None,
+) -> Columns:
+    """Record CSV → time_s (s), displacement_m (m), force_N (N)[, normal_force_N (N)]."""
+
+def diagnose(
+    time_s: F64Array,
+    displacement_m: F64Array,
+    force_n: F64Array,
+    normal_force_n: Optional[F64Array] = None,
+    *,
+    baseline: Optional[ValanisParams] = None,
+    normal_n: Optional[float] = None,
+    max_effects: int = 2,
+    source: str = "numpy arrays",
+) -> Dict[str, Any]:
+    """The report of ``asperity diagnose`` (as in diagnose.json) plus ``series`` (arrays of the
+    analysed samples and both models' forces) and ``text``."""

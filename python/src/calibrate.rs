@@ -1,0 +1,257 @@
+//! The calibration table (kn, E0, k, μ, Et per unit area versus pressure): read, interpolate,
+//! write; and its join with node preloads into one row per contact element.
+
+use crate::arrays::borrow_f64;
+use crate::errors::{to_python, IntoPy};
+use asperity::calibrate::table::{self, RangeFlag};
+use asperity::elements::{self, ElementRow};
+use asperity::film::nodes::Preload;
+use ndarray::Ix1;
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// Calibration table: rows of pressure (Pa), contact area ratio, kn, E0, Et (N/m³), k, μ, fit R²
+/// and energy per cycle (J/m²), strictly increasing in pressure.
+#[pyclass(frozen, module = "asperity")]
+pub struct CalibrationTable {
+    pub inner: table::CalibrationTable,
+}
+
+fn range_code(r: RangeFlag) -> i8 {
+    match r {
+        RangeFlag::Below => -1,
+        RangeFlag::Within => 0,
+        RangeFlag::Above => 1,
+    }
+}
+
+#[pymethods]
+impl CalibrationTable {
+    /// Read `calibration_table.csv` (as written by `asperity calibrate`); errors name the file
+    /// and line.
+    #[staticmethod]
+    fn read_csv(path: PathBuf) -> PyResult<Self> {
+        Ok(Self {
+            inner: table::CalibrationTable::read_csv(&path).py()?,
+        })
+    }
+
+    /// Write the table (atomic).
+    fn write_csv(&self, path: PathBuf) -> PyResult<()> {
+        self.inner.write_csv(&path).py()
+    }
+
+    /// The columns as numpy arrays, named as in the CSV header.
+    fn columns<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        let rows = &self.inner.rows;
+        let fields: [fn(&table::CalibrationRow) -> f64; 9] = [
+            |r| r.pressure_pa,
+            |r| r.contact_area_ratio,
+            |r| r.kn_n_per_m3,
+            |r| r.e0_n_per_m3,
+            |r| r.k,
+            |r| r.mu,
+            |r| r.et_n_per_m3,
+            |r| r.fit_r2,
+            |r| r.energy_per_cycle_j_per_m2,
+        ];
+        for (name, f) in table::COLUMNS.iter().zip(fields) {
+            d.set_item(*name, PyArray1::from_vec(py, rows.iter().map(f).collect()))?;
+        }
+        Ok(d)
+    }
+
+    /// (lowest, highest) tabulated pressure (Pa).
+    #[getter]
+    fn pressure_range(&self) -> (f64, f64) {
+        self.inner.pressure_range()
+    }
+
+    /// Element parameters at `pressure_pa` (Pa; a number or a float64 array): monotone cubic
+    /// (Fritsch–Carlson) in ln p inside the table, the end row outside it (no extrapolation).
+    /// Returns a dict with `pressure_Pa`, `contact_area_ratio`, `kn_N_per_m3`, `E0_N_per_m3`,
+    /// `k`, `mu`, `Et_N_per_m3` and `range` (−1 below, 0 within, +1 above the table), as numbers
+    /// or arrays like the argument.
+    fn interpolate<'py>(
+        &self,
+        py: Python<'py>,
+        pressure_pa: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        if let Ok(p) = pressure_pa.extract::<f64>() {
+            let v = self.inner.interpolate(p);
+            d.set_item("pressure_Pa", v.pressure_pa)?;
+            d.set_item("contact_area_ratio", v.contact_area_ratio)?;
+            d.set_item("kn_N_per_m3", v.kn_n_per_m3)?;
+            d.set_item("E0_N_per_m3", v.e0_n_per_m3)?;
+            d.set_item("k", v.k)?;
+            d.set_item("mu", v.mu)?;
+            d.set_item("Et_N_per_m3", v.et_n_per_m3)?;
+            d.set_item("range", range_code(v.range))?;
+            return Ok(d);
+        }
+        let p = borrow_f64::<Ix1>(pressure_pa, "pressure_pa", "pressures (Pa)")?;
+        let vals: Vec<_> = p
+            .as_slice()
+            .expect("contiguous")
+            .iter()
+            .map(|&p| self.inner.interpolate(p))
+            .collect();
+        let col = |f: fn(&table::Interpolated) -> f64| {
+            PyArray1::from_vec(py, vals.iter().map(f).collect::<Vec<f64>>())
+        };
+        d.set_item("pressure_Pa", col(|v| v.pressure_pa))?;
+        d.set_item("contact_area_ratio", col(|v| v.contact_area_ratio))?;
+        d.set_item("kn_N_per_m3", col(|v| v.kn_n_per_m3))?;
+        d.set_item("E0_N_per_m3", col(|v| v.e0_n_per_m3))?;
+        d.set_item("k", col(|v| v.k))?;
+        d.set_item("mu", col(|v| v.mu))?;
+        d.set_item("Et_N_per_m3", col(|v| v.et_n_per_m3))?;
+        d.set_item(
+            "range",
+            PyArray1::from_vec(
+                py,
+                vals.iter()
+                    .map(|v| range_code(v.range))
+                    .collect::<Vec<i8>>(),
+            ),
+        )?;
+        Ok(d)
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.rows.len()
+    }
+
+    fn __repr__(&self) -> String {
+        let (lo, hi) = self.inner.pressure_range();
+        format!(
+            "CalibrationTable({} rows, {lo:e}–{hi:e} Pa)",
+            self.inner.rows.len()
+        )
+    }
+}
+
+/// The columns of a preload table (`id`, `x_m`, `y_m`, `area_m2`, `pressure_Pa`, `N0_N`) as
+/// numpy arrays.
+pub fn preload_columns<'py>(py: Python<'py>, rows: &[Preload]) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let col =
+        |f: fn(&Preload) -> f64| PyArray1::from_vec(py, rows.iter().map(f).collect::<Vec<f64>>());
+    d.set_item(
+        "id",
+        PyArray1::from_vec(py, rows.iter().map(|r| r.id).collect::<Vec<u64>>()),
+    )?;
+    d.set_item("x_m", col(|r| r.x_m))?;
+    d.set_item("y_m", col(|r| r.y_m))?;
+    d.set_item("area_m2", col(|r| r.area_m2))?;
+    d.set_item("pressure_Pa", col(|r| r.pressure_pa))?;
+    d.set_item("N0_N", col(|r| r.n0_n))?;
+    Ok(d)
+}
+
+/// Preloads from a dict of columns (`id` integer array, the others float64 arrays).
+pub fn preloads_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Preload>> {
+    let py = columns.py();
+    let get = |name: &str| -> PyResult<Bound<'_, PyAny>> {
+        columns.get_item(name)?.ok_or_else(|| {
+            crate::errors::parameter(
+                py,
+                "preloads",
+                format!("missing column `{name}` (need id, x_m, y_m, area_m2, pressure_Pa, N0_N)"),
+            )
+        })
+    };
+    let ids: Vec<u64> = get("id")?.extract()?;
+    let mut cols = Vec::new();
+    for name in ["x_m", "y_m", "area_m2", "pressure_Pa", "N0_N"] {
+        let obj = get(name)?;
+        let a = borrow_f64::<Ix1>(&obj, name, "preload column")?;
+        let v = crate::arrays::finite_slice(py, &a, name)?.to_vec();
+        if v.len() != ids.len() {
+            return Err(crate::errors::parameter(
+                py,
+                name,
+                format!("{} values for {} ids", v.len(), ids.len()),
+            ));
+        }
+        cols.push(v);
+    }
+    Ok((0..ids.len())
+        .map(|i| Preload {
+            id: ids[i],
+            x_m: cols[0][i],
+            y_m: cols[1][i],
+            area_m2: cols[2][i],
+            pressure_pa: cols[3][i],
+            n0_n: cols[4][i],
+        })
+        .collect())
+}
+
+fn element_columns<'py>(py: Python<'py>, rows: &[ElementRow]) -> PyResult<Bound<'py, PyDict>> {
+    let nodes: Vec<Preload> = rows
+        .iter()
+        .map(|r| Preload {
+            id: r.id,
+            x_m: r.x_m,
+            y_m: r.y_m,
+            area_m2: r.area_m2,
+            pressure_pa: r.pressure_pa,
+            n0_n: r.n0_n,
+        })
+        .collect();
+    let d = preload_columns(py, &nodes)?;
+    let col = |f: fn(&ElementRow) -> f64| {
+        PyArray1::from_vec(py, rows.iter().map(f).collect::<Vec<f64>>())
+    };
+    d.set_item("kn_N_per_m", col(|r| r.kn_n_per_m))?;
+    d.set_item("E0_N_per_m", col(|r| r.e0_n_per_m))?;
+    d.set_item("k", col(|r| r.k))?;
+    d.set_item("mu", col(|r| r.mu))?;
+    d.set_item("Et_N_per_m", col(|r| r.et_n_per_m))?;
+    d.set_item(
+        "out_of_range",
+        PyArray1::from_vec(py, rows.iter().map(|r| r.out_of_range).collect::<Vec<i8>>()),
+    )?;
+    Ok(d)
+}
+
+/// One row per contact element (`asperity elements`): each preloaded node (a dict of preload
+/// columns, as `film_preloads` or `read_preloads` return) joined with the table at its
+/// pressure; kn, E0, Et scaled by the node's area (N/m), k and μ as tabulated, out-of-range
+/// pressures flagged (−1/+1) and given the end row. Returns `(columns, summary)`; with
+/// `out=path` the element CSV is written too (atomic).
+#[pyfunction]
+#[pyo3(signature = (preloads, table, out=None))]
+pub fn join_elements<'py>(
+    py: Python<'py>,
+    preloads: &Bound<'py, PyDict>,
+    table: &CalibrationTable,
+    out: Option<PathBuf>,
+) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
+    let pre = preloads_from_columns(preloads)?;
+    let (rows, summary) = elements::join(&pre, &table.inner).py()?;
+    if let Some(path) = out {
+        elements::write_csv(&path, &rows).py()?;
+    }
+    Ok((element_columns(py, &rows)?, to_python(py, &summary)?))
+}
+
+/// Read a preload CSV (`id,x_m,y_m,area_m2,pressure_Pa,N0_N`) as a dict of columns.
+#[pyfunction]
+pub fn read_preloads(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
+    let rows = asperity::film::nodes::read_preloads_csv(&path).py()?;
+    preload_columns(py, &rows)
+}
+
+/// Write preloads (a dict of columns) as the CSV `asperity film` writes, `comment` lines first.
+#[pyfunction]
+#[pyo3(signature = (path, preloads, comment=""))]
+pub fn write_preloads(path: PathBuf, preloads: &Bound<'_, PyDict>, comment: &str) -> PyResult<()> {
+    let rows = preloads_from_columns(preloads)?;
+    asperity::film::nodes::write_preloads_csv(&path, &rows, comment).py()
+}

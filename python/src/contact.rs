@@ -1,0 +1,604 @@
+//! Normal contact (projected CG: preconditioned or Polonsky–Keer) and tangential partial slip
+//! (Coulomb, with history).
+//! Pressures and moduli in Pa, lengths and gaps in m, forces in N, energies in J.
+
+use crate::arrays::{borrow_f64, view};
+use crate::errors::{to_python, IntoPy};
+use crate::surface::Surface;
+use asperity::contact::normal::{self, NormalOptions, NormalProblem};
+use asperity::contact::sweep::{self, SweepOptions};
+use asperity::contact::tangential::{
+    self, Control, Operator, Oscillation, TangentialOptions, TangentialProblem,
+};
+use asperity::halfspace::Boundary;
+use asperity::surface::combine::Material;
+use ndarray::{Array2, Ix2};
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// A converged normal-contact solution. Fields are SI; the arrays (`pressure`, `gap`,
+/// `displacement`, shape (nx, ny)) are read-only views of the solution's memory (no copy).
+#[pyclass(frozen, module = "asperity")]
+pub struct NormalSolution {
+    pub inner: normal::NormalSolution,
+    /// Tolerance the solve met.
+    tolerance: f64,
+    /// Boundary of the surface it was solved on.
+    pub periodic: bool,
+}
+
+#[pymethods]
+impl NormalSolution {
+    /// Contact pressure p (Pa); zero outside the contact.
+    #[getter]
+    fn pressure(slf: Bound<'_, Self>) -> Bound<'_, PyArray2<f64>> {
+        let owner = slf.clone().into_any();
+        view(&slf.get().inner.pressure, owner)
+    }
+
+    /// Gap g = h0 − δ + u (m), ≥ 0 up to the tolerance, zero in contact.
+    #[getter]
+    fn gap(slf: Bound<'_, Self>) -> Bound<'_, PyArray2<f64>> {
+        let owner = slf.clone().into_any();
+        view(&slf.get().inner.gap, owner)
+    }
+
+    /// Elastic surface displacement u = K ⊛ p (m), both bodies combined (zero-mean for
+    /// periodic patches).
+    #[getter]
+    fn displacement(slf: Bound<'_, Self>) -> Bound<'_, PyArray2<f64>> {
+        let owner = slf.clone().into_any();
+        view(&slf.get().inner.displacement, owner)
+    }
+
+    /// Grid spacings (dx, dy) (m).
+    #[getter]
+    fn spacing_m(&self) -> (f64, f64) {
+        (self.inner.dx, self.inner.dy)
+    }
+
+    /// True when solved with the periodic kernel.
+    #[getter]
+    fn periodic(&self) -> bool {
+        self.periodic
+    }
+
+    /// Imposed mean pressure p̄ over the patch (Pa).
+    #[getter]
+    fn mean_pressure_pa(&self) -> f64 {
+        self.inner.mean_pressure_pa
+    }
+
+    /// Real over nominal contact area (-).
+    #[getter]
+    fn contact_area_ratio(&self) -> f64 {
+        self.inner.contact_area_ratio
+    }
+
+    /// Grid points in contact.
+    #[getter]
+    fn contact_points(&self) -> usize {
+        self.inner.contact_points
+    }
+
+    /// Contact spots (4-connected clusters; across periodic boundaries counted once).
+    #[getter]
+    fn contact_spots(&self) -> usize {
+        self.inner.contact_spots
+    }
+
+    /// Grid points of the smallest contact spot.
+    #[getter]
+    fn smallest_spot_points(&self) -> usize {
+        self.inner.smallest_spot_points
+    }
+
+    /// Grid points of the median contact spot.
+    #[getter]
+    fn median_spot_points(&self) -> usize {
+        self.inner.median_spot_points
+    }
+
+    /// Mean gap (m): mean separation of the surfaces.
+    #[getter]
+    fn mean_gap_m(&self) -> f64 {
+        self.inner.mean_gap_m
+    }
+
+    /// Rigid approach δ from first contact of the highest point (m).
+    #[getter]
+    fn approach_m(&self) -> f64 {
+        self.inner.approach_m
+    }
+
+    /// Elastic energy ½ Σ p·u·dA (J).
+    #[getter]
+    fn elastic_energy_j(&self) -> f64 {
+        self.inner.elastic_energy_j
+    }
+
+    /// Iterations of the solve (search directions).
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+
+    /// Final relative gap error ε.
+    #[getter]
+    fn residual(&self) -> f64 {
+        self.inner.residual
+    }
+
+    /// Always True (non-convergence raises `asperity.ConvergenceError`).
+    #[getter]
+    fn converged(&self) -> bool {
+        self.inner.converged
+    }
+
+    /// Wall time of the solve (s).
+    #[getter]
+    fn wall_time_s(&self) -> f64 {
+        self.inner.wall_time_s
+    }
+
+    /// The convergence record: iterations, residual, tolerance, converged, wall_time_s.
+    #[getter]
+    fn convergence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("iterations", self.inner.iterations)?;
+        d.set_item("residual", self.inner.residual)?;
+        d.set_item("tolerance", self.tolerance)?;
+        d.set_item("converged", self.inner.converged)?;
+        d.set_item("wall_time_s", self.inner.wall_time_s)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "NormalSolution(mean_pressure_pa={:e}, contact_area_ratio={:e}, mean_gap_m={:e}, iterations={}, residual={:e})",
+            self.inner.mean_pressure_pa,
+            self.inner.contact_area_ratio,
+            self.inner.mean_gap_m,
+            self.inner.iterations,
+            self.inner.residual
+        )
+    }
+}
+
+/// Normal contact solver (projected CG) for one surface against an elastic half-space of
+/// composite modulus `e_star_pa` (Pa; see `composite_modulus`): FFT plan and kernel are built
+/// once and reused by every solve. Solves run without the GIL.
+#[pyclass(module = "asperity")]
+pub struct NormalSolver {
+    inner: normal::NormalSolver,
+    periodic: bool,
+}
+
+fn normal_options(tolerance: f64, max_iterations: usize, method: &str) -> PyResult<NormalOptions> {
+    Ok(NormalOptions {
+        tolerance,
+        max_iterations,
+        method: method.parse().py()?,
+        ..NormalOptions::default()
+    })
+}
+
+#[pymethods]
+impl NormalSolver {
+    /// `tolerance`: relative gap error ε to reach; `max_iterations`: cap per solve (reaching
+    /// it raises `asperity.ConvergenceError`); `method`: "auto", "preconditioned" or
+    /// "polonsky-keer".
+    #[new]
+    #[pyo3(signature = (surface, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
+    fn new(
+        py: Python<'_>,
+        surface: &Surface,
+        e_star_pa: f64,
+        tolerance: f64,
+        max_iterations: usize,
+        method: &str,
+    ) -> PyResult<Self> {
+        let grid = surface.grid();
+        let options = normal_options(tolerance, max_iterations, method)?;
+        let inner = py
+            .detach(|| {
+                normal::NormalSolver::new(
+                    &NormalProblem {
+                        surface: grid,
+                        e_star_pa,
+                    },
+                    options,
+                )
+            })
+            .py()?;
+        Ok(Self {
+            inner,
+            periodic: grid.periodic,
+        })
+    }
+
+    /// Load control: the solution at mean pressure `mean_pressure_pa` (Pa, over the patch).
+    /// `warm_start`: a previous solution on this grid (its pressure shape starts the iteration).
+    #[pyo3(signature = (mean_pressure_pa, warm_start=None))]
+    fn solve_load(
+        &mut self,
+        py: Python<'_>,
+        mean_pressure_pa: f64,
+        warm_start: Option<Bound<'_, NormalSolution>>,
+    ) -> PyResult<NormalSolution> {
+        let warm = warm_start.as_ref().map(|w| &w.get().inner);
+        let inner = &mut self.inner;
+        let sol = py
+            .detach(|| inner.solve_load(mean_pressure_pa, warm))
+            .py()?;
+        Ok(self.wrap(sol))
+    }
+
+    /// Displacement control: the solution at rigid approach `approach_m` (m, from first contact).
+    #[pyo3(signature = (approach_m, warm_start=None))]
+    fn solve_approach(
+        &mut self,
+        py: Python<'_>,
+        approach_m: f64,
+        warm_start: Option<Bound<'_, NormalSolution>>,
+    ) -> PyResult<NormalSolution> {
+        let warm = warm_start.as_ref().map(|w| &w.get().inner);
+        let inner = &mut self.inner;
+        let sol = py.detach(|| inner.solve_approach(approach_m, warm)).py()?;
+        Ok(self.wrap(sol))
+    }
+
+    /// Elastic displacement u = K ⊛ p (m) of any pressure field p (Pa) on this grid.
+    fn displacement_of<'py>(
+        &mut self,
+        py: Python<'py>,
+        pressure: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let p = borrow_f64::<Ix2>(pressure, "pressure", "pressure (Pa), shape (nx, ny)")?;
+        let p: Array2<f64> = p.as_array().to_owned();
+        let inner = &mut self.inner;
+        let u = py.detach(|| inner.displacement_of(&p)).py()?;
+        Ok(PyArray2::from_owned_array(py, u))
+    }
+
+    /// Grid shape (nx, ny).
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        self.inner.grid_shape()
+    }
+
+    /// Composite modulus E* (Pa).
+    #[getter]
+    fn e_star_pa(&self) -> f64 {
+        self.inner.e_star_pa()
+    }
+
+    /// Tolerance on the relative gap error.
+    #[getter]
+    fn tolerance(&self) -> f64 {
+        self.inner.options().tolerance
+    }
+
+    /// Iteration cap per solve.
+    #[getter]
+    fn max_iterations(&self) -> usize {
+        self.inner.options().max_iterations
+    }
+}
+
+impl NormalSolver {
+    fn wrap(&self, inner: normal::NormalSolution) -> NormalSolution {
+        NormalSolution {
+            inner,
+            tolerance: self.inner.options().tolerance,
+            periodic: self.periodic,
+        }
+    }
+}
+
+/// The columns of a sweep, named as in `normal_sweep.csv` (plus `wall_time_s`).
+fn sweep_columns<'py>(
+    py: Python<'py>,
+    points: &[sweep::SweepPoint],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let f = |g: fn(&sweep::SweepPoint) -> f64| {
+        PyArray1::from_vec(py, points.iter().map(g).collect::<Vec<f64>>())
+    };
+    let u = |g: fn(&sweep::SweepPoint) -> usize| {
+        PyArray1::from_vec(py, points.iter().map(|p| g(p) as u64).collect::<Vec<u64>>())
+    };
+    d.set_item("pressure_Pa", f(|p| p.pressure_pa))?;
+    d.set_item("contact_area_ratio", f(|p| p.contact_area_ratio))?;
+    d.set_item("mean_gap_m", f(|p| p.mean_gap_m))?;
+    d.set_item("kn_N_per_m3", f(|p| p.kn_n_per_m3))?;
+    d.set_item("approach_m", f(|p| p.approach_m))?;
+    d.set_item("contact_spots", u(|p| p.contact_spots))?;
+    d.set_item("smallest_spot_points", u(|p| p.smallest_spot_points))?;
+    d.set_item("median_spot_points", u(|p| p.median_spot_points))?;
+    d.set_item(
+        "points_across_contact",
+        f(|p| p.resolution.points_across_contact()),
+    )?;
+    d.set_item(
+        "points_across_free",
+        f(|p| p.resolution.points_across_free()),
+    )?;
+    d.set_item(
+        "method",
+        points.iter().map(|p| p.method.name()).collect::<Vec<_>>(),
+    )?;
+    d.set_item("iterations", u(|p| p.iterations))?;
+    d.set_item("stiffness_iterations", u(|p| p.stiffness_iterations))?;
+    d.set_item("residual", f(|p| p.residual))?;
+    d.set_item("wall_time_s", f(|p| p.wall_time_s))?;
+    Ok(d)
+}
+
+/// The pressure sweep of `asperity contact normal` on one surface: warm-started solves at the
+/// sorted `pressures_pa` (Pa) and `kn = dp̄/dδ` (N/m³) from the tangent problem on each contact
+/// set. Returns a dict of columns named as in `normal_sweep.csv` (numpy arrays; `method` a list).
+#[pyfunction]
+#[pyo3(signature = (surface, pressures_pa, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
+pub fn normal_sweep<'py>(
+    py: Python<'py>,
+    surface: &Surface,
+    pressures_pa: Vec<f64>,
+    e_star_pa: f64,
+    tolerance: f64,
+    max_iterations: usize,
+    method: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let grid = surface.grid();
+    let options = normal_options(tolerance, max_iterations, method)?;
+    let result = py
+        .detach(|| {
+            let mut solver = normal::NormalSolver::new(
+                &NormalProblem {
+                    surface: grid,
+                    e_star_pa,
+                },
+                options,
+            )?;
+            sweep::run(
+                &mut solver,
+                &pressures_pa,
+                SweepOptions {
+                    keep_solutions: false,
+                },
+                |_| {},
+            )
+        })
+        .py()?;
+    sweep_columns(py, &result.points)
+}
+
+fn operator(name: &str) -> PyResult<Operator> {
+    match name {
+        "auto" => Ok(Operator::Auto),
+        "dense" => Ok(Operator::Dense),
+        "fft" => Ok(Operator::Fft),
+        o => Err(asperity::Error::param(
+            "operator",
+            format!("expected \"auto\", \"dense\" or \"fft\", got \"{o}\""),
+        ))
+        .py(),
+    }
+}
+
+/// Exactly one of a displacement (m) or a force (N) as a control, along `direction`.
+fn control(displacement_m: Option<[f64; 2]>, force_n: Option<[f64; 2]>) -> PyResult<Control> {
+    match (displacement_m, force_n) {
+        (Some(d), None) => Ok(Control::Displacement(d)),
+        (None, Some(f)) => Ok(Control::Force(f)),
+        _ => Err(asperity::Error::param(
+            "displacement_m / force_n",
+            "give exactly one",
+        ))
+        .py(),
+    }
+}
+
+/// Partial-slip solver on one fixed pressure field (quasi-identical materials: normal–tangential
+/// coupling neglected, exact for two bodies of the same material). Holds the contact history.
+#[pyclass(module = "asperity")]
+pub struct TangentialSolver {
+    inner: tangential::TangentialSolver,
+}
+
+#[pymethods]
+impl TangentialSolver {
+    /// `pressure`: a `NormalSolution`, or a float64 array of pressures (Pa, shape (nx, ny)) with
+    /// `spacing_m=(dx, dy)` and `periodic`. Body 1 has `youngs_modulus_pa`, `poisson_ratio`;
+    /// body 2 the `_2` values (default: the same material). `friction_coefficient` μ (-).
+    /// `tolerance`: relative natural residual; `operator`: "auto", "dense" or "fft".
+    #[new]
+    #[pyo3(signature = (pressure, *, friction_coefficient, spacing_m=None, periodic=None, youngs_modulus_pa=210e9, poisson_ratio=0.3, youngs_modulus_2_pa=None, poisson_ratio_2=None, tolerance=TangentialOptions::default().tolerance, max_iterations=TangentialOptions::default().max_iterations, operator="auto"))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        pressure: &Bound<'_, PyAny>,
+        friction_coefficient: f64,
+        spacing_m: Option<(f64, f64)>,
+        periodic: Option<bool>,
+        youngs_modulus_pa: f64,
+        poisson_ratio: f64,
+        youngs_modulus_2_pa: Option<f64>,
+        poisson_ratio_2: Option<f64>,
+        tolerance: f64,
+        max_iterations: usize,
+        operator: &str,
+    ) -> PyResult<Self> {
+        let options = TangentialOptions {
+            tolerance,
+            max_iterations,
+            operator: self::operator(operator)?,
+        };
+        let body1 = Material {
+            youngs_modulus_pa,
+            poisson_ratio,
+        };
+        let body2 = Material {
+            youngs_modulus_pa: youngs_modulus_2_pa.unwrap_or(youngs_modulus_pa),
+            poisson_ratio: poisson_ratio_2.unwrap_or(poisson_ratio),
+        };
+        let build = |p: &Array2<f64>, (dx, dy): (f64, f64), periodic: bool| {
+            tangential::TangentialSolver::new(
+                &TangentialProblem {
+                    pressure: p,
+                    dx,
+                    dy,
+                    boundary: if periodic {
+                        Boundary::Periodic
+                    } else {
+                        Boundary::ZeroPadded
+                    },
+                    friction_coefficient,
+                    body1,
+                    body2,
+                },
+                options,
+            )
+        };
+        let inner = if let Ok(sol) = pressure.cast::<NormalSolution>() {
+            let s = sol.get();
+            let spacing = spacing_m.unwrap_or((s.inner.dx, s.inner.dy));
+            let periodic = periodic.unwrap_or(s.periodic);
+            py.detach(|| build(&s.inner.pressure, spacing, periodic))
+        } else {
+            let p = borrow_f64::<Ix2>(pressure, "pressure", "pressure (Pa), shape (nx, ny)")?;
+            let (Some(spacing), Some(periodic)) = (spacing_m, periodic) else {
+                return Err(asperity::Error::param(
+                    "spacing_m / periodic",
+                    "give both with a pressure array (they come from a NormalSolution otherwise)",
+                ))
+                .py();
+            };
+            let p = p.as_array().to_owned();
+            py.detach(|| build(&p, spacing, periodic))
+        }
+        .py()?;
+        Ok(Self { inner })
+    }
+
+    /// One load step from the current state: impose a rigid shift `displacement_m=(dx, dy)` (m)
+    /// or a total force `force_n=(Tx, Ty)` (N). Returns the step record (dict, SI).
+    #[pyo3(signature = (*, displacement_m=None, force_n=None))]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        displacement_m: Option<[f64; 2]>,
+        force_n: Option<[f64; 2]>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let c = control(displacement_m, force_n)?;
+        let inner = &mut self.inner;
+        let s = py.detach(|| inner.step(c)).py()?;
+        to_python(py, &s)
+    }
+
+    /// A sinusoidal history from the virgin state (the solver is reset first):
+    /// `amplitude · sin(2π k / steps_per_cycle)`, `k = 1 … cycles·steps_per_cycle`, with the
+    /// amplitude a displacement `amplitude_m=(ax, ay)` (m) or a force `amplitude_n` (N).
+    /// Returns `{"steps": {column: array}, "cycles": [...], "metadata": {...}, "wall_time_s"}`;
+    /// step 0 is the unloaded initial state.
+    #[pyo3(signature = (*, amplitude_m=None, amplitude_n=None, cycles=3, steps_per_cycle=40))]
+    fn oscillate<'py>(
+        &mut self,
+        py: Python<'py>,
+        amplitude_m: Option<[f64; 2]>,
+        amplitude_n: Option<[f64; 2]>,
+        cycles: usize,
+        steps_per_cycle: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let amplitude = control(amplitude_m, amplitude_n)?;
+        let inner = &mut self.inner;
+        let r = py
+            .detach(|| {
+                tangential::oscillate(
+                    inner,
+                    &Oscillation {
+                        amplitude,
+                        cycles,
+                        steps_per_cycle,
+                    },
+                    |_, _| {},
+                )
+            })
+            .py()?;
+        let steps = PyDict::new(py);
+        let col = |f: &dyn Fn(&tangential::TangentialStep) -> f64| {
+            PyArray1::from_vec(py, r.steps.iter().map(f).collect::<Vec<f64>>())
+        };
+        steps.set_item("displacement_m", col(&|s| s.shift_m[0]))?;
+        steps.set_item("displacement_y_m", col(&|s| s.shift_m[1]))?;
+        steps.set_item("force_N", col(&|s| s.force_n[0]))?;
+        steps.set_item("force_y_N", col(&|s| s.force_n[1]))?;
+        steps.set_item("mean_shear_stress_Pa", col(&|s| s.mean_shear_pa[0]))?;
+        steps.set_item("mean_shear_stress_y_Pa", col(&|s| s.mean_shear_pa[1]))?;
+        steps.set_item("stick_fraction", col(&|s| s.stick_fraction))?;
+        steps.set_item("accumulated_slip_m", col(&|s| s.accumulated_slip_m))?;
+        steps.set_item("frictional_work_J", col(&|s| s.frictional_work_j))?;
+        steps.set_item(
+            "iterations",
+            PyArray1::from_vec(
+                py,
+                r.steps
+                    .iter()
+                    .map(|s| s.iterations as u64)
+                    .collect::<Vec<u64>>(),
+            ),
+        )?;
+        steps.set_item("residual", col(&|s| s.residual))?;
+        steps.set_item("wall_time_s", col(&|s| s.wall_time_s))?;
+        let out = PyDict::new(py);
+        out.set_item("steps", steps)?;
+        out.set_item("cycles", to_python(py, &r.cycles)?)?;
+        out.set_item("metadata", to_python(py, &r.metadata)?)?;
+        out.set_item("wall_time_s", r.wall_time_s)?;
+        Ok(out)
+    }
+
+    /// Shift (m) along `direction` at which every contact point slips (gross slip).
+    #[pyo3(signature = (direction=(1.0, 0.0)))]
+    fn gross_slip_displacement(&self, py: Python<'_>, direction: (f64, f64)) -> PyResult<f64> {
+        let inner = &self.inner;
+        py.detach(|| inner.gross_slip_displacement([direction.0, direction.1]))
+            .py()
+    }
+
+    /// Current shear tractions (qx, qy) (Pa), shape (nx, ny).
+    fn traction<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>) {
+        let (qx, qy) = self.inner.traction();
+        (
+            PyArray2::from_owned_array(py, qx),
+            PyArray2::from_owned_array(py, qy),
+        )
+    }
+
+    /// Current stick mask (bool, shape (nx, ny)); False outside the contact.
+    fn stick_mask<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<bool>> {
+        PyArray2::from_owned_array(py, self.inner.stick_mask())
+    }
+
+    /// Back to the virgin state (no shear, no slip history).
+    fn reset(&mut self) {
+        self.inner.reset()
+    }
+
+    /// Total Coulomb limit μP (N).
+    #[getter]
+    fn friction_limit_n(&self) -> f64 {
+        self.inner.friction_limit_n()
+    }
+
+    /// Set-up facts (dict): assumption, μ, grid, boundary, operator, contact points, normal force
+    /// (N), nominal area (m²), compliance norm (m/Pa), setup time (s).
+    #[getter]
+    fn metadata<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, self.inner.metadata())
+    }
+}

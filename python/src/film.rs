@@ -1,0 +1,445 @@
+//! Pressure-measurement film → pressure map (Pa), regions, polynomial fit, preloads per node
+//! (N), node reduction: the building blocks of `asperity film`, composed in Python the way the
+//! CLI composes them. Film frame: x right, y up, metres, origin at the centre of the image's
+//! bottom-left pixel; arrays are indexed `[i, j]` at `(i·s, j·s)` for pixel size `s`.
+
+use crate::arrays::{borrow_f64, view};
+use crate::calibrate::{preload_columns, preloads_from_columns};
+use crate::errors::{to_python, IntoPy};
+use asperity::film::colour::{
+    ColourTable, ColourToPressure, DensityCalibration, PixelClass, DEFAULT_MAX_COLOUR_DISTANCE,
+};
+use asperity::film::nodes::{self, Node, Placement};
+use asperity::film::polyfit::{self, PolyFit2};
+use asperity::film::reduce;
+use asperity::film::regions::{self, Roi, DEFAULT_RIM_PIXELS};
+use ndarray::Ix1;
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// Pixel class codes of `FilmMap.pixel_class`, in order.
+const CLASSES: [PixelClass; 5] = [
+    PixelClass::InRange,
+    PixelClass::Unstained,
+    PixelClass::BelowRange,
+    PixelClass::AboveRange,
+    PixelClass::OffCurve,
+];
+
+fn class_code(c: PixelClass) -> u8 {
+    CLASSES
+        .iter()
+        .position(|k| *k == c)
+        .expect("every class listed") as u8
+}
+
+/// A film image read into pressure: per-pixel class and pressure (Pa, NaN unless in range).
+#[pyclass(frozen, module = "asperity")]
+pub struct FilmMap {
+    inner: regions::FilmMap,
+}
+
+/// A set of pixels of a film map, with an id.
+#[pyclass(frozen, module = "asperity")]
+pub struct Region {
+    inner: regions::Region,
+}
+
+/// A 2-D polynomial least-squares fit of a region's in-range pressures (Pa) in coordinates
+/// scaled to the region's bounding box.
+#[pyclass(frozen, module = "asperity")]
+pub struct PolyFit {
+    inner: PolyFit2,
+}
+
+#[pymethods]
+impl FilmMap {
+    /// Read a PNG, JPEG or TIFF film image (8 or 16 bit) with square pixels of `pixel_size_m`
+    /// (m), through a colour table (`colour_table`: pressure in MPa, R, G, B; or a
+    /// `pressure_Pa,R,G,B` header) or a density calibration (`density_calibration`:
+    /// `density,pressure_MPa` for raw scans). Pixels farther than `max_colour_distance` (RGB
+    /// units) from the colour curve are rejected (off-curve).
+    #[staticmethod]
+    #[pyo3(signature = (image, pixel_size_m, *, colour_table=None, density_calibration=None, max_colour_distance=DEFAULT_MAX_COLOUR_DISTANCE))]
+    fn read(
+        py: Python<'_>,
+        image: PathBuf,
+        pixel_size_m: f64,
+        colour_table: Option<PathBuf>,
+        density_calibration: Option<PathBuf>,
+        max_colour_distance: f64,
+    ) -> PyResult<Self> {
+        let inner = py
+            .detach(|| {
+                let reader = match (&colour_table, &density_calibration) {
+                    (Some(t), None) => {
+                        ColourToPressure::Table(ColourTable::read_csv(t, max_colour_distance)?)
+                    }
+                    (None, Some(d)) => ColourToPressure::Density(DensityCalibration::read_csv(d)?),
+                    _ => {
+                        return Err(asperity::Error::param(
+                            "colour_table / density_calibration",
+                            "give exactly one",
+                        ))
+                    }
+                };
+                regions::FilmMap::read_image(&image, &reader, pixel_size_m)
+            })
+            .py()?;
+        Ok(Self { inner })
+    }
+
+    /// Pressure (Pa), shape (nx, ny), NaN unless the pixel is in range: a read-only view.
+    #[getter]
+    fn pressure_pa(slf: Bound<'_, Self>) -> Bound<'_, PyArray2<f64>> {
+        let owner = slf.clone().into_any();
+        view(&slf.get().inner.pressure_pa, owner)
+    }
+
+    /// Pixel classes as codes (uint8, shape (nx, ny)); `class_names[code]` names them.
+    #[getter]
+    fn pixel_class<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<u8>> {
+        PyArray2::from_owned_array(py, self.inner.class.mapv(class_code))
+    }
+
+    /// Names of the pixel class codes: in_range, unstained, below_range, above_range, off_curve.
+    #[classattr]
+    fn class_names() -> Vec<&'static str> {
+        CLASSES.iter().map(|c| c.name()).collect()
+    }
+
+    /// Pixel counts per class.
+    #[getter]
+    fn class_counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.class_counts())
+    }
+
+    /// Pixel size (m).
+    #[getter]
+    fn pixel_size_m(&self) -> f64 {
+        self.inner.pixel_size_m
+    }
+
+    /// (nx, ny) pixels.
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        self.inner.dim()
+    }
+
+    /// Automatic patches: 8-connected components of pressure-bearing pixels whose core is at
+    /// least `min_diameter_m` (m) across, plus up to `rim_pixels` of the stained below-range rim,
+    /// holes filled. Returns `(regions, discarded_small_components)`.
+    #[pyo3(signature = (min_diameter_m=2e-3, rim_pixels=DEFAULT_RIM_PIXELS))]
+    fn detect_patches(
+        &self,
+        py: Python<'_>,
+        min_diameter_m: f64,
+        rim_pixels: usize,
+    ) -> PyResult<(Vec<Region>, usize)> {
+        let map = &self.inner;
+        let d = py
+            .detach(|| regions::detect_patches(map, min_diameter_m, rim_pixels))
+            .py()?;
+        Ok((
+            d.patches
+                .into_iter()
+                .map(|inner| Region { inner })
+                .collect(),
+            d.discarded_small,
+        ))
+    }
+
+    /// The pixels whose centres lie in the rectangle [x0_m, x1_m] × [y0_m, y1_m] (m).
+    #[pyo3(signature = (x0_m, y0_m, x1_m, y1_m, id=1))]
+    fn roi_rectangle(
+        &self,
+        x0_m: f64,
+        y0_m: f64,
+        x1_m: f64,
+        y1_m: f64,
+        id: usize,
+    ) -> PyResult<Region> {
+        let roi = Roi::Rectangle {
+            x0: x0_m,
+            y0: y0_m,
+            x1: x1_m,
+            y1: y1_m,
+        };
+        Ok(Region {
+            inner: regions::roi_region(&self.inner, &roi, id).py()?,
+        })
+    }
+
+    /// The pixels whose centres lie in the polygon of `vertices_m` [(x, y), ...] (m, ≥ 3).
+    #[pyo3(signature = (vertices_m, id=1))]
+    fn roi_polygon(&self, vertices_m: Vec<(f64, f64)>, id: usize) -> PyResult<Region> {
+        Ok(Region {
+            inner: regions::roi_region(&self.inner, &Roi::Polygon(vertices_m), id).py()?,
+        })
+    }
+
+    /// Summary of a region: centre, area, equivalent diameter (m, m²), mean/max pressure (Pa),
+    /// in-range load (N), pixel counts by class.
+    fn summarise<'py>(&self, py: Python<'py>, region: &Region) -> PyResult<Bound<'py, PyAny>> {
+        let s = regions::summarise(&self.inner, &region.inner).py()?;
+        to_python(py, &s)
+    }
+
+    /// Order-`order` polynomial fit of the region's in-range pressures (Householder QR).
+    #[pyo3(signature = (region, order=4))]
+    fn fit(&self, py: Python<'_>, region: &Region, order: usize) -> PyResult<PolyFit> {
+        let pts = self.inner.pressure_points(&region.inner.pixels);
+        if pts.is_empty() {
+            return Err(asperity::Error::Data(format!(
+                "region {} holds no in-range pixel: nothing to fit",
+                region.inner.id
+            )))
+            .py();
+        }
+        let inner = py.detach(|| polyfit::fit(&pts, order, None)).py()?;
+        Ok(PolyFit { inner })
+    }
+}
+
+#[pymethods]
+impl Region {
+    #[getter]
+    fn id(&self) -> usize {
+        self.inner.id
+    }
+
+    /// Pixel indices (i, j), shape (n, 2), uint64.
+    #[getter]
+    fn pixels<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<u64>> {
+        let n = self.inner.pixels.len();
+        let flat: Vec<u64> = self
+            .inner
+            .pixels
+            .iter()
+            .flat_map(|&(i, j)| [i as u64, j as u64])
+            .collect();
+        PyArray2::from_owned_array(
+            py,
+            ndarray::Array2::from_shape_vec((n, 2), flat).expect("n × 2"),
+        )
+    }
+
+    /// Bounding box [x0, x1, y0, y1] (m) on `film_map`, pixel edges included.
+    fn bounds_m(&self, film_map: &FilmMap) -> [f64; 4] {
+        self.inner.bounds_m(&film_map.inner)
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.pixels.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Region(id={}, {} pixels)",
+            self.inner.id,
+            self.inner.pixels.len()
+        )
+    }
+}
+
+#[pymethods]
+impl PolyFit {
+    #[getter]
+    fn order(&self) -> usize {
+        self.inner.order
+    }
+
+    /// Coefficients (Pa) of the monomials `exponents`.
+    #[getter]
+    fn coefficients_pa<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.coefficients_pa)
+    }
+
+    /// Exponents (a, b) of each monomial ξ^a η^b in scaled coordinates.
+    #[getter]
+    fn exponents(&self) -> Vec<(usize, usize)> {
+        self.inner.exponents.clone()
+    }
+
+    #[getter]
+    fn r_squared(&self) -> f64 {
+        self.inner.r_squared
+    }
+
+    /// RMS residual (Pa).
+    #[getter]
+    fn rms_residual_pa(&self) -> f64 {
+        self.inner.rms_residual_pa
+    }
+
+    #[getter]
+    fn n_points(&self) -> usize {
+        self.inner.n_points
+    }
+
+    /// Fitted pressure (Pa) at film points `x_m`, `y_m` (m; numbers or float64 arrays).
+    fn __call__<'py>(
+        &self,
+        py: Python<'py>,
+        x_m: &Bound<'py, PyAny>,
+        y_m: &Bound<'py, PyAny>,
+    ) -> PyResult<Py<PyAny>> {
+        if let (Ok(x), Ok(y)) = (x_m.extract::<f64>(), y_m.extract::<f64>()) {
+            return Ok(self.inner.eval(x, y).into_pyobject(py)?.into_any().unbind());
+        }
+        let xa = borrow_f64::<Ix1>(x_m, "x_m", "film x (m)")?;
+        let ya = borrow_f64::<Ix1>(y_m, "y_m", "film y (m)")?;
+        let (xs, ys) = (
+            xa.as_slice().expect("contiguous"),
+            ya.as_slice().expect("contiguous"),
+        );
+        if xs.len() != ys.len() {
+            return Err(asperity::Error::param(
+                "y_m",
+                format!("{} y values for {} x values", ys.len(), xs.len()),
+            ))
+            .py();
+        }
+        let v: Vec<f64> = xs
+            .iter()
+            .zip(ys)
+            .map(|(&x, &y)| self.inner.eval(x, y))
+            .collect();
+        Ok(PyArray1::from_vec(py, v).into_any().unbind())
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "PolyFit(order={}, r_squared={:.6}, n_points={})",
+            self.inner.order, self.inner.r_squared, self.inner.n_points
+        )
+    }
+}
+
+/// Read a nodes CSV (`id,x_m,y_m[,area_m2]`, mesh frame) as columns; `area_m2` is NaN where the
+/// file gives none.
+#[pyfunction]
+pub fn read_nodes(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
+    let n = nodes::read_nodes_csv(&path).py()?;
+    let d = PyDict::new(py);
+    d.set_item(
+        "id",
+        PyArray1::from_vec(py, n.iter().map(|n| n.id).collect::<Vec<u64>>()),
+    )?;
+    d.set_item(
+        "x_m",
+        PyArray1::from_vec(py, n.iter().map(|n| n.x_m).collect::<Vec<f64>>()),
+    )?;
+    d.set_item(
+        "y_m",
+        PyArray1::from_vec(py, n.iter().map(|n| n.y_m).collect::<Vec<f64>>()),
+    )?;
+    d.set_item(
+        "area_m2",
+        PyArray1::from_vec(
+            py,
+            n.iter()
+                .map(|n| n.area_m2.unwrap_or(f64::NAN))
+                .collect::<Vec<f64>>(),
+        ),
+    )?;
+    Ok(d)
+}
+
+fn nodes_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Node>> {
+    let py = columns.py();
+    let get = |name: &str| -> PyResult<Bound<'_, PyAny>> {
+        columns.get_item(name)?.ok_or_else(|| {
+            crate::errors::parameter(
+                py,
+                "nodes",
+                format!("missing column `{name}` (need id, x_m, y_m[, area_m2])"),
+            )
+        })
+    };
+    let ids: Vec<u64> = get("id")?.extract()?;
+    let xa = get("x_m")?;
+    let ya = get("y_m")?;
+    let x = borrow_f64::<Ix1>(&xa, "x_m", "node x (m)")?;
+    let y = borrow_f64::<Ix1>(&ya, "y_m", "node y (m)")?;
+    let x = crate::arrays::finite_slice(py, &x, "x_m")?;
+    let y = crate::arrays::finite_slice(py, &y, "y_m")?;
+    let area: Option<Vec<f64>> = match columns.get_item("area_m2")? {
+        Some(a) => Some(
+            borrow_f64::<Ix1>(&a, "area_m2", "node area (m²), NaN where absent")?
+                .as_slice()
+                .expect("contiguous")
+                .to_vec(),
+        ),
+        None => None,
+    };
+    if x.len() != ids.len()
+        || y.len() != ids.len()
+        || area.as_ref().is_some_and(|a| a.len() != ids.len())
+    {
+        return Err(crate::errors::parameter(
+            py,
+            "nodes",
+            "columns of different lengths".into(),
+        ));
+    }
+    Ok((0..ids.len())
+        .map(|i| Node {
+            id: ids[i],
+            x_m: x[i],
+            y_m: y[i],
+            area_m2: area.as_ref().map(|a| a[i]).filter(|a| !a.is_nan()),
+        })
+        .collect())
+}
+
+/// Preload of each node, `N0 = σ_fit(x, y)·A` (N): the nodes (columns as `read_nodes` returns;
+/// mesh frame) are placed on the film by `offset_m` (m), `rotation_rad` (counter-clockwise) and
+/// `scale`; areas come from the nodes or, when absent, from a Delaunay triangulation; the
+/// pressure is the region's fit. With `total_load_n` (N) every preload is rescaled to that
+/// total. Nodes outside the map or the region raise `asperity.DataError`.
+/// Returns `(preloads, summary)`, the preloads as columns `id, x_m, y_m, area_m2, pressure_Pa,
+/// N0_N` (film frame).
+#[pyfunction]
+#[pyo3(signature = (film_map, region, fit, nodes, *, offset_m=(0.0, 0.0), rotation_rad=0.0, scale=1.0, total_load_n=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn film_preloads<'py>(
+    py: Python<'py>,
+    film_map: &FilmMap,
+    region: &Region,
+    fit: &PolyFit,
+    nodes: &Bound<'py, PyDict>,
+    offset_m: (f64, f64),
+    rotation_rad: f64,
+    scale: f64,
+    total_load_n: Option<f64>,
+) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
+    let nodes = nodes_from_columns(nodes)?;
+    let placement = Placement {
+        offset_x_m: offset_m.0,
+        offset_y_m: offset_m.1,
+        rotation_rad,
+        scale,
+    };
+    let pressure_at = |x: f64, y: f64| {
+        asperity::film::fitted_pressure_at(&film_map.inner, &region.inner, &fit.inner, x, y)
+    };
+    let (pre, summary) = nodes::preloads(&nodes, &placement, pressure_at, total_load_n).py()?;
+    Ok((preload_columns(py, &pre)?, to_python(py, &summary)?))
+}
+
+/// Reduce preloaded nodes on a triangular mesh of side `mesh_size_m` (m): in each triangle the
+/// node nearest its centroid is kept with the summed area and load (pressure = ΣN0/ΣA), so the
+/// total area and load are preserved.
+#[pyfunction]
+pub fn reduce_preloads<'py>(
+    py: Python<'py>,
+    preloads: &Bound<'py, PyDict>,
+    mesh_size_m: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let fine = preloads_from_columns(preloads)?;
+    let r = reduce::reduce(&fine, mesh_size_m).py()?;
+    preload_columns(py, &r.nodes)
+}

@@ -1,0 +1,52 @@
+//! `asperity._native`: the Python bindings of the `asperity` library (PyO3, numpy).
+//!
+//! A thin layer: every function calls the library and converts arguments and results. Arrays
+//! come in as borrowed read-only float64 views and go out without a second copy (see
+//! [`arrays`]); library errors become Python exceptions carrying the Rust message (see
+//! [`errors`]). Long computations release the GIL. The Python package `asperity`
+//! (python/asperity/) re-exports everything with type stubs.
+
+mod arrays;
+mod calibrate;
+mod contact;
+mod diagnose;
+mod element;
+mod errors;
+mod film;
+mod surface;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<surface::Surface>()?;
+    m.add_class::<surface::Profile>()?;
+    m.add_function(wrap_pyfunction!(surface::read_topography, m)?)?;
+    m.add_function(wrap_pyfunction!(surface::composite_modulus, m)?)?;
+    m.add_function(wrap_pyfunction!(surface::equivalent_surface, m)?)?;
+    m.add_class::<contact::NormalSolver>()?;
+    m.add_class::<contact::NormalSolution>()?;
+    m.add_function(wrap_pyfunction!(contact::normal_sweep, m)?)?;
+    m.add_class::<contact::TangentialSolver>()?;
+    m.add_class::<element::ValanisParams>()?;
+    m.add_class::<element::ValanisFit>()?;
+    m.add_function(wrap_pyfunction!(element::valanis_integrate, m)?)?;
+    m.add_function(wrap_pyfunction!(element::normal_load_history, m)?)?;
+    m.add_function(wrap_pyfunction!(element::dissipated_energy, m)?)?;
+    m.add_function(wrap_pyfunction!(element::sine_history, m)?)?;
+    m.add_function(wrap_pyfunction!(element::fit_valanis, m)?)?;
+    m.add_class::<calibrate::CalibrationTable>()?;
+    m.add_function(wrap_pyfunction!(calibrate::join_elements, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::write_preloads, m)?)?;
+    m.add_class::<film::FilmMap>()?;
+    m.add_class::<film::Region>()?;
+    m.add_class::<film::PolyFit>()?;
+    m.add_function(wrap_pyfunction!(film::read_nodes, m)?)?;
+    m.add_function(wrap_pyfunction!(film::film_preloads, m)?)?;
+    m.add_function(wrap_pyfunction!(film::reduce_preloads, m)?)?;
+    m.add_function(wrap_pyfunction!(diagnose::read_record, m)?)?;
+    m.add_function(wrap_pyfunction!(diagnose::diagnose, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,338 @@
+//! Surfaces: generate, read, write, statistics and power spectrum, composite modulus.
+//! Heights in m, spacings in m, moduli in Pa.
+
+use crate::arrays::{borrow_f64, view};
+use crate::errors::{to_python, IntoPy};
+use asperity::surface::combine::{self, Material};
+use asperity::surface::generate::GaussianSurfaceSpec;
+use asperity::surface::stats::{self, Detrend};
+use asperity::surface::{Profile as RsProfile, Topography};
+use asperity::Grid2;
+use ndarray::{ArrayView1, Ix2};
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// A rough surface: heights (m) on a regular grid, `heights[i, j]` at `(i·dx_m, j·dy_m)`.
+///
+/// `periodic` says whether the patch is one period of an infinite surface (generated surfaces
+/// are): it selects the periodic or the zero-padded (finite window) contact kernels.
+/// The object owns its heights and never changes them; `heights` is a read-only view of them
+/// (no copy). Building a `Surface` from a numpy array copies it once, so that solvers can run
+/// without the GIL on memory Python cannot change meanwhile.
+#[pyclass(frozen, module = "asperity")]
+pub struct Surface {
+    /// Always `Topography::Area`.
+    topo: Topography,
+}
+
+impl Surface {
+    pub fn grid(&self) -> &Grid2 {
+        match &self.topo {
+            Topography::Area(g) => g,
+            Topography::Profile(_) => unreachable!("a Surface holds an area"),
+        }
+    }
+
+    pub fn from_grid(grid: Grid2) -> Self {
+        Self {
+            topo: Topography::Area(grid),
+        }
+    }
+}
+
+fn detrend(text: &str) -> PyResult<Detrend> {
+    text.parse::<Detrend>().py()
+}
+
+/// Statistics and PSD of any topography, as dicts (SI units).
+fn stats_dict<'py>(
+    py: Python<'py>,
+    topo: &Topography,
+    detrend_: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let d = detrend(detrend_)?;
+    let s = py.detach(|| stats::stats(topo, d)).py()?;
+    to_python(py, &s)
+}
+
+fn psd_dict<'py>(
+    py: Python<'py>,
+    topo: &Topography,
+    detrend_: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = detrend(detrend_)?;
+    let psd = py.detach(|| stats::power_spectrum(topo, d)).py()?;
+    let out = PyDict::new(py);
+    out.set_item("dim", psd.dim)?;
+    out.set_item("q_rad_per_m", PyArray1::from_vec(py, psd.q))?;
+    out.set_item(
+        if psd.dim == 1 { "c_m3" } else { "c_m4" },
+        PyArray1::from_vec(py, psd.c),
+    )?;
+    out.set_item(
+        "count",
+        PyArray1::from_vec(py, psd.count.into_iter().map(|c| c as u64).collect()),
+    )?;
+    Ok(out)
+}
+
+#[pymethods]
+impl Surface {
+    /// Surface from a float64, C-contiguous array of heights (m), shape (nx, ny), with spacings
+    /// `dx_m` and `dy_m` (m; default `dx_m`). Copies the heights once.
+    #[new]
+    #[pyo3(signature = (heights, dx_m, dy_m=None, periodic=false))]
+    fn new(
+        heights: &Bound<'_, PyAny>,
+        dx_m: f64,
+        dy_m: Option<f64>,
+        periodic: bool,
+    ) -> PyResult<Self> {
+        let h = borrow_f64::<Ix2>(heights, "heights", "heights (m), shape (nx, ny)")?;
+        let grid = Grid2::new(
+            h.as_array().to_owned(),
+            dx_m,
+            dy_m.unwrap_or(dx_m),
+            periodic,
+        )
+        .py()?;
+        Ok(Self::from_grid(grid))
+    }
+
+    /// A periodic Gaussian-correlated patch (autocorrelation `rq_m² exp(-(x²/clx_m² + y²/cly_m²))`,
+    /// Rq exact), the same surface as `asperity surface generate` for the same arguments. The
+    /// defaults are the reference case: Rq 0.177 µm, 1/e correlation length 6.6 µm, 250 µm
+    /// square, 1024², seed 1. `cly_m`, `ly_m`, `ny` default to their x counterparts.
+    #[staticmethod]
+    #[pyo3(signature = (*, rq_m=0.177e-6, clx_m=6.6e-6, cly_m=None, lx_m=250e-6, ly_m=None, nx=1024, ny=None, seed=1))]
+    #[allow(clippy::too_many_arguments)]
+    fn generate(
+        py: Python<'_>,
+        rq_m: f64,
+        clx_m: f64,
+        cly_m: Option<f64>,
+        lx_m: f64,
+        ly_m: Option<f64>,
+        nx: usize,
+        ny: Option<usize>,
+        seed: u64,
+    ) -> PyResult<Self> {
+        let spec = GaussianSurfaceSpec {
+            rq_m,
+            clx_m,
+            cly_m: cly_m.unwrap_or(clx_m),
+            lx_m,
+            ly_m: ly_m.unwrap_or(lx_m),
+            nx,
+            ny: ny.unwrap_or(nx),
+            seed,
+        };
+        let grid = py
+            .detach(|| {
+                spec.validate()
+                    .and_then(|_| asperity::surface::generate(&spec))
+            })
+            .py()?;
+        Ok(Self::from_grid(grid))
+    }
+
+    /// Read a height map: `.npy` (+ `.npy.json` sidecar), `.x3p`, or a height-matrix text file.
+    /// A 1-D profile file raises `asperity.DataError` (use `read_topography`).
+    #[staticmethod]
+    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let grid = py
+            .detach(|| {
+                asperity::surface::io::read(&path)
+                    .and_then(|t| t.into_area(&path.display().to_string()))
+            })
+            .py()?;
+        Ok(Self::from_grid(grid))
+    }
+
+    /// Write the heights; the format follows the extension (`.npy` + sidecar, `.x3p`,
+    /// `.csv`/`.txt`/`.asc` matrix, `.png` image). Atomic: complete or absent.
+    fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        py.detach(|| asperity::surface::io::write(&path, self.grid()))
+            .py()
+    }
+
+    /// Heights (m), shape (nx, ny): a read-only view (no copy).
+    #[getter]
+    fn heights(slf: Bound<'_, Self>) -> Bound<'_, PyArray2<f64>> {
+        let owner = slf.clone().into_any();
+        view(&slf.get().grid().heights, owner)
+    }
+
+    /// Grid spacing along x (m).
+    #[getter]
+    fn dx_m(&self) -> f64 {
+        self.grid().dx
+    }
+
+    /// Grid spacing along y (m).
+    #[getter]
+    fn dy_m(&self) -> f64 {
+        self.grid().dy
+    }
+
+    /// True when the patch is one period of a periodic surface.
+    #[getter]
+    fn periodic(&self) -> bool {
+        self.grid().periodic
+    }
+
+    /// Grid shape (nx, ny).
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        (self.grid().nx(), self.grid().ny())
+    }
+
+    /// Patch size (lx, ly) = (nx·dx, ny·dy) (m).
+    #[getter]
+    fn size_m(&self) -> (f64, f64) {
+        (self.grid().lx(), self.grid().ly())
+    }
+
+    /// Statistics (the keys of `asperity surface stats --json`; SI units, slopes
+    /// dimensionless; `None` where undefined). `detrend`: "mean" or "plane".
+    #[pyo3(signature = (detrend="mean"))]
+    fn stats<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyAny>> {
+        stats_dict(py, &self.topo, detrend)
+    }
+
+    /// Radially averaged power spectral density: `q_rad_per_m`, `c_m4`, `count`.
+    #[pyo3(signature = (detrend="mean"))]
+    fn power_spectrum<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyDict>> {
+        psd_dict(py, &self.topo, detrend)
+    }
+
+    fn __repr__(&self) -> String {
+        let g = self.grid();
+        format!(
+            "Surface({} x {} points, dx_m={:e}, dy_m={:e}, periodic={})",
+            g.nx(),
+            g.ny(),
+            g.dx,
+            g.dy,
+            if g.periodic { "True" } else { "False" }
+        )
+    }
+}
+
+/// A 1-D line scan: heights (m) at `x = i·dx_m`, or at measured `positions_m`.
+#[pyclass(frozen, module = "asperity")]
+pub struct Profile {
+    /// Always `Topography::Profile`.
+    topo: Topography,
+}
+
+impl Profile {
+    fn profile(&self) -> &RsProfile {
+        match &self.topo {
+            Topography::Profile(p) => p,
+            Topography::Area(_) => unreachable!("a Profile holds a profile"),
+        }
+    }
+}
+
+#[pymethods]
+impl Profile {
+    /// Heights (m): a read-only view (no copy).
+    #[getter]
+    fn heights(slf: Bound<'_, Self>) -> Bound<'_, PyArray1<f64>> {
+        let owner = slf.clone().into_any();
+        view(&ArrayView1::from(&slf.get().profile().heights[..]), owner)
+    }
+
+    /// Measured positions (m) of a nonuniform profile, or None.
+    #[getter]
+    fn positions_m<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.profile()
+            .positions
+            .as_ref()
+            .map(|x| PyArray1::from_slice(py, x))
+    }
+
+    /// Sample spacing (m); the mean spacing of a nonuniform profile.
+    #[getter]
+    fn dx_m(&self) -> f64 {
+        self.profile().dx
+    }
+
+    #[getter]
+    fn periodic(&self) -> bool {
+        self.profile().periodic
+    }
+
+    /// Statistics, as for `Surface.stats`.
+    #[pyo3(signature = (detrend="mean"))]
+    fn stats<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyAny>> {
+        stats_dict(py, &self.topo, detrend)
+    }
+
+    /// Power spectral density: `q_rad_per_m`, `c_m3`, `count`.
+    #[pyo3(signature = (detrend="mean"))]
+    fn power_spectrum<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyDict>> {
+        psd_dict(py, &self.topo, detrend)
+    }
+
+    fn __len__(&self) -> usize {
+        self.profile().len()
+    }
+
+    fn __repr__(&self) -> String {
+        let p = self.profile();
+        format!(
+            "Profile({} points, dx_m={:e}, {})",
+            p.len(),
+            p.dx,
+            if p.is_uniform() {
+                "uniform"
+            } else {
+                "nonuniform"
+            }
+        )
+    }
+}
+
+/// Read any topography file: a `Surface` (areas) or a `Profile` (Dektak CSV, profile text).
+#[pyfunction]
+pub fn read_topography(py: Python<'_>, path: PathBuf) -> PyResult<Py<PyAny>> {
+    let topo = py.detach(|| asperity::surface::io::read(&path)).py()?;
+    Ok(match topo {
+        Topography::Area(_) => Py::new(py, Surface { topo })?.into_any(),
+        Topography::Profile(_) => Py::new(py, Profile { topo })?.into_any(),
+    })
+}
+
+/// Composite modulus E* (Pa) of two bodies: `1/E* = (1-ν1²)/E1 + (1-ν2²)/E2`
+/// (body 2 defaults to body 1).
+#[pyfunction]
+#[pyo3(signature = (youngs_modulus_pa, poisson_ratio, youngs_modulus_2_pa=None, poisson_ratio_2=None))]
+pub fn composite_modulus(
+    youngs_modulus_pa: f64,
+    poisson_ratio: f64,
+    youngs_modulus_2_pa: Option<f64>,
+    poisson_ratio_2: Option<f64>,
+) -> PyResult<f64> {
+    let b1 = Material {
+        youngs_modulus_pa,
+        poisson_ratio,
+    };
+    let b2 = Material {
+        youngs_modulus_pa: youngs_modulus_2_pa.unwrap_or(youngs_modulus_pa),
+        poisson_ratio: poisson_ratio_2.unwrap_or(poisson_ratio),
+    };
+    combine::composite_modulus(b1, b2).py()
+}
+
+/// Equivalent rough surface `h1 − h2` of two bodies on a common grid (for a rigid-elastic
+/// contact with the composite modulus).
+#[pyfunction]
+pub fn equivalent_surface(body1: &Surface, body2: &Surface) -> PyResult<Surface> {
+    Ok(Surface::from_grid(
+        combine::equivalent_surface(body1.grid(), body2.grid()).py()?,
+    ))
+}

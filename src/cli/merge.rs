@@ -1,0 +1,45 @@
+//! `asperity merge`: the shard files of a sharded sweep (`--shard i/n`) → the outputs a single
+//! run writes, byte for byte. Every shard must be present once and all must come from the same
+//! configuration (see [`asperity::shard`]); nothing is written otherwise.
+
+use asperity::contact::surface_sweep::SurfaceSweep;
+use asperity::shard::{self, ShardedSweep};
+use asperity::{Error, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// Shard files (`<kind>.shard-<i>-of-<n>.json`): all n shards of one sweep, in any order.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// Output directory: receives the same files a single run of the sweep writes.
+    #[arg(long)]
+    out_dir: PathBuf,
+}
+
+pub fn run(args: MergeArgs) -> Result<()> {
+    let kind = shard::read_kind(&args.shards[0])?;
+    match kind.as_str() {
+        SurfaceSweep::KIND => {
+            let merged = shard::merge::<SurfaceSweep>(&args.shards)?;
+            super::contact_normal::write_outputs(&merged.config, &merged.units, &args.out_dir)?;
+            super::contact_normal::print_summary(&merged.units)?;
+            println!(
+                "merged {} shards ({} surfaces, configuration {}) into {}",
+                merged.shards,
+                merged.units.len(),
+                &merged.config_sha256[..12],
+                args.out_dir.display()
+            );
+            Ok(())
+        }
+        other => Err(Error::parse(
+            &args.shards[0],
+            0,
+            format!(
+                "shards of an unknown sweep kind `{other}` (known: {})",
+                SurfaceSweep::KIND
+            ),
+        )),
+    }
+}

@@ -1,0 +1,359 @@
+//! The normal-contact sweep over several surfaces × loads: generated realisations (one per
+//! seed) or measured files, each with its whole warm-started pressure sweep
+//! ([`super::sweep::run`]).
+//!
+//! One surface is one unit of a [sharded sweep](crate::shard): the load steps of a surface are
+//! warm-started one from the next, so they stay together, while surfaces are independent and can
+//! run in any job of a cluster array. Units: pressures in Pa, lengths in m, kn in N/m³.
+//!
+//! With several random realisations, [`statistics`] gives the mean and the sample standard
+//! deviation over the surfaces at each pressure (results of one random surface are never
+//! reported alone).
+
+use super::normal::{NormalOptions, NormalProblem, NormalSolution, NormalSolver};
+use super::sweep::{self, checked_pressures, SweepOptions, SweepPoint};
+use crate::error::{Error, Result};
+use crate::grid::Grid2;
+use crate::shard::ShardedSweep;
+use crate::surface::combine::{composite_modulus, Material};
+use crate::surface::generate::{generate, GaussianSurfaceSpec};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Where a surface of the sweep comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "source", rename_all = "kebab-case")]
+pub enum SurfaceSource {
+    /// A generated Gaussian patch (its seed names it).
+    Generated { spec: GaussianSurfaceSpec },
+    /// A topography file (any format [`crate::surface::io::read`] reads), with the SHA-256 of
+    /// its content so that every shard provably read the same file.
+    File { path: String, sha256: String },
+}
+
+impl SurfaceSource {
+    /// A topography file, hashed now.
+    pub fn file(path: &Path) -> Result<Self> {
+        Ok(SurfaceSource::File {
+            path: path.display().to_string(),
+            sha256: crate::elements::sha256_file(path)?,
+        })
+    }
+
+    /// Label of the surface in tables: `seed-<seed>` or the file path.
+    pub fn label(&self) -> String {
+        match self {
+            SurfaceSource::Generated { spec } => format!("seed-{}", spec.seed),
+            SurfaceSource::File { path, .. } => path.clone(),
+        }
+    }
+
+    /// One-line description with the parameters (for file headers).
+    pub fn describe(&self) -> String {
+        match self {
+            SurfaceSource::Generated { spec } => format!(
+                "generated Gaussian surface (Rq {:e} m, correlation lengths {:e} x {:e} m, {:e} x {:e} m, {} x {} points, seed {})",
+                spec.rq_m, spec.clx_m, spec.cly_m, spec.lx_m, spec.ly_m, spec.nx, spec.ny, spec.seed
+            ),
+            SurfaceSource::File { path, sha256 } => format!("{path} (sha256 {sha256})"),
+        }
+    }
+
+    /// The height map: generated, or read (refused when the file changed since it was hashed).
+    pub fn load(&self) -> Result<Grid2> {
+        match self {
+            SurfaceSource::Generated { spec } => generate(spec),
+            SurfaceSource::File { path, sha256 } => {
+                let p = Path::new(path);
+                let now = crate::elements::sha256_file(p)?;
+                if &now != sha256 {
+                    return Err(Error::Data(format!(
+                        "{path}: content changed during the sweep (sha256 {now}, expected {sha256})"
+                    )));
+                }
+                crate::surface::io::read(p)?.into_area(path)
+            }
+        }
+    }
+}
+
+/// The sweep: every surface × every pressure, one material for both bodies.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceSweep {
+    /// The surfaces, one unit each.
+    pub surfaces: Vec<SurfaceSource>,
+    /// Nominal pressures (Pa), increasing (see [`checked_pressures`]).
+    pub pressures_pa: Vec<f64>,
+    /// Material of both bodies.
+    pub material: Material,
+    /// Contact solver settings.
+    pub options: NormalOptions,
+}
+
+/// Grid of one surface of the sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GridInfo {
+    pub nx: usize,
+    pub ny: usize,
+    /// Spacing along x (m).
+    pub dx_m: f64,
+    /// Spacing along y (m).
+    pub dy_m: f64,
+    pub periodic: bool,
+}
+
+/// Result of one surface: its grid and one point per pressure.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SurfaceResult {
+    pub grid: GridInfo,
+    pub points: Vec<SweepPoint>,
+}
+
+impl ShardedSweep for SurfaceSweep {
+    const KIND: &'static str = "contact-normal";
+    type Unit = SurfaceResult;
+    fn unit_labels(&self) -> Vec<String> {
+        self.surfaces.iter().map(SurfaceSource::label).collect()
+    }
+}
+
+impl SurfaceSweep {
+    /// Check every setting before any work: pressures, material, solver options, at least one
+    /// surface and unique labels.
+    pub fn validate(&self) -> Result<()> {
+        let sorted = checked_pressures(&self.pressures_pa)?;
+        if sorted != self.pressures_pa {
+            return Err(Error::param(
+                "pressures_pa",
+                "must be given in increasing order",
+            ));
+        }
+        self.e_star_pa()?;
+        self.options.validate()?;
+        for s in &self.surfaces {
+            if let SurfaceSource::Generated { spec } = s {
+                spec.validate()?;
+            }
+        }
+        crate::shard::check_labels(&self.unit_labels())
+    }
+
+    /// Composite modulus E* of the two bodies (Pa).
+    pub fn e_star_pa(&self) -> Result<f64> {
+        composite_modulus(self.material, self.material)
+    }
+
+    fn sweep_options(&self, keep_solutions: bool) -> SweepOptions {
+        SweepOptions { keep_solutions }
+    }
+
+    /// Unit `k`: load surface `k` and run its warm-started pressure sweep. With
+    /// `keep_solutions` the converged solutions at the sweep pressures are returned too.
+    /// `progress(j)` is called after the j-th pressure.
+    pub fn run_unit(
+        &self,
+        k: usize,
+        keep_solutions: bool,
+        progress: impl FnMut(usize),
+    ) -> Result<(SurfaceResult, Vec<NormalSolution>)> {
+        let source = self
+            .surfaces
+            .get(k)
+            .ok_or_else(|| Error::param("unit", format!("no surface {k}")))?;
+        let surface = source.load()?;
+        let mut solver = NormalSolver::new(
+            &NormalProblem {
+                surface: &surface,
+                e_star_pa: self.e_star_pa()?,
+            },
+            self.options,
+        )?;
+        let sw = sweep::run(
+            &mut solver,
+            &self.pressures_pa,
+            self.sweep_options(keep_solutions),
+            progress,
+        )
+        .map_err(|e| match e {
+            Error::Data(m) => Error::Data(format!("{}: {m}", source.label())),
+            other => other,
+        })?;
+        Ok((
+            SurfaceResult {
+                grid: GridInfo {
+                    nx: surface.nx(),
+                    ny: surface.ny(),
+                    dx_m: surface.dx,
+                    dy_m: surface.dy,
+                    periodic: surface.periodic,
+                },
+                points: sw.points,
+            },
+            sw.solutions,
+        ))
+    }
+}
+
+/// Mean and sample standard deviation of a quantity over the surfaces.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MeanStd {
+    pub mean: f64,
+    /// Sample standard deviation (n − 1 in the denominator); NaN for one surface.
+    pub std: f64,
+}
+
+impl MeanStd {
+    /// Mean and sample standard deviation of `values` (summed in the given order).
+    pub fn of(values: &[f64]) -> Self {
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        Self {
+            mean,
+            std: var.sqrt(),
+        }
+    }
+}
+
+/// Statistics over the surfaces at one pressure.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PressureStatistics {
+    pub pressure_pa: f64,
+    pub surfaces: usize,
+    pub contact_area_ratio: MeanStd,
+    pub mean_gap_m: MeanStd,
+    pub kn_n_per_m3: MeanStd,
+    pub approach_m: MeanStd,
+}
+
+/// Per-pressure mean and sample standard deviation over the surfaces (every result must hold
+/// the same pressures).
+pub fn statistics(results: &[&SurfaceResult]) -> Result<Vec<PressureStatistics>> {
+    let Some(first) = results.first() else {
+        return Err(Error::Data("no surface result".into()));
+    };
+    let pressures: Vec<f64> = first.points.iter().map(|p| p.pressure_pa).collect();
+    for r in results {
+        if r.points
+            .iter()
+            .map(|p| p.pressure_pa)
+            .ne(pressures.iter().copied())
+        {
+            return Err(Error::Data(
+                "surface results hold different pressures".into(),
+            ));
+        }
+    }
+    Ok(pressures
+        .iter()
+        .enumerate()
+        .map(|(j, &p)| {
+            let of = |f: fn(&SweepPoint) -> f64| {
+                MeanStd::of(&results.iter().map(|r| f(&r.points[j])).collect::<Vec<_>>())
+            };
+            PressureStatistics {
+                pressure_pa: p,
+                surfaces: results.len(),
+                contact_area_ratio: of(|s| s.contact_area_ratio),
+                mean_gap_m: of(|s| s.mean_gap_m),
+                kn_n_per_m3: of(|s| s.kn_n_per_m3),
+                approach_m: of(|s| s.approach_m),
+            }
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shard::{merge, run_units, write_shard, Shard};
+
+    fn small_sweep(seeds: &[u64]) -> SurfaceSweep {
+        SurfaceSweep {
+            surfaces: seeds
+                .iter()
+                .map(|&seed| SurfaceSource::Generated {
+                    spec: GaussianSurfaceSpec {
+                        nx: 32,
+                        ny: 32,
+                        lx_m: 100e-6,
+                        ly_m: 100e-6,
+                        clx_m: 10e-6,
+                        cly_m: 10e-6,
+                        seed,
+                        ..GaussianSurfaceSpec::reference()
+                    },
+                })
+                .collect(),
+            pressures_pa: vec![1e6, 1e7],
+            material: Material::STEEL,
+            options: NormalOptions::default(),
+        }
+    }
+
+    #[test]
+    fn mean_and_sample_std() {
+        let m = MeanStd::of(&[1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(m.mean, 2.5);
+        assert!((m.std - (5.0f64 / 3.0).sqrt()).abs() < 1e-15);
+        assert!(MeanStd::of(&[3.0]).std.is_nan());
+    }
+
+    #[test]
+    fn validation_names_the_problem() {
+        let mut s = small_sweep(&[1, 1]);
+        assert!(s.validate().unwrap_err().to_string().contains("twice"));
+        s = small_sweep(&[1, 2]);
+        s.pressures_pa = vec![2e6, 1e6];
+        assert!(s.validate().unwrap_err().to_string().contains("increasing"));
+        s = small_sweep(&[]);
+        assert!(s.validate().unwrap_err().to_string().contains("no unit"));
+    }
+
+    /// Units are independent: sharded in any split, the results equal the single run's bit for
+    /// bit (wall times aside), in a pool of one thread and of two.
+    #[test]
+    fn shards_reproduce_the_single_run() {
+        let sweep = small_sweep(&[1, 2, 3]);
+        sweep.validate().unwrap();
+        let run = |shard: Shard, threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    run_units(&sweep, shard, |k| {
+                        sweep.run_unit(k, false, |_| {}).map(|(r, _)| r)
+                    })
+                    .unwrap()
+                })
+        };
+        let strip = |mut r: SurfaceResult| {
+            r.points.iter_mut().for_each(|p| p.wall_time_s = 0.0);
+            r
+        };
+        let whole: Vec<SurfaceResult> = run(Shard::WHOLE, 2)
+            .into_iter()
+            .map(|u| strip(u.result))
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let paths: Vec<_> = (1..=2)
+            .map(|i| {
+                let shard = Shard::new(i, 2).unwrap();
+                write_shard(dir.path(), &sweep, shard, &run(shard, 1)).unwrap()
+            })
+            .collect();
+        let merged = merge::<SurfaceSweep>(&paths).unwrap();
+        assert_eq!(merged.config, sweep);
+        let merged: Vec<SurfaceResult> =
+            merged.units.into_iter().map(|u| strip(u.result)).collect();
+        assert_eq!(whole, merged);
+        // Different surfaces give different answers (the comparison above can fail).
+        assert_ne!(whole[0].points[0].mean_gap_m, whole[1].points[0].mean_gap_m);
+        let stats = statistics(&whole.iter().collect::<Vec<_>>()).unwrap();
+        assert_eq!(stats.len(), 2);
+        assert_eq!(stats[0].surfaces, 3);
+        assert!(stats[0].kn_n_per_m3.std > 0.0);
+    }
+}

@@ -1,0 +1,283 @@
+//! Sharded normal-contact sweeps end to end: `asperity contact normal --shard i/n` on several
+//! surfaces, then `asperity merge`, must write byte for byte the files a single run writes
+//! (the table, the statistics and the plots; only the wall-time file differs), and a missing,
+//! duplicated or foreign shard must fail with a message naming the files and write nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn asperity(args: &[&str], threads: usize) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .env("RAYON_NUM_THREADS", threads.to_string())
+        .output()
+        .expect("run asperity");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The reference statistics on a coarse 128² grid, five seeds, two pressures: a few ms a solve.
+const CASE: [&str; 7] = [
+    "contact",
+    "normal",
+    "--seeds",
+    "2-4,7,9",
+    "--grid",
+    "128",
+    "--pressures-pa=1e6,8e6",
+];
+
+fn run_case(extra: &[&str], threads: usize) -> (bool, String, String) {
+    let mut args: Vec<&str> = CASE.to_vec();
+    args.extend_from_slice(extra);
+    asperity(&args, threads)
+}
+
+fn shards(dir: &Path, n: usize) -> Vec<PathBuf> {
+    (1..=n)
+        .map(|i| {
+            let shard = format!("{i}/{n}");
+            let (ok, _, err) =
+                run_case(&["--out-dir", dir.to_str().unwrap(), "--shard", &shard], 1);
+            assert!(ok, "shard {shard}: {err}");
+            dir.join(format!("contact-normal.shard-{i}-of-{n}.json"))
+        })
+        .collect()
+}
+
+fn merge(paths: &[PathBuf], out: &Path) -> (bool, String, String) {
+    let mut args = vec!["merge".to_string()];
+    args.extend(paths.iter().map(|p| p.display().to_string()));
+    args.extend(["--out-dir".into(), out.display().to_string()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    asperity(&args, 2)
+}
+
+const REPRODUCIBLE: [&str; 5] = [
+    "normal_sweep.csv",
+    "normal_sweep_statistics.csv",
+    "area_ratio.png",
+    "mean_gap.png",
+    "kn.png",
+];
+
+#[test]
+fn merged_shards_equal_the_single_run_byte_for_byte() {
+    let tmp = tempfile::tempdir().unwrap();
+    let single = tmp.path().join("single");
+    let (ok, stdout, err) = run_case(&["--out-dir", single.to_str().unwrap()], 2);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("over 5 surfaces"), "{stdout}");
+    // Three shards (1, 2 and 2 surfaces) run single-threaded, and four (one of them holding a
+    // single surface) merged from a list given out of order.
+    for n in [3, 4] {
+        let dir = tmp.path().join(format!("shards-{n}"));
+        let mut paths = shards(&dir, n);
+        paths.reverse();
+        let merged = tmp.path().join(format!("merged-{n}"));
+        let (ok, _, err) = merge(&paths, &merged);
+        assert!(ok, "{err}");
+        for f in REPRODUCIBLE {
+            let a = std::fs::read(single.join(f)).unwrap();
+            let b = std::fs::read(merged.join(f)).unwrap();
+            assert!(
+                a == b,
+                "{f} differs between the single run and {n} merged shards"
+            );
+        }
+        let timings = std::fs::read_to_string(merged.join("normal_sweep_timings.csv")).unwrap();
+        assert_eq!(
+            timings.lines().filter(|l| l.starts_with("seed-")).count(),
+            10
+        );
+    }
+    // The table holds every surface × pressure, and the surfaces differ (the test can fail).
+    let table = std::fs::read_to_string(single.join("normal_sweep.csv")).unwrap();
+    let rows: Vec<&str> = table
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("surface,"))
+        .collect();
+    assert_eq!(rows.len(), 10);
+    assert!(rows[0].starts_with("seed-2,1e6,") && rows[9].starts_with("seed-9,8e6,"));
+    assert_ne!(rows[0].split(',').nth(3), rows[2].split(',').nth(3));
+}
+
+#[test]
+fn sharded_surface_files_merge_too() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Two measured-like files: generated surfaces written as .npy.
+    let mut files = Vec::new();
+    for seed in ["5", "6"] {
+        let f = tmp.path().join(format!("s{seed}.npy"));
+        let (ok, _, err) = asperity(
+            &[
+                "surface",
+                "generate",
+                "--nx",
+                "48",
+                "--ny",
+                "48",
+                "--lx-m",
+                "100e-6",
+                "--ly-m",
+                "100e-6",
+                "--clx-m",
+                "8e-6",
+                "--cly-m",
+                "8e-6",
+                "--seed",
+                seed,
+                "-o",
+                f.to_str().unwrap(),
+            ],
+            2,
+        );
+        assert!(ok, "{err}");
+        files.push(f.display().to_string());
+    }
+    let base = |out: &Path| -> Vec<String> {
+        vec![
+            "contact".into(),
+            "normal".into(),
+            "--surface".into(),
+            files[0].clone(),
+            "--surface".into(),
+            files[1].clone(),
+            "--pressures-pa=2e6".into(),
+            "--out-dir".into(),
+            out.display().to_string(),
+        ]
+    };
+    let single = tmp.path().join("single");
+    let args = base(&single);
+    let (ok, _, err) = asperity(&args.iter().map(String::as_str).collect::<Vec<_>>(), 2);
+    assert!(ok, "{err}");
+    let dir = tmp.path().join("shards");
+    let mut paths = Vec::new();
+    for i in 1..=2 {
+        let mut args = base(&dir);
+        args.extend(["--shard".into(), format!("{i}/2")]);
+        let (ok, _, err) = asperity(&args.iter().map(String::as_str).collect::<Vec<_>>(), 1);
+        assert!(ok, "{err}");
+        paths.push(dir.join(format!("contact-normal.shard-{i}-of-2.json")));
+    }
+    let merged = tmp.path().join("merged");
+    let (ok, _, err) = merge(&paths, &merged);
+    assert!(ok, "{err}");
+    for f in REPRODUCIBLE {
+        assert_eq!(
+            std::fs::read(single.join(f)).unwrap(),
+            std::fs::read(merged.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+}
+
+fn assert_fails_without_output(result: (bool, String, String), needles: &[&str], out: &Path) {
+    let (ok, _, err) = result;
+    assert!(!ok, "should fail");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` not in: {err}");
+    }
+    assert!(!out.exists(), "output written: {}", out.display());
+}
+
+#[test]
+fn missing_duplicated_or_foreign_shards_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("shards");
+    let paths = shards(&dir, 3);
+    let out = tmp.path().join("merged");
+    // Missing shard 2: named by its file name.
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), paths[2].clone()], &out),
+        &["missing", "contact-normal.shard-2-of-3.json"],
+        &out,
+    );
+    // Duplicated: the same shard under another name.
+    let copy = tmp.path().join("copy-of-shard-3.json");
+    std::fs::copy(&paths[2], &copy).unwrap();
+    let mut with_copy = paths.clone();
+    with_copy.push(copy.clone());
+    assert_fails_without_output(
+        merge(&with_copy, &out),
+        &[
+            "given twice",
+            "copy-of-shard-3.json",
+            "contact-normal.shard-3-of-3.json",
+        ],
+        &out,
+    );
+    // Another configuration (other pressures): both files named.
+    let other = tmp.path().join("other");
+    let (ok, _, err) = asperity(
+        &[
+            "contact",
+            "normal",
+            "--seeds",
+            "2-4,7,9",
+            "--grid",
+            "128",
+            "--pressures-pa=1e6,9e6",
+            "--shard",
+            "3/3",
+            "--out-dir",
+            other.to_str().unwrap(),
+        ],
+        2,
+    );
+    assert!(ok, "{err}");
+    let foreign = other.join("contact-normal.shard-3-of-3.json");
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), paths[1].clone(), foreign.clone()], &out),
+        &["different configurations", foreign.to_str().unwrap()],
+        &out,
+    );
+    // Not a shard file, and a missing file.
+    let junk = tmp.path().join("junk.json");
+    std::fs::write(&junk, "[1, 2]").unwrap();
+    assert_fails_without_output(merge(&[junk], &out), &["junk.json"], &out);
+    assert_fails_without_output(
+        merge(&[tmp.path().join("absent.json")], &out),
+        &["absent.json"],
+        &out,
+    );
+}
+
+#[test]
+fn bad_shard_and_seed_flags_fail_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let o = out.to_str().unwrap();
+    for (extra, needle) in [
+        (vec!["--shard", "0/4"], "--shard"),
+        (vec!["--shard", "5/4"], "--shard"),
+        (vec!["--shard", "two"], "--shard"),
+    ] {
+        let mut args = extra.clone();
+        args.extend(["--out-dir", o]);
+        assert_fails_without_output(run_case(&args, 2), &[needle], &out);
+    }
+    for (seeds, needle) in [("4-2", "empty"), ("1,x", "not a seed"), ("1-3,2", "twice")] {
+        assert_fails_without_output(
+            asperity(
+                &[
+                    "contact",
+                    "normal",
+                    "--seeds",
+                    seeds,
+                    "--grid",
+                    "128",
+                    "--out-dir",
+                    o,
+                ],
+                2,
+            ),
+            &["--seeds", needle],
+            &out,
+        );
+    }
+}
