@@ -1,13 +1,15 @@
-//! Benchmark: Valanis element integrators, the Valanis fit, and the calibration chain on coarse
-//! grids (the full 1024² reference run is timed through the CLI; see BENCHMARKS.md).
+//! Benchmark: Valanis element integrators, the Valanis fit, how the calibration's chains share
+//! the cores, and the full reference calibration with its time split by stage.
 //!
-//!     cargo bench --bench calibrate
+//!     cargo bench --bench calibrate                                  # all but the reference run
+//!     ASPERITY_BENCH_REFERENCE=1 cargo bench --bench calibrate       # + the built-in reference case
+//!     ASPERITY_BENCH_PARALLEL_GRID=512 ASPERITY_BENCH_PARALLEL_REALISATIONS=4 cargo bench --bench calibrate
 //!
 //! Units: times in seconds (or µs per step), per unit nominal area quantities inside.
 
 use asperity::calibrate::config::CalibrationConfig;
 use asperity::calibrate::fit::{fit_valanis, FitOptions, LoopData};
-use asperity::calibrate::pipeline;
+use asperity::calibrate::pipeline::{self, Parallelism, StageTimes, SurfaceSource};
 use asperity::element::sine_history;
 use asperity::element::valanis::{integrate, Integrator, ValanisParams};
 use std::time::Instant;
@@ -57,26 +59,127 @@ fn main() {
         );
     }
 
-    println!("\n## Calibration chain on coarse grids (library call, reference statistics)");
-    for n in [256usize, 512] {
-        let mut cfg = CalibrationConfig::reference();
-        cfg.surface.nx = n;
-        cfg.surface.ny = n;
+    println!("\n## Chains sharing the cores: concurrently single-threaded vs one at a time");
+    let grid = env_usize("ASPERITY_BENCH_PARALLEL_GRID", 512);
+    let count = env_usize("ASPERITY_BENCH_PARALLEL_REALISATIONS", 4);
+    let mut cfg = CalibrationConfig::reference();
+    cfg.surface.nx = grid;
+    cfg.surface.ny = grid;
+    cfg.realisations.count = count;
+    let mut tables = Vec::new();
+    for mode in [
+        Parallelism::ChainsConcurrently,
+        Parallelism::OneChainAtATime,
+    ] {
+        let load = load_average();
         let (t, run) = best_of(1, || {
-            pipeline::run(&cfg, &indicatif::ProgressBar::hidden()).unwrap()
+            pipeline::run_with(
+                &cfg,
+                &SurfaceSource::Generated,
+                &indicatif::ProgressBar::hidden(),
+                mode,
+            )
+            .unwrap()
         });
-        let s = run.times;
         println!(
-            "{n}²: total {t:.2} s (surface {:.2}, normal sweep {:.2}, loops {:.2}, fits {:.2}); min R² {:.5}",
-            s.surface_s,
-            s.normal_sweep_s,
-            s.tangential_loops_s,
-            s.fits_s,
-            run.table
-                .rows
-                .iter()
-                .map(|r| r.fit_r2)
-                .fold(f64::INFINITY, f64::min)
+            "{grid}², {count} realisations + checks, {} threads, {mode:?}: wall {t:.1} s (load average before: {load})",
+            rayon::current_num_threads()
         );
+        tables.push(run.table);
     }
+    println!(
+        "tables identical: {}",
+        tables.windows(2).all(|w| w[0] == w[1])
+    );
+
+    if std::env::var("ASPERITY_BENCH_REFERENCE").is_ok() {
+        println!("\n## Reference case (built-in default of `asperity calibrate`)");
+        let cfg = CalibrationConfig::reference();
+        let load = load_average();
+        let dir = tempfile::tempdir().unwrap();
+        let t = Instant::now();
+        let run = pipeline::run(
+            &cfg,
+            &SurfaceSource::Generated,
+            &indicatif::ProgressBar::hidden(),
+        )
+        .unwrap();
+        let (_, output_s) = asperity::calibrate::write_outputs(
+            &run,
+            &asperity::calibrate::ConfigSource::BuiltIn,
+            dir.path(),
+        )
+        .unwrap();
+        let wall = t.elapsed().as_secs_f64();
+        let s: StageTimes = run.times;
+        println!(
+            "{} realisations × {} pressures × {} amplitudes at {}², {} threads: wall {wall:.1} s (chains {:.1} s, output {output_s:.1} s); load average before: {load}, after: {}",
+            cfg.realisations.count,
+            cfg.loading.pressures_pa.len(),
+            cfg.loading.amplitude_factors.len(),
+            cfg.surface.nx,
+            rayon::current_num_threads(),
+            s.total_s,
+            load_average()
+        );
+        println!("| stage | CPU, all chains (s) | CPU, main chains (s) | CPU, check chains (s) |");
+        println!("|---|---|---|---|");
+        let sum = |rs: &[pipeline::Realisation], f: fn(&StageTimes) -> f64| -> f64 {
+            rs.iter().map(|r| f(&r.times)).sum()
+        };
+        let checks: Vec<pipeline::Realisation> = run
+            .grid_check
+            .iter()
+            .chain(&run.patch_check)
+            .cloned()
+            .collect();
+        type Stage = (&'static str, fn(&StageTimes) -> f64);
+        let stages: [Stage; 4] = [
+            ("surface", |t| t.surface_cpu_s),
+            ("normal", |t| t.normal_cpu_s),
+            ("tangential", |t| t.tangential_cpu_s),
+            ("fit", |t| t.fit_cpu_s),
+        ];
+        for (name, f) in stages {
+            println!(
+                "| {name} | {:.1} | {:.1} | {:.1} |",
+                f(&s),
+                sum(&run.realisations, f),
+                sum(&checks, f)
+            );
+        }
+        println!("| output (wall) | {output_s:.1} | | |");
+        for (i, r) in run.table.rows.iter().enumerate() {
+            let iv = run.table.intervals.as_ref().map(|v| v[i]);
+            let c = &run.convergence.pressures[i];
+            println!(
+                "{} MPa: kn {:.3e} ± {:.1e}, E0 {:.3e} ± {:.1e}, k {:.3} ± {:.3}; spots {:.1}, median points/spot {}; grid {}, patch {}",
+                r.pressure_pa / 1e6,
+                r.kn_n_per_m3,
+                iv.map_or(f64::NAN, |v| v.kn_n_per_m3),
+                r.e0_n_per_m3,
+                iv.map_or(f64::NAN, |v| v.e0_n_per_m3),
+                r.k,
+                iv.map_or(f64::NAN, |v| v.k),
+                c.contact_spots.mean,
+                c.median_spot_points,
+                c.grid_verdict.as_str(),
+                c.patch_verdict.as_str()
+            );
+        }
+    }
+}
+
+fn env_usize(name: &str, default: usize) -> usize {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// The 1-, 5- and 15-minute load averages (the machine may be shared).
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into())
 }

@@ -50,6 +50,16 @@ pub fn csv_record(
     Ok((rec, line))
 }
 
+/// A TOML deserialisation error as an [`Error`] naming the file and the line of the offending
+/// span (0 when unknown).
+pub fn toml_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
+    let line = e
+        .span()
+        .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
+        .unwrap_or(0);
+    Error::parse(path, line, e.message().trim().to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,6 +18,7 @@
 pub mod calibrate;
 pub mod contact;
 pub mod diagnose;
+pub mod dynamics;
 pub mod element;
 pub mod elements;
 pub mod error;

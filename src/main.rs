@@ -29,6 +29,8 @@ enum Command {
     Elements(cli::elements::ElementsArgs),
     /// Compare a model with a measured hysteresis record; find and add the missing effect.
     Diagnose(cli::diagnose::DiagnoseArgs),
+    /// Nonlinear forced response (harmonic balance, AFT, continuation) driven by element tables.
+    Response(cli::response::ResponseArgs),
     /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
     Merge(cli::merge::MergeArgs),
 }
@@ -42,6 +44,7 @@ fn main() {
         Command::Film(a) => cli::film::run(a),
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Response(a) => cli::response::run(a),
         Command::Merge(a) => cli::merge::run(a),
     };
     if let Err(e) = result {

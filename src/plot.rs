@@ -14,6 +14,11 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Draw markers instead of a line (measured or sampled data).
     pub markers: bool,
+    /// A shaded band instead: the polygon `points` (upper edge left to right, then the lower
+    /// edge right to left), see [`Series::band`].
+    pub band: bool,
+    /// Colour index into [`series_colour`]; by default the series' position in the plot.
+    pub colour: Option<usize>,
 }
 
 impl Series {
@@ -23,6 +28,8 @@ impl Series {
             label: label.into(),
             points,
             markers: false,
+            band: false,
+            colour: None,
         }
     }
 
@@ -32,7 +39,29 @@ impl Series {
             label: label.into(),
             points,
             markers: true,
+            band: false,
+            colour: None,
         }
+    }
+
+    /// A shaded band between `lower` and `upper` at each `x`: `(x, lower, upper)` (e.g. a 95 %
+    /// confidence interval), drawn translucent in the series colour.
+    pub fn band(label: impl Into<String>, points: &[(f64, f64, f64)]) -> Self {
+        let upper = points.iter().map(|&(x, _, hi)| (x, hi));
+        let lower = points.iter().rev().map(|&(x, lo, _)| (x, lo));
+        Self {
+            label: label.into(),
+            points: upper.chain(lower).collect(),
+            markers: false,
+            band: true,
+            colour: None,
+        }
+    }
+
+    /// The same series drawn in colour `i` of [`series_colour`] (e.g. a band and its mean line).
+    pub fn with_colour(mut self, i: usize) -> Self {
+        self.colour = Some(i);
+        self
     }
 }
 
@@ -52,6 +81,36 @@ pub struct LinePlot<'a> {
     pub y_label: &'a str,
     pub x_scale: Scale,
     pub y_scale: Scale,
+}
+
+/// The length unit that shows a displacement of magnitude `max_abs_m` (m) with 1–3 digits
+/// before the decimal point: `(factor from m, unit)`, one of nm, µm, mm, m.
+pub fn length_unit(max_abs_m: f64) -> (f64, &'static str) {
+    match max_abs_m.abs() {
+        v if v < 1e-6 => (1e9, "nm"),
+        v if v < 1e-3 => (1e6, "µm"),
+        v if v < 1.0 => (1e3, "mm"),
+        _ => (1.0, "m"),
+    }
+}
+
+/// Tick label of `v` on a linear axis spanning `span`: as many decimals as the tick spacing
+/// (about a tenth of the span) needs, and never a negative zero ("-0.0").
+pub fn tick_label(v: f64, span: f64) -> String {
+    let step = (span.abs() / 10.0).max(f64::MIN_POSITIVE);
+    if !(1e-4..1e6).contains(&step) && v != 0.0 {
+        return format!("{v:.2e}");
+    }
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s
+    }
 }
 
 fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
@@ -110,14 +169,24 @@ where
     Y: Ranged<ValueType = f64>,
 {
     for (i, s) in series.iter().enumerate() {
-        let colour = series_colour(i);
+        let colour = series_colour(s.colour.unwrap_or(i));
         let pts: Vec<(f64, f64)> = s
             .points
             .iter()
             .copied()
             .filter(|(x, y)| x.is_finite() && y.is_finite())
             .collect();
-        if s.markers {
+        if s.band {
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    pts,
+                    colour.mix(0.25).filled(),
+                )))?
+                .label(s.label.clone())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 20, y + 5)], colour.mix(0.25).filled())
+                });
+        } else if s.markers {
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))?
                 .label(s.label.clone())
@@ -157,15 +226,22 @@ pub fn line_plot(path: &Path, layout: &LinePlot<'_>, series: &[Series]) -> Resul
             .margin(15)
             .x_label_area_size(50)
             .y_label_area_size(80);
+        // Linear axes: labels without "-0.0" and with the decimals the ticks need.
+        let (xs, ys) = (xr.1 - xr.0, yr.1 - yr.0);
+        let x_fmt = |v: &f64| tick_label(*v, xs);
+        let y_fmt = |v: &f64| tick_label(*v, ys);
         macro_rules! finish {
             ($chart:expr) => {{
                 let mut chart = $chart.map_err(|e| plot_err(path, e))?;
-                chart
-                    .configure_mesh()
-                    .x_desc(layout.x_label)
-                    .y_desc(layout.y_label)
-                    .draw()
-                    .map_err(|e| plot_err(path, e))?;
+                let mut mesh = chart.configure_mesh();
+                mesh.x_desc(layout.x_label).y_desc(layout.y_label);
+                if layout.x_scale == Scale::Linear {
+                    mesh.x_label_formatter(&x_fmt);
+                }
+                if layout.y_scale == Scale::Linear {
+                    mesh.y_label_formatter(&y_fmt);
+                }
+                mesh.draw().map_err(|e| plot_err(path, e))?;
                 draw_series(&mut chart, series).map_err(|e| plot_err(path, e))?;
             }};
         }
@@ -193,12 +269,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn tick_labels_have_no_negative_zero() {
+        assert_eq!(tick_label(-1e-17, 1.0), "0.0");
+        assert_eq!(tick_label(-0.0, 10.0), "0");
+        assert_eq!(tick_label(-0.25, 1.0), "-0.2");
+        assert_eq!(tick_label(150.0, 400.0), "150");
+        assert_eq!(tick_label(2e-5, 1e-4), "2.00e-5");
+        assert_eq!(tick_label(0.002, 0.01), "0.002");
+        assert_eq!(length_unit(1e-7), (1e9, "nm"));
+        assert_eq!(length_unit(2e-5), (1e6, "µm"));
+        assert_eq!(length_unit(0.02), (1e3, "mm"));
+    }
+
+    #[test]
     fn writes_png() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("a.png");
         let s = vec![
             Series::line("x²", (1..50).map(|i| (i as f64, (i * i) as f64)).collect()),
             Series::markers("x", (1..50).map(|i| (i as f64, i as f64)).collect()),
+            Series::band(
+                "x ± 10 %",
+                &(1..50)
+                    .map(|i| (i as f64, 0.9 * i as f64, 1.1 * i as f64))
+                    .collect::<Vec<_>>(),
+            ),
         ];
         let layout = LinePlot {
             title: "test",

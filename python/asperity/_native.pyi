@@ -250,6 +250,10 @@ class TangentialSolver:
         stick_fraction, accumulated_slip_m, frictional_work_J, iterations, residual,
         wall_time_s; step 0 = unloaded), ``cycles`` (dissipated_J, dissipated_J_per_m2,
         frictional_work_J per cycle), ``metadata``, ``wall_time_s``."""
+    def amplitude_loops(self, factors: Sequence[float], steps_per_cycle: int = 40) -> Dict[str, Any]:
+        """The calibration's history of increasing amplitudes (factors × gross-slip
+        displacement); per amplitude the steady loop and its fit data (``fit_q``, ``fit_force``,
+        ``steady``)."""
     def gross_slip_displacement(self, direction: Tuple[float, float] = (1.0, 0.0)) -> float:
         """Shift (m) at which every contact point slips."""
     def traction(self) -> Tuple[F64Array, F64Array]:
@@ -317,6 +321,8 @@ class ValanisFit:
     @property
     def model_force(self) -> F64Array: ...
     @property
+    def loops(self) -> List[Dict[str, float]]: ...
+    @property
     def iterations(self) -> int: ...
     @property
     def final_cost(self) -> float: ...
@@ -337,6 +343,19 @@ def fit_valanis(
     k_starts: Sequence[float] = (0.1, 0.5, 0.9),
 ) -> ValanisFit:
     """Least-squares E0, k (and Et) with μ fixed, measured on samples [start, stop)."""
+
+def fit_valanis_loops(
+    loops: Sequence[Tuple[F64Array, F64Array, Union[F64Array, float], Tuple[int, int]]],
+    *,
+    mu: float,
+    fit_et: bool = False,
+    max_iterations: int = 600,
+    k_starts: Sequence[float] = (0.1, 0.5, 0.9),
+) -> ValanisFit:
+    """One element fitted to several loops together (mean of 1 − R²)."""
+
+def student_t_975(dof: float) -> float:
+    """Two-sided 95 % quantile of Student's t."""
 
 # ---------------------------------------------------------------- calibration table, elements
 

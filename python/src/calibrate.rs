@@ -61,6 +61,22 @@ impl CalibrationTable {
         for (name, f) in table::COLUMNS.iter().zip(fields) {
             d.set_item(*name, PyArray1::from_vec(py, rows.iter().map(f).collect()))?;
         }
+        // A table over several realisations: the realisation count and the 95 % interval
+        // half-widths of the means.
+        if let Some(iv) = &self.inner.intervals {
+            let fields: [fn(&table::RowInterval) -> f64; 7] = [
+                |r| r.realisations as f64,
+                |r| r.contact_area_ratio,
+                |r| r.kn_n_per_m3,
+                |r| r.e0_n_per_m3,
+                |r| r.k,
+                |r| r.et_n_per_m3,
+                |r| r.energy_per_cycle_j_per_m2,
+            ];
+            for (name, f) in table::INTERVAL_COLUMNS.iter().zip(fields) {
+                d.set_item(*name, PyArray1::from_vec(py, iv.iter().map(f).collect()))?;
+            }
+        }
         Ok(d)
     }
 

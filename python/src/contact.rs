@@ -5,6 +5,7 @@
 use crate::arrays::{borrow_f64, view};
 use crate::errors::{to_python, IntoPy};
 use crate::surface::Surface;
+use asperity::calibrate::amplitudes;
 use asperity::contact::normal::{self, NormalOptions, NormalProblem};
 use asperity::contact::sweep::{self, SweepOptions};
 use asperity::contact::tangential::{
@@ -556,6 +557,56 @@ impl TangentialSolver {
         out.set_item("cycles", to_python(py, &r.cycles)?)?;
         out.set_item("metadata", to_python(py, &r.metadata)?)?;
         out.set_item("wall_time_s", r.wall_time_s)?;
+        Ok(out)
+    }
+
+    /// The calibration's loading history (`asperity::calibrate::amplitudes`): one history of
+    /// increasing displacement amplitudes `factors × δ_gs` along x from the virgin state (the
+    /// solver is reset first), one half cycle per amplitude completed by its point reflection
+    /// (Masing). Returns `{"gross_slip_displacement_m", "steps", "loops": [{"amplitude_factor",
+    /// "amplitude_m", "displacement_m", "shear_stress_pa", "loop_area_j_per_m2",
+    /// "dissipation_j_per_m2", "closure_error", "fit_q", "fit_force", "steady"}]}`; `fit_q`,
+    /// `fit_force` and `steady` are the loop as the calibration fits it (the element's virgin
+    /// quarter cycle to +a, then the steady cycle), for `fit_valanis_loops` with the pressure
+    /// as the normal load.
+    #[pyo3(signature = (factors, steps_per_cycle=40))]
+    fn amplitude_loops<'py>(
+        &mut self,
+        py: Python<'py>,
+        factors: Vec<f64>,
+        steps_per_cycle: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let inner = &mut self.inner;
+        let sweep = py
+            .detach(|| amplitudes::run(inner, &factors, steps_per_cycle, || {}))
+            .py()?;
+        let out = PyDict::new(py);
+        out.set_item("gross_slip_displacement_m", sweep.gross_slip_displacement_m)?;
+        out.set_item("steps", sweep.steps)?;
+        let mut loops = Vec::new();
+        for (j, l) in sweep.loops.iter().enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("amplitude_factor", l.amplitude_factor)?;
+            d.set_item("amplitude_m", l.amplitude_m)?;
+            d.set_item(
+                "displacement_m",
+                PyArray1::from_slice(py, &l.displacement_m),
+            )?;
+            d.set_item(
+                "shear_stress_pa",
+                PyArray1::from_slice(py, &l.shear_stress_pa),
+            )?;
+            d.set_item("loop_area_j_per_m2", l.loop_area_j_per_m2)?;
+            d.set_item("dissipation_j_per_m2", l.dissipation_j_per_m2)?;
+            d.set_item("closure_error", l.closure_error)?;
+            // The normal load is set by the caller; 1.0 here only fills the field.
+            let data = asperity::calibrate::pipeline::loop_data(&sweep, j, steps_per_cycle, 1.0);
+            d.set_item("fit_q", PyArray1::from_vec(py, data.q))?;
+            d.set_item("fit_force", PyArray1::from_vec(py, data.force))?;
+            d.set_item("steady", (data.steady.start, data.steady.end))?;
+            loops.push(d);
+        }
+        out.set_item("loops", loops)?;
         Ok(out)
     }
 

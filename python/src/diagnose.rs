@@ -47,8 +47,10 @@ fn column(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<Vec<f64>> 
     Ok(finite_slice(obj.py(), &a, name)?.to_vec())
 }
 
-/// Diagnose a record: fit (or take) a Valanis baseline, search the candidate effects with
-/// held-out cycles and ΔBIC, and report the errors before and after. The baseline is fitted to
+/// Diagnose a record: fit (or take) a Valanis baseline, estimate the noise floor from the
+/// record's cycle-to-cycle repeatability, search the candidate effects by their held-out
+/// evidence against that floor, give one of three verdicts (effect(s) found, model adequate,
+/// model inadequate with where the residual sits) and the errors before and after. The baseline is fitted to
 /// the training cycles, or given as `baseline` (a `ValanisParams` in N/m) with the mean normal
 /// load `normal_n` (N). Returns the report of `diagnose.json` (dict) with, under `"series"`,
 /// the analysed samples and both models' forces as arrays. Runs without the GIL.

@@ -177,40 +177,59 @@ impl ValanisFit {
         }
     }
 
-    /// Coefficient of determination on the steady cycle.
+    /// Coefficient of determination on the steady cycle (several loops: their mean).
     #[getter]
     fn r2(&self) -> f64 {
         self.inner.r2
     }
 
-    /// RMS residual over the peak-to-peak force of the steady cycle.
+    /// RMS residual over the peak-to-peak force of the steady cycle (first loop).
     #[getter]
     fn nrmse(&self) -> f64 {
-        self.inner.nrmse
+        self.inner.loops[0].nrmse
     }
 
-    /// ∮ F dq of the data over the steady cycle.
+    /// ∮ F dq of the data over the steady cycle (first loop).
     #[getter]
     fn energy_data(&self) -> f64 {
-        self.inner.energy_data
+        self.inner.loops[0].energy_data
     }
 
-    /// ∮ F dq of the fitted element over the steady cycle.
+    /// ∮ F dq of the fitted element over the steady cycle (first loop).
     #[getter]
     fn energy_model(&self) -> f64 {
-        self.inner.energy_model
+        self.inner.loops[0].energy_model
     }
 
-    /// (energy_model − energy_data)/energy_data.
+    /// (energy_model − energy_data)/energy_data (first loop).
     #[getter]
     fn energy_rel_error(&self) -> f64 {
-        self.inner.energy_rel_error
+        self.inner.loops[0].energy_rel_error
     }
 
-    /// Model force over the whole history (a new array).
+    /// Model force over the whole history (first loop; a new array).
     #[getter]
     fn model_force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.model_force)
+        PyArray1::from_slice(py, &self.inner.loops[0].model_force)
+    }
+
+    /// Per loop (several loops fitted together): `{"r2", "nrmse", "energy_data",
+    /// "energy_model", "energy_rel_error"}`.
+    #[getter]
+    fn loops<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
+        self.inner
+            .loops
+            .iter()
+            .map(|l| {
+                let d = pyo3::types::PyDict::new(py);
+                d.set_item("r2", l.r2)?;
+                d.set_item("nrmse", l.nrmse)?;
+                d.set_item("energy_data", l.energy_data)?;
+                d.set_item("energy_model", l.energy_model)?;
+                d.set_item("energy_rel_error", l.energy_rel_error)?;
+                Ok(d)
+            })
+            .collect()
     }
 
     /// Nelder–Mead iterations summed over the starts.
@@ -292,4 +311,57 @@ pub fn fit_valanis(
     };
     let inner = py.detach(|| fit::fit_valanis(&data, &opts)).py()?;
     Ok(ValanisFit { inner })
+}
+
+/// `(q, force, normal_load, steady)` of one loop, as Python passes it.
+type LoopArgs<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    (usize, usize),
+);
+
+/// One Valanis element (E0, k, and Et if `fit_et`; μ fixed) fitted to several loops together:
+/// `loops` is a list of `(q, force, normal_load, steady)` as for `fit_valanis`, each driving the
+/// element from its own virgin state; the mean of their 1 − R² is minimised (each loop counts
+/// the same whatever its force level). Runs without the GIL.
+#[pyfunction]
+#[pyo3(signature = (loops, *, mu, fit_et=false, max_iterations=600, k_starts=vec![0.1, 0.5, 0.9]))]
+pub fn fit_valanis_loops(
+    py: Python<'_>,
+    loops: Vec<LoopArgs<'_>>,
+    mu: f64,
+    fit_et: bool,
+    max_iterations: u64,
+    k_starts: Vec<f64>,
+) -> PyResult<ValanisFit> {
+    let mut data = Vec::with_capacity(loops.len());
+    for (q, force, normal_load, steady) in &loops {
+        let qa = borrow_f64::<Ix1>(q, "q", "displacement history (m)")?;
+        let fa = borrow_f64::<Ix1>(force, "force", "force history")?;
+        let q = finite_slice(py, &qa, "q")?.to_vec();
+        let force = finite_slice(py, &fa, "force")?.to_vec();
+        let nl = self::normal_load(normal_load, q.len())?;
+        data.push(LoopData {
+            q,
+            force,
+            normal_load: nl,
+            steady: steady.0..steady.1,
+        });
+    }
+    let opts = FitOptions {
+        mu,
+        fit_et,
+        max_iters: max_iterations,
+        k_starts,
+    };
+    let inner = py.detach(|| fit::fit_valanis_loops(&data, &opts)).py()?;
+    Ok(ValanisFit { inner })
+}
+
+/// Two-sided 95 % quantile of Student's t with `dof` degrees of freedom (the factor of the
+/// calibration table's confidence intervals, `t·s/√N` with `dof = N − 1`).
+#[pyfunction]
+pub fn student_t_975(dof: f64) -> f64 {
+    asperity::calibrate::statistics::student_t_975(dof)
 }

@@ -36,6 +36,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(element::dissipated_energy, m)?)?;
     m.add_function(wrap_pyfunction!(element::sine_history, m)?)?;
     m.add_function(wrap_pyfunction!(element::fit_valanis, m)?)?;
+    m.add_function(wrap_pyfunction!(element::fit_valanis_loops, m)?)?;
+    m.add_function(wrap_pyfunction!(element::student_t_975, m)?)?;
     m.add_class::<calibrate::CalibrationTable>()?;
     m.add_function(wrap_pyfunction!(calibrate::join_elements, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;

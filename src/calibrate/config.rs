@@ -13,7 +13,10 @@
 //! ly_m = 2.5e-4
 //! nx = 1024                 # grid points
 //! ny = 1024
-//! seed = 1
+//! seed = 1                  # seed of the first realisation
+//!
+//! [realisations]
+//! count = 8                 # surfaces of these statistics, seeds seed, seed + 1, ...
 //!
 //! [material]                # both bodies (quasi-identical: normal/tangential decouple)
 //! youngs_modulus_pa = 2.1e11
@@ -22,17 +25,21 @@
 //! [contact]
 //! mu = 0.6                  # friction coefficient: BEM slip limit, held fixed in the fit
 //! normal_tolerance = 1e-10  # normal contact relative gap error
-//! tangential_tolerance = 1e-8
+//! tangential_tolerance = 1e-4
 //!
 //! [loading]
 //! pressures_pa = [1e5, 2e5, 1e6, 2e6, 5e6, 1e7]   # positive, strictly increasing
-//! amplitude_factor = 1.5    # δa = factor × gross-slip displacement at each pressure
-//! steps_per_cycle = 40      # BEM steps per cycle (virgin quarter + one steady cycle are run)
+//! amplitude_factors = [0.2, 0.4, 0.7, 1.0, 1.5]   # δa / gross-slip displacement, increasing
+//! steps_per_cycle = 40      # BEM steps per cycle (multiple of 4)
 //!
 //! [fit]
 //! fit_et = false            # also fit the residual stiffness Et (else Et = 0)
 //! k_starts = [0.1, 0.5, 0.9]  # Nelder–Mead starts for k, each in [0, 1)
 //! max_iterations = 600      # per start
+//!
+//! [convergence]             # verdicts of the grid and patch-size checks
+//! relative_tolerance = 0.05 # kn and E0: change allowed, relative to the mean
+//! k_tolerance = 0.05        # k: change allowed (absolute)
 //! ```
 
 use crate::error::{Error, Result};
@@ -67,10 +74,29 @@ pub struct ContactConfig {
 pub struct LoadingConfig {
     /// Nominal pressures (Pa), positive and strictly increasing.
     pub pressures_pa: Vec<f64>,
-    /// Displacement amplitude as a multiple of the gross-slip displacement at each pressure.
-    pub amplitude_factor: f64,
+    /// Displacement amplitudes as multiples of the gross-slip displacement at each pressure,
+    /// positive and strictly increasing (from microslip to gross slip).
+    pub amplitude_factors: Vec<f64>,
     /// BEM load steps per cycle (multiple of 4, ≥ 8).
     pub steps_per_cycle: usize,
+}
+
+/// How many random surfaces of the configured statistics.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RealisationsConfig {
+    /// Number of realisations (seeds `surface.seed`, `surface.seed + 1`, ...), ≥ 1.
+    pub count: usize,
+}
+
+/// Tolerances of the grid and patch-size convergence verdicts (`calibrate::convergence`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConvergenceConfig {
+    /// Allowed change of kn and E0, relative to their mean (-).
+    pub relative_tolerance: f64,
+    /// Allowed change of k (absolute, -).
+    pub k_tolerance: f64,
 }
 
 /// Fit settings.
@@ -90,19 +116,23 @@ pub struct FitConfig {
 #[serde(deny_unknown_fields)]
 pub struct CalibrationConfig {
     pub surface: GaussianSurfaceSpec,
+    pub realisations: RealisationsConfig,
     pub material: MaterialConfig,
     pub contact: ContactConfig,
     pub loading: LoadingConfig,
     pub fit: FitConfig,
+    pub convergence: ConvergenceConfig,
 }
 
 impl CalibrationConfig {
-    /// The built-in reference case: Rq 0.177 µm, cl 6.6 µm, 250 µm patch, 1024², steel on
-    /// steel (E = 210 GPa, ν = 0.3), μ = 0.6, pressures 0.1, 0.2, 1, 2, 5, 10 MPa.
+    /// The built-in reference case: Rq 0.177 µm, cl 6.6 µm, 250 µm patch, 1024², 8
+    /// realisations (seeds 1–8), steel on steel (E = 210 GPa, ν = 0.3), μ = 0.6, pressures 0.1,
+    /// 0.2, 1, 2, 5, 10 MPa, amplitudes 0.2, 0.4, 0.7, 1 and 1.5 × the gross-slip displacement.
     /// `calib/reference.toml` is this configuration written out.
     pub fn reference() -> Self {
         Self {
             surface: GaussianSurfaceSpec::reference(),
+            realisations: RealisationsConfig { count: 8 },
             material: MaterialConfig {
                 youngs_modulus_pa: 210e9,
                 poisson_ratio: 0.3,
@@ -110,17 +140,21 @@ impl CalibrationConfig {
             contact: ContactConfig {
                 mu: 0.6,
                 normal_tolerance: 1e-10,
-                tangential_tolerance: 1e-8,
+                tangential_tolerance: 1e-4,
             },
             loading: LoadingConfig {
                 pressures_pa: vec![0.1e6, 0.2e6, 1e6, 2e6, 5e6, 10e6],
-                amplitude_factor: 1.5,
+                amplitude_factors: vec![0.2, 0.4, 0.7, 1.0, 1.5],
                 steps_per_cycle: 40,
             },
             fit: FitConfig {
                 fit_et: false,
                 k_starts: vec![0.1, 0.5, 0.9],
                 max_iterations: 600,
+            },
+            convergence: ConvergenceConfig {
+                relative_tolerance: 0.05,
+                k_tolerance: 0.05,
             },
         }
     }
@@ -138,13 +172,8 @@ impl CalibrationConfig {
     }
 
     fn parse(text: &str, path: &Path) -> Result<Self> {
-        let cfg: Self = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
-                .unwrap_or(0);
-            Error::parse(path, line, e.message().trim().to_string())
-        })?;
+        let cfg: Self =
+            toml::from_str(text).map_err(|e| crate::input::toml_error(path, text, e))?;
         cfg.validate().map_err(|e| match e {
             Error::InvalidParameter { name, message } => {
                 let line = key_line(text, &name);
@@ -207,12 +236,18 @@ impl CalibrationConfig {
                 ));
             }
         }
-        if !(l.amplitude_factor.is_finite() && l.amplitude_factor > 0.0) {
-            return Err(Error::param(
-                "loading.amplitude_factor",
-                format!("must be finite and > 0, got {}", l.amplitude_factor),
-            ));
+        crate::calibrate::amplitudes::check_factors(&l.amplitude_factors).map_err(|e| match e {
+            Error::InvalidParameter { message, .. } => {
+                Error::param("loading.amplitude_factors", message)
+            }
+            other => other,
+        })?;
+        if self.realisations.count == 0 {
+            return Err(Error::param("realisations.count", "must be at least 1"));
         }
+        let c = &self.convergence;
+        crate::error::require_positive("convergence.relative_tolerance", c.relative_tolerance)?;
+        crate::error::require_positive("convergence.k_tolerance", c.k_tolerance)?;
         if l.steps_per_cycle < 8 || !l.steps_per_cycle.is_multiple_of(4) {
             return Err(Error::param(
                 "loading.steps_per_cycle",
@@ -350,5 +385,12 @@ mod tests {
         assert!(msg.contains("extra"), "{msg}");
         let msg = refused(&base.replace("fit_et = false\n", ""));
         assert!(msg.contains("fit_et"), "{msg}");
+        let msg = refused(&base.replace("count = 8", "count = 0"));
+        assert!(msg.contains("realisations.count"), "{msg}");
+        let msg = refused(&base.replace(
+            "amplitude_factors = [0.2, 0.4, 0.7, 1.0, 1.5]",
+            "amplitude_factors = [0.4, 0.2]",
+        ));
+        assert!(msg.contains("loading.amplitude_factors"), "{msg}");
     }
 }

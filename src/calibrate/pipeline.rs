@@ -1,101 +1,282 @@
-//! The calibration chain: surface → normal sweep → tangential loops → Valanis fits → table.
+//! The calibration chain: surfaces → normal sweep → tangential loops at several amplitudes →
+//! Valanis fits → table of means with 95 % intervals, and the convergence checks.
 //!
 //! Units: SI; per unit nominal area throughout (pressures and shear stresses in Pa,
 //! displacements in m, stiffnesses kn, E0, Et in N/m³, energies in J/m²).
 //!
-//! 1. **Surface**: the Gaussian-correlated patch of the configuration
-//!    ([`crate::surface::generate`]).
+//! For each **realisation** (a Gaussian surface of the configured statistics with seed
+//! `surface.seed + r`, or one given measured surface):
+//!
+//! 1. **Surface** ([`crate::surface::generate`]).
 //! 2. **Normal sweep** ([`crate::contact::sweep`]): the normal contact solver at each nominal
-//!    pressure, with `kn = dp̄/dδ` from the tangent problem on the contact set.
-//! 3. **Tangential loops** ([`crate::contact::tangential`]): on each pressure field, the rigid
-//!    shift `δ(t) = δa·sin(2πt)` along x from the virgin state over a quarter cycle (initial
-//!    loading) and one full cycle: the **steady cycle** runs from the first peak `+δa` through
-//!    `−δa` back to `+δa` (with the normal load constant and no normal–tangential coupling the
-//!    loop closes after the first reversal — Masing behaviour). The amplitude is
-//!    `δa = amplitude_factor × δ_gs(p̄)`, `δ_gs` the gross-slip displacement of monotonic loading
-//!    at that pressure, so every loop spans stick, microslip and gross slip.
-//! 4. **Fit** ([`crate::calibrate::fit`]): E0, k (optionally Et) of a Valanis element per unit
-//!    area with `Fz = p̄` and μ fixed, by least squares on the steady cycle.
-//! 5. **Table** ([`crate::calibrate::table`]) and outputs ([`write_outputs`]).
+//!    pressure, warm-started, with `kn = dp̄/dδ` from the tangent problem on the contact set.
+//! 3. **Tangential loops** ([`crate::calibrate::amplitudes`]): on each pressure field, one
+//!    history of increasing displacement amplitudes `factor × δ_gs(p̄)` along x (δ_gs the
+//!    gross-slip displacement of monotonic loading at that pressure), from microslip to gross
+//!    slip, giving the steady loop at each amplitude (Masing; checked by each loop's closure
+//!    error and by the tests of [`crate::calibrate::amplitudes`]).
+//! 4. **Fits** ([`crate::calibrate::fit`]): one Valanis element (E0, k, optionally Et; μ fixed,
+//!    `Fz = p̄`) fitted to all amplitudes together (the table's values), and one per amplitude (to
+//!    show how much the best element depends on the amplitude).
+//!
+//! Then, over the realisations, the mean and the 95 % interval of every tabulated value
+//! ([`crate::calibrate::statistics`]), and the **convergence checks**
+//! ([`crate::calibrate::convergence`]): the same surfaces on the grid with half the points per
+//! side (resolution alone), and independent surfaces on the half-size patch at the same spacing
+//! (patch size). The warnings name every pressure whose result rests on under-resolved spots,
+//! few spots, an unconverged grid or patch, or a fitted `k` at a bound of its range.
+//!
+//! Realisations (and the checks' surfaces) are independent chains; they run concurrently, each
+//! single-threaded (measured faster than one chain at a time on all threads, BENCHMARKS.md).
+//! Every solver is bit-identical for any thread count, so the results do not depend on this.
 
+use crate::calibrate::amplitudes::{self, AmplitudeSweep};
 use crate::calibrate::config::CalibrationConfig;
-use crate::calibrate::fit::{fit_valanis, FitOptions, FitResult, LoopData};
-use crate::calibrate::table::{CalibrationRow, CalibrationTable};
+use crate::calibrate::convergence::{Check, Verdict};
+use crate::calibrate::fit::{fit_valanis, fit_valanis_loops, FitOptions, FitResult, LoopData};
+use crate::calibrate::statistics::{paired_difference, summarise, welch_difference, Summary};
+use crate::calibrate::table::{CalibrationRow, CalibrationTable, RowInterval};
 use crate::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
+use crate::contact::resolution::RESOLVED_POINTS_ACROSS;
 use crate::contact::sweep::{self, SweepOptions, SweepPoint};
-use crate::contact::tangential::{Control, TangentialOptions, TangentialProblem, TangentialSolver};
-use crate::element::dissipated_energy;
+use crate::contact::tangential::{TangentialOptions, TangentialProblem, TangentialSolver};
 use crate::error::{Error, Result};
+use crate::grid::Grid2;
 use crate::halfspace::Boundary;
-use crate::output::write_string_atomic;
-use crate::plot::{line_plot, LinePlot, Scale, Series};
 use crate::surface::combine::{composite_modulus, Material};
-use crate::surface::generate::generate;
+use crate::surface::generate::{generate, GaussianSurfaceSpec};
 use indicatif::ProgressBar;
 use sha2::{Digest, Sha256};
 use std::fmt::Write as _;
-use std::ops::Range;
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The BEM hysteresis loop at one pressure.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct BemLoop {
-    /// Nominal pressure (Pa).
-    pub pressure_pa: f64,
-    /// Gross-slip displacement of monotonic loading (m).
-    pub gross_slip_displacement_m: f64,
-    /// Displacement amplitude δa (m).
-    pub amplitude_m: f64,
-    /// Rigid tangential shift at every step, from the virgin state (m).
-    pub displacement_m: Vec<f64>,
-    /// Mean shear stress (tangential force over nominal area) at every step (Pa).
-    pub shear_stress_pa: Vec<f64>,
-    /// Steps of the steady cycle (peak to peak).
-    #[serde(skip)]
-    pub steady: Range<usize>,
-    /// Energy dissipated over the steady cycle per unit nominal area, ∮τ dδ (J/m²).
-    pub energy_per_cycle_j_per_m2: f64,
-    /// Contact points carrying shear.
-    pub contact_points: usize,
-    /// Largest solver iteration count of a step.
-    pub max_step_iterations: usize,
-    /// Largest final residual of a step.
-    pub max_step_residual: f64,
-    /// Wall time of solver set-up and all steps (s).
-    pub wall_time_s: f64,
+/// A fitted `k` below this is reported as at the lower bound 0, above `1 − K_BOUND_FLAG` as at
+/// the upper bound 1 (see [`k_bound_reading`]).
+pub const K_BOUND_FLAG: f64 = 1e-3;
+
+/// Fewer contact spots than this on the patch (mean over realisations) earn a warning: the row
+/// describes a few asperities, not a rough surface.
+pub const FEW_SPOTS: f64 = 10.0;
+
+/// A loop whose closure error exceeds this earns a warning (Masing assumption weak).
+pub const CLOSURE_WARNING: f64 = 0.05;
+
+/// Where a fitted `k` sits in its range `[0, 1)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum KBound {
+    /// `k < K_BOUND_FLAG`.
+    Lower,
+    /// Inside the range.
+    Inside,
+    /// `k > 1 − K_BOUND_FLAG`.
+    Upper,
 }
 
-/// Everything computed at one pressure.
+impl KBound {
+    /// Classify a fitted `k`.
+    pub fn of(k: f64) -> Self {
+        if k < K_BOUND_FLAG {
+            KBound::Lower
+        } else if k > 1.0 - K_BOUND_FLAG {
+            KBound::Upper
+        } else {
+            KBound::Inside
+        }
+    }
+}
+
+/// The physical reading of a fitted `k` at a bound of its range.
+///
+/// The Valanis force slope is `dF/dq = E0(1 + x)/(1 + kx)` with `x = −F/(μFz)` on loading: `k`
+/// sets how the stiffness falls from E0 to 0 as the force approaches μFz.
+pub fn k_bound_reading(bound: KBound) -> &'static str {
+    match bound {
+        KBound::Lower => {
+            "k -> 0: the BEM loops soften more gradually than any Valanis element with k >= 0 \
+             (exponential approach to muFz): many spots of different sizes enter slip one after \
+             another; the fit is the best k = 0 element"
+        }
+        KBound::Upper => {
+            "k -> 1: a Jenkins-like corner, full stiffness E0 until the force saturates at \
+             muFz: the loops stick and then slip almost at once, as a few contact points do \
+             when a spot's slip annulus is narrower than a grid spacing (one or few spots on \
+             the patch, few points per spot); refine the grid and enlarge the patch"
+        }
+        KBound::Inside => "",
+    }
+}
+
+/// Everything computed at one pressure of one realisation.
 #[derive(Debug, Clone)]
 pub struct PressureCalibration {
+    /// Normal contact.
     pub sweep: SweepPoint,
-    pub bem: BemLoop,
+    /// Loops at the amplitudes.
+    pub amplitudes: AmplitudeSweep,
+    /// One element fitted to all amplitudes together.
     pub fit: FitResult,
+    /// One element per amplitude (same order as the amplitudes).
+    pub per_amplitude: Vec<FitResult>,
+    /// Set-up time of the tangential solver (s).
+    pub tangential_setup_s: f64,
 }
 
-/// Wall time of each stage (s).
+/// Time of each stage (s): wall time and CPU time of the chain's thread. For a realisation, its
+/// chain (single-threaded when chains run concurrently, so that the CPU time is the stage's
+/// whole cost, unaffected by other processes on the machine); for a run, summed over all chains,
+/// with the run's wall time in `total_s`.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct StageTimes {
     pub surface_s: f64,
-    pub normal_sweep_s: f64,
-    pub tangential_loops_s: f64,
-    pub fits_s: f64,
+    pub normal_s: f64,
+    pub tangential_s: f64,
+    pub fit_s: f64,
+    pub surface_cpu_s: f64,
+    pub normal_cpu_s: f64,
+    pub tangential_cpu_s: f64,
+    pub fit_cpu_s: f64,
     pub total_s: f64,
+}
+
+impl StageTimes {
+    fn add(&mut self, o: &StageTimes) {
+        self.surface_s += o.surface_s;
+        self.normal_s += o.normal_s;
+        self.tangential_s += o.tangential_s;
+        self.fit_s += o.fit_s;
+        self.surface_cpu_s += o.surface_cpu_s;
+        self.normal_cpu_s += o.normal_cpu_s;
+        self.tangential_cpu_s += o.tangential_cpu_s;
+        self.fit_cpu_s += o.fit_cpu_s;
+    }
+}
+
+/// CPU time of the calling thread (s), from /proc/thread-self/schedstat (NaN where that file
+/// does not exist).
+fn thread_cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-9)
+}
+
+/// Wall and thread-CPU stopwatch of a stage.
+struct Lap {
+    wall: Instant,
+    cpu: f64,
+}
+
+impl Lap {
+    fn start() -> Self {
+        Self {
+            wall: Instant::now(),
+            cpu: thread_cpu_s(),
+        }
+    }
+
+    /// `(wall, cpu)` seconds since the start.
+    fn stop(&self) -> (f64, f64) {
+        (self.wall.elapsed().as_secs_f64(), thread_cpu_s() - self.cpu)
+    }
+}
+
+/// One surface through the chain.
+#[derive(Debug, Clone)]
+pub struct Realisation {
+    /// Seed of a generated surface (`None` for a given surface).
+    pub seed: Option<u64>,
+    /// Grid points `(nx, ny)`.
+    pub grid: (usize, usize),
+    /// Patch size `(lx, ly)` (m).
+    pub patch_m: (f64, f64),
+    /// SHA-256 of the surface heights (f64 little-endian, row-major).
+    pub surface_sha256: String,
+    /// One entry per pressure.
+    pub pressures: Vec<PressureCalibration>,
+    /// Stage times of this chain.
+    pub times: StageTimes,
+}
+
+/// The surfaces to calibrate on.
+#[derive(Debug, Clone)]
+pub enum SurfaceSource {
+    /// `realisations.count` Gaussian surfaces of the configuration's `[surface]` statistics.
+    Generated,
+    /// One given (e.g. measured) equivalent surface; its periodicity selects the kernel.
+    Given {
+        /// Heights (m) on the grid.
+        surface: Grid2,
+        /// Where it came from (file names), for the reports.
+        description: String,
+    },
+}
+
+/// Convergence facts and verdicts at one pressure.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PressureConvergence {
+    /// Nominal pressure (Pa).
+    pub pressure_pa: f64,
+    /// Contact spots on the patch over the realisations.
+    pub contact_spots: Summary,
+    /// Median over the realisations of the median spot size (grid points).
+    pub median_spot_points: f64,
+    /// Smallest median spot size of a realisation (grid points).
+    pub min_median_spot_points: usize,
+    /// Realisations whose grid does not resolve the narrower of contact spots and free regions
+    /// (fewer than [`RESOLVED_POINTS_ACROSS`] points across, [`SweepPoint::under_resolved`]).
+    pub under_resolved_realisations: usize,
+    /// Smallest number of grid points across the narrower phase over the realisations.
+    pub min_points_across: f64,
+    /// Whether that narrowest phase is the contact spots (else the free regions).
+    pub narrowest_is_contact: bool,
+    /// Grid checks of kn, E0, k (`n` against `n/2` points per side, same surfaces).
+    pub grid: [Check; 3],
+    /// Patch checks of kn, E0, k (`L` against `L/2`, independent surfaces).
+    pub patch: [Check; 3],
+    /// Worst grid verdict.
+    pub grid_verdict: Verdict,
+    /// Worst patch verdict.
+    pub patch_verdict: Verdict,
+}
+
+/// The coarser configurations of the convergence checks.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ConvergenceStudy {
+    /// Grid check: the main surfaces with half the points per side (None if that grid does
+    /// not resolve the correlation length, or for a given surface).
+    pub grid_spec: Option<GaussianSurfaceSpec>,
+    /// Patch check: half the patch side at the same spacing, seeds after the main ones.
+    pub patch_spec: Option<GaussianSurfaceSpec>,
+    /// Why a check was not run.
+    pub notes: Vec<String>,
+    /// Verdicts per pressure.
+    pub pressures: Vec<PressureConvergence>,
 }
 
 /// Result of [`run`].
 #[derive(Debug, Clone)]
 pub struct CalibrationRun {
     pub config: CalibrationConfig,
+    /// What the surfaces were.
+    pub surface_description: String,
+    /// Means (and intervals over ≥ 2 realisations) per pressure.
     pub table: CalibrationTable,
-    pub pressures: Vec<PressureCalibration>,
-    /// SHA-256 of the surface heights (f64 little-endian, row-major).
-    pub surface_sha256: String,
+    /// The main realisations.
+    pub realisations: Vec<Realisation>,
+    /// The realisations of the grid check (same seeds, half the points per side).
+    pub grid_check: Vec<Realisation>,
+    /// The realisations of the patch check (half the patch, same spacing).
+    pub patch_check: Vec<Realisation>,
+    /// Convergence verdicts.
+    pub convergence: ConvergenceStudy,
+    /// Everything the user should know about the table's reliability, one sentence each.
+    pub warnings: Vec<String>,
+    /// Stage times summed over all chains (main and checks), and the run's wall time.
     pub times: StageTimes,
 }
 
-fn sha256_hex(bytes: &[u8]) -> String {
+pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
     Sha256::digest(bytes)
         .iter()
         .fold(String::with_capacity(64), |mut s, b| {
@@ -104,44 +285,125 @@ fn sha256_hex(bytes: &[u8]) -> String {
         })
 }
 
-/// Number of work units [`run`] reports to its progress bar for a configuration.
-pub fn progress_units(config: &CalibrationConfig) -> u64 {
-    let n = config.loading.pressures_pa.len() as u64;
-    let steps = (config.loading.steps_per_cycle + config.loading.steps_per_cycle / 4) as u64;
-    1 + n + n * steps + n
-}
-
-/// Run the whole chain. `bar` receives [`progress_units`] increments (pass
-/// `ProgressBar::hidden()` for none).
-pub fn run(config: &CalibrationConfig, bar: &ProgressBar) -> Result<CalibrationRun> {
-    config.validate()?;
-    let t0 = Instant::now();
-    let mut times = StageTimes::default();
-
-    // 1. Surface.
-    bar.set_message("surface");
-    let surface = generate(&config.surface)?;
+fn surface_sha256(surface: &Grid2) -> String {
     let mut bytes = Vec::with_capacity(surface.heights.len() * 8);
     for h in surface.heights.iter() {
         bytes.extend_from_slice(&h.to_le_bytes());
     }
-    let surface_sha256 = sha256_hex(&bytes);
-    drop(bytes);
-    times.surface_s = t0.elapsed().as_secs_f64();
-    bar.inc(1);
+    sha256_hex(&bytes)
+}
 
-    // 2. Normal sweep.
+/// Progress units of one chain (surface, normal solves, tangential steps, fits).
+fn chain_units(config: &CalibrationConfig) -> u64 {
+    let p = config.loading.pressures_pa.len();
+    let steps = amplitudes::step_count(
+        &config.loading.amplitude_factors,
+        config.loading.steps_per_cycle,
+    );
+    (1 + p + p * steps + p) as u64
+}
+
+/// The checks' surface statistics: half the points per side on the same patch (grid), and half
+/// the patch side at the same spacing (patch); `None` where that spec is invalid.
+fn check_specs(
+    config: &CalibrationConfig,
+) -> (
+    Option<GaussianSurfaceSpec>,
+    Option<GaussianSurfaceSpec>,
+    Vec<String>,
+) {
+    let s = config.surface;
+    let mut notes = Vec::new();
+    let mut admissible = |spec: GaussianSurfaceSpec, what: &str| match spec.validate() {
+        Ok(()) => Some(spec),
+        Err(e) => {
+            notes.push(format!(
+                "{what} check not run: {}x{} points over {:e} m x {:e} m is not admissible ({e})",
+                spec.nx, spec.ny, spec.lx_m, spec.ly_m
+            ));
+            None
+        }
+    };
+    let grid = admissible(
+        GaussianSurfaceSpec {
+            nx: s.nx / 2,
+            ny: s.ny / 2,
+            ..s
+        },
+        "grid",
+    );
+    let patch = admissible(
+        GaussianSurfaceSpec {
+            nx: s.nx / 2,
+            ny: s.ny / 2,
+            lx_m: s.lx_m * (s.nx / 2) as f64 / s.nx as f64,
+            ly_m: s.ly_m * (s.ny / 2) as f64 / s.ny as f64,
+            seed: s.seed.wrapping_add(config.realisations.count as u64),
+            ..s
+        },
+        "patch",
+    );
+    (grid, patch, notes)
+}
+
+/// Number of progress units [`run`] reports for `config` and `source`.
+pub fn progress_units(config: &CalibrationConfig, source: &SurfaceSource) -> u64 {
+    let chains = match source {
+        SurfaceSource::Given { .. } => 1,
+        SurfaceSource::Generated => {
+            let (g, p, _) = check_specs(config);
+            config.realisations.count * (1 + usize::from(g.is_some()) + usize::from(p.is_some()))
+        }
+    };
+    chains as u64 * chain_units(config)
+}
+
+/// The fit data of one amplitude: the element's own virgin quarter cycle to `+a` (the BEM's
+/// virgin curve at those displacements, which the cost does not use) and the steady BEM loop.
+pub fn loop_data(
+    sweep: &AmplitudeSweep,
+    j: usize,
+    steps_per_cycle: usize,
+    pressure_pa: f64,
+) -> LoopData {
+    let n = steps_per_cycle;
+    let l = &sweep.loops[j];
+    let a = l.amplitude_m;
+    let mut q: Vec<f64> = (0..=n / 4)
+        .map(|k| {
+            if k == n / 4 {
+                a
+            } else {
+                a * (2.0 * std::f64::consts::PI * k as f64 / n as f64).sin()
+            }
+        })
+        .collect();
+    let mut force: Vec<f64> = q.iter().map(|&d| sweep.virgin_shear_at(d)).collect();
+    q.extend(&l.displacement_m[1..]);
+    force.extend(&l.shear_stress_pa[1..]);
+    LoopData::constant_load(q, force, pressure_pa, n / 4..n / 4 + n + 1)
+}
+
+/// Run one surface through the chain (single pass, on the current rayon pool). `bar` receives
+/// [`chain_units`] increments.
+pub fn calibrate_surface(
+    config: &CalibrationConfig,
+    surface: &Grid2,
+    bar: &ProgressBar,
+) -> Result<(Vec<PressureCalibration>, StageTimes)> {
+    let mut times = StageTimes::default();
     let material = Material {
         youngs_modulus_pa: config.material.youngs_modulus_pa,
         poisson_ratio: config.material.poisson_ratio,
     }
     .validated("material")?;
     let e_star = composite_modulus(material, material)?;
-    let t1 = Instant::now();
-    bar.set_message("normal sweep");
+
+    // Normal sweep.
+    let t = Lap::start();
     let mut normal = NormalSolver::new(
         &NormalProblem {
-            surface: &surface,
+            surface,
             e_star_pa: e_star,
         },
         NormalOptions {
@@ -158,26 +420,25 @@ pub fn run(config: &CalibrationConfig, bar: &ProgressBar) -> Result<CalibrationR
         |_| bar.inc(1),
     )?;
     drop(normal);
-    times.normal_sweep_s = t1.elapsed().as_secs_f64();
+    (times.normal_s, times.normal_cpu_s) = t.stop();
 
-    // 3. Tangential loops.
-    let t2 = Instant::now();
-    let mu = config.contact.mu;
-    let n = config.loading.steps_per_cycle;
-    let total_steps = n + n / 4;
-    let steady = n / 4..n / 4 + n + 1;
+    // Tangential loops.
+    let boundary = if surface.periodic {
+        Boundary::Periodic
+    } else {
+        Boundary::ZeroPadded
+    };
+    let t = Lap::start();
     let mut loops = Vec::with_capacity(sweep.points.len());
-    for (point, sol) in sweep.points.iter().zip(&sweep.solutions) {
-        let p = point.pressure_pa;
-        bar.set_message(format!("loop {:.3} MPa", p / 1e6));
+    for sol in &sweep.solutions {
         let started = Instant::now();
         let mut solver = TangentialSolver::new(
             &TangentialProblem {
                 pressure: &sol.pressure,
                 dx: sol.dx,
                 dy: sol.dy,
-                boundary: Boundary::Periodic,
-                friction_coefficient: mu,
+                boundary,
+                friction_coefficient: config.contact.mu,
                 body1: material,
                 body2: material,
             },
@@ -186,491 +447,464 @@ pub fn run(config: &CalibrationConfig, bar: &ProgressBar) -> Result<CalibrationR
                 ..TangentialOptions::default()
             },
         )?;
-        let gross_slip = solver.gross_slip_displacement([1.0, 0.0])?;
-        let amplitude = config.loading.amplitude_factor * gross_slip;
-        solver.reset();
-        let mut displacement = Vec::with_capacity(total_steps + 1);
-        let mut shear = Vec::with_capacity(total_steps + 1);
-        displacement.push(0.0);
-        shear.push(0.0);
-        let (mut max_it, mut max_res) = (0usize, 0.0f64);
-        for k in 1..=total_steps {
-            // Exact zeros at multiples of half a period, so that the cycle closes exactly.
-            let s = if (2 * k) % n == 0 {
-                0.0
-            } else if (4 * k) % n == 0 {
-                if (4 * k / n) % 4 == 1 {
-                    1.0
-                } else {
-                    -1.0
-                }
-            } else {
-                (2.0 * std::f64::consts::PI * k as f64 / n as f64).sin()
-            };
-            let step = solver.step(Control::Displacement([amplitude * s, 0.0]))?;
-            displacement.push(step.shift_m[0]);
-            shear.push(step.mean_shear_pa[0]);
-            max_it = max_it.max(step.iterations);
-            max_res = max_res.max(step.residual);
-            bar.inc(1);
-        }
-        let energy = dissipated_energy(&displacement[steady.clone()], &shear[steady.clone()]);
-        loops.push(BemLoop {
-            pressure_pa: p,
-            gross_slip_displacement_m: gross_slip,
-            amplitude_m: amplitude,
-            displacement_m: displacement,
-            shear_stress_pa: shear,
-            steady: steady.clone(),
-            energy_per_cycle_j_per_m2: energy,
-            contact_points: solver.contact_points().len(),
-            max_step_iterations: max_it,
-            max_step_residual: max_res,
-            wall_time_s: started.elapsed().as_secs_f64(),
-        });
+        let setup = started.elapsed().as_secs_f64();
+        let sweep = amplitudes::run(
+            &mut solver,
+            &config.loading.amplitude_factors,
+            config.loading.steps_per_cycle,
+            || bar.inc(1),
+        )?;
+        loops.push((sweep, setup));
     }
     drop(sweep.solutions);
-    times.tangential_loops_s = t2.elapsed().as_secs_f64();
+    (times.tangential_s, times.tangential_cpu_s) = t.stop();
 
-    // 4. Fits.
-    let t3 = Instant::now();
+    // Fits.
+    let t = Lap::start();
     let opts = FitOptions {
-        mu,
+        mu: config.contact.mu,
         fit_et: config.fit.fit_et,
         max_iters: config.fit.max_iterations,
         k_starts: config.fit.k_starts.clone(),
     };
-    let mut pressures = Vec::with_capacity(loops.len());
-    let mut rows = Vec::with_capacity(loops.len());
-    for (point, bem) in sweep.points.into_iter().zip(loops) {
-        bar.set_message(format!("fit {:.3} MPa", bem.pressure_pa / 1e6));
-        let data = LoopData::constant_load(
-            bem.displacement_m.clone(),
-            bem.shear_stress_pa.clone(),
-            bem.pressure_pa,
-            bem.steady.clone(),
-        );
-        let fit = fit_valanis(&data, &opts).map_err(|e| {
-            Error::Data(format!("Valanis fit at {} Pa failed: {e}", bem.pressure_pa))
-        })?;
-        rows.push(CalibrationRow {
-            pressure_pa: point.pressure_pa,
-            contact_area_ratio: point.contact_area_ratio,
-            kn_n_per_m3: point.kn_n_per_m3,
-            e0_n_per_m3: fit.params.e0,
-            k: fit.params.k,
-            mu,
-            et_n_per_m3: fit.params.et,
-            fit_r2: fit.r2,
-            energy_per_cycle_j_per_m2: bem.energy_per_cycle_j_per_m2,
-        });
-        pressures.push(PressureCalibration {
+    let n = config.loading.steps_per_cycle;
+    let mut out = Vec::with_capacity(loops.len());
+    for (point, (amps, setup)) in sweep.points.into_iter().zip(loops) {
+        let p = point.pressure_pa;
+        let data: Vec<LoopData> = (0..amps.loops.len())
+            .map(|j| loop_data(&amps, j, n, p))
+            .collect();
+        let failed = |e: Error| Error::Data(format!("Valanis fit at {p} Pa failed: {e}"));
+        let fit = fit_valanis_loops(&data, &opts).map_err(failed)?;
+        let per_amplitude = data
+            .iter()
+            .map(|d| fit_valanis(d, &opts).map_err(failed))
+            .collect::<Result<Vec<_>>>()?;
+        out.push(PressureCalibration {
             sweep: point,
-            bem,
+            amplitudes: amps,
             fit,
+            per_amplitude,
+            tangential_setup_s: setup,
         });
         bar.inc(1);
     }
-    times.fits_s = t3.elapsed().as_secs_f64();
-    times.total_s = t0.elapsed().as_secs_f64();
-    let table = CalibrationTable::new(rows)?;
+    (times.fit_s, times.fit_cpu_s) = t.stop();
+    Ok((out, times))
+}
+
+/// One chain to run: a generated surface (spec with its seed) or the given one.
+#[derive(Debug, Clone, Copy)]
+enum Job {
+    Main(usize),
+    Grid(usize),
+    Patch(usize),
+}
+
+/// How the chains share the cores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Parallelism {
+    /// Chains run concurrently, each single-threaded (the default of [`run`]).
+    ChainsConcurrently,
+    /// One chain at a time, each on all threads of the current pool.
+    OneChainAtATime,
+}
+
+/// Run `f` on every job with as many worker threads as the current rayon pool has, each
+/// taking the next job from a shared counter and running it inside its own single-threaded
+/// rayon pool (so the solvers' parallel loops run serially within a chain). Results in job
+/// order.
+fn run_concurrently<J: Copy + Sync, T: Send>(
+    jobs: &[J],
+    f: impl Fn(J) -> Result<T> + Sync,
+) -> Result<Vec<Result<T>>> {
+    let workers = rayon::current_num_threads().clamp(1, jobs.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<Result<T>>>> =
+        jobs.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    let pools = (0..workers)
+        .map(|_| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .map_err(|e| Error::Data(format!("cannot start a worker thread: {e}")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    std::thread::scope(|scope| {
+        for pool in &pools {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(&job) = jobs.get(i) else { break };
+                let r = pool.install(|| f(job));
+                *slots[i].lock().expect("result slot") = Some(r);
+            });
+        }
+    });
+    Ok(slots
+        .into_iter()
+        .map(|m| {
+            m.into_inner()
+                .expect("result slot")
+                .expect("every job was run")
+        })
+        .collect())
+}
+
+/// Run the calibration (see the module documentation). `bar` receives [`progress_units`]
+/// increments (pass `ProgressBar::hidden()` for none).
+pub fn run(
+    config: &CalibrationConfig,
+    source: &SurfaceSource,
+    bar: &ProgressBar,
+) -> Result<CalibrationRun> {
+    run_with(config, source, bar, Parallelism::ChainsConcurrently)
+}
+
+/// [`run`] with the given [`Parallelism`] (the benchmark compares both; the results are the
+/// same bit for bit).
+pub fn run_with(
+    config: &CalibrationConfig,
+    source: &SurfaceSource,
+    bar: &ProgressBar,
+    parallelism: Parallelism,
+) -> Result<CalibrationRun> {
+    config.validate()?;
+    let started = Instant::now();
+    let count = config.realisations.count;
+    let (grid_spec, patch_spec, mut notes) = match source {
+        SurfaceSource::Generated => check_specs(config),
+        SurfaceSource::Given { .. } => (
+            None,
+            None,
+            vec!["grid and patch checks not run: a given surface has no other resolution or size of the same realisation".to_string()],
+        ),
+    };
+    let mut jobs: Vec<Job> = Vec::new();
+    match source {
+        SurfaceSource::Given { .. } => jobs.push(Job::Main(0)),
+        SurfaceSource::Generated => {
+            jobs.extend((0..count).map(Job::Main));
+            if grid_spec.is_some() {
+                jobs.extend((0..count).map(Job::Grid));
+            }
+            if patch_spec.is_some() {
+                jobs.extend((0..count).map(Job::Patch));
+            }
+        }
+    }
+    let spec_of = |job: Job| -> GaussianSurfaceSpec {
+        let s = config.surface;
+        match job {
+            Job::Main(r) => GaussianSurfaceSpec {
+                seed: s.seed.wrapping_add(r as u64),
+                ..s
+            },
+            Job::Grid(r) => GaussianSurfaceSpec {
+                seed: s.seed.wrapping_add(r as u64),
+                ..grid_spec.expect("grid spec")
+            },
+            Job::Patch(r) => {
+                let p = patch_spec.expect("patch spec");
+                GaussianSurfaceSpec {
+                    seed: p.seed.wrapping_add(r as u64),
+                    ..p
+                }
+            }
+        }
+    };
+    let run_job = |job: Job| -> Result<Realisation> {
+        let t = Lap::start();
+        let (surface, seed) = match source {
+            SurfaceSource::Given { surface, .. } => (surface.clone(), None),
+            SurfaceSource::Generated => {
+                let spec = spec_of(job);
+                (generate(&spec)?, Some(spec.seed))
+            }
+        };
+        let sha = surface_sha256(&surface);
+        let (surface_s, surface_cpu_s) = t.stop();
+        bar.inc(1);
+        let (pressures, mut times) = calibrate_surface(config, &surface, bar)?;
+        (times.surface_s, times.surface_cpu_s) = (surface_s, surface_cpu_s);
+        times.total_s = t.stop().0;
+        Ok(Realisation {
+            seed,
+            grid: (surface.nx(), surface.ny()),
+            patch_m: (surface.lx(), surface.ly()),
+            surface_sha256: sha,
+            pressures,
+            times,
+        })
+    };
+    let results: Vec<Result<Realisation>> = match parallelism {
+        Parallelism::OneChainAtATime => jobs.iter().map(|&j| run_job(j)).collect(),
+        Parallelism::ChainsConcurrently => run_concurrently(&jobs, run_job)?,
+    };
+    let mut main = Vec::new();
+    let mut grid_check = Vec::new();
+    let mut patch_check = Vec::new();
+    let mut times = StageTimes::default();
+    for (job, r) in jobs.iter().zip(results) {
+        let r = r?;
+        times.add(&r.times);
+        match job {
+            Job::Main(_) => main.push(r),
+            Job::Grid(_) => grid_check.push(r),
+            Job::Patch(_) => patch_check.push(r),
+        }
+    }
+    let table = table_of(config, &main)?;
+    let pressures: Vec<PressureConvergence> = (0..config.loading.pressures_pa.len())
+        .map(|i| convergence_at(config, i, &main, &grid_check, &patch_check))
+        .collect();
+    let surface_description = match source {
+        SurfaceSource::Given { description, .. } => description.clone(),
+        SurfaceSource::Generated => {
+            let s = config.surface;
+            format!(
+                "{count} Gaussian surface(s), Rq {} m, correlation lengths {} x {} m, patch {} x {} m, {}x{} points, seeds {}..={}",
+                s.rq_m, s.clx_m, s.cly_m, s.lx_m, s.ly_m, s.nx, s.ny, s.seed, s.seed.wrapping_add(count as u64 - 1)
+            )
+        }
+    };
+    let mut convergence = ConvergenceStudy {
+        grid_spec,
+        patch_spec,
+        notes: Vec::new(),
+        pressures,
+    };
+    convergence.notes.append(&mut notes);
+    let warnings = warnings_of(config, &main, &convergence);
+    times.total_s = started.elapsed().as_secs_f64();
     Ok(CalibrationRun {
         config: config.clone(),
+        surface_description,
         table,
-        pressures,
-        surface_sha256,
+        realisations: main,
+        grid_check,
+        patch_check,
+        convergence,
+        warnings,
         times,
     })
 }
 
-/// Shape of a sequence along increasing pressure, in words: "rises monotonically",
-/// "falls monotonically", "rises to a maximum of … at … MPa, then falls", etc.
-pub fn describe_shape(pressures_pa: &[f64], values: &[f64]) -> String {
-    let n = values.len();
-    if n < 2 {
-        return "single point".into();
+/// Values of one quantity at pressure `i` over realisations.
+fn values(rs: &[Realisation], i: usize, f: impl Fn(&PressureCalibration) -> f64) -> Vec<f64> {
+    rs.iter().map(|r| f(&r.pressures[i])).collect()
+}
+
+fn kn(pc: &PressureCalibration) -> f64 {
+    pc.sweep.kn_n_per_m3
+}
+fn e0(pc: &PressureCalibration) -> f64 {
+    pc.fit.params.e0
+}
+fn k(pc: &PressureCalibration) -> f64 {
+    pc.fit.params.k
+}
+/// Energy per cycle of the BEM loop at the largest amplitude (J/m²).
+fn energy(pc: &PressureCalibration) -> f64 {
+    pc.amplitudes
+        .loops
+        .last()
+        .map_or(f64::NAN, |l| l.loop_area_j_per_m2)
+}
+
+/// The table: means over the realisations, with intervals when there are at least two.
+fn table_of(config: &CalibrationConfig, rs: &[Realisation]) -> Result<CalibrationTable> {
+    let mut rows = Vec::new();
+    let mut intervals = Vec::new();
+    for (i, &p) in config.loading.pressures_pa.iter().enumerate() {
+        let s = |f: &dyn Fn(&PressureCalibration) -> f64| summarise(&values(rs, i, f));
+        let area = s(&|pc| pc.sweep.contact_area_ratio);
+        let (skn, se0, sk) = (s(&kn), s(&e0), s(&k));
+        let set = s(&|pc| pc.fit.params.et);
+        let sen = s(&energy);
+        rows.push(CalibrationRow {
+            pressure_pa: p,
+            contact_area_ratio: area.mean,
+            kn_n_per_m3: skn.mean,
+            e0_n_per_m3: se0.mean,
+            k: sk.mean,
+            mu: config.contact.mu,
+            et_n_per_m3: set.mean,
+            fit_r2: s(&|pc| pc.fit.r2).mean,
+            energy_per_cycle_j_per_m2: sen.mean,
+        });
+        intervals.push(RowInterval {
+            realisations: rs.len(),
+            contact_area_ratio: area.ci95,
+            kn_n_per_m3: skn.ci95,
+            e0_n_per_m3: se0.ci95,
+            k: sk.ci95,
+            et_n_per_m3: set.ci95,
+            energy_per_cycle_j_per_m2: sen.ci95,
+        });
     }
-    let rising = values.windows(2).all(|w| w[1] > w[0]);
-    let falling = values.windows(2).all(|w| w[1] < w[0]);
-    let (imax, vmax) =
-        values.iter().enumerate().fold(
-            (0, f64::NEG_INFINITY),
-            |b, (i, &v)| if v > b.1 { (i, v) } else { b },
-        );
-    let (imin, vmin) =
-        values.iter().enumerate().fold(
-            (0, f64::INFINITY),
-            |b, (i, &v)| if v < b.1 { (i, v) } else { b },
-        );
-    let mpa = |i: usize| pressures_pa[i] / 1e6;
-    if rising {
-        format!(
-            "rises monotonically from {:.4} at {} MPa to {:.4} at {} MPa",
-            values[0],
-            mpa(0),
-            values[n - 1],
-            mpa(n - 1)
-        )
-    } else if falling {
-        format!(
-            "falls monotonically from {:.4} at {} MPa to {:.4} at {} MPa",
-            values[0],
-            mpa(0),
-            values[n - 1],
-            mpa(n - 1)
-        )
-    } else if imax > 0 && imax < n - 1 {
-        format!(
-            "non-monotonic: {:.4} at {} MPa, maximum {:.4} at {} MPa, {:.4} at {} MPa",
-            values[0],
-            mpa(0),
-            vmax,
-            mpa(imax),
-            values[n - 1],
-            mpa(n - 1)
-        )
+    if rs.len() >= 2 {
+        CalibrationTable::with_intervals(rows, intervals)
     } else {
-        format!(
-            "non-monotonic: {:.4} at {} MPa, minimum {:.4} at {} MPa, {:.4} at {} MPa",
-            values[0],
-            mpa(0),
-            vmin,
-            mpa(imin),
-            values[n - 1],
-            mpa(n - 1)
-        )
+        CalibrationTable::new(rows)
     }
 }
 
-/// A fitted `k` below this is reported as "at the lower bound 0". `k → 1` gives a sharp,
-/// Jenkins-like corner (slope E0 until saturation); `k = 0` the most gradual transition the
-/// Valanis form allows (exponential approach to μFz). A loop whose microslip transition is still
-/// more gradual drives the fit to k = 0; the fit is then the best k = 0 element, and the report
-/// says so.
-pub const K_BOUND_FLAG: f64 = 1e-3;
-
-/// Where the configuration came from (recorded in the sidecar).
-#[derive(Debug, Clone)]
-pub enum ConfigSource {
-    /// The built-in reference case.
-    BuiltIn,
-    /// A TOML file and its bytes.
-    File { path: PathBuf, bytes: Vec<u8> },
-}
-
-/// File names written by [`write_outputs`] into the output directory.
-pub mod files {
-    pub const TABLE: &str = "calibration_table.csv";
-    pub const FITS: &str = "calibration_fits.csv";
-    pub const LOOPS: &str = "calibration_loops.csv";
-    pub const SIDECAR: &str = "calibration.json";
-    pub const KN_PLOT: &str = "kn_vs_pressure.png";
-    pub const E0_PLOT: &str = "e0_vs_pressure.png";
-    pub const K_PLOT: &str = "k_vs_pressure.png";
-    pub const LOOPS_PLOT: &str = "loops_normalised.png";
-
-    /// Per-pressure loop-with-fit figure, e.g. `loop_fit_100000Pa.png`.
-    pub fn loop_plot(pressure_pa: f64) -> String {
-        format!("loop_fit_{pressure_pa}Pa.png")
+fn convergence_at(
+    config: &CalibrationConfig,
+    i: usize,
+    main: &[Realisation],
+    grid: &[Realisation],
+    patch: &[Realisation],
+) -> PressureConvergence {
+    let c = config.convergence;
+    let quantities: [fn(&PressureCalibration) -> f64; 3] = [kn, e0, k];
+    let tolerance = |j: usize, mean: f64| {
+        if j == 2 {
+            c.k_tolerance
+        } else {
+            c.relative_tolerance * mean.abs()
+        }
+    };
+    let checks = |other: &[Realisation], paired: bool| -> [Check; 3] {
+        std::array::from_fn(|j| {
+            if other.is_empty() {
+                return Check::not_checked();
+            }
+            let x = values(main, i, quantities[j]);
+            let y = values(other, i, quantities[j]);
+            let d = if paired {
+                paired_difference(&x, &y)
+            } else {
+                welch_difference(&x, &y)
+            };
+            Check::new(d, tolerance(j, summarise(&x).mean))
+        })
+    };
+    let grid = checks(grid, true);
+    let patch = checks(patch, false);
+    let mut medians: Vec<usize> = main
+        .iter()
+        .map(|r| r.pressures[i].sweep.median_spot_points)
+        .collect();
+    medians.sort_unstable();
+    let median = if medians.len() % 2 == 1 {
+        medians[medians.len() / 2] as f64
+    } else {
+        0.5 * (medians[medians.len() / 2 - 1] + medians[medians.len() / 2]) as f64
+    };
+    let narrowest = main
+        .iter()
+        .map(|r| r.pressures[i].sweep.resolution)
+        .min_by(|a, b| a.points_across().total_cmp(&b.points_across()))
+        .expect("at least one realisation");
+    PressureConvergence {
+        under_resolved_realisations: main
+            .iter()
+            .filter(|r| r.pressures[i].sweep.under_resolved())
+            .count(),
+        min_points_across: narrowest.points_across(),
+        narrowest_is_contact: narrowest.points_across_contact() <= narrowest.points_across_free(),
+        pressure_pa: config.loading.pressures_pa[i],
+        contact_spots: summarise(&values(main, i, |pc| pc.sweep.contact_spots as f64)),
+        median_spot_points: median,
+        min_median_spot_points: medians[0],
+        grid_verdict: Verdict::worst(grid.iter().map(|c| c.verdict)),
+        patch_verdict: Verdict::worst(patch.iter().map(|c| c.verdict)),
+        grid,
+        patch,
     }
 }
 
-/// Write the table, per-pressure fit report, loops, plots and JSON sidecar into `out_dir`
-/// (each file atomically). Returns the paths written.
-pub fn write_outputs(
-    run: &CalibrationRun,
-    source: &ConfigSource,
-    out_dir: &Path,
-) -> Result<Vec<PathBuf>> {
-    let mut written = Vec::new();
-    let pressures: Vec<f64> = run.table.rows.iter().map(|r| r.pressure_pa).collect();
-
-    // Table.
-    let table_path = out_dir.join(files::TABLE);
-    run.table.write_csv(&table_path)?;
-    written.push(table_path.clone());
-
-    // Fit report.
-    let mut fits = String::from(
-        "pressure_Pa,gross_slip_displacement_m,amplitude_m,E0_N_per_m3,k,Et_N_per_m3,fit_R2,fit_nrmse,energy_bem_J_per_m2,energy_valanis_J_per_m2,energy_rel_error,fit_iterations,fit_converged,contact_points,median_spot_points,normal_iterations,tangential_max_step_iterations,tangential_wall_time_s,fit_wall_time_s\n",
-    );
-    for pc in &run.pressures {
-        let (b, f, s) = (&pc.bem, &pc.fit, &pc.sweep);
-        let _ = writeln!(
-            fits,
-            "{},{:e},{:e},{:e},{},{:e},{},{:e},{:e},{:e},{:e},{},{},{},{},{},{},{:.3},{:.3}",
-            b.pressure_pa,
-            b.gross_slip_displacement_m,
-            b.amplitude_m,
-            f.params.e0,
-            f.params.k,
-            f.params.et,
-            f.r2,
-            f.nrmse,
-            f.energy_data,
-            f.energy_model,
-            f.energy_rel_error,
-            f.iterations,
-            f.converged,
-            b.contact_points,
-            s.median_spot_points,
-            s.iterations,
-            b.max_step_iterations,
-            b.wall_time_s,
-            f.wall_time.as_secs_f64()
+fn warnings_of(
+    config: &CalibrationConfig,
+    main: &[Realisation],
+    conv: &ConvergenceStudy,
+) -> Vec<String> {
+    let mut w = Vec::new();
+    let n = main.len();
+    if n == 1 {
+        w.push(
+            "one realisation: the values come from one surface and carry no confidence interval"
+                .to_string(),
         );
     }
-    let fits_path = out_dir.join(files::FITS);
-    write_string_atomic(&fits_path, &fits)?;
-    written.push(fits_path);
-
-    // Loops with fits.
-    let mut loops = String::from(
-        "pressure_Pa,step,displacement_m,shear_stress_bem_Pa,shear_stress_valanis_Pa,steady_cycle\n",
-    );
-    for pc in &run.pressures {
-        let b = &pc.bem;
-        for (i, ((d, t), m)) in b
-            .displacement_m
+    w.extend(conv.notes.iter().cloned());
+    let mpa = |p: f64| format!("{} MPa", p / 1e6);
+    for (i, pc) in conv.pressures.iter().enumerate() {
+        let p = mpa(pc.pressure_pa);
+        if pc.under_resolved_realisations > 0 {
+            w.push(format!(
+                "{p}: under-resolved {} in {} of {n} realisation(s): {:.1} grid points across (fewer than {}; median spot {} grid points): refine the grid",
+                if pc.narrowest_is_contact {
+                    "contact spots"
+                } else {
+                    "free regions"
+                },
+                pc.under_resolved_realisations,
+                pc.min_points_across,
+                RESOLVED_POINTS_ACROSS,
+                pc.median_spot_points
+            ));
+        }
+        if pc.contact_spots.mean < FEW_SPOTS {
+            w.push(format!(
+                "{p}: {:.1} contact spots on the patch on average: the row describes a few asperities, not a rough surface; enlarge the patch",
+                pc.contact_spots.mean
+            ));
+        }
+        for (what, v) in [("grid", pc.grid_verdict), ("patch size", pc.patch_verdict)] {
+            match v {
+                Verdict::NotConverged => w.push(format!("{p}: NOT converged in {what}")),
+                Verdict::Undetermined => w.push(format!(
+                    "{p}: convergence in {what} undetermined (the 95 % interval of the change straddles the tolerance; more realisations would tell)"
+                )),
+                Verdict::NotChecked | Verdict::Converged => {}
+            }
+        }
+        for bound in [KBound::Lower, KBound::Upper] {
+            let hits = main
+                .iter()
+                .filter(|r| KBound::of(r.pressures[i].fit.params.k) == bound)
+                .count();
+            if hits > 0 {
+                w.push(format!(
+                    "{p}: k at its {} bound in {hits} of {n} realisation(s) ({})",
+                    if bound == KBound::Lower {
+                        "lower"
+                    } else {
+                        "upper"
+                    },
+                    k_bound_reading(bound)
+                ));
+            }
+        }
+        let unconverged = main
             .iter()
-            .zip(&b.shear_stress_pa)
-            .zip(&pc.fit.model_force)
-            .enumerate()
-        {
-            let _ = writeln!(
-                loops,
-                "{},{i},{d:e},{t:e},{m:e},{}",
-                b.pressure_pa,
-                u8::from(b.steady.contains(&i))
-            );
+            .filter(|r| !r.pressures[i].fit.converged)
+            .count();
+        if unconverged > 0 {
+            w.push(format!(
+                "{p}: the Valanis fit stopped on its iteration cap ({} per start) in {unconverged} of {n} realisation(s)",
+                config.fit.max_iterations
+            ));
+        }
+        let worst_closure = main
+            .iter()
+            .flat_map(|r| {
+                r.pressures[i]
+                    .amplitudes
+                    .loops
+                    .iter()
+                    .map(|l| l.closure_error)
+            })
+            .fold(0.0, f64::max);
+        if worst_closure > CLOSURE_WARNING {
+            w.push(format!(
+                "{p}: a loop's closure error is {worst_closure:.3} of max mu p: the Masing assumption of the amplitude history is weak here"
+            ));
         }
     }
-    let loops_path = out_dir.join(files::LOOPS);
-    write_string_atomic(&loops_path, &loops)?;
-    written.push(loops_path);
-
-    // Plots.
-    let mpa: Vec<f64> = pressures.iter().map(|p| p / 1e6).collect();
-    let column = |f: fn(&CalibrationRow) -> f64| -> Vec<(f64, f64)> {
-        mpa.iter()
-            .zip(&run.table.rows)
-            .map(|(&p, r)| (p, f(r)))
-            .collect()
-    };
-    type PlotSpec<'a> = (&'a str, &'a str, &'a str, Scale, Vec<(f64, f64)>);
-    let plots: [PlotSpec; 3] = [
-        (
-            files::KN_PLOT,
-            "Normal contact stiffness per unit area vs pressure",
-            "kn (10¹² N/m³)",
-            Scale::Log,
-            column(|r| r.kn_n_per_m3 * 1e-12),
-        ),
-        (
-            files::E0_PLOT,
-            "Valanis E0 (initial tangential stiffness) per unit area vs pressure",
-            "E0 (10¹² N/m³)",
-            Scale::Log,
-            column(|r| r.e0_n_per_m3 * 1e-12),
-        ),
-        (
-            files::K_PLOT,
-            "Valanis shape parameter k vs pressure",
-            "k (-)",
-            Scale::Linear,
-            column(|r| r.k),
-        ),
-    ];
-    // The interpolant users get from the table, drawn on a fine log grid.
-    let (p_lo, p_hi) = run.table.pressure_range();
-    let interp = |name: &str| -> Vec<(f64, f64)> {
-        (0..=200)
-            .map(|i| {
-                let p = p_lo * (p_hi / p_lo).powf(i as f64 / 200.0);
-                let v = run.table.interpolate(p);
-                let y = match name {
-                    files::KN_PLOT => v.kn_n_per_m3 * 1e-12,
-                    files::E0_PLOT => v.e0_n_per_m3 * 1e-12,
-                    _ => v.k,
-                };
-                (p / 1e6, y)
-            })
-            .collect()
-    };
-    for (name, title, ylabel, yscale, pts) in plots {
-        let path = out_dir.join(name);
-        line_plot(
-            &path,
-            &LinePlot {
-                title,
-                x_label: "nominal pressure (MPa)",
-                y_label: ylabel,
-                x_scale: Scale::Log,
-                y_scale: yscale,
-            },
-            &[
-                Series::line(
-                    "table interpolation (monotone cubic in log p)",
-                    interp(name),
-                ),
-                Series::markers("calibrated pressures", pts),
-            ],
-        )?;
-        written.push(path);
-    }
-    for pc in &run.pressures {
-        let b = &pc.bem;
-        let path = out_dir.join(files::loop_plot(b.pressure_pa));
-        let r = b.steady.clone();
-        let title = format!(
-            "Steady loop at {} MPa: BEM and Valanis fit (E0 {:.3e} N/m³, k {:.3}, R² {:.4})",
-            b.pressure_pa / 1e6,
-            pc.fit.params.e0,
-            pc.fit.params.k,
-            pc.fit.r2
-        );
-        line_plot(
-            &path,
-            &LinePlot {
-                title: &title,
-                x_label: "tangential displacement (µm)",
-                y_label: "mean shear stress (MPa)",
-                x_scale: Scale::Linear,
-                y_scale: Scale::Linear,
-            },
-            &[
-                Series::markers(
-                    "BEM (steady cycle)",
-                    r.clone()
-                        .map(|i| (b.displacement_m[i] * 1e6, b.shear_stress_pa[i] / 1e6))
-                        .collect(),
-                ),
-                Series::line(
-                    "Valanis fit",
-                    r.map(|i| (b.displacement_m[i] * 1e6, pc.fit.model_force[i] / 1e6))
-                        .collect(),
-                ),
-            ],
-        )?;
-        written.push(path);
-    }
-    let series: Vec<Series> = run
-        .pressures
-        .iter()
-        .map(|pc| {
-            let b = &pc.bem;
-            let scale = run.config.contact.mu * b.pressure_pa;
-            Series::line(
-                format!("{} MPa (fit R² {:.4})", b.pressure_pa / 1e6, pc.fit.r2),
-                b.steady
-                    .clone()
-                    .map(|i| {
-                        (
-                            b.displacement_m[i] / b.amplitude_m,
-                            b.shear_stress_pa[i] / scale,
-                        )
-                    })
-                    .collect(),
-            )
-        })
-        .collect();
-    let loops_plot = out_dir.join(files::LOOPS_PLOT);
-    line_plot(
-        &loops_plot,
-        &LinePlot {
-            title: "Steady BEM loops, normalised: loop shape versus pressure",
-            x_label: "displacement / amplitude δ/δa (-)",
-            y_label: "shear stress / (μ p) (-)",
-            x_scale: Scale::Linear,
-            y_scale: Scale::Linear,
-        },
-        &series,
-    )?;
-    written.push(loops_plot);
-
-    // Sidecar.
-    let config_toml = run.config.to_toml_string()?;
-    let (source_desc, file_hash) = match source {
-        ConfigSource::BuiltIn => ("built-in reference case".to_string(), None),
-        ConfigSource::File { path, bytes } => (path.display().to_string(), Some(sha256_hex(bytes))),
-    };
-    let table_sha = sha256_hex(&std::fs::read(&table_path).map_err(|e| Error::io(&table_path, e))?);
-    let ks: Vec<f64> = run.table.rows.iter().map(|r| r.k).collect();
-    let kn: Vec<f64> = run.table.rows.iter().map(|r| r.kn_n_per_m3).collect();
-    let e0: Vec<f64> = run.table.rows.iter().map(|r| r.e0_n_per_m3).collect();
-    let per_pressure: Vec<serde_json::Value> = run
-        .pressures
-        .iter()
-        .map(|pc| {
-            serde_json::json!({
-                "pressure_Pa": pc.bem.pressure_pa,
-                "normal": pc.sweep,
-                "tangential": {
-                    "gross_slip_displacement_m": pc.bem.gross_slip_displacement_m,
-                    "amplitude_m": pc.bem.amplitude_m,
-                    "contact_points": pc.bem.contact_points,
-                    "max_step_iterations": pc.bem.max_step_iterations,
-                    "max_step_residual": pc.bem.max_step_residual,
-                    "energy_per_cycle_J_per_m2": pc.bem.energy_per_cycle_j_per_m2,
-                    "wall_time_s": pc.bem.wall_time_s,
-                },
-                "fit": {
-                    "E0_N_per_m3": pc.fit.params.e0,
-                    "k": pc.fit.params.k,
-                    "Et_N_per_m3": pc.fit.params.et,
-                    "R2": pc.fit.r2,
-                    "nrmse": pc.fit.nrmse,
-                    "energy_valanis_J_per_m2": pc.fit.energy_model,
-                    "energy_rel_error": pc.fit.energy_rel_error,
-                    "iterations": pc.fit.iterations,
-                    "converged": pc.fit.converged,
-                    "k_at_lower_bound": pc.fit.params.k < K_BOUND_FLAG,
-                    "final_cost": pc.fit.final_cost,
-                    "wall_time_s": pc.fit.wall_time.as_secs_f64(),
-                },
-            })
-        })
-        .collect();
-    let sidecar = serde_json::json!({
-        "tool": "asperity calibrate",
-        "crate_version": env!("CARGO_PKG_VERSION"),
-        "units": "SI, per unit nominal area: pressures and shear in Pa, displacements in m, kn/E0/Et in N/m^3, energies in J/m^2",
-        "config_source": source_desc,
-        "config": run.config,
-        "input_hashes": {
-            "config_file_sha256": file_hash,
-            "config_canonical_toml_sha256": sha256_hex(config_toml.as_bytes()),
-            "surface_heights_sha256": run.surface_sha256,
-        },
-        "outputs": {
-            "table": files::TABLE,
-            "table_sha256": table_sha,
-            "fits": files::FITS,
-            "loops": files::LOOPS,
-            "plots": [files::KN_PLOT, files::E0_PLOT, files::K_PLOT, files::LOOPS_PLOT],
-            "loop_plots": run.pressures.iter().map(|pc| files::loop_plot(pc.bem.pressure_pa)).collect::<Vec<_>>(),
-        },
-        "method": {
-            "loading": "virgin quarter cycle + one steady cycle (peak to peak) of delta = amplitude*sin(2 pi t) along x, amplitude = amplitude_factor x gross-slip displacement at each pressure",
-            "fit": "Valanis element per unit area, Fz = nominal pressure, mu fixed; Nelder-Mead (argmin) on E0 = E0ref*exp(t0), k = logistic(t1), Et = E0*logistic(t2); cost 1 - R^2 on the steady cycle; element driven by the exact closed-form branch solution",
-            "kn": "dp/d(approach) from the tangent problem on the contact set",
-            "tangential_assumption": crate::contact::tangential::QUASI_IDENTICAL_ASSUMPTION,
-        },
-        "summary": {
-            "kn_rises_monotonically": kn.windows(2).all(|w| w[1] > w[0]),
-            "E0_rises_monotonically": e0.windows(2).all(|w| w[1] > w[0]),
-            "k_shape": describe_shape(&pressures, &ks),
-            "min_fit_R2": run.table.rows.iter().map(|r| r.fit_r2).fold(f64::INFINITY, f64::min),
-        },
-        "per_pressure": per_pressure,
-        "wall_time_s": run.times,
-    });
-    let sidecar_path = out_dir.join(files::SIDECAR);
-    let text = serde_json::to_string_pretty(&sidecar)
-        .map_err(|e| Error::Data(format!("cannot serialise sidecar: {e}")))?;
-    write_string_atomic(&sidecar_path, &(text + "\n"))?;
-    written.push(sidecar_path);
-    Ok(written)
+    w
 }
 
 #[cfg(test)]
@@ -678,17 +912,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shape_descriptions() {
-        let p = [1e5, 1e6, 1e7];
-        assert!(describe_shape(&p, &[0.1, 0.2, 0.3]).starts_with("rises"));
-        assert!(describe_shape(&p, &[0.3, 0.2, 0.1]).starts_with("falls"));
-        assert!(describe_shape(&p, &[0.1, 0.5, 0.3]).contains("maximum 0.5000 at 1 MPa"));
-        assert!(describe_shape(&p, &[0.4, 0.1, 0.3]).contains("minimum 0.1000 at 1 MPa"));
-    }
-
-    #[test]
-    fn progress_units_count_every_step() {
-        let c = CalibrationConfig::reference();
-        assert_eq!(progress_units(&c), 1 + 6 + 6 * 50 + 6);
+    fn k_bounds_are_flagged_with_their_reading() {
+        assert_eq!(KBound::of(7.8e-11), KBound::Lower);
+        assert_eq!(KBound::of(0.9999996), KBound::Upper);
+        assert_eq!(KBound::of(0.5), KBound::Inside);
+        assert!(k_bound_reading(KBound::Lower).contains("gradually"));
+        assert!(k_bound_reading(KBound::Upper).contains("Jenkins"));
+        assert!(k_bound_reading(KBound::Inside).is_empty());
     }
 }

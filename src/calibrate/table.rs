@@ -11,8 +11,20 @@
 //! one row per nominal pressure, pressures strictly increasing and positive. `kn` is the normal
 //! contact stiffness per unit area `dp/dδ` (N/m³), `E0`, `Et` the Valanis stiffnesses per unit area
 //! (N/m³), `k` the Valanis shape parameter, `mu` the friction coefficient, `fit_R2` the coefficient
-//! of determination of the Valanis fit against the BEM loop, `energy_per_cycle_J_per_m2` the
-//! energy the BEM loop dissipates per cycle per unit nominal area.
+//! of determination of the Valanis fit against the BEM loops, `energy_per_cycle_J_per_m2` the
+//! energy the BEM loop dissipates per cycle per unit nominal area (in a calibration over several
+//! amplitudes: at the largest).
+//!
+//! A table computed over several realisations (random surfaces of the same statistics) holds
+//! their **means** in these columns and carries, after them, the number of realisations and the
+//! half-widths of the 95 % confidence intervals of the means ([`INTERVAL_COLUMNS`];
+//! [`crate::calibrate::statistics`]):
+//!
+//! ```text
+//! ...,energy_per_cycle_J_per_m2,realisations,contact_area_ratio_ci95,kn_ci95_N_per_m3,E0_ci95_N_per_m3,k_ci95,Et_ci95_N_per_m3,energy_per_cycle_ci95_J_per_m2
+//! ```
+//!
+//! [`CalibrationTable::read_csv`] reads both forms; interpolation uses the means.
 //!
 //! # Interpolation
 //!
@@ -43,6 +55,67 @@ pub const COLUMNS: [&str; 9] = [
     "fit_R2",
     "energy_per_cycle_J_per_m2",
 ];
+
+/// The columns after [`COLUMNS`] in a table over several realisations.
+pub const INTERVAL_COLUMNS: [&str; 7] = [
+    "realisations",
+    "contact_area_ratio_ci95",
+    "kn_ci95_N_per_m3",
+    "E0_ci95_N_per_m3",
+    "k_ci95",
+    "Et_ci95_N_per_m3",
+    "energy_per_cycle_ci95_J_per_m2",
+];
+
+/// Realisation count and 95 % interval half-widths of one row's means (same units as the row).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RowInterval {
+    /// Realisations the means are taken over (≥ 2).
+    pub realisations: usize,
+    pub contact_area_ratio: f64,
+    pub kn_n_per_m3: f64,
+    pub e0_n_per_m3: f64,
+    pub k: f64,
+    pub et_n_per_m3: f64,
+    pub energy_per_cycle_j_per_m2: f64,
+}
+
+impl RowInterval {
+    fn values(&self) -> [f64; 7] {
+        [
+            self.realisations as f64,
+            self.contact_area_ratio,
+            self.kn_n_per_m3,
+            self.e0_n_per_m3,
+            self.k,
+            self.et_n_per_m3,
+            self.energy_per_cycle_j_per_m2,
+        ]
+    }
+
+    fn from_values(v: [f64; 7]) -> std::result::Result<Self, String> {
+        if !(v[0].fract() == 0.0 && v[0] >= 2.0) {
+            return Err(format!(
+                "`realisations` must be an integer >= 2, got {}",
+                v[0]
+            ));
+        }
+        for (name, x) in INTERVAL_COLUMNS.iter().zip(v).skip(1) {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(format!("`{name}` must be finite and >= 0, got {x}"));
+            }
+        }
+        Ok(Self {
+            realisations: v[0] as usize,
+            contact_area_ratio: v[1],
+            kn_n_per_m3: v[2],
+            e0_n_per_m3: v[3],
+            k: v[4],
+            et_n_per_m3: v[5],
+            energy_per_cycle_j_per_m2: v[6],
+        })
+    }
+}
 
 /// One row of the calibration table (per unit nominal area, SI).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -176,13 +249,40 @@ pub struct Interpolated {
 /// The calibration table: rows sorted by strictly increasing pressure.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct CalibrationTable {
+    /// The rows (means over the realisations when `intervals` is present).
     pub rows: Vec<CalibrationRow>,
+    /// Per row: realisation count and 95 % intervals of the means (tables over several
+    /// realisations), or `None`.
+    pub intervals: Option<Vec<RowInterval>>,
 }
 
 impl CalibrationTable {
     /// Build from rows, checking each row and the pressure ordering.
     pub fn new(rows: Vec<CalibrationRow>) -> Result<Self> {
-        let table = Self { rows };
+        let table = Self {
+            rows,
+            intervals: None,
+        };
+        table.validate()?;
+        Ok(table)
+    }
+
+    /// Build from rows of means and their intervals (one per row).
+    pub fn with_intervals(rows: Vec<CalibrationRow>, intervals: Vec<RowInterval>) -> Result<Self> {
+        if intervals.len() != rows.len() {
+            return Err(Error::param(
+                "intervals",
+                format!("{} intervals for {} rows", intervals.len(), rows.len()),
+            ));
+        }
+        for (i, iv) in intervals.iter().enumerate() {
+            RowInterval::from_values(iv.values())
+                .map_err(|m| Error::param(format!("intervals[{i}]"), m))?;
+        }
+        let table = Self {
+            rows,
+            intervals: Some(intervals),
+        };
         table.validate()?;
         Ok(table)
     }
@@ -215,39 +315,52 @@ impl CalibrationTable {
             .map_err(|e| Error::parse(path, 1, format!("cannot read header: {e}")))?
             .clone();
         let got: Vec<&str> = headers.iter().collect();
-        if got != COLUMNS {
+        let long: Vec<&str> = COLUMNS.iter().chain(&INTERVAL_COLUMNS).copied().collect();
+        let with_intervals = got == long;
+        if got != COLUMNS && !with_intervals {
             return Err(Error::parse(
                 path,
                 1,
                 format!(
-                    "header must be `{}`, got `{}`",
+                    "header must be `{}` (optionally followed by `,{}`), got `{}`",
                     COLUMNS.join(","),
+                    INTERVAL_COLUMNS.join(","),
                     got.join(",")
                 ),
             ));
         }
+        let width = got.len();
         let mut rows: Vec<CalibrationRow> = Vec::new();
+        let mut intervals: Vec<RowInterval> = Vec::new();
         for rec in rdr.records() {
             let (rec, line) = crate::input::csv_record(path, rec)?;
             if rec.len() == 1 && rec.get(0) == Some("") {
                 continue; // blank line
             }
-            if rec.len() != COLUMNS.len() {
+            if rec.len() != width {
                 return Err(Error::parse(
                     path,
                     line,
-                    format!("expected {} fields, found {}", COLUMNS.len(), rec.len()),
+                    format!("expected {width} fields, found {}", rec.len()),
                 ));
             }
-            let mut v = [0.0; 9];
+            let mut all = Vec::with_capacity(width);
             for (j, field) in rec.iter().enumerate() {
-                v[j] = field.parse::<f64>().map_err(|_| {
+                all.push(field.parse::<f64>().map_err(|_| {
                     Error::parse(
                         path,
                         line,
-                        format!("column `{}`: `{field}` is not a number", COLUMNS[j]),
+                        format!("column `{}`: `{field}` is not a number", got[j]),
                     )
-                })?;
+                })?);
+            }
+            let mut v = [0.0; 9];
+            v.copy_from_slice(&all[..9]);
+            if with_intervals {
+                let mut w = [0.0; 7];
+                w.copy_from_slice(&all[9..]);
+                intervals
+                    .push(RowInterval::from_values(w).map_err(|m| Error::parse(path, line, m))?);
             }
             let row = CalibrationRow::from_values(v);
             row.check().map_err(|m| Error::parse(path, line, m))?;
@@ -268,7 +381,10 @@ impl CalibrationTable {
         if rows.is_empty() {
             return Err(Error::parse(path, 0, "calibration table has no data rows"));
         }
-        Ok(Self { rows })
+        Ok(Self {
+            rows,
+            intervals: with_intervals.then_some(intervals),
+        })
     }
 
     /// Write the table atomically (complete file or none).
@@ -277,10 +393,18 @@ impl CalibrationTable {
         write_atomic(path, |w| {
             let mut wtr = csv::Writer::from_writer(w);
             let io = |e: csv::Error| Error::Data(format!("{}: {e}", path.display()));
-            wtr.write_record(COLUMNS).map_err(io)?;
-            for r in &self.rows {
-                wtr.write_record(r.values().iter().map(|v| format!("{v}")))
-                    .map_err(io)?;
+            match &self.intervals {
+                None => wtr.write_record(COLUMNS).map_err(io)?,
+                Some(_) => wtr
+                    .write_record(COLUMNS.iter().chain(&INTERVAL_COLUMNS))
+                    .map_err(io)?,
+            }
+            for (i, r) in self.rows.iter().enumerate() {
+                let mut fields: Vec<String> = r.values().iter().map(|v| format!("{v}")).collect();
+                if let Some(iv) = &self.intervals {
+                    fields.extend(iv[i].values().iter().map(|v| format!("{v}")));
+                }
+                wtr.write_record(fields).map_err(io)?;
             }
             wtr.flush().map_err(|e| Error::io(path, e))?;
             Ok(())
@@ -482,6 +606,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("bad.csv");
         let header = COLUMNS.join(",");
+        let long = format!("{header},{}", INTERVAL_COLUMNS.join(","));
         let cases = [
             (format!("{header}\n1e5,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3\n1e6,0.1,abc,1e12,0.2,0.6,0,0.99,1e-3\n"), ":3", "kn_N_per_m3"),
             (format!("{header}\n1e5,0.1,1e12,1e12,1.2,0.6,0,0.99,1e-3\n"), ":2", "`k`"),
@@ -489,6 +614,25 @@ mod tests {
             (format!("{header}\n1e5,0.1,1e12\n"), ":2", "fields"),
             ("pressure,kn\n1,2\n".to_string(), ":1", "header"),
             (format!("{header}\n"), "bad.csv", "no data"),
+            (
+                format!(
+                    "{long}\n1e5,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3,1,0,1e11,1e11,0.01,0,1e-4\n"
+                ),
+                ":2",
+                "realisations",
+            ),
+            (
+                format!(
+                    "{long}\n1e5,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3,8,0,-1e11,1e11,0.01,0,1e-4\n"
+                ),
+                ":2",
+                "kn_ci95",
+            ),
+            (
+                format!("{long}\n1e5,0.1,1e12,1e12,0.2,0.6,0,0.99,1e-3\n"),
+                ":2",
+                "fields",
+            ),
         ];
         for (text, loc, what) in cases {
             std::fs::write(&p, text).unwrap();
@@ -499,5 +643,28 @@ mod tests {
             );
         }
         assert!(CalibrationTable::read_csv(&dir.path().join("missing.csv")).is_err());
+    }
+
+    #[test]
+    fn csv_round_trip_with_intervals() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        let t = table();
+        let iv = RowInterval {
+            realisations: 8,
+            contact_area_ratio: 1e-4,
+            kn_n_per_m3: 1e11,
+            e0_n_per_m3: 2e11,
+            k: 0.05,
+            et_n_per_m3: 0.0,
+            energy_per_cycle_j_per_m2: 1e-4,
+        };
+        let t = CalibrationTable::with_intervals(t.rows.clone(), vec![iv; t.rows.len()]).unwrap();
+        t.write_csv(&p).unwrap();
+        let back = CalibrationTable::read_csv(&p).unwrap();
+        assert_eq!(back, t);
+        // Interpolation uses the means, as for a table without intervals.
+        assert_eq!(back.interpolate(2e6), table().interpolate(2e6));
+        assert!(CalibrationTable::with_intervals(t.rows.clone(), vec![iv]).is_err());
     }
 }

@@ -1,23 +1,37 @@
-//! `asperity calibrate [CONFIG.toml] [--grid N] [--out-dir calib]`: the whole chain surface →
-//! normal sweep → tangential loops → Valanis fits → calibration table, on the built-in
-//! reference case when no configuration is given. Outputs (SI units, per unit nominal area):
-//! the table CSV, a fit report CSV, the loops CSV, PNGs of kn, E0, k versus pressure and of the
-//! loops with their fits, and a JSON sidecar (config, crate version, input hashes).
+//! `asperity calibrate [CONFIG.toml] [--grid N] [--realisations N] [--surface FILE [--surface
+//! FILE2]] [--out-dir calib]`: the whole chain surface → normal sweep → tangential loops at
+//! several amplitudes → Valanis fits → calibration table (means and 95 % intervals over the
+//! realisations), with grid and patch-size convergence checks, on the built-in reference case
+//! when no configuration is given. Outputs (SI units, per unit nominal area): see
+//! `asperity::calibrate::output`.
 
 use asperity::calibrate::config::CalibrationConfig;
-use asperity::calibrate::pipeline::{self, describe_shape, ConfigSource};
+use asperity::calibrate::convergence::Verdict;
+use asperity::calibrate::output::{self, describe_shape, ConfigSource};
+use asperity::calibrate::pipeline::{self, SurfaceSource};
 use asperity::{Error, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct CalibrateArgs {
     /// Calibration configuration (TOML; see calib/reference.toml). Default: the built-in
-    /// reference case (Rq 0.177 µm, cl 6.6 µm, 250 µm, 1024², steel, μ = 0.6,
-    /// 0.1 0.2 1 2 5 10 MPa).
+    /// reference case (Rq 0.177 µm, cl 6.6 µm, 250 µm, 1024², 8 realisations, steel, μ = 0.6,
+    /// 0.1 0.2 1 2 5 10 MPa, amplitudes 0.2–1.5 × the gross-slip displacement).
     config: Option<PathBuf>,
     /// Grid points per side, overriding the configuration (same patch size): a quick look.
     #[arg(long)]
     grid: Option<usize>,
+    /// Number of realisations (random surfaces of the configured statistics), overriding the
+    /// configuration.
+    #[arg(long)]
+    realisations: Option<usize>,
+    /// A measured surface instead of the generated ones (heights in m; every format `asperity
+    /// surface stats` reads). Give it twice for two rough bodies: body 1, then body 2 in the
+    /// common frame (as `asperity surface combine`); their equivalent surface h1 − h2 is used.
+    /// Both bodies have the configuration's material. Non-periodic files use the zero-padded
+    /// kernels. One surface is one realisation: no interval, no convergence checks.
+    #[arg(long, num_args = 1)]
+    surface: Vec<PathBuf>,
     /// Output directory.
     #[arg(long, default_value = "calib")]
     out_dir: PathBuf,
@@ -38,68 +52,141 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
         None => (CalibrationConfig::reference(), ConfigSource::BuiltIn),
     };
     if let Some(n) = args.grid {
+        if !args.surface.is_empty() {
+            return Err(Error::param(
+                "--grid",
+                "applies to the generated surfaces, not to a --surface file",
+            ));
+        }
         config.surface.nx = n;
         config.surface.ny = n;
-        config.validate().map_err(|e| match e {
-            Error::InvalidParameter { message, .. } => Error::param("--grid", message),
-            other => other,
-        })?;
+        config
+            .validate()
+            .map_err(|e| super::rename_param(e, "--grid"))?;
     }
-    let s = &config.surface;
-    eprintln!(
-        "calibrate: {}×{} grid over {:e} m × {:e} m (Rq {:e} m, cl {:e} m), μ = {}, {} pressures",
-        s.nx,
-        s.ny,
-        s.lx_m,
-        s.ly_m,
-        s.rq_m,
-        s.clx_m,
-        config.contact.mu,
-        config.loading.pressures_pa.len()
-    );
-    let bar = super::progress_bar("calibrate", pipeline::progress_units(&config));
-    let result = pipeline::run(&config, &bar)?;
+    if let Some(n) = args.realisations {
+        if !args.surface.is_empty() && n != 1 {
+            return Err(Error::param(
+                "--realisations",
+                "a --surface file is one realisation",
+            ));
+        }
+        config.realisations.count = n;
+        config
+            .validate()
+            .map_err(|e| super::rename_param(e, "--realisations"))?;
+    }
+    let surfaces = if args.surface.is_empty() {
+        SurfaceSource::Generated
+    } else {
+        let (surface, description) = asperity::surface::io::read_equivalent_surface(&args.surface)
+            .map_err(|e| super::rename_param(e, "--surface"))?;
+        config.realisations.count = 1;
+        SurfaceSource::Given {
+            surface,
+            description,
+        }
+    };
+    match &surfaces {
+        SurfaceSource::Generated => {
+            let s = &config.surface;
+            eprintln!(
+                "calibrate: {} realisation(s), {}×{} grid over {:e} m × {:e} m (Rq {:e} m, cl {:e} m)",
+                config.realisations.count, s.nx, s.ny, s.lx_m, s.ly_m, s.rq_m, s.clx_m
+            );
+        }
+        SurfaceSource::Given {
+            surface,
+            description,
+        } => eprintln!(
+            "calibrate: {description}, {}",
+            super::surface_summary(surface)
+        ),
+    }
+    eprintln!("calibrate: {}", output::describe_config(&config));
+    let bar = super::progress_bar("calibrate", pipeline::progress_units(&config, &surfaces));
+    let result = pipeline::run(&config, &surfaces, &bar);
     bar.finish_and_clear();
-    let written = pipeline::write_outputs(&result, &source, &args.out_dir)?;
+    let result = result?;
+    let (written, output_s) = output::write_outputs(&result, &source, &args.out_dir)?;
 
+    let n = result.realisations.len();
     println!(
-        "pressure_MPa  area_ratio   kn_N_per_m3   E0_N_per_m3       k   fit_R2  nrmse   energy_err"
+        "means over {n} realisation(s){}:",
+        if n >= 2 {
+            ", ± half-width of the 95 % interval"
+        } else {
+            ""
+        }
     );
-    for (r, pc) in result.table.rows.iter().zip(&result.pressures) {
+    println!(
+        "pressure_MPa  area_ratio    kn_N_per_m3              E0_N_per_m3              k                 mean_R2"
+    );
+    for (i, r) in result.table.rows.iter().enumerate() {
+        let iv = result.table.intervals.as_ref().map(|v| v[i]);
+        let pm = |h: Option<f64>| h.map_or(String::new(), |h| format!(" ± {h:.2e}"));
         println!(
-            "{:>12.3}  {:>10.3e}  {:>12.4e}  {:>12.4e}  {:>6.4}  {:>7.5}  {:>5.3}  {:>+10.2e}",
+            "{:>12.3}  {:>10.3e}  {:>10.4e}{:<13}  {:>10.4e}{:<13}  {:>6.4}{:<10}  {:>7.5}",
             r.pressure_pa / 1e6,
             r.contact_area_ratio,
             r.kn_n_per_m3,
+            pm(iv.map(|v| v.kn_n_per_m3)),
             r.e0_n_per_m3,
+            pm(iv.map(|v| v.e0_n_per_m3)),
             r.k,
-            r.fit_r2,
-            pc.fit.nrmse,
-            pc.fit.energy_rel_error
+            iv.map_or(String::new(), |v| format!(" ± {:.3}", v.k)),
+            r.fit_r2
         );
     }
     let p: Vec<f64> = result.table.rows.iter().map(|r| r.pressure_pa).collect();
     let k: Vec<f64> = result.table.rows.iter().map(|r| r.k).collect();
-    println!("k(p): {}", describe_shape(&p, &k));
-    let at_bound: Vec<String> = result
-        .table
-        .rows
-        .iter()
-        .filter(|r| r.k < pipeline::K_BOUND_FLAG)
-        .map(|r| format!("{} MPa", r.pressure_pa / 1e6))
-        .collect();
-    if !at_bound.is_empty() {
+    println!("mean k(p): {}", describe_shape(&p, &k));
+    println!(
+        "resolution and convergence (grid: same surfaces at half the points per side; patch: half the patch side, same spacing):"
+    );
+    println!("pressure_MPa  spots_per_patch  median_points_per_spot  grid          patch");
+    for c in &result.convergence.pressures {
         println!(
-            "note: k reached its lower bound 0 at {} (the BEM loop's microslip transition is \
-             more gradual than any Valanis element with k >= 0 gives; the fit is the best k = 0 \
-             element)",
-            at_bound.join(", ")
+            "{:>12.3}  {:>15.1}  {:>22}  {:<12}  {:<12}",
+            c.pressure_pa / 1e6,
+            c.contact_spots.mean,
+            c.median_spot_points,
+            c.grid_verdict.as_str(),
+            c.patch_verdict.as_str()
         );
+    }
+    let converged = result
+        .convergence
+        .pressures
+        .iter()
+        .filter(|c| c.grid_verdict == Verdict::Converged && c.patch_verdict == Verdict::Converged)
+        .count();
+    println!(
+        "{converged} of {} pressure(s) converged in both grid and patch size",
+        result.convergence.pressures.len()
+    );
+    for w in &result.warnings {
+        println!("warning: {w}");
     }
     let t = result.times;
     println!(
-        "time: surface {:.1} s, normal sweep {:.1} s, loops {:.1} s, fits {:.1} s, total {:.1} s",
-        t.surface_s, t.normal_sweep_s, t.tangential_loops_s, t.fits_s, t.total_s
+        "time: wall {:.1} s + output {:.1} s; CPU time of the stages summed over all chains ({} main{}): surface {:.1} s, normal {:.1} s, tangential {:.1} s, fit {:.1} s",
+        t.total_s,
+        output_s,
+        result.realisations.len(),
+        if result.grid_check.len() + result.patch_check.len() > 0 {
+            format!(
+                ", {} grid-check, {} patch-check",
+                result.grid_check.len(),
+                result.patch_check.len()
+            )
+        } else {
+            String::new()
+        },
+        t.surface_cpu_s,
+        t.normal_cpu_s,
+        t.tangential_cpu_s,
+        t.fit_cpu_s
     );
     for w in written {
         println!("wrote {}", w.display());

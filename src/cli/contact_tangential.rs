@@ -46,6 +46,12 @@ pub struct TangentialArgs {
     /// default 1024). Smaller values give a quick, coarser look.
     #[arg(long)]
     grid: Option<usize>,
+    /// A measured surface instead of the reference generated one (heights in m; every format
+    /// `asperity surface stats` reads). Give it twice for two rough bodies: body 1, then body 2
+    /// in the common frame (as `asperity surface combine`); their equivalent surface h1 − h2 is
+    /// used. Non-periodic files use the zero-padded kernels (normal and tangential).
+    #[arg(long, num_args = 1)]
+    surface: Vec<PathBuf>,
     /// Young's modulus of both bodies (Pa).
     #[arg(long, default_value_t = 210e9)]
     youngs_modulus_pa: f64,
@@ -114,29 +120,46 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         operator,
     };
     asperity::error::require_positive("--tolerance", args.tolerance)?;
-    let mut spec = GaussianSurfaceSpec::reference();
-    if let Some(n) = args.grid {
-        if n < 8 {
+    let started = std::time::Instant::now();
+    let (surface, source) = if args.surface.is_empty() {
+        let mut spec = GaussianSurfaceSpec::reference();
+        if let Some(n) = args.grid {
+            if n < 8 {
+                return Err(Error::param(
+                    "--grid",
+                    format!("must be at least 8, got {n}"),
+                ));
+            }
+            spec.nx = n;
+            spec.ny = n;
+        }
+        spec.validate()
+            .map_err(|e| super::rename_param(e, "--grid"))?;
+        (
+            generate(&spec)?,
+            format!(
+                "reference generated surface (Rq {} m, correlation length {} m, {} m, {}², seed {})",
+                spec.rq_m, spec.clx_m, spec.lx_m, spec.nx, spec.seed
+            ),
+        )
+    } else {
+        if args.grid.is_some() {
             return Err(Error::param(
                 "--grid",
-                format!("must be at least 8, got {n}"),
+                "applies to the generated surface, not to a --surface file",
             ));
         }
-        spec.nx = n;
-        spec.ny = n;
-    }
-    spec.validate()
-        .map_err(|e| super::rename_param(e, "--grid"))?;
-
-    let started = std::time::Instant::now();
-    let surface = generate(&spec)?;
-    let source = format!(
-        "reference generated surface (Rq {} m, correlation length {} m, {} m, {}², seed {})",
-        spec.rq_m, spec.clx_m, spec.lx_m, spec.nx, spec.seed
-    );
+        asperity::surface::io::read_equivalent_surface(&args.surface)
+            .map_err(|e| super::rename_param(e, "--surface"))?
+    };
+    let boundary = if surface.periodic {
+        Boundary::Periodic
+    } else {
+        Boundary::ZeroPadded
+    };
     eprintln!(
-        "surface: {source}; spacing {:.4e} m, periodic; E* = {e_star:.4e} Pa, μ = {mu}",
-        surface.dx
+        "surface: {source}; {}; E* = {e_star:.4e} Pa, μ = {mu}",
+        super::surface_summary(&surface)
     );
 
     let steps_per_pressure = (args.cycles * args.steps_per_cycle) as u64;
@@ -166,7 +189,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 pressure,
                 dx: surface.dx,
                 dy: surface.dy,
-                boundary: Boundary::Periodic,
+                boundary,
                 friction_coefficient: mu,
                 body1: material,
                 body2: material,
@@ -224,14 +247,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     );
     let _ = writeln!(head, "# assumption: {}", results[0].metadata.assumption);
     let _ = writeln!(head, "# surface: {source}");
-    let _ = writeln!(
-        head,
-        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy
-    );
+    let _ = writeln!(head, "{}", super::grid_header(&surface));
     let _ = writeln!(
         head,
         "# youngs_modulus_Pa = {:e}, poisson_ratio = {} (both bodies), friction_coefficient = {mu}",

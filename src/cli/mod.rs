@@ -9,10 +9,39 @@ pub mod diagnose;
 pub mod elements;
 pub mod film;
 pub mod merge;
+pub mod response;
 pub mod surface;
 
 use asperity::surface::combine::Material;
-use asperity::{Error, Result};
+use asperity::{Error, Grid2, Result};
+
+/// `"nx × ny points, spacing dx × dy m, periodic"` (or `non-periodic (zero-padded kernels)`).
+pub fn surface_summary(surface: &Grid2) -> String {
+    format!(
+        "{} × {} points, spacing {:.4e} × {:.4e} m, {}",
+        surface.nx(),
+        surface.ny(),
+        surface.dx,
+        surface.dy,
+        if surface.periodic {
+            "periodic"
+        } else {
+            "non-periodic (zero-padded kernels)"
+        }
+    )
+}
+
+/// The `# grid: …` provenance line of the contact CSVs.
+pub fn grid_header(surface: &Grid2) -> String {
+    format!(
+        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
+        surface.nx(),
+        surface.ny(),
+        surface.dx,
+        surface.dy,
+        surface.periodic
+    )
+}
 
 /// Name the CLI flag in a parameter error raised by the library.
 pub fn rename_param(e: Error, flag: &str) -> Error {

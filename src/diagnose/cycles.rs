@@ -172,6 +172,11 @@ pub fn segment(time_s: &[f64], displacement_m: &[f64]) -> Result<Cycles> {
 }
 
 /// Phase of the contact within a half-cycle.
+///
+/// The first four are classified from a model force ([`classify_phases`]); `Clearance` (the
+/// force stays near zero while the drive crosses a free play) and `Closing` (the first 5 % of
+/// the stroke after the play is taken up) are found in the measured force
+/// (`super::residual::clearance_regions`), since a model without a clearance cannot show them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Phase {
@@ -179,14 +184,18 @@ pub enum Phase {
     Stick,
     Microslip,
     Macroslip,
+    Clearance,
+    Closing,
 }
 
 impl Phase {
-    pub const ALL: [Phase; 4] = [
+    pub const ALL: [Phase; 6] = [
         Phase::Reversal,
         Phase::Stick,
         Phase::Microslip,
         Phase::Macroslip,
+        Phase::Clearance,
+        Phase::Closing,
     ];
 
     pub fn name(self) -> &'static str {
@@ -195,6 +204,20 @@ impl Phase {
             Phase::Stick => "stick",
             Phase::Microslip => "microslip",
             Phase::Macroslip => "macroslip",
+            Phase::Clearance => "clearance",
+            Phase::Closing => "closing",
+        }
+    }
+
+    /// Words for a report ("at the closing of a clearance").
+    pub fn description(self) -> &'static str {
+        match self {
+            Phase::Reversal => "at the reversals",
+            Phase::Stick => "in stick",
+            Phase::Microslip => "in microslip",
+            Phase::Macroslip => "in macroslip",
+            Phase::Clearance => "across the clearance (near-zero force plateau)",
+            Phase::Closing => "at the closing of a clearance",
         }
     }
 }

@@ -1,15 +1,20 @@
 //! Report of a diagnosis: text, JSON, a CSV of the time series and PNG figures (measured,
-//! before, after), every file written atomically.
+//! before, after; residual against the noise floor), every file written atomically.
 //!
-//! Units: displacement m (figures in mm), force N, energy J, stiffness N/m. Error measures are
-//! dimensionless (see [`super::select::Errors`]).
+//! Units: displacement m (figures in nm, µm or mm, whichever suits the amplitude), force N,
+//! energy J, stiffness N/m. Residuals are given in N and as multiples of the noise floor σ.
+//! The baseline's slip force is reported in N; a friction coefficient `μ` only when the normal
+//! load is known (a measured normal-force column, or a calibration table's `N = p·A`).
 
-use super::cycles::classify_phases;
-use super::select::{Candidate, Diagnosis, Errors, FitInfo, PhaseStats, Round};
-use super::{Baseline, Effect};
+use super::cycles::Phase;
+use super::noise::NoiseFloor;
+use super::residual::PhaseStats;
+use super::select::{Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict};
+use super::stationarity::{Stationarity, Trend};
+use super::{Bound, Effect};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
-use crate::plot::{line_plot, LinePlot, Scale, Series};
+use crate::plot::{length_unit, line_plot, LinePlot, Scale, Series};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -20,6 +25,29 @@ pub struct InputInfo {
     pub columns: Vec<String>,
     /// Baseline description, e.g. "fitted to the training cycles" or the table and pressure.
     pub baseline_source: String,
+}
+
+/// The baseline element as reported: stiffnesses in N/m, slip force in N; the normal load and
+/// friction coefficient only when the normal load is known.
+#[derive(Debug, Clone, Serialize)]
+pub struct BaselineReport {
+    pub e0_n_per_m: f64,
+    pub k: f64,
+    pub et_n_per_m: f64,
+    pub slip_force_n: f64,
+    pub normal_load_n: Option<f64>,
+    pub friction_coefficient: Option<f64>,
+    /// Fitted parameters on a bound.
+    pub at_bound: Vec<(String, Bound)>,
+}
+
+/// Zero-force plateaus found in the measured force.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClearanceSummary {
+    pub half_cycles_with_plateau: usize,
+    pub half_cycles: usize,
+    /// Mean displacement span of the plateaus: the free play (m).
+    pub mean_free_play_m: f64,
 }
 
 /// The JSON report.
@@ -34,15 +62,18 @@ pub struct Report {
     pub period_s: f64,
     pub amplitude_m: f64,
     pub force_scale_n: f64,
-    pub baseline: Baseline,
+    pub noise: NoiseFloor,
+    pub baseline: BaselineReport,
     pub baseline_fit: FitInfo,
-    pub residual_before: Vec<PhaseStats>,
-    pub residual_after: Vec<PhaseStats>,
+    pub residual_before: Character,
+    pub residual_after: Character,
+    pub clearance: Option<ClearanceSummary>,
+    pub stationarity: Stationarity,
     pub rounds: Vec<Round>,
-    /// Effects added, in order; empty means "no effect needed".
+    /// Effects added, in order.
     pub effects_added: Vec<Effect>,
+    pub verdict: Verdict,
     pub conclusion: String,
-    pub final_model: super::Model,
     /// Fitted parameters of the effects added, with units: `(effect, name (unit), value)`.
     pub final_effect_parameters: Vec<(Effect, String, f64)>,
     pub parameters_before: usize,
@@ -53,13 +84,29 @@ pub struct Report {
     pub nrms_reduction: f64,
 }
 
+/// A length in the unit that suits it, e.g. `1.59 mm`, `85 nm`.
+fn length(v: f64) -> String {
+    let (f, u) = length_unit(v);
+    format!("{:.3} {u}", v * f)
+}
+
+fn opt(v: Option<f64>, prec: usize) -> String {
+    v.map_or("—".to_string(), |x| format!("{x:.prec$}"))
+}
+
 impl Report {
     pub fn new(d: &Diagnosis, input: InputInfo) -> Self {
         let p = &d.prepared;
         let nc = p.cycles.cycles.len();
         let added = d.effects_added();
-        let conclusion = conclusion(&added, &d.rounds);
-        Self {
+        let b = d.baseline.baseline;
+        let clearance = (!d.clearances.is_empty()).then(|| ClearanceSummary {
+            half_cycles_with_plateau: d.clearances.len(),
+            half_cycles: p.cycles.half_cycles.len(),
+            mean_free_play_m: d.clearances.iter().map(|c| c.span_m).sum::<f64>()
+                / d.clearances.len() as f64,
+        });
+        let mut r = Self {
             input,
             samples_analysed: p.record.len(),
             block_average_factor: p.decimation,
@@ -69,14 +116,25 @@ impl Report {
             period_s: p.cycles.period_s,
             amplitude_m: p.cycles.amplitude_m,
             force_scale_n: p.drive.force_scale_n,
-            baseline: d.baseline.baseline,
+            noise: p.noise.clone(),
+            baseline: BaselineReport {
+                e0_n_per_m: b.valanis.e0,
+                k: b.valanis.k,
+                et_n_per_m: b.valanis.et,
+                slip_force_n: b.slip_force_n(),
+                normal_load_n: d.normal_load_known.then_some(b.normal_n),
+                friction_coefficient: d.normal_load_known.then_some(b.valanis.mu),
+                at_bound: d.baseline_at_bound.clone(),
+            },
             baseline_fit: d.baseline_fit.clone(),
-            residual_before: d.phases_before.clone(),
-            residual_after: d.phases_after.clone(),
+            residual_before: d.before.clone(),
+            residual_after: d.after.clone(),
+            clearance,
+            stationarity: d.stationarity.clone(),
             rounds: d.rounds.clone(),
             effects_added: added,
-            conclusion,
-            final_model: d.final_model.clone(),
+            verdict: d.verdict,
+            conclusion: String::new(),
             final_effect_parameters: d
                 .final_model
                 .effects
@@ -93,7 +151,150 @@ impl Report {
             errors_before: d.errors_before,
             errors_after: d.errors_after,
             nrms_reduction: 1.0 - d.errors_after.nrms / d.errors_before.nrms,
+        };
+        r.conclusion = r.conclusion_text();
+        r
+    }
+
+    /// The accepted candidates, in order.
+    fn accepted(&self) -> Vec<&Candidate> {
+        self.rounds
+            .iter()
+            .filter_map(|r| {
+                let e = r.accepted?;
+                r.candidates.iter().find(|c| c.effect == e)
+            })
+            .collect()
+    }
+
+    fn effect_sentence(c: &Candidate) -> String {
+        let params: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(n, v)| {
+                if n.ends_with("(m)") {
+                    format!("{} = {}", n.trim_end_matches(" (m)"), length(*v))
+                } else {
+                    format!("{n} = {v:.4e}")
+                }
+            })
+            .collect();
+        format!(
+            "{} ({}; z = {:.0}, explains {} of the excess residual; {})",
+            c.effect.id(),
+            params.join(", "),
+            c.evidence_z,
+            c.explained_fraction
+                .map_or("all".to_string(), |e| format!("{:.0} %", 100.0 * e)),
+            c.effect.meaning()
+        )
+    }
+
+    /// The verdict in words (module documentation of [`super::select`]).
+    fn conclusion_text(&self) -> String {
+        let sigma = self.noise.sigma_n;
+        let after = &self.residual_after;
+        let r = after.held_out_rms_over_noise;
+        let found: Vec<String> = self
+            .accepted()
+            .into_iter()
+            .map(Self::effect_sentence)
+            .collect();
+        // A floor set by slow, cycle-to-cycle scatter is that of any periodic model, not of the
+        // measurement: say so beside every verdict.
+        let fast = self.noise.high_pass_n;
+        let caveat = if fast > 0.0 && fast < 0.5 * sigma {
+            format!(
+                "; note: the record is not repeatable cycle to cycle — its scatter σ is {:.1}× \
+                 the fast measurement noise ({fast:.3e} N), so the floor is that of any \
+                 periodic model, not of the instrument",
+                sigma / fast
+            )
+        } else {
+            String::new()
+        };
+        let verdict = match self.verdict {
+            Verdict::ModelAdequate => format!(
+                "model adequate: the baseline's held-out residual is {r:.2}× the noise floor \
+                 (σ = {sigma:.4e} N){}; no effect needed",
+                worst(after)
+            ),
+            Verdict::EffectsFound => format!(
+                "effect(s) found: {}; the held-out residual is now {r:.2}× the noise floor \
+                 (σ = {sigma:.4e} N){}",
+                found.join("; then "),
+                worst(after)
+            ),
+            Verdict::ModelInadequate => {
+                let mut s = format!(
+                    "model inadequate, residual unexplained: the held-out residual is {r:.1}× \
+                     the noise floor (σ = {sigma:.4e} N){}",
+                    worst(after)
+                );
+                let shares: Vec<String> = after
+                    .concentrated_at
+                    .iter()
+                    .filter_map(|ph| after.phases.iter().find(|p| p.phase == *ph))
+                    .map(|p| {
+                        format!(
+                            "{} ({:.0} % of the excess in {} samples, {:.1}× σ)",
+                            p.phase.description(),
+                            100.0 * p.excess_share,
+                            p.samples,
+                            p.rms_over_noise.unwrap_or(f64::NAN)
+                        )
+                    })
+                    .collect();
+                s += &if shares.is_empty() {
+                    "; spread over the whole loop".to_string()
+                } else {
+                    format!("; concentrated {}", shares.join(" and "))
+                };
+                s += &match &after.ringing {
+                    Some(ri) => format!(
+                        "; periodic: ringing at {:.3} Hz, damping ratio {}, {:.3e} N RMS \
+                         (a lightly damped mode in the load path)",
+                        ri.frequency_hz,
+                        opt(ri.damping_ratio, 3),
+                        ri.rms_n
+                    ),
+                    None => "; no ringing".to_string(),
+                };
+                s += &if self.stationarity.drifts() {
+                    format!("; drifts: {}", self.stationarity.findings.join("; "))
+                } else if self.stationarity.testable {
+                    "; no drift".to_string()
+                } else {
+                    "; drift not testable (fewer than 3 cycles)".to_string()
+                };
+                if !found.is_empty() {
+                    s += &format!("; explained in part by {}", found.join("; then "));
+                }
+                s
+            }
+        };
+        verdict + &caveat
+    }
+
+    /// Findings beside the verdict: drift, clearance, noise notes.
+    pub fn findings(&self) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .stationarity
+            .findings
+            .iter()
+            .map(|f| format!("drift: {f}"))
+            .collect();
+        if let Some(c) = &self.clearance {
+            v.push(format!(
+                "clearance: the measured force has a zero-force plateau in {} of {} half-cycles; \
+                 free play {}",
+                c.half_cycles_with_plateau,
+                c.half_cycles,
+                length(c.mean_free_play_m)
+            ));
         }
+        v.extend(self.noise.notes.iter().map(|n| format!("noise: {n}")));
+        v
     }
 
     /// Human-readable report.
@@ -108,29 +309,43 @@ impl Report {
         );
         s += &format!(
             "analysed: {} samples (block average ×{}), {} complete cycles, period {:.4} s, \
-             amplitude {:.4e} m, force amplitude {:.4e} N\n",
+             amplitude {}, force amplitude {:.4e} N\n",
             self.samples_analysed,
             self.block_average_factor,
             self.complete_cycles,
             self.period_s,
-            self.amplitude_m,
+            length(self.amplitude_m),
             self.force_scale_n
         );
         s += &format!(
             "fit on cycles {:?}, scored on held-out cycles {:?}\n\n",
             self.training_cycles, self.held_out_cycles
         );
+        let nf = &self.noise;
         s += &format!(
-            "baseline Valanis element ({}): E0 = {:.4e} N/m, k = {:.4}, Et = {:.4e} N/m, \
-             mu = {:.4e}, N = {:.4e} N, slip force mu*N = {:.4e} N\n",
-            self.input.baseline_source,
-            b.valanis.e0,
-            b.valanis.k,
-            b.valanis.et,
-            b.valanis.mu,
-            b.normal_n,
-            b.slip_force_n()
+            "noise floor σ = {:.4e} N (cycle-to-cycle repeatability, {} differences across {} \
+             cycles); high-pass cross-check {:.4e} N; noise lag-1 autocorrelation {:.2}\n",
+            nf.sigma_n,
+            nf.repeatability_samples,
+            nf.across_cycles,
+            nf.high_pass_n,
+            nf.lag1_autocorrelation
         );
+        for n in &nf.notes {
+            s += &format!("  note: {n}\n");
+        }
+        s += &format!(
+            "\nbaseline Valanis element ({}): E0 = {:.4e} N/m, k = {:.4}, Et = {:.4e} N/m, \
+             slip force = {:.4e} N",
+            self.input.baseline_source, b.e0_n_per_m, b.k, b.et_n_per_m, b.slip_force_n
+        );
+        s += &match (b.normal_load_n, b.friction_coefficient) {
+            (Some(n), Some(mu)) => format!(" (normal load {n:.4e} N, μ = {mu:.4})\n"),
+            _ => " (normal load not known: no friction coefficient)\n".to_string(),
+        };
+        for (name, bound) in &b.at_bound {
+            s += &format!("  {name} is on its {} bound\n", bound.name());
+        }
         s += &format!(
             "  fit: {} iterations, final cost {:.3e}, converged {}, {:.2} s\n\n",
             self.baseline_fit.iterations,
@@ -138,48 +353,75 @@ impl Report {
             self.baseline_fit.converged,
             self.baseline_fit.wall_time_s
         );
-        s += "residual before (measured − baseline, / force amplitude; mean signed with the \
-              direction of motion):\n";
-        s += &phase_table(&self.residual_before);
+        s += &format!(
+            "residual before (measured − baseline, held-out cycles): RMS {:.2}× the noise floor\n",
+            self.residual_before.held_out_rms_over_noise
+        );
+        s += &phase_table(&self.residual_before.phases);
         for (r, round) in self.rounds.iter().enumerate() {
             s += &format!(
-                "\nround {}: candidate effects (ΔBIC on held-out cycles; accepted when < {})\n",
+                "\nround {}: candidate effects, scored on the held-out cycles (accepted when \
+                 z ≥ {}, explaining ≥ {:.0} % of the excess, better in every held-out cycle, \
+                 no parameter on a bound)\n",
                 r + 1,
-                super::select::BIC_THRESHOLD
+                super::select::EVIDENCE_Z,
+                100.0 * super::select::MIN_EXPLAINED
             );
             s += &format!(
-                "  {:<28} {:>3} {:>11} {:>11} {:>8} {:>10}  parameters\n",
-                "effect", "Δp", "train nrms", "held nrms", "n_eff", "ΔBIC"
+                "  {:<28} {:>3} {:>9} {:>9} {:>9} {:>7}  {:<44} parameters\n",
+                "effect", "Δp", "held/σ", "z", "explains", "cycles", "decision"
             );
             let mut cands: Vec<&Candidate> = round.candidates.iter().collect();
-            cands.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+            cands.sort_by(|a, b| b.delta_rss.total_cmp(&a.delta_rss));
             for c in cands {
                 let params: Vec<String> = c
                     .parameters
                     .iter()
-                    .map(|(n, v)| format!("{n} = {v:.4e}"))
+                    .map(|(n, v)| {
+                        let mark = c
+                            .at_bound
+                            .iter()
+                            .find(|(m, _)| m == n)
+                            .map_or(String::new(), |(_, b)| format!(" [{} bound]", b.name()));
+                        format!("{n} = {v:.4e}{mark}")
+                    })
                     .collect();
                 s += &format!(
-                    "  {:<28} {:>3} {:>11.4e} {:>11.4e} {:>8.1} {:>10.1}  {}\n",
+                    "  {:<28} {:>3} {:>9.2} {:>9.1} {:>9} {:>7}  {:<44} {}\n",
                     c.effect.id(),
                     c.extra_parameters,
-                    c.train_nrms,
-                    c.held_out_nrms,
-                    c.n_eff,
-                    c.delta_bic,
+                    c.held_out_rms_over_noise,
+                    c.evidence_z,
+                    c.explained_fraction
+                        .map_or("—".to_string(), |e| format!("{:.0} %", 100.0 * e)),
+                    format!("{}/{}", c.improved_cycles.0, c.improved_cycles.1),
+                    c.decision,
                     params.join(", ")
                 );
             }
             s += &match round.accepted {
                 Some(e) => format!("  → accepted: {} ({})\n", e.id(), e.meaning()),
-                None => "  → no candidate has sufficient evidence: no further effect needed\n"
-                    .to_string(),
+                None => "  → no candidate passes\n".to_string(),
             };
         }
-        s += &format!("\nconclusion: {}\n", self.conclusion);
+        s += &format!("\nverdict: {}\n", self.verdict.name());
+        s += &format!("conclusion: {}\n", self.conclusion);
         for (e, name, v) in &self.final_effect_parameters {
             s += &format!("  {}: {name} = {v:.4e}\n", e.id());
         }
+        let findings = self.findings();
+        if !findings.is_empty() {
+            s += "findings:\n";
+            for f in findings {
+                s += &format!("  {f}\n");
+            }
+        }
+        s += &format!(
+            "\nstationarity over the cycles at the steady amplitude {:?} (baseline fitted to each \
+             cycle alone; Student-t trend test, 1 % level, reported when the change is ≥ 5 %):\n",
+            self.stationarity.cycles
+        );
+        s += &trend_table(&self.stationarity);
         s += "\n";
         s += &format!(
             "errors (all complete cycles)     before       after\n\
@@ -187,6 +429,7 @@ impl Report {
              peak force error            {:>11.4e} {:>11.4e}\n\
              energy-per-cycle error      {:>11.4e} {:>11.4e}\n\
              held-out normalised RMS     {:>11.4e} {:>11.4e}\n\
+             held-out RMS / noise floor  {:>11.2} {:>11.2}\n\
              parameters                  {:>11} {:>11}\n\
              RMS error reduction: {:.1} %\n",
             self.errors_before.nrms,
@@ -197,55 +440,66 @@ impl Report {
             self.errors_after.energy_error,
             self.errors_before.held_out_nrms,
             self.errors_after.held_out_nrms,
+            self.errors_before.held_out_rms_over_noise,
+            self.errors_after.held_out_rms_over_noise,
             self.parameters_before,
             self.parameters_after,
             100.0 * self.nrms_reduction
         );
         if !self.effects_added.is_empty() {
-            s += "\nresidual after:\n";
-            s += &phase_table(&self.residual_after);
+            s += "\nresidual after (measured − final model, held-out cycles):\n";
+            s += &phase_table(&self.residual_after.phases);
         }
         s
     }
 }
 
-fn conclusion(added: &[Effect], rounds: &[Round]) -> String {
-    if added.is_empty() {
-        return "no effect needed: no candidate improves the held-out cycles enough to pay for \
-                its parameters"
-            .into();
+/// ", at most 1.4× in any phase" / ", 3.1× in microslip".
+fn worst(c: &Character) -> String {
+    match c.worst_phase {
+        Some((ph, r)) if c.adequate => format!(", at most {r:.1}× in any phase ({})", ph.name()),
+        Some((ph, r)) => format!(", {r:.1}× {}", ph.description()),
+        None => String::new(),
     }
-    let parts: Vec<String> = rounds
-        .iter()
-        .filter_map(|r| {
-            let e = r.accepted?;
-            let c = r.candidates.iter().find(|c| c.effect == e)?;
-            Some(format!(
-                "{} (ΔBIC {:.0}; {})",
-                e.id(),
-                c.delta_bic,
-                e.meaning()
-            ))
-        })
-        .collect();
-    format!("effect found: {}", parts.join("; then "))
 }
 
 fn phase_table(stats: &[PhaseStats]) -> String {
     let mut s = format!(
-        "  {:<10} {:>8} {:>14} {:>13}\n",
-        "phase", "samples", "mean residual", "rms residual"
+        "  {:<10} {:>8} {:>13} {:>13} {:>8} {:>14}\n",
+        "phase", "samples", "mean (N)", "rms (N)", "rms/σ", "excess share"
     );
+    let e = |v: Option<f64>| v.map_or("—".to_string(), |x| format!("{x:.4e}"));
     for p in stats {
+        if p.samples == 0 && matches!(p.phase, Phase::Clearance | Phase::Closing) {
+            continue;
+        }
         s += &format!(
-            "  {:<10} {:>8} {:>14.4e} {:>13.4e}\n",
+            "  {:<10} {:>8} {:>13} {:>13} {:>8} {:>13.0}%\n",
             p.phase.name(),
             p.samples,
-            p.mean_residual,
-            p.rms_residual
+            e(p.mean_residual_n),
+            e(p.rms_residual_n),
+            opt(p.rms_over_noise, 2),
+            100.0 * p.excess_share
         );
     }
     s
+}
+
+fn trend_table(st: &Stationarity) -> String {
+    let row = |t: &Trend| {
+        let vals: Vec<String> = t.per_cycle.iter().map(|v| format!("{v:.4e}")).collect();
+        format!(
+            "  {:<28} {}  change {:+.1} %, t = {:.1} (critical {}){}\n",
+            t.name,
+            vals.join(" "),
+            100.0 * t.relative_change,
+            t.t,
+            opt(t.t_critical, 2),
+            if t.drift { "  DRIFT" } else { "" }
+        )
+    };
+    row(&st.slip_force) + &row(&st.stiffness) + &row(&st.loop_area)
 }
 
 /// Paths of the files written by [`write`].
@@ -287,7 +541,7 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         let io = |e| Error::io(&out.csv, e);
         writeln!(
             w,
-            "# asperity diagnose: {}; baseline {}; effects added: {}",
+            "# asperity diagnose: {}; baseline {}; effects added: {}; verdict: {}; noise floor {:.6e} N",
             report.input.file,
             report.input.baseline_source,
             if report.effects_added.is_empty() {
@@ -299,7 +553,9 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
                     .map(|e| e.id())
                     .collect::<Vec<_>>()
                     .join(", ")
-            }
+            },
+            report.verdict.name(),
+            report.noise.sigma_n
         )
         .map_err(io)?;
         writeln!(
@@ -308,7 +564,7 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
              residual_before_N,residual_after_N,phase"
         )
         .map_err(io)?;
-        let phases = classify_phases(x, &d.baseline_force, &p.cycles);
+        let phases = d.phases();
         for i in 0..t.len() {
             writeln!(
                 w,
@@ -326,12 +582,14 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         }
         Ok(())
     })?;
-    // Loops over the complete cycles.
+    // Loops over the complete cycles, displacement in the unit that suits the amplitude.
     let (a, b) = (
         p.cycles.cycles[0].0,
         p.cycles.cycles.last().map_or(t.len() - 1, |c| c.1),
     );
-    let pts = |f: &[f64]| -> Vec<(f64, f64)> { (a..=b).map(|i| (x[i] * 1e3, f[i])).collect() };
+    let xmax = (a..=b).fold(0.0_f64, |m, i| m.max(x[i].abs()));
+    let (scale, unit) = length_unit(xmax);
+    let pts = |f: &[f64]| -> Vec<(f64, f64)> { (a..=b).map(|i| (x[i] * scale, f[i])).collect() };
     let after_label = if report.effects_added.is_empty() {
         "after (no effect added)".to_string()
     } else {
@@ -346,17 +604,18 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         )
     };
     let title = format!(
-        "nrms {:.3} → {:.3}; energy error {:.3} → {:.3}",
-        report.errors_before.nrms,
-        report.errors_after.nrms,
-        report.errors_before.energy_error,
-        report.errors_after.energy_error
+        "{}: residual {:.1}σ → {:.1}σ (σ = {:.3e} N)",
+        report.verdict.name(),
+        report.errors_before.held_out_rms_over_noise,
+        report.errors_after.held_out_rms_over_noise,
+        report.noise.sigma_n
     );
+    let x_label = format!("displacement ({unit})");
     line_plot(
         &out.loops_png,
         &LinePlot {
             title: &title,
-            x_label: "displacement (mm)",
+            x_label: &x_label,
             y_label: "tangential force (N)",
             x_scale: Scale::Linear,
             y_scale: Scale::Linear,
@@ -368,10 +627,12 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         ],
     )?;
     let res = |f: &[f64]| -> Vec<(f64, f64)> { (a..=b).map(|i| (t[i], y[i] - f[i])).collect() };
+    let two_sigma = 2.0 * report.noise.sigma_n;
+    let band = |s: f64| vec![(t[a], s * two_sigma), (t[b], s * two_sigma)];
     line_plot(
         &out.residual_png,
         &LinePlot {
-            title: "residual: measured − model",
+            title: "residual: measured − model, against twice the noise floor",
             x_label: "time (s)",
             y_label: "force residual (N)",
             x_scale: Scale::Linear,
@@ -380,6 +641,8 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         &[
             Series::line("before", res(&d.baseline_force)),
             Series::line(after_label, res(&d.final_force)),
+            Series::line("+2σ noise floor", band(1.0)),
+            Series::line("−2σ noise floor", band(-1.0)),
         ],
     )?;
     Ok(())

@@ -62,6 +62,41 @@ pub fn integrate(p: &JenkinsParams, q: &[f64], fz: &[f64]) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// Two-dimensional Jenkins element with a circular slip limit (isotropic Coulomb friction in the
+/// tangential plane): trial force `T = F0 + kt·Δq`, `F1 = T` if `|T| ≤ μ·Fz1`, else the radial
+/// return `F1 = μ·Fz1·T/|T|` (the return map of Coulomb friction with an elastic predictor, exact
+/// for a straight displacement path at constant normal load). `Fz1 ≤ 0` is separation: `F1 = 0`.
+pub fn step_2d(p: &JenkinsParams, f0: [f64; 2], dq: [f64; 2], fz1: f64) -> [f64; 2] {
+    step_2d_partials(p, f0, dq, fz1).0
+}
+
+/// [`step_2d`] with its exact derivatives: `∂F1/∂F0` (2×2, equal to `∂F1/∂Δq / kt`) and
+/// `∂F1/∂Fz1` (2). In stick `∂F1/∂F0 = I`; in slip `∂F1/∂T = (μFz1/|T|)·(I − t̂t̂ᵀ)` and
+/// `∂F1/∂Fz1 = μ·t̂` with `t̂ = T/|T|`.
+pub fn step_2d_partials(
+    p: &JenkinsParams,
+    f0: [f64; 2],
+    dq: [f64; 2],
+    fz1: f64,
+) -> ([f64; 2], [[f64; 2]; 2], [f64; 2]) {
+    if fz1 <= 0.0 {
+        return ([0.0; 2], [[0.0; 2]; 2], [0.0; 2]);
+    }
+    let t = [f0[0] + p.kt * dq[0], f0[1] + p.kt * dq[1]];
+    let norm = t[0].hypot(t[1]);
+    let limit = p.mu * fz1;
+    if norm <= limit {
+        return (t, [[1.0, 0.0], [0.0, 1.0]], [0.0; 2]);
+    }
+    let u = [t[0] / norm, t[1] / norm];
+    let r = limit / norm;
+    let dt = [
+        [r * (1.0 - u[0] * u[0]), -r * u[0] * u[1]],
+        [-r * u[1] * u[0], r * (1.0 - u[1] * u[1])],
+    ];
+    ([limit * u[0], limit * u[1]], dt, [p.mu * u[0], p.mu * u[1]])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -80,6 +115,36 @@ mod tests {
         let w = dissipated_energy(&q[n - 20_001..], &f[n - 20_001..]);
         let exact = 4.0 * fs * (a - fs / p.kt);
         assert!((w - exact).abs() / exact < 1e-3, "{w} vs {exact}");
+    }
+
+    #[test]
+    fn circular_limit_and_its_derivatives() {
+        let p = JenkinsParams::new(2.0, 0.5).unwrap();
+        // Slip along a diagonal: the force lands on the circle μ·Fz in the trial direction.
+        let f = step_2d(&p, [0.0, 0.0], [3.0, 3.0], 4.0);
+        assert!((f[0].hypot(f[1]) - 2.0).abs() < 1e-14 && (f[0] - f[1]).abs() < 1e-14);
+        // One-dimensional motion reduces to the 1-D element.
+        let f1 = step_2d(&p, [0.5, 0.0], [0.3, 0.0], 4.0);
+        assert!((f1[0] - step(&p, 0.5, 0.3, 4.0)).abs() < 1e-15 && f1[1] == 0.0);
+        // Finite differences in slip.
+        let (f0, dq, fz) = ([0.7, -0.4], [0.9, 0.2], 3.0);
+        let (_, dt, dfz) = step_2d_partials(&p, f0, dq, fz);
+        let h = 1e-7;
+        for j in 0..2 {
+            let mut a = f0;
+            let mut b = f0;
+            a[j] += h;
+            b[j] -= h;
+            let (fa, fb) = (step_2d(&p, a, dq, fz), step_2d(&p, b, dq, fz));
+            for i in 0..2 {
+                assert!(((fa[i] - fb[i]) / (2.0 * h) - dt[i][j]).abs() < 1e-7);
+            }
+        }
+        let (fa, fb) = (step_2d(&p, f0, dq, fz + h), step_2d(&p, f0, dq, fz - h));
+        for i in 0..2 {
+            assert!(((fa[i] - fb[i]) / (2.0 * h) - dfz[i]).abs() < 1e-7);
+        }
+        assert_eq!(step_2d(&p, f0, dq, -1.0), [0.0, 0.0]);
     }
 
     #[test]

@@ -1,15 +1,22 @@
-//! Contact elements for nonlinear dynamic solvers: Valanis microslip, Gaul–Lenz, Jenkins.
+//! Contact elements for nonlinear dynamic solvers: Valanis microslip, Gaul–Lenz, Jenkins (1-D and
+//! 2-D with a circular slip limit), Iwan (power-law slip-strength density), Bouc–Wen, and the
+//! cubic spring used to validate solvers.
 //!
 //! Each element is a parameters struct, a pure force update for one displacement increment and a
 //! loop integrator mapping a displacement history (and a normal-load history) to a force history.
 //! Units: either per unit nominal area (displacement m, force Pa, stiffness N/m³) or per element
 //! (m, N, N/m) — the mathematics is the same; see [`valanis`].
 
+pub mod bouc_wen;
+pub mod cubic;
 pub mod gaul_lenz;
+pub mod iwan;
 pub mod jenkins;
 pub mod valanis;
 
+pub use bouc_wen::BoucWenParams;
 pub use gaul_lenz::GaulLenzParams;
+pub use iwan::{IwanElement, IwanParams};
 pub use jenkins::JenkinsParams;
 pub use valanis::{Integrator, ValanisParams, ValanisState};
 

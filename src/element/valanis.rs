@@ -246,6 +246,141 @@ pub fn implicit_euler_step(
     }
 }
 
+/// Partial derivatives of one [`implicit_euler_step`] with respect to its inputs, in the order
+/// `(F0, q_ref0, q0, Fz0, q1, Fz1)` (start force, start reference displacement, start
+/// displacement, start normal load, end displacement, end normal load).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepPartials {
+    /// `∂F1/∂(F0, q_ref0, q0, Fz0, q1, Fz1)`.
+    pub force: [f64; 6],
+    /// `∂q_ref1/∂(F0, q_ref0, q0, Fz0, q1, Fz1)`.
+    pub q_ref: [f64; 6],
+}
+
+/// [`implicit_euler_step`] together with the exact derivatives of the discrete update
+/// ([`StepPartials`]), for Newton solvers that differentiate a time-discrete element (e.g. the
+/// alternating frequency–time method of `crate::dynamics::aft`).
+///
+/// Derivation: the quadratic `P(x) = k·x² + (1 − A·k + B)·x + (B − A) = 0` of
+/// [`implicit_euler_step`] is differentiated implicitly, `dx = −(P_A·dA + P_B·dB)/P_x`, with
+/// `A = g·(Et·(q1 − q_ref) − F0)`, `B = λ(Fz1)·|q1 − q0|`, `g = s·λ/E0`, `dλ/dFz1 = −λ/Fz1`;
+/// then `F1 = Et·(q1 − q_ref) − x/g`. On the projection (the force on the slip limit)
+/// `F1 = Et·(q1 − q_ref) ± μ·Fz1·(1 − Et/E0)`. At re-contact inside the increment the start
+/// point `q_c = q0 + θ·(q1 − q0)`, `θ = Fz0/(Fz0 − Fz1)` is differentiated too. On the kink
+/// `q1 = q0` the one-sided derivative for `q1 > q0` is returned.
+pub fn implicit_euler_step_partials(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> (ValanisState, StepPartials) {
+    let out = implicit_euler_step(p, state, q1, fz1);
+    let mut d = StepPartials::default();
+    // Index of each input in the partial arrays.
+    const F0: usize = 0;
+    const QR0: usize = 1;
+    const Q0: usize = 2;
+    const FZ0: usize = 3;
+    const Q1: usize = 4;
+    const FZ1: usize = 5;
+    if fz1 <= 0.0 {
+        // Ends separated: F1 = 0, q_ref1 = q1.
+        d.q_ref[Q1] = 1.0;
+        return (out, d);
+    }
+    // Start of the smooth update and its derivatives w.r.t. the six inputs.
+    let (fs, qs, qrs, dfs, dqs, dqrs) = if state.fz <= 0.0 {
+        let theta = state.fz / (state.fz - fz1);
+        let den = (state.fz - fz1) * (state.fz - fz1);
+        let dth_dfz0 = -fz1 / den;
+        let dth_dfz1 = state.fz / den;
+        let qc = state.q + theta * (q1 - state.q);
+        let mut dqc = [0.0; 6];
+        dqc[Q0] = 1.0 - theta;
+        dqc[Q1] = theta;
+        dqc[FZ0] = (q1 - state.q) * dth_dfz0;
+        dqc[FZ1] = (q1 - state.q) * dth_dfz1;
+        (0.0, qc, qc, [0.0; 6], dqc, dqc)
+    } else {
+        let mut df = [0.0; 6];
+        df[F0] = 1.0;
+        let mut dq = [0.0; 6];
+        dq[Q0] = 1.0;
+        let mut dqr = [0.0; 6];
+        dqr[QR0] = 1.0;
+        (state.force, state.q, state.q_ref, df, dq, dqr)
+    };
+    d.q_ref = dqrs;
+    let dq1 = {
+        let mut v = [0.0; 6];
+        v[Q1] = 1.0;
+        v
+    };
+    let dfz1 = {
+        let mut v = [0.0; 6];
+        v[FZ1] = 1.0;
+        v
+    };
+    let centre = p.et * (q1 - qrs);
+    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
+    let dq = q1 - qs;
+    // Unprojected force and its derivative.
+    let (force, mut dforce) = if dq == 0.0 {
+        // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
+        let lam = p.lambda(fz1);
+        let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
+        let slope = force_slope(p, x);
+        let mut df = dfs;
+        for i in 0..6 {
+            df[i] += slope * (dq1[i] - dqs[i]);
+        }
+        (fs, df)
+    } else {
+        let lam = p.lambda(fz1);
+        let s = dq.signum();
+        let g = s * lam / p.e0;
+        let dvar = p.et * (q1 - qrs) - fs;
+        let a = g * dvar;
+        let b = lam * dq.abs();
+        let x = if p.k == 0.0 {
+            (a - b) / (1.0 + b)
+        } else {
+            let bb = 1.0 - a * p.k + b;
+            let c = b - a;
+            let disc = (bb * bb - 4.0 * p.k * c).max(0.0).sqrt();
+            if bb > 0.0 {
+                2.0 * c / (-bb - disc)
+            } else {
+                (-bb + disc) / (2.0 * p.k)
+            }
+        };
+        let px = 2.0 * p.k * x + 1.0 - a * p.k + b;
+        let pa = -p.k * x - 1.0;
+        let pb = x + 1.0;
+        let mut df = [0.0; 6];
+        for i in 0..6 {
+            let dlam = -lam / fz1 * dfz1[i];
+            let dg = s * dlam / p.e0;
+            let dd = p.et * (dq1[i] - dqrs[i]) - dfs[i];
+            let da = g * dd + dvar * dg;
+            let db = dq.abs() * dlam + lam * s * (dq1[i] - dqs[i]);
+            let dx = -(pa * da + pb * db) / px;
+            df[i] = dcentre[i] - dx / g + x / (g * g) * dg;
+        }
+        (centre - x / g, df)
+    };
+    // Projection onto the admissible band |F − centre| ≤ μ·Fz1·(1 − Et/E0).
+    let half = p.slip_limit(fz1);
+    let dhalf = p.mu * (1.0 - p.et / p.e0);
+    if force > centre + half {
+        dforce = std::array::from_fn(|i| dcentre[i] + dhalf * dfz1[i]);
+    } else if force < centre - half {
+        dforce = std::array::from_fn(|i| dcentre[i] - dhalf * dfz1[i]);
+    }
+    d.force = dforce;
+    (out, d)
+}
+
 /// Relative tolerance of [`reference_step`], as a fraction of the slip force scale.
 pub const REFERENCE_TOLERANCE: f64 = 1e-10;
 
@@ -280,6 +415,37 @@ pub fn reference_step(
         });
     }
     adaptive_step(p, &start, q1, fz1)
+}
+
+/// One increment that is exact for a piecewise-linear displacement path when the normal load
+/// steps to `fz1` at the start of the increment and is held over it: the start force is
+/// projected onto the band of `fz1` (the falling-load policy) and the monotonic branch is then
+/// integrated in closed form ([`closed_form_branch`]).
+///
+/// Where the load changes continuously this differs from [`reference_step`] only by the
+/// load change within one increment (`O(ΔFz·Δq)`), at the cost of a few Newton iterations
+/// instead of an adaptive integration. It carries none of the first-order lag of
+/// [`implicit_euler_step`], whose error at coarse sampling (a drive increment comparable to
+/// the stick range `μFz/E0`) is a systematic phase lag of the whole loop — the error that an
+/// identification must not mistake for a physical effect (see `crate::diagnose::effects`).
+pub fn frozen_load_step(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> ValanisState {
+    let start = match contact_transition(state, q1, fz1) {
+        Ok(s) => s,
+        Err(separated) => return separated,
+    };
+    let f0 = project(p, start.force, start.q, start.q_ref, fz1);
+    let force = closed_form_branch(p, fz1, start.q_ref, start.q, f0, q1);
+    ValanisState {
+        force: project(p, force, q1, start.q_ref, fz1),
+        q: q1,
+        fz: fz1,
+        q_ref: start.q_ref,
+    }
 }
 
 /// One increment by adaptive Dormand–Prince 5(4) (see [`reference_step`]); `state` must be in
@@ -665,6 +831,45 @@ mod tests {
         assert!((ee - er).abs() / er < 0.005, "{ee} vs {er}");
     }
 
+    /// At constant load the frozen-load step is the exact branch (equal to the reference to
+    /// round-off at any sampling, where implicit Euler lags by O(Δq)); under a varying load it
+    /// converges to the reference as the increments shrink.
+    #[test]
+    fn frozen_load_step_is_exact_at_constant_load() {
+        let p = params();
+        let fz = 1.0e6;
+        let q = sine_history(3.0 * p.mu * fz / p.e0, 2, 40);
+        let fzs = vec![fz; q.len()];
+        let fr = integrate_reference(&p, &q, &fzs).unwrap();
+        let fe = integrate_implicit_euler(&p, &q, &fzs).unwrap();
+        let mut st = ValanisState::virgin(q[0], fz);
+        let (mut dev, mut dev_euler) = (0.0_f64, 0.0_f64);
+        for i in 1..q.len() {
+            st = frozen_load_step(&p, &st, q[i], fz);
+            dev = dev.max((st.force - fr[i]).abs());
+            dev_euler = dev_euler.max((fe[i] - fr[i]).abs());
+        }
+        assert!(dev < 1e-9 * p.mu * fz, "{dev}");
+        assert!(dev_euler > 0.05 * p.mu * fz, "{dev_euler}");
+        // Varying load: error falls at least linearly with the increment.
+        let err = |per: usize| {
+            let q = sine_history(2.0 * p.mu * fz / p.e0, 1, per);
+            let fzv: Vec<f64> = (0..q.len())
+                .map(|i| fz * (1.0 + 0.3 * (std::f64::consts::TAU * i as f64 / per as f64).cos()))
+                .collect();
+            let fr = integrate_reference(&p, &q, &fzv).unwrap();
+            let mut st = ValanisState::virgin(q[0], fzv[0]);
+            let mut e = 0.0_f64;
+            for i in 1..q.len() {
+                st = frozen_load_step(&p, &st, q[i], fzv[i]);
+                e = e.max((st.force - fr[i]).abs());
+            }
+            e
+        };
+        let (e1, e2) = (err(200), err(400));
+        assert!(e2 < 0.6 * e1 && e1 < 0.02 * p.mu * fz, "{e1} {e2}");
+    }
+
     #[test]
     fn implicit_euler_is_first_order() {
         let p = params();
@@ -707,6 +912,66 @@ mod tests {
         for m in [Integrator::ImplicitEuler, Integrator::Reference] {
             let f = integrate(&p, &q, &fz, m).unwrap();
             assert!((f[2] - p.mu * 0.5e6).abs() < 1e-6 * p.mu * 1e6);
+        }
+    }
+
+    #[test]
+    fn step_partials_match_finite_differences() {
+        let p = ValanisParams::new(2.0e7, 0.5, 1.0e6, 0.6).unwrap();
+        let slip = p.mu * 10.0 / p.e0;
+        // (F0, q_ref0, q0, Fz0, q1, Fz1): loading, unloading, near the limit, re-contact.
+        let cases = [
+            [0.0, 0.0, 0.0, 10.0, 0.3 * slip, 10.0],
+            [3.0, 0.1 * slip, 0.5 * slip, 10.0, 0.2 * slip, 12.0],
+            [-2.0, 0.0, -0.4 * slip, 9.0, -0.1 * slip, 8.0],
+            [0.0, 0.2 * slip, 0.1 * slip, -3.0, 0.6 * slip, 7.0],
+            [1.0, 0.0, 0.2 * slip, 10.0, 5.0 * slip, 10.0],
+        ];
+        // At Δq = 0 the derivative with respect to q1 is the slope for Δq → 0+ (E0 on a virgin
+        // element).
+        let st = ValanisState::virgin(0.0, 10.0);
+        let (_, d0) = implicit_euler_step_partials(&p, &st, 0.0, 10.0);
+        assert!((d0.force[4] - p.e0).abs() < 1e-9 * p.e0 && d0.force[2] == -d0.force[4]);
+        for c in cases {
+            let eval = |v: &[f64; 6]| {
+                let st = ValanisState {
+                    force: v[0],
+                    q_ref: v[1],
+                    q: v[2],
+                    fz: v[3],
+                };
+                implicit_euler_step(&p, &st, v[4], v[5])
+            };
+            let st = ValanisState {
+                force: c[0],
+                q_ref: c[1],
+                q: c[2],
+                fz: c[3],
+            };
+            let (_, d) = implicit_euler_step_partials(&p, &st, c[4], c[5]);
+            let scale = [1.0, slip, slip, 10.0, slip, 10.0];
+            for i in 0..6 {
+                let h = 1e-6 * scale[i];
+                let mut up = c;
+                let mut dn = c;
+                up[i] += h;
+                dn[i] -= h;
+                let (a, b) = (eval(&up), eval(&dn));
+                let fd_f = (a.force - b.force) / (2.0 * h);
+                let fd_r = (a.q_ref - b.q_ref) / (2.0 * h);
+                let typical = [1.0, p.e0, p.e0, p.mu, p.e0, p.mu][i];
+                let tol_f = 1e-5 * (typical + fd_f.abs());
+                assert!(
+                    (fd_f - d.force[i]).abs() <= tol_f,
+                    "case {c:?} input {i}: dF {} vs fd {fd_f}",
+                    d.force[i]
+                );
+                assert!(
+                    (fd_r - d.q_ref[i]).abs() <= 1e-6,
+                    "case {c:?} input {i}: dq_ref {} vs fd {fd_r}",
+                    d.q_ref[i]
+                );
+            }
         }
     }
 

@@ -354,6 +354,11 @@ impl TangentialSolver {
         self.element_area * self.limit.iter().sum::<f64>()
     }
 
+    /// Largest traction bound `max_i μ p_i` (Pa), the scale of the natural residual.
+    pub fn traction_bound_pa(&self) -> f64 {
+        self.max_limit
+    }
+
     /// Forget the history: back to the virgin state (q = 0, no slip, no shift).
     pub fn reset(&mut self) {
         self.q.iter_mut().for_each(|v| *v = [0.0; 2]);

@@ -99,3 +99,33 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
         _ => matrix::write(path, grid),
     }
 }
+
+/// The equivalent rough surface for the contact solvers from one or two topography files
+/// (areas; a profile is refused): one file is the equivalent surface itself; two files are
+/// body 1 and body 2 on the same grid, body 2's heights in the common frame (`z` from body 1
+/// towards body 2, as `asperity surface combine` takes them), reduced to `h1 − h2` by
+/// [`crate::surface::combine::equivalent_surface`] (periodic only when both are). Returns the
+/// surface and a description naming the files.
+pub fn read_equivalent_surface(paths: &[std::path::PathBuf]) -> Result<(Grid2, String)> {
+    let area = |p: &Path| read(p)?.into_area(&p.display().to_string());
+    match paths {
+        [one] => Ok((area(one)?, format!("measured surface {}", one.display()))),
+        [a, b] => {
+            let (g1, g2) = (area(a)?, area(b)?);
+            let h = crate::surface::combine::equivalent_surface(&g1, &g2)
+                .map_err(|e| Error::Data(format!("{} and {}: {e}", a.display(), b.display())))?;
+            Ok((
+                h,
+                format!(
+                    "equivalent surface h1 - h2 of {} (body 1) and {} (body 2)",
+                    a.display(),
+                    b.display()
+                ),
+            ))
+        }
+        _ => Err(Error::param(
+            "surface",
+            format!("give one or two surface files, got {}", paths.len()),
+        )),
+    }
+}

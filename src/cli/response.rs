@@ -1,0 +1,175 @@
+//! `asperity response`: nonlinear forced response of a model file (HBM + AFT + continuation).
+
+use asperity::dynamics::aft::Harmonics;
+use asperity::dynamics::continuation::{sweep, ContinuationSettings};
+use asperity::dynamics::hbm::{Excitation, HbmSystem};
+use asperity::dynamics::model_file;
+use asperity::dynamics::report::{self, LevelResult};
+use asperity::elements::{provenance_json, InputFile};
+use asperity::output::write_string_atomic;
+use asperity::{Error, Result};
+use std::path::PathBuf;
+
+/// Frequency response of a structure with contact elements: multi-harmonic balance with the
+/// alternating frequency–time method and pseudo-arclength continuation, one sweep per excitation
+/// level of the model file.
+#[derive(clap::Args)]
+pub struct ResponseArgs {
+    /// Model file (TOML: linear part, element tables and node pairs, excitation, sweep).
+    model: PathBuf,
+    /// Output directory (CSV per level, element CSV at each peak, FRF PNG, response.json).
+    #[arg(long, default_value = "out/response")]
+    out_dir: PathBuf,
+}
+
+pub fn run(args: ResponseArgs) -> Result<()> {
+    let model = model_file::load(&args.model)?;
+    let f = &model.file;
+    let harmonics = Harmonics::new(f.sweep.harmonics, f.sweep.odd_only, f.sweep.time_samples)
+        .map_err(|e| super::rename_param(e, "sweep.harmonics / sweep.time_samples"))?;
+    let system = HbmSystem::new(
+        &model.structure,
+        harmonics,
+        Excitation {
+            force: model.force.clone(),
+            harmonic: f.excitation.harmonic,
+        },
+        f.sweep.formulation,
+    )?;
+    let mut settings =
+        ContinuationSettings::new(f.sweep.frequency_start_hz, f.sweep.frequency_end_hz);
+    settings.points = f.sweep.points;
+    let n_el = model.structure.elements.len();
+    println!(
+        "{} coordinates ({:?}), {} elements ({} contact DOFs{}); harmonics {:?}, {} samples per period; formulation: {:?} with {} unknowns",
+        model.structure.n(),
+        model.structure.kind,
+        n_el,
+        model.structure.contact_dofs(),
+        if model.out_of_range > 0 {
+            format!(", {} outside their calibration table's range", model.out_of_range)
+        } else {
+            String::new()
+        },
+        system.harmonics.orders(),
+        system.harmonics.n_time(),
+        system.formulation(),
+        system.unknowns()
+    );
+    let levels = f.excitation.levels_n.clone();
+    let bar = super::progress_bar("response", (levels.len() * 1000) as u64);
+    let mut results: Vec<LevelResult> = Vec::new();
+    for (i, &level) in levels.iter().enumerate() {
+        bar.set_message(format!("{level} N"));
+        let base = (i * 1000) as u64;
+        let branch = sweep(&system, level, &settings, &mut |frac| {
+            bar.set_position(base + (frac * 1000.0) as u64);
+        })
+        .inspect_err(|_| bar.abandon())?;
+        results.push(report::summarise(
+            &system,
+            level,
+            branch,
+            &model.responses[0].1,
+        ));
+    }
+    bar.finish_and_clear();
+    // Everything computed: write the files.
+    let header = format!(
+        "asperity {} response: model {}; {:?} formulation, {} unknowns; harmonics {:?}, {} samples per period",
+        env!("CARGO_PKG_VERSION"),
+        args.model.display(),
+        system.formulation(),
+        system.unknowns(),
+        system.harmonics.orders(),
+        system.harmonics.n_time()
+    );
+    let mut level_summaries = Vec::new();
+    for (i, r) in results.iter().enumerate() {
+        let csv = args.out_dir.join(format!("response_level_{}.csv", i + 1));
+        report::write_level_csv(&csv, &system, &model.responses, r, &header)?;
+        let el = args.out_dir.join(format!("elements_level_{}.csv", i + 1));
+        report::write_elements_csv(&el, &system, r)?;
+        let p = &r.branch.points[r.peak];
+        let x = system.coordinates(p);
+        let (amp, _) =
+            report::harmonic_of(&system, &x, &model.responses[0].1, f.excitation.harmonic);
+        let fpk = p.omega / (2.0 * std::f64::consts::PI);
+        println!(
+            "level {} N: {} points, peak {:.6e} m at {:.4} Hz ({}), energy/cycle at peak {:.4e} J, slip {:.3}, separation {:.3}; {} steps rejected, {} turning points, {:.2} s",
+            r.level_n,
+            r.branch.points.len(),
+            amp,
+            fpk,
+            model.responses[0].0,
+            r.totals[r.peak][0],
+            r.totals[r.peak][2],
+            r.totals[r.peak][3],
+            r.branch.rejected_steps,
+            r.branch.turning_points,
+            r.branch.wall_time_s
+        );
+        level_summaries.push(serde_json::json!({
+            "level_N": r.level_n,
+            "csv": csv.display().to_string(),
+            "elements_csv": el.display().to_string(),
+            "points": r.branch.points.len(),
+            "peak_frequency_Hz": fpk,
+            "peak_amplitude_m": amp,
+            "peak_dissipated_energy_J": r.totals[r.peak][0],
+            "peak_slip_fraction": r.totals[r.peak][2],
+            "peak_separation_fraction": r.totals[r.peak][3],
+            "rejected_steps": r.branch.rejected_steps,
+            "turning_points": r.branch.turning_points,
+            "jacobians": r.branch.jacobians,
+            "max_relative_residual": r.branch.points.iter().map(|p| p.residual).fold(0.0, f64::max),
+            "max_periodicity_error": r.branch.points.iter().map(|p| p.periodicity_error).fold(0.0, f64::max),
+            "wall_time_s": r.branch.wall_time_s,
+        }));
+    }
+    for (label, row) in &model.responses {
+        let safe: String = label
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let png = args.out_dir.join(format!("frf_{safe}.png"));
+        report::plot_frf_family(&png, &system, label, row, &results)?;
+    }
+    let inputs: Vec<InputFile> = model
+        .inputs
+        .iter()
+        .map(|(role, p)| InputFile::new(role, p))
+        .collect::<Result<_>>()?;
+    let json = provenance_json(
+        "response",
+        &inputs,
+        serde_json::json!({
+            "model": serde_json::to_value(f).map_err(|e| Error::Data(e.to_string()))?,
+            "harmonics": system.harmonics.orders(),
+            "time_samples": system.harmonics.n_time(),
+            "formulation": system.formulation(),
+            "unknowns": system.unknowns(),
+            "coordinates": model.structure.kind,
+            "newton": system.newton,
+            "aft": system.aft,
+            "continuation": settings,
+        }),
+        serde_json::json!({
+            "elements": n_el,
+            "elements_out_of_calibration_range": model.out_of_range,
+            "levels": level_summaries,
+        }),
+    );
+    write_string_atomic(
+        &args.out_dir.join("response.json"),
+        &serde_json::to_string_pretty(&json).map_err(|e| Error::Data(e.to_string()))?,
+    )?;
+    println!("wrote {}", args.out_dir.display());
+    Ok(())
+}

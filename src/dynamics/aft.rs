@@ -1,0 +1,811 @@
+//! Alternating frequency–time (AFT) evaluation of a hysteretic element.
+//!
+//! Harmonics of the element's relative displacement → `N` time samples over one period →
+//! the element is advanced sample by sample over the period, repeated until its state is
+//! periodic → the harmonics of the force (Cameron & Griffin 1989, *J. Appl. Mech.* 56:149;
+//! Krack & Gross, *Harmonic Balance for Nonlinear Vibration Problems*, Springer 2019, §3.3).
+//!
+//! # Harmonic convention
+//!
+//! `x(t) = a0 + Σ_k (a_k·cos kωt + b_k·sin kωt)` over the retained orders `k` ([`Harmonics`]:
+//! `0..=H`, or the odd orders `1, 3, …, H` only). The coefficient vector of one signal is
+//! `[a0, a1, b1, a2, b2, …]` (without `a0` when the mean is not retained). Time samples
+//! `t_i = i·T/N`, `i = 0 … N−1`. The transforms use `realfft`; aliasing of the force's higher
+//! harmonics into the retained ones is controlled by `N` (default `N ≥ 16·H`).
+//!
+//! # Periodic state
+//!
+//! The element starts virgin at the static equilibrium `u = 0` and is loaded in one increment to
+//! the first sample; from there its state at the start of the period is made periodic by Newton's
+//! method on the one-period map, `s0 ← s0 + (I − Φ)⁺·(s_N − s0)` with `Φ = ∂s_N/∂s0` the
+//! monodromy of the discrete update (`⁺`: pseudo-inverse; directions with `Φ = I`, e.g. a fully
+//! stuck Jenkins slider, are neutral and keep the start value). It converges in one update for
+//! elements that slip somewhere in the cycle (`Φ = 0`) and quadratically for Valanis elements,
+//! whose plain period-by-period iteration contracts very slowly at small amplitudes. A period is
+//! periodic when `|s_N − s0| ≤ tolerance × scale` for every state component.
+//!
+//! # Jacobian
+//!
+//! Exact derivative of the time-discrete procedure: forward sensitivities of the state and the
+//! force with respect to the displacement harmonics (chain rule through every sample of the
+//! period, [`crate::dynamics::nonlinear::StepPartials`]) and with respect to the start state;
+//! the start state's own dependence follows from the implicit-function theorem on the periodicity
+//! condition, `(I − Φ)·ds0/dU = ∂s_N/∂U`, with neutral directions inheriting the derivative of
+//! the virgin start. Checked against finite differences in the tests below.
+
+use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
+use crate::error::{Error, Result};
+use nalgebra::DMatrix;
+use realfft::RealFftPlanner;
+use std::sync::Arc;
+
+/// Retained harmonic orders, the number of time samples per period and the transforms.
+#[derive(Clone)]
+pub struct Harmonics {
+    orders: Vec<usize>,
+    n_time: usize,
+    /// `n_time × len` synthesis matrix: `x_i = Σ_c E[i][c]·X_c`.
+    synthesis: Vec<f64>,
+    /// `len × n_time` analysis matrix: `X_c = Σ_i D[c][i]·x_i`.
+    analysis: Vec<f64>,
+    /// The same as a matrix (for products with sensitivities).
+    analysis_matrix: DMatrix<f64>,
+    forward: Arc<dyn realfft::RealToComplex<f64>>,
+    inverse: Arc<dyn realfft::ComplexToReal<f64>>,
+}
+
+impl std::fmt::Debug for Harmonics {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Harmonics")
+            .field("orders", &self.orders)
+            .field("n_time", &self.n_time)
+            .finish()
+    }
+}
+
+impl Harmonics {
+    /// Orders `0..=h_max` (`odd_only`: `1, 3, …, ≤ h_max`) with `n_time` samples per period
+    /// (`None`: the smallest power of two `≥ max(16·h_max, 64)`). `n_time` must exceed
+    /// `2·h_max` (sampling theorem).
+    pub fn new(h_max: usize, odd_only: bool, n_time: Option<usize>) -> Result<Self> {
+        if h_max == 0 {
+            return Err(Error::param(
+                "harmonics",
+                "the highest harmonic must be at least 1",
+            ));
+        }
+        let orders: Vec<usize> = if odd_only {
+            (1..=h_max).step_by(2).collect()
+        } else {
+            (0..=h_max).collect()
+        };
+        let n = n_time.unwrap_or_else(|| (16 * h_max).max(64).next_power_of_two());
+        if n <= 2 * h_max {
+            return Err(Error::param(
+                "time_samples",
+                format!(
+                    "{n} samples per period cannot resolve harmonic {h_max} (need > {})",
+                    2 * h_max
+                ),
+            ));
+        }
+        let len = orders
+            .iter()
+            .map(|&k| if k == 0 { 1 } else { 2 })
+            .sum::<usize>();
+        let mut synthesis = vec![0.0; n * len];
+        let mut analysis = vec![0.0; len * n];
+        for i in 0..n {
+            let theta = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
+            let mut c = 0;
+            for &k in &orders {
+                if k == 0 {
+                    synthesis[i * len + c] = 1.0;
+                    analysis[c * n + i] = 1.0 / n as f64;
+                    c += 1;
+                } else {
+                    let (s, co) = (k as f64 * theta).sin_cos();
+                    synthesis[i * len + c] = co;
+                    synthesis[i * len + c + 1] = s;
+                    analysis[c * n + i] = 2.0 * co / n as f64;
+                    analysis[(c + 1) * n + i] = 2.0 * s / n as f64;
+                    c += 2;
+                }
+            }
+        }
+        let mut planner = RealFftPlanner::<f64>::new();
+        let analysis_matrix = DMatrix::from_row_slice(len, n, &analysis);
+        Ok(Self {
+            orders,
+            n_time: n,
+            synthesis,
+            analysis,
+            analysis_matrix,
+            forward: planner.plan_fft_forward(n),
+            inverse: planner.plan_fft_inverse(n),
+        })
+    }
+
+    /// Retained orders, ascending.
+    pub fn orders(&self) -> &[usize] {
+        &self.orders
+    }
+
+    /// Highest retained order.
+    pub fn h_max(&self) -> usize {
+        *self.orders.last().expect("at least one order")
+    }
+
+    /// Whether the mean (order 0) is retained.
+    pub fn has_mean(&self) -> bool {
+        self.orders[0] == 0
+    }
+
+    /// Number of real coefficients per signal.
+    pub fn len(&self) -> usize {
+        self.orders
+            .iter()
+            .map(|&k| if k == 0 { 1 } else { 2 })
+            .sum()
+    }
+
+    /// Always false (at least one order is retained).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Time samples per period.
+    pub fn n_time(&self) -> usize {
+        self.n_time
+    }
+
+    /// Indices `(cos, sin)` of order `k ≥ 1` in a coefficient vector, if retained.
+    pub fn index_of(&self, k: usize) -> Option<(usize, usize)> {
+        let mut c = 0;
+        for &o in &self.orders {
+            if o == 0 {
+                c += 1;
+                continue;
+            }
+            if o == k {
+                return Some((c, c + 1));
+            }
+            c += 2;
+        }
+        None
+    }
+
+    /// Synthesis row of sample `i`: `x_i = Σ_c row[c]·X_c`.
+    pub fn synthesis_row(&self, i: usize) -> &[f64] {
+        let len = self.len();
+        &self.synthesis[i * len..(i + 1) * len]
+    }
+
+    /// Analysis row of coefficient `c`: `X_c = Σ_i row[i]·x_i`.
+    pub fn analysis_row(&self, c: usize) -> &[f64] {
+        &self.analysis[c * self.n_time..(c + 1) * self.n_time]
+    }
+
+    /// Time samples of a signal from its coefficients (inverse real FFT).
+    pub fn to_time(&self, coeffs: &[f64], samples: &mut [f64]) {
+        let n = self.n_time;
+        let mut spec = self.inverse.make_input_vec();
+        let mut c = 0;
+        for &k in &self.orders {
+            if k == 0 {
+                spec[0] = realfft::num_complex::Complex::new(coeffs[c], 0.0);
+                c += 1;
+            } else {
+                // x_i = Re Σ X_k e^{ikθ}/… : a·cos + b·sin = Re((a − i·b)·e^{ikθ}).
+                let z = realfft::num_complex::Complex::new(coeffs[c], -coeffs[c + 1]);
+                spec[k] = if 2 * k == n { z * 2.0 } else { z } * 0.5;
+                c += 2;
+            }
+        }
+        // The unnormalised inverse sums X_0 + 2·Re Σ X_k e^{ikθ}.
+        self.inverse
+            .process(&mut spec, samples)
+            .expect("matching lengths");
+    }
+
+    /// Coefficients of a signal from its time samples (forward real FFT; the samples are used
+    /// as scratch).
+    pub fn to_harmonics(&self, samples: &mut [f64], coeffs: &mut [f64]) {
+        let n = self.n_time as f64;
+        let mut spec = self.forward.make_output_vec();
+        self.forward
+            .process(samples, &mut spec)
+            .expect("matching lengths");
+        let mut c = 0;
+        for &k in &self.orders {
+            if k == 0 {
+                coeffs[c] = spec[0].re / n;
+                c += 1;
+            } else {
+                let f = if 2 * k == self.n_time { 1.0 } else { 2.0 };
+                coeffs[c] = f * spec[k].re / n;
+                coeffs[c + 1] = -f * spec[k].im / n;
+                c += 2;
+            }
+        }
+    }
+}
+
+/// Settings of the periodic-state iteration.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct AftSettings {
+    /// Relative tolerance on `|s_N − s0|` per state component (relative to the element's
+    /// state scale).
+    pub periodicity_tolerance: f64,
+    /// Cap on the periods integrated (Newton updates of the start state + 1).
+    pub max_periods: usize,
+}
+
+impl Default for AftSettings {
+    fn default() -> Self {
+        Self {
+            periodicity_tolerance: 1e-10,
+            max_periods: 30,
+        }
+    }
+}
+
+/// Force harmonics of one element (and optionally their Jacobian).
+#[derive(Debug, Clone)]
+pub struct ElementHarmonics {
+    /// `d × len` force coefficients, component-major.
+    pub forces: Vec<f64>,
+    /// `(d·len) × (d·len)` Jacobian `∂forces/∂u`, row-major (empty when not requested).
+    pub jacobian: Vec<f64>,
+    /// Periods integrated.
+    pub periods: usize,
+    /// Largest relative periodicity error of the state in the last period.
+    pub periodicity_error: f64,
+    /// `periodicity_error ≤ tolerance`.
+    pub periodic: bool,
+}
+
+/// Energy and contact states of one element over the periodic cycle.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ElementCycle {
+    /// Energy dissipated per cycle `∮ f·du` (J), trapezoidal rule over the samples.
+    pub dissipated_energy_j: f64,
+    /// Fractions of the period in stick, slip and separation.
+    pub stick_fraction: f64,
+    pub slip_fraction: f64,
+    pub separation_fraction: f64,
+}
+
+/// Reusable buffers of one element evaluation.
+struct Period {
+    /// `d × N` displacement samples.
+    u: Vec<f64>,
+    /// `d × N` force samples.
+    f: Vec<f64>,
+    /// State at the start of the period.
+    s0: Vec<f64>,
+    /// State at the end.
+    s_end: Vec<f64>,
+}
+
+fn sample(u: &[f64], n: usize, d: usize, i: usize, out: &mut [f64]) {
+    for c in 0..d {
+        out[c] = u[c * n + i];
+    }
+}
+
+/// Run one period from `s0` without sensitivities; fills `p.f` and `p.s_end`; calls
+/// `visit(i, s_i, u_i, f_i)` at every sample (state after the increment ending there).
+fn run_plain(
+    el: &dyn HystereticElement,
+    n: usize,
+    p: &mut Period,
+    mut visit: impl FnMut(usize, &[f64], &[f64], &[f64]),
+) {
+    let (m, d) = (el.state_len(), el.dofs());
+    let mut s = p.s0.clone();
+    let mut s1 = vec![0.0; m];
+    let mut f1 = vec![0.0; d];
+    let mut ua = vec![0.0; d];
+    let mut ub = vec![0.0; d];
+    for i in 0..n {
+        let i1 = (i + 1) % n;
+        sample(&p.u, n, d, i, &mut ua);
+        sample(&p.u, n, d, i1, &mut ub);
+        el.step(&s, &ua, &ub, &mut s1, &mut f1, None);
+        for c in 0..d {
+            p.f[c * n + i1] = f1[c];
+        }
+        std::mem::swap(&mut s, &mut s1);
+        visit(i1, &s, &ub, &f1);
+    }
+    p.s_end.copy_from_slice(&s);
+}
+
+/// Sensitivities over one period with respect to `ncol` columns: the first `nu` are the
+/// displacement harmonics (`d × len`, component-major), the last `m` the start state.
+struct Sensitivity {
+    ncol: usize,
+    /// `m × ncol` state sensitivity at the end of the period.
+    ds_end: Vec<f64>,
+    /// `N × d × ncol` force sensitivities per sample.
+    df: Vec<f64>,
+}
+
+/// Run one period from `p.s0` with forward sensitivities (columns: `with_u` displacement
+/// harmonics, then the `m` start-state components).
+fn run_sensitive(
+    el: &dyn HystereticElement,
+    h: &Harmonics,
+    p: &mut Period,
+    with_u: bool,
+) -> Sensitivity {
+    let (m, d, n, len) = (el.state_len(), el.dofs(), h.n_time(), h.len());
+    let nu = if with_u { d * len } else { 0 };
+    let ncol = nu + m;
+    let mut ds = vec![0.0; m * ncol];
+    for r in 0..m {
+        ds[r * ncol + nu + r] = 1.0;
+    }
+    let mut ds_next = vec![0.0; m * ncol];
+    let mut df = vec![0.0; n * d * ncol];
+    let mut part = StepPartials::new(m, d);
+    let mut s = p.s0.clone();
+    let mut s1 = vec![0.0; m];
+    let mut f1 = vec![0.0; d];
+    let mut ua = vec![0.0; d];
+    let mut ub = vec![0.0; d];
+    for i in 0..n {
+        let i1 = (i + 1) % n;
+        sample(&p.u, n, d, i, &mut ua);
+        sample(&p.u, n, d, i1, &mut ub);
+        part.clear();
+        el.step(&s, &ua, &ub, &mut s1, &mut f1, Some(&mut part));
+        for c in 0..d {
+            p.f[c * n + i1] = f1[c];
+        }
+        let ea = h.synthesis_row(i);
+        let eb = h.synthesis_row(i1);
+        // ds_next = A·ds + B0·dU_i + B1·dU_i1 ; df_i1 = Fs·ds + F0·dU_i + F1·dU_i1.
+        let dfi = &mut df[i1 * d * ncol..(i1 + 1) * d * ncol];
+        dfi.fill(0.0);
+        ds_next.fill(0.0);
+        for (rows, out, a, b0, b1) in [
+            (
+                m,
+                &mut ds_next[..],
+                &part.ds_ds0,
+                &part.ds_du0,
+                &part.ds_du1,
+            ),
+            (d, &mut dfi[..], &part.df_ds0, &part.df_du0, &part.df_du1),
+        ] {
+            for r in 0..rows {
+                let orow = &mut out[r * ncol..(r + 1) * ncol];
+                for k in 0..m {
+                    let coef = a[r * m + k];
+                    if coef != 0.0 {
+                        let src = &ds[k * ncol..(k + 1) * ncol];
+                        for (o, v) in orow.iter_mut().zip(src) {
+                            *o += coef * v;
+                        }
+                    }
+                }
+                if with_u {
+                    for c in 0..d {
+                        let (c0, c1) = (b0[r * d + c], b1[r * d + c]);
+                        if c0 != 0.0 || c1 != 0.0 {
+                            let block = &mut orow[c * len..(c + 1) * len];
+                            for ((o, x), y) in block.iter_mut().zip(ea).zip(eb) {
+                                *o += c0 * x + c1 * y;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        std::mem::swap(&mut ds, &mut ds_next);
+        std::mem::swap(&mut s, &mut s1);
+    }
+    p.s_end.copy_from_slice(&s);
+    Sensitivity {
+        ncol,
+        ds_end: ds,
+        df,
+    }
+}
+
+/// `(I − Φ)⁺` in the element's state scales, returned unscaled (`m × m`, row-major).
+fn periodic_pinv(phi: &[f64], scales: &[f64], m: usize) -> Vec<f64> {
+    // Â = I − D⁻¹ Φ D with D = diag(scales); (I − Φ)⁺ ≈ D Â⁺ D⁻¹.
+    let a = DMatrix::from_fn(m, m, |r, c| {
+        let v = -phi[r * m + c] * scales[c] / scales[r];
+        if r == c {
+            1.0 + v
+        } else {
+            v
+        }
+    });
+    let pinv = a
+        .svd(true, true)
+        .pseudo_inverse(1e-10)
+        .unwrap_or_else(|_| DMatrix::zeros(m, m));
+    let mut out = vec![0.0; m * m];
+    for r in 0..m {
+        for c in 0..m {
+            out[r * m + c] = pinv[(r, c)] * scales[r] / scales[c];
+        }
+    }
+    out
+}
+
+/// Everything the evaluation found about the periodic cycle of one element.
+struct Cycle {
+    period: Period,
+    periods: usize,
+    error: f64,
+    periodic: bool,
+    /// `∂s_init/∂U` of the virgin start (`m × d·len`).
+    ds_init: Vec<f64>,
+}
+
+fn periodic_cycle(
+    el: &dyn HystereticElement,
+    h: &Harmonics,
+    u_coeffs: &[f64],
+    settings: &AftSettings,
+) -> Cycle {
+    let (m, d, n, len) = (el.state_len(), el.dofs(), h.n_time(), h.len());
+    let mut p = Period {
+        u: vec![0.0; d * n],
+        f: vec![0.0; d * n],
+        s0: vec![0.0; m],
+        s_end: vec![0.0; m],
+    };
+    for c in 0..d {
+        h.to_time(
+            &u_coeffs[c * len..(c + 1) * len],
+            &mut p.u[c * n..(c + 1) * n],
+        );
+    }
+    // Virgin element at u = 0 loaded to the first sample.
+    let mut virgin = vec![0.0; m];
+    el.virgin_state(&mut virgin);
+    let zero = vec![0.0; d];
+    let mut u_first = vec![0.0; d];
+    sample(&p.u, n, d, 0, &mut u_first);
+    let mut part = StepPartials::new(m, d);
+    let mut f1 = vec![0.0; d];
+    el.step(
+        &virgin,
+        &zero,
+        &u_first,
+        &mut p.s0,
+        &mut f1,
+        Some(&mut part),
+    );
+    let e0 = h.synthesis_row(0);
+    let mut ds_init = vec![0.0; m * d * len];
+    for r in 0..m {
+        for c in 0..d {
+            let b = part.ds_du1[r * d + c];
+            for (k, e) in e0.iter().enumerate() {
+                ds_init[r * d * len + c * len + k] = b * e;
+            }
+        }
+    }
+    let mut scales = vec![0.0; m];
+    el.state_scales(&mut scales);
+    for s in scales.iter_mut() {
+        *s = s.abs().max(f64::MIN_POSITIVE);
+    }
+    if m == 0 {
+        run_plain(el, n, &mut p, |_, _, _, _| {});
+        return Cycle {
+            period: p,
+            periods: 1,
+            error: 0.0,
+            periodic: true,
+            ds_init,
+        };
+    }
+    let mut periods = 0;
+    let mut error = f64::INFINITY;
+    while periods < settings.max_periods {
+        periods += 1;
+        let sens = run_sensitive(el, h, &mut p, false);
+        error = (0..m)
+            .map(|j| (p.s_end[j] - p.s0[j]).abs() / scales[j])
+            .fold(0.0, f64::max);
+        if error <= settings.periodicity_tolerance {
+            break;
+        }
+        let pinv = periodic_pinv(&sens.ds_end, &scales, m);
+        let r: Vec<f64> = (0..m).map(|j| p.s_end[j] - p.s0[j]).collect();
+        for j in 0..m {
+            p.s0[j] += (0..m).map(|k| pinv[j * m + k] * r[k]).sum::<f64>();
+        }
+    }
+    Cycle {
+        periodic: error <= settings.periodicity_tolerance,
+        period: p,
+        periods,
+        error,
+        ds_init,
+    }
+}
+
+/// Force harmonics of `element` driven by the displacement harmonics `u` (`d × len`,
+/// component-major), and with `jacobian` their exact derivative (see the module documentation).
+pub fn evaluate(
+    element: &dyn HystereticElement,
+    harmonics: &Harmonics,
+    u: &[f64],
+    jacobian: bool,
+    settings: &AftSettings,
+) -> ElementHarmonics {
+    let (m, d, n, len) = (
+        element.state_len(),
+        element.dofs(),
+        harmonics.n_time(),
+        harmonics.len(),
+    );
+    let mut cycle = periodic_cycle(element, harmonics, u, settings);
+    let mut jac = Vec::new();
+    if jacobian {
+        let nu = d * len;
+        let sens = run_sensitive(element, harmonics, &mut cycle.period, true);
+        let ncol = sens.ncol;
+        // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
+        let mut ds0 = vec![0.0; m * nu];
+        if m > 0 {
+            let phi: Vec<f64> = (0..m * m)
+                .map(|idx| sens.ds_end[(idx / m) * ncol + nu + idx % m])
+                .collect();
+            let mut scales = vec![0.0; m];
+            element.state_scales(&mut scales);
+            for s in scales.iter_mut() {
+                *s = s.abs().max(f64::MIN_POSITIVE);
+            }
+            let pinv = periodic_pinv(&phi, &scales, m);
+            // P = pinv·(I − Φ): projector on the non-neutral directions.
+            let mut proj = vec![0.0; m * m];
+            for r in 0..m {
+                for c in 0..m {
+                    let mut v = 0.0;
+                    for k in 0..m {
+                        let a = if k == c { 1.0 } else { 0.0 } - phi[k * m + c];
+                        v += pinv[r * m + k] * a;
+                    }
+                    proj[r * m + c] = v;
+                }
+            }
+            for r in 0..m {
+                for col in 0..nu {
+                    let mut v = 0.0;
+                    for k in 0..m {
+                        v += pinv[r * m + k] * sens.ds_end[k * ncol + col];
+                        let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
+                        v += null * cycle.ds_init[k * nu + col];
+                    }
+                    ds0[r * nu + col] = v;
+                }
+            }
+        }
+        // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU (rows (i, c)), then its
+        // harmonics J = D·T, both as matrix products.
+        let dfm = DMatrix::from_row_slice(n * d, ncol, &sens.df);
+        let mut t = dfm.columns(0, nu).into_owned();
+        if m > 0 {
+            let ds0m = DMatrix::from_row_slice(m, nu, &ds0);
+            t += dfm.columns(nu, m) * ds0m;
+        }
+        // Rows (i, c) → row i, column block c.
+        let mut t2 = DMatrix::zeros(n, d * nu);
+        for i in 0..n {
+            for c in 0..d {
+                for col in 0..nu {
+                    t2[(i, c * nu + col)] = t[(i * d + c, col)];
+                }
+            }
+        }
+        let j2 = &harmonics.analysis_matrix * t2;
+        jac = vec![0.0; d * len * nu];
+        for c in 0..d {
+            for hc in 0..len {
+                for col in 0..nu {
+                    jac[(c * len + hc) * nu + col] = j2[(hc, c * nu + col)];
+                }
+            }
+        }
+    }
+    let mut forces = vec![0.0; d * len];
+    for c in 0..d {
+        harmonics.to_harmonics(
+            &mut cycle.period.f[c * n..(c + 1) * n],
+            &mut forces[c * len..(c + 1) * len],
+        );
+    }
+    ElementHarmonics {
+        forces,
+        jacobian: jac,
+        periods: cycle.periods,
+        periodicity_error: cycle.error,
+        periodic: cycle.periodic,
+    }
+}
+
+/// Dissipated energy and stick/slip/separation fractions of the periodic cycle.
+pub fn cycle_summary(
+    element: &dyn HystereticElement,
+    harmonics: &Harmonics,
+    u: &[f64],
+    settings: &AftSettings,
+) -> ElementCycle {
+    let (d, n) = (element.dofs(), harmonics.n_time());
+    let mut cycle = periodic_cycle(element, harmonics, u, settings);
+    let mut counts = [0usize; 3];
+    run_plain(element, n, &mut cycle.period, |_, s, uu, f| {
+        let k = match element.status(s, uu, f) {
+            ContactStatus::Stick => 0,
+            ContactStatus::Slip => 1,
+            ContactStatus::Separated => 2,
+        };
+        counts[k] += 1;
+    });
+    let p = &cycle.period;
+    let mut energy = 0.0;
+    for c in 0..d {
+        let uc = &p.u[c * n..(c + 1) * n];
+        let fc = &p.f[c * n..(c + 1) * n];
+        for i in 0..n {
+            let i1 = (i + 1) % n;
+            energy += 0.5 * (fc[i] + fc[i1]) * (uc[i1] - uc[i]);
+        }
+    }
+    ElementCycle {
+        dissipated_energy_j: energy,
+        stick_fraction: counts[0] as f64 / n as f64,
+        slip_fraction: counts[1] as f64 / n as f64,
+        separation_fraction: counts[2] as f64 / n as f64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::nonlinear::{
+        CubicSpring, GaulLenz, Jenkins, JenkinsContact, MicroslipContact,
+    };
+    use crate::element::ValanisParams;
+
+    #[test]
+    fn transforms_round_trip_and_match_the_dense_matrices() {
+        for (hm, odd, n) in [(7, false, Some(64)), (5, true, None), (3, false, Some(8))] {
+            let h = Harmonics::new(hm, odd, n).unwrap();
+            let len = h.len();
+            let coeffs: Vec<f64> = (0..len).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
+            let mut t = vec![0.0; h.n_time()];
+            h.to_time(&coeffs, &mut t);
+            for (i, ti) in t.iter().enumerate() {
+                let dense: f64 = h
+                    .synthesis_row(i)
+                    .iter()
+                    .zip(&coeffs)
+                    .map(|(a, b)| a * b)
+                    .sum();
+                assert!((ti - dense).abs() < 1e-12, "{ti} vs {dense}");
+            }
+            let mut back = vec![0.0; len];
+            let mut tt = t.clone();
+            h.to_harmonics(&mut tt, &mut back);
+            for (a, b) in coeffs.iter().zip(&back) {
+                assert!((a - b).abs() < 1e-12);
+            }
+            // x(t) = a1 cos θ + b1 sin θ at θ = 2π/N.
+            let theta = 2.0 * std::f64::consts::PI / h.n_time() as f64;
+            let mut one = vec![0.0; len];
+            let (ci, si) = h.index_of(1).unwrap();
+            one[ci] = 2.0;
+            one[si] = 3.0;
+            h.to_time(&one, &mut t);
+            assert!((t[1] - (2.0 * theta.cos() + 3.0 * theta.sin())).abs() < 1e-12);
+        }
+        assert!(Harmonics::new(8, false, Some(16)).is_err());
+    }
+
+    /// Jacobian of the AFT against central finite differences of the whole procedure.
+    fn check_jacobian(el: &dyn HystereticElement, h: &Harmonics, u: &[f64], step: f64) -> f64 {
+        let s = AftSettings::default();
+        let r = evaluate(el, h, u, true, &s);
+        assert!(r.periodic, "not periodic: {}", r.periodicity_error);
+        let n = u.len();
+        let mut worst: f64 = 0.0;
+        let jmax = r.jacobian.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        for col in 0..n {
+            let mut up = u.to_vec();
+            let mut dn = u.to_vec();
+            up[col] += step;
+            dn[col] -= step;
+            let fu = evaluate(el, h, &up, false, &s).forces;
+            let fd = evaluate(el, h, &dn, false, &s).forces;
+            for row in 0..n {
+                let fdv = (fu[row] - fd[row]) / (2.0 * step);
+                worst = worst.max((fdv - r.jacobian[row * n + col]).abs() / jmax);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn aft_jacobian_matches_finite_differences() {
+        let h = Harmonics::new(3, false, Some(64)).unwrap();
+        let len = h.len();
+        let (c1, s1) = h.index_of(1).unwrap();
+        let (c2, s2) = h.index_of(2).unwrap();
+        // Jenkins 1-D in stick-slip.
+        let mut u = vec![0.0; len];
+        u[c1] = 3e-5;
+        u[s1] = 1e-5;
+        u[c2] = 4e-6;
+        u[0] = 2e-6;
+        let j = Jenkins::new(1e5, 1.0).unwrap();
+        let w = check_jacobian(&j, &h, &u, 1e-10);
+        assert!(w < 1e-5, "jenkins: {w}");
+        // Fully stuck Jenkins: the neutral direction keeps the virgin start (F = kt·u).
+        let small: Vec<f64> = u.iter().map(|v| v * 0.1).collect();
+        let w = check_jacobian(&j, &h, &small, 1e-11);
+        assert!(w < 1e-6, "stuck jenkins: {w}");
+        let r = evaluate(&j, &h, &small, false, &AftSettings::default());
+        for (f, x) in r.forces.iter().zip(&small) {
+            assert!((f - 1e5 * x).abs() < 1e-9, "{f} vs {}", 1e5 * x);
+        }
+        // Cubic spring.
+        let w = check_jacobian(&CubicSpring { k3: 1e12 }, &h, &u, 1e-10);
+        assert!(w < 1e-6, "cubic: {w}");
+        // Gaul–Lenz (Valanis, constant limit): microslip at small amplitude.
+        let gl = GaulLenz::new(&crate::element::GaulLenzParams {
+            e0: 1e5,
+            k: 0.4,
+            et: 1e3,
+            sigma0: 1.0,
+        })
+        .unwrap();
+        let w = check_jacobian(&gl, &h, &small, 1e-12);
+        assert!(w < 1e-5, "gaul-lenz microslip: {w}");
+        let w = check_jacobian(&gl, &h, &u, 1e-10);
+        assert!(w < 1e-5, "gaul-lenz: {w}");
+        // 3-D elements with a varying normal load and separation over part of the cycle.
+        let mut u3 = vec![0.0; 3 * len];
+        u3[c1] = 2e-5;
+        u3[s2] = 5e-6;
+        u3[len + s1] = 1.5e-5;
+        u3[len + c2] = -3e-6;
+        u3[2 * len + c1] = 1.5e-6;
+        u3[2 * len] = 2e-7;
+        let v = ValanisParams::new(2e5, 0.5, 0.0, 0.6).unwrap();
+        let micro = MicroslipContact::new(v, 1e7, 10.0).unwrap();
+        let w = check_jacobian(&micro, &h, &u3, 1e-11);
+        assert!(w < 1e-5, "microslip: {w}");
+        let jc = JenkinsContact::new(2e5, 0.6, 1e7, 10.0).unwrap();
+        let w = check_jacobian(&jc, &h, &u3, 1e-11);
+        assert!(w < 1e-5, "jenkins contact: {w}");
+    }
+
+    #[test]
+    fn jenkins_energy_per_cycle_and_fractions() {
+        // W = 4·Fs·(A − Fs/kt) for a sinusoid of amplitude A > Fs/kt.
+        let h = Harmonics::new(1, true, Some(4096)).unwrap();
+        let (kt, fs) = (1e5, 1.0);
+        let a = 3.0 * fs / kt;
+        let j = Jenkins::new(kt, fs).unwrap();
+        let c = cycle_summary(&j, &h, &[a, 0.0], &AftSettings::default());
+        let exact = 4.0 * fs * (a - fs / kt);
+        assert!((c.dissipated_energy_j - exact).abs() < 1e-4 * exact);
+        // Slip while |q − reversal| > 2Fs/kt: fraction (π − φ*)/π with cos φ* = 1 − 2/3.
+        let phi = (1.0f64 - 2.0 / 3.0).acos();
+        let slip = 1.0 - phi / std::f64::consts::PI;
+        assert!((c.slip_fraction - slip).abs() < 2e-3, "{}", c.slip_fraction);
+        assert_eq!(c.separation_fraction, 0.0);
+    }
+}

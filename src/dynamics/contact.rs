@@ -1,0 +1,259 @@
+//! Contact elements on node pairs: the element table of `asperity elements`, the node pairs
+//! they join, and the local contact frame.
+//!
+//! Each row of the element table (columns `id, …, N0_N, kn_N_per_m, E0_N_per_m, k, mu,
+//! Et_N_per_m`, per-element units N and N/m; see [`crate::elements`]) becomes one 3-D contact
+//! element ([`ContactLaw`]) between node `a` and node `b` (or ground). Its local relative
+//! displacement is `u = R·(x_a − x_b)` with `R` rows `(t1, t2, n)`: `n` the contact normal
+//! pointing from `a` towards `b` (so `u_n > 0` closes the contact), `t1` the given tangent made
+//! orthogonal to `n`, `t2 = n × t1`.
+
+use crate::dynamics::nonlinear::{ContactLaw, HystereticElement, JenkinsContact, MicroslipContact};
+use crate::element::ValanisParams;
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// One row of an element table with the line it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableElement {
+    pub id: u64,
+    /// 1-based line in the file.
+    pub line: usize,
+    pub n0_n: f64,
+    pub kn_n_per_m: f64,
+    pub e0_n_per_m: f64,
+    pub k: f64,
+    pub mu: f64,
+    pub et_n_per_m: f64,
+    /// −1 / 0 / +1 as written by `asperity elements` (0 when the column is absent).
+    pub out_of_range: i8,
+}
+
+/// Read an element table (CSV written by `asperity elements`; extra columns are ignored).
+/// Every value is checked: `N0, kn, E0, μ > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, ids unique;
+/// errors name the file, the line and the column.
+pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
+    let mut rdr = crate::input::csv_reader(path)?;
+    let headers = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
+    let col = |name: &str| -> Result<usize> {
+        headers.iter().position(|h| h == name).ok_or_else(|| {
+            Error::parse(
+                path,
+                0,
+                format!("missing column `{name}` (expected the table of `asperity elements`: id,…,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m)"),
+            )
+        })
+    };
+    let ci = [
+        col("id")?,
+        col("N0_N")?,
+        col("kn_N_per_m")?,
+        col("E0_N_per_m")?,
+        col("k")?,
+        col("mu")?,
+        col("Et_N_per_m")?,
+    ];
+    let flag_col = headers.iter().position(|h| h == "out_of_range");
+    let mut out: Vec<TableElement> = Vec::new();
+    let mut seen: HashMap<u64, usize> = HashMap::new();
+    for rec in rdr.records() {
+        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let field = |i: usize, name: &str| -> Result<f64> {
+            let s = rec
+                .get(i)
+                .ok_or_else(|| Error::parse(path, line, format!("missing value of `{name}`")))?;
+            let v: f64 = s.parse().map_err(|_| {
+                Error::parse(path, line, format!("`{name}` = `{s}` is not a number"))
+            })?;
+            if !v.is_finite() {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("`{name}` = {v} is not finite"),
+                ));
+            }
+            Ok(v)
+        };
+        let id_s = rec.get(ci[0]).unwrap_or("");
+        let id: u64 = id_s.parse().map_err(|_| {
+            Error::parse(
+                path,
+                line,
+                format!("`id` = `{id_s}` is not a non-negative integer"),
+            )
+        })?;
+        if let Some(first) = seen.insert(id, line) {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("element id {id} repeats the row on line {first}"),
+            ));
+        }
+        let e = TableElement {
+            id,
+            line,
+            n0_n: field(ci[1], "N0_N")?,
+            kn_n_per_m: field(ci[2], "kn_N_per_m")?,
+            e0_n_per_m: field(ci[3], "E0_N_per_m")?,
+            k: field(ci[4], "k")?,
+            mu: field(ci[5], "mu")?,
+            et_n_per_m: field(ci[6], "Et_N_per_m")?,
+            out_of_range: match flag_col {
+                Some(i) => field(i, "out_of_range")? as i8,
+                None => 0,
+            },
+        };
+        for (name, v) in [
+            ("N0_N", e.n0_n),
+            ("kn_N_per_m", e.kn_n_per_m),
+            ("E0_N_per_m", e.e0_n_per_m),
+            ("mu", e.mu),
+        ] {
+            if v <= 0.0 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("element {id}: `{name}` must be > 0, got {v}"),
+                ));
+            }
+        }
+        ValanisParams::new(e.e0_n_per_m, e.k, e.et_n_per_m, e.mu)
+            .map_err(|err| Error::parse(path, line, format!("element {id}: {err}")))?;
+        out.push(e);
+    }
+    if out.is_empty() {
+        return Err(Error::parse(path, 0, "no element rows"));
+    }
+    Ok(out)
+}
+
+/// Node pairs of the elements: `element_id,node_a,node_b` (`node_b` may be `ground`).
+pub fn read_pairs(path: &Path) -> Result<HashMap<u64, (String, String, usize)>> {
+    let mut rdr = crate::input::csv_reader(path)?;
+    let headers = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
+    let expect = ["element_id", "node_a", "node_b"];
+    if headers.len() < 3 || headers.iter().take(3).ne(expect.iter().copied()) {
+        return Err(Error::parse(
+            path,
+            0,
+            "expected the header `element_id,node_a,node_b`",
+        ));
+    }
+    let mut out = HashMap::new();
+    for rec in rdr.records() {
+        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let id_s = rec.get(0).unwrap_or("");
+        let id: u64 = id_s.parse().map_err(|_| {
+            Error::parse(
+                path,
+                line,
+                format!("`element_id` = `{id_s}` is not an integer"),
+            )
+        })?;
+        let (a, b) = (rec.get(1).unwrap_or(""), rec.get(2).unwrap_or(""));
+        if a.is_empty() || b.is_empty() {
+            return Err(Error::parse(path, line, "empty node name"));
+        }
+        if out
+            .insert(id, (a.to_string(), b.to_string(), line))
+            .is_some()
+        {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("element {id} is listed twice"),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// Rows `(t1, t2, n)` of the local frame from a normal and a first tangent (global x, y, z).
+pub fn contact_frame(normal: [f64; 3], tangent: [f64; 3]) -> Result<[[f64; 3]; 3]> {
+    let nn = (normal.iter().map(|v| v * v).sum::<f64>()).sqrt();
+    if !(nn.is_finite() && nn > 0.0) {
+        return Err(Error::param("normal", "must be a non-zero finite vector"));
+    }
+    let n = normal.map(|v| v / nn);
+    let dot: f64 = tangent.iter().zip(&n).map(|(a, b)| a * b).sum();
+    let t: Vec<f64> = tangent.iter().zip(&n).map(|(a, b)| a - dot * b).collect();
+    let tn = (t.iter().map(|v| v * v).sum::<f64>()).sqrt();
+    if !(tn.is_finite() && tn > 1e-9 * (tangent.iter().map(|v| v * v).sum::<f64>()).sqrt())
+        || tn == 0.0
+    {
+        return Err(Error::param(
+            "tangent",
+            "must not be parallel to the normal",
+        ));
+    }
+    let t1 = [t[0] / tn, t[1] / tn, t[2] / tn];
+    let t2 = [
+        n[1] * t1[2] - n[2] * t1[1],
+        n[2] * t1[0] - n[0] * t1[2],
+        n[0] * t1[1] - n[1] * t1[0],
+    ];
+    Ok([t1, t2, n])
+}
+
+/// The element of `law` for one table row.
+pub fn element_for(law: ContactLaw, e: &TableElement) -> Result<Arc<dyn HystereticElement>> {
+    Ok(match law {
+        ContactLaw::Valanis => Arc::new(MicroslipContact::new(
+            ValanisParams::new(e.e0_n_per_m, e.k, e.et_n_per_m, e.mu)?,
+            e.kn_n_per_m,
+            e.n0_n,
+        )?),
+        ContactLaw::Jenkins => Arc::new(JenkinsContact::new(
+            e.e0_n_per_m,
+            e.mu,
+            e.kn_n_per_m,
+            e.n0_n,
+        )?),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_and_right_handed() {
+        let r = contact_frame([0.0, 0.0, 2.0], [1.0, 0.0, 0.3]).unwrap();
+        assert_eq!(r[0], [1.0, 0.0, 0.0]);
+        assert_eq!(r[1], [0.0, 1.0, 0.0]);
+        assert_eq!(r[2], [0.0, 0.0, 1.0]);
+        assert!(contact_frame([0.0, 0.0, 1.0], [0.0, 0.0, 3.0]).is_err());
+        assert!(contact_frame([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]).is_err());
+    }
+
+    #[test]
+    fn bad_element_rows_are_refused_with_file_and_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let head = "# units\nid,x_m,y_m,area_m2,pressure_Pa,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m,out_of_range\n";
+        let good = "7,0,0,1e-7,2e6,0.5,7e6,3e6,0.3,0.6,0,0\n";
+        let p = dir.path().join("e.csv");
+        std::fs::write(&p, format!("{head}{good}")).unwrap();
+        assert_eq!(read_element_table(&p).unwrap().len(), 1);
+        for (row, needle) in [
+            ("8,0,0,1e-7,2e6,0.5,0,3e6,0.3,0.6,0,0", "kn_N_per_m"),
+            ("8,0,0,1e-7,2e6,0.5,7e6,-3e6,0.3,0.6,0,0", "E0_N_per_m"),
+            ("8,0,0,1e-7,2e6,0.5,7e6,3e6,0.3,0,0,0", "mu"),
+            ("8,0,0,1e-7,2e6,0.5,7e6,3e6,1.3,0.6,0,0", "k"),
+            ("8,0,0,1e-7,2e6,-1,7e6,3e6,0.3,0.6,0,0", "N0_N"),
+            ("8,0,0,1e-7,2e6,0.5,7e6,NaN,0.3,0.6,0,0", "E0_N_per_m"),
+            ("7,0,0,1e-7,2e6,0.5,7e6,3e6,0.3,0.6,0,0", "repeats"),
+        ] {
+            std::fs::write(&p, format!("{head}{good}{row}\n")).unwrap();
+            let e = read_element_table(&p).unwrap_err().to_string();
+            assert!(e.contains("e.csv:4") && e.contains(needle), "{e}");
+        }
+    }
+}

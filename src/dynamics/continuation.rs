@@ -1,0 +1,406 @@
+//! Pseudo-arclength continuation of harmonic-balance solutions in frequency.
+//!
+//! The path `y(s) = (z(s), ω(s))` of solutions of `R(z, ω) = 0` is followed in scaled variables
+//! `ŷ = (z/z_s, ω/ω_s)` (`ω_s` = the frequency span, `z_s` = the largest unknown seen so far)
+//! with a tangent predictor `ŷ_p = ŷ_i + Δs·t̂_i` and a bordered Newton corrector on
+//! `[R(ŷ) = 0; t̂_iᵀ·(ŷ − ŷ_p) = 0]` (Keller 1977; Seydel, *Practical Bifurcation and Stability
+//! Analysis*, 3rd ed., Springer 2010, §4.3–4.5). The bordered matrix stays regular at turning
+//! points, so folds (Duffing) are followed. The next tangent solves
+//! `[∂R/∂ŷ; t̂_iᵀ]·t̂ = [0; 1]`.
+//!
+//! Step control: the step is rejected and halved when the corrector fails or when the tangent
+//! turns by more than `max_angle_deg`; after an accepted step it is scaled by
+//! `target_iterations / iterations` and by the turning angle (within ×0.5 … ×2), between
+//! `max_step / 10⁴` and `max_step = 1/points` (so a sweep has at least `points` points). When
+//! the step falls below its minimum the sweep stops with an error that names the frequency, the
+//! residual, and what was tried.
+
+use crate::dynamics::hbm::{solve_linear, HbmPoint, HbmSystem};
+use crate::error::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+use std::time::Instant;
+
+const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// Settings of a frequency sweep.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ContinuationSettings {
+    /// Start and end of the sweep (Hz); the sweep runs downwards when end < start.
+    pub frequency_start_hz: f64,
+    pub frequency_end_hz: f64,
+    /// Minimum number of points along the frequency span (sets the largest step).
+    pub points: usize,
+    /// Corrector iterations aimed at.
+    pub target_iterations: usize,
+    /// Corrector iteration cap.
+    pub max_corrector_iterations: usize,
+    /// Largest angle between successive tangents (degrees) before a step is rejected.
+    pub max_angle_deg: f64,
+    /// Cap on the number of accepted points.
+    pub max_points: usize,
+}
+
+impl ContinuationSettings {
+    /// A sweep from `start_hz` to `end_hz` with the default controls (200 points).
+    pub fn new(start_hz: f64, end_hz: f64) -> Self {
+        Self {
+            frequency_start_hz: start_hz,
+            frequency_end_hz: end_hz,
+            points: 200,
+            target_iterations: 4,
+            max_corrector_iterations: 12,
+            max_angle_deg: 20.0,
+            max_points: 20_000,
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        crate::error::require_positive("frequency_start_Hz", self.frequency_start_hz)?;
+        crate::error::require_positive("frequency_end_Hz", self.frequency_end_hz)?;
+        if self.frequency_start_hz == self.frequency_end_hz {
+            return Err(Error::param(
+                "frequency_end_Hz",
+                "must differ from the start frequency",
+            ));
+        }
+        if self.points < 2 {
+            return Err(Error::param("points", "at least 2"));
+        }
+        if !(self.max_angle_deg > 0.0 && self.max_angle_deg < 90.0) {
+            return Err(Error::param("max_angle_deg", "must lie in (0, 90)"));
+        }
+        Ok(())
+    }
+}
+
+/// A computed branch of the frequency response at one excitation level.
+#[derive(Debug, Clone)]
+pub struct Branch {
+    pub level: f64,
+    pub points: Vec<HbmPoint>,
+    /// Steps rejected (corrector failure or turning angle) and retried with half the step.
+    pub rejected_steps: usize,
+    /// Turning points passed (sign changes of dω/ds).
+    pub turning_points: usize,
+    /// Jacobian evaluations (each with one AFT Jacobian per element).
+    pub jacobians: usize,
+    pub wall_time_s: f64,
+}
+
+/// Outcome of one corrector run.
+struct Corrected {
+    z: DVector<f64>,
+    omega: f64,
+    iterations: usize,
+    jacobians: usize,
+    residual: f64,
+    periodicity: f64,
+    /// Bordered Jacobian blocks at the last iterate (for the next tangent).
+    jz: DMatrix<f64>,
+    jw: DVector<f64>,
+}
+
+/// Bordered solve `[jz·zs, jw·ws; tᵀ]·x = [r; g]` in scaled variables.
+#[allow(clippy::too_many_arguments)]
+fn bordered(
+    jz: &DMatrix<f64>,
+    jw: &DVector<f64>,
+    t: &DVector<f64>,
+    zs: f64,
+    ws: f64,
+    r: &DVector<f64>,
+    g: f64,
+    omega: f64,
+) -> Result<DVector<f64>> {
+    let n = jz.nrows();
+    let a = bordered_matrix(jz, jw, t, zs, ws);
+    let mut b = DVector::zeros(n + 1);
+    b.rows_mut(0, n).copy_from(r);
+    b[n] = g;
+    solve_linear(&a, &b, omega)
+}
+
+/// Follow the frequency response of `system` at excitation `level` over the settings' span.
+/// `progress(fraction)` is called after each accepted point with the fraction of the span
+/// covered.
+pub fn sweep(
+    system: &HbmSystem<'_>,
+    level: f64,
+    settings: &ContinuationSettings,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Branch> {
+    settings.validate()?;
+    let t0 = Instant::now();
+    let w0 = TWO_PI * settings.frequency_start_hz;
+    let w1 = TWO_PI * settings.frequency_end_hz;
+    let dir = (w1 - w0).signum();
+    let ws = (w1 - w0).abs();
+    let max_step = 1.0 / settings.points as f64;
+    let min_step = max_step * 1e-4;
+    let tol = system.newton.tolerance;
+    let n = system.unknowns();
+
+    let first = system.solve(w0, level, None)?;
+    let mut jacobians = first.iterations + 1;
+    let mut zs = first.z.amax().max(f64::MIN_POSITIVE);
+    let ev = system.evaluate(&first.z, w0, level, true);
+    jacobians += 1;
+    // Initial tangent along +ω in the sweep direction.
+    let mut e = DVector::zeros(n + 1);
+    e[n] = dir;
+    let mut t = bordered(
+        &ev.jacobian,
+        &ev.d_omega,
+        &e,
+        zs,
+        ws,
+        &DVector::zeros(n),
+        1.0,
+        w0,
+    )?;
+    t /= t.norm();
+    let mut points = vec![first];
+    let mut step = max_step;
+    let mut rejected = 0;
+    let mut turning = 0;
+    progress(0.0);
+    let max_angle = settings.max_angle_deg.to_radians();
+    loop {
+        let last = points.last().expect("at least the first point");
+        let y_hat = {
+            let mut y = DVector::zeros(n + 1);
+            y.rows_mut(0, n).copy_from(&(&last.z / zs));
+            y[n] = last.omega / ws;
+            y
+        };
+        // Predictor + corrector, halving the step on failure.
+        let mut halvings = 0;
+        let mut last_failure: String;
+        let step_tried = step;
+        let (corr, t_new) = loop {
+            let yp = &y_hat + &t * step;
+            match correct(system, level, &yp, &t, zs, ws, settings, tol) {
+                Ok(c) => {
+                    jacobians += c.jacobians;
+                    // Next tangent.
+                    let mut tn =
+                        bordered(&c.jz, &c.jw, &t, zs, ws, &DVector::zeros(n), 1.0, c.omega)?;
+                    tn /= tn.norm();
+                    let angle = t.dot(&tn).clamp(-1.0, 1.0).acos();
+                    if angle > max_angle && step > 2.0 * min_step {
+                        last_failure = format!("tangent turned by {:.1}°", angle.to_degrees());
+                    } else {
+                        break (c, (tn, angle));
+                    }
+                }
+                Err(msg) => {
+                    jacobians += settings.max_corrector_iterations;
+                    last_failure = msg;
+                }
+            }
+            rejected += 1;
+            halvings += 1;
+            step *= 0.5;
+            if step < min_step {
+                return Err(Error::NonConvergence {
+                    solver: format!(
+                        "pseudo-arclength continuation after {:.6} Hz (level {level:.4e}, {} points): \
+                         step halved {halvings} times from {step_tried:.3e} to below {min_step:.3e}; \
+                         last attempt: {last_failure}",
+                        last.omega / TWO_PI,
+                        points.len()
+                    ),
+                    iterations: settings.max_corrector_iterations,
+                    residual: f64::NAN,
+                    tolerance: tol,
+                });
+            }
+        };
+        let (tn, angle) = t_new;
+        if tn[n].signum() != t[n].signum() && tn[n] != 0.0 && t[n] != 0.0 {
+            turning += 1;
+        }
+        // Step adaptation on iterations and turning angle.
+        let mut factor = settings.target_iterations as f64 / corr.iterations.max(1) as f64;
+        if angle > 0.0 {
+            factor = factor.min(0.5 * max_angle / angle);
+        }
+        step = (step * factor.clamp(0.5, 2.0)).clamp(min_step, max_step);
+        // Rescale the tangent if the unknowns' scale grows.
+        let new_zs = zs.max(corr.z.amax());
+        t = tn;
+        if new_zs > zs {
+            for v in t.rows_mut(0, n).iter_mut() {
+                *v *= zs / new_zs;
+            }
+            t /= t.norm();
+            zs = new_zs;
+        }
+        let past_end = (corr.omega - w1) * dir >= 0.0;
+        let before_start = (corr.omega - w0) * dir < -0.05 * ws;
+        let point = HbmPoint {
+            omega: corr.omega,
+            level,
+            z: corr.z,
+            iterations: corr.iterations,
+            residual: corr.residual,
+            converged: true,
+            periodicity_error: corr.periodicity,
+            wall_time_s: t0.elapsed().as_secs_f64(),
+        };
+        if past_end {
+            // Land exactly on the end frequency from the interpolated state.
+            let prev = points.last().expect("non-empty");
+            let a = (w1 - prev.omega) / (point.omega - prev.omega);
+            let guess = &prev.z + (&point.z - &prev.z) * a;
+            let end = system.solve(w1, level, Some(&guess))?;
+            jacobians += end.iterations + 1;
+            points.push(end);
+            progress(1.0);
+            break;
+        }
+        if before_start {
+            return Err(Error::Data(format!(
+                "continuation at level {level:.4e} turned back below the start frequency ({:.6} Hz) after {} points",
+                point.omega / TWO_PI,
+                points.len()
+            )));
+        }
+        points.push(point);
+        progress(((corr.omega - w0) / (w1 - w0)).clamp(0.0, 1.0));
+        if points.len() >= settings.max_points {
+            return Err(Error::Data(format!(
+                "continuation at level {level:.4e} reached max_points = {} at {:.6} Hz",
+                settings.max_points,
+                corr.omega / TWO_PI
+            )));
+        }
+    }
+    Ok(Branch {
+        level,
+        points,
+        rejected_steps: rejected,
+        turning_points: turning,
+        jacobians,
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Bordered corrector from the predicted point `yp`: Newton's method with the Jacobian kept
+/// (chord iterations, residual-only AFT evaluations) while the residual falls at least by half
+/// per iteration, refreshed otherwise. `Err` carries what went wrong.
+#[allow(clippy::too_many_arguments)]
+fn correct(
+    system: &HbmSystem<'_>,
+    level: f64,
+    yp: &DVector<f64>,
+    t: &DVector<f64>,
+    zs: f64,
+    ws: f64,
+    settings: &ContinuationSettings,
+    tol: f64,
+) -> std::result::Result<Corrected, String> {
+    let n = system.unknowns();
+    let mut y = yp.clone();
+    let mut first_residual = f64::NAN;
+    let mut prev_residual = f64::INFINITY;
+    let mut lu: Option<Factorised> = None;
+    let mut jacobians = 0;
+    for it in 0..=settings.max_corrector_iterations {
+        let z = y.rows(0, n) * zs;
+        let omega = y[n] * ws;
+        if omega <= 0.0 {
+            return Err("predicted frequency ≤ 0".into());
+        }
+        let refresh = lu.is_none();
+        let ev = system.evaluate(&z, omega, level, refresh);
+        let rel = ev.relative_residual();
+        if !rel.is_finite() {
+            return Err("residual not finite".into());
+        }
+        if it == 0 {
+            first_residual = rel;
+        }
+        if rel <= tol {
+            let (_, jz, jw) = match lu {
+                Some(l) => l,
+                None => {
+                    // Converged on the first evaluation: its Jacobian is at hand.
+                    let a = bordered_matrix(&ev.jacobian, &ev.d_omega, t, zs, ws);
+                    (a.lu(), ev.jacobian, ev.d_omega)
+                }
+            };
+            return Ok(Corrected {
+                z,
+                omega,
+                iterations: it,
+                jacobians: jacobians + usize::from(refresh),
+                residual: rel,
+                periodicity: ev.periodicity_error,
+                jz,
+                jw,
+            });
+        }
+        if it == settings.max_corrector_iterations {
+            return Err(format!(
+                "corrector: {it} iterations at {:.6} Hz, relative residual {rel:.3e} (from {first_residual:.3e}) > {tol:.1e}",
+                omega / TWO_PI
+            ));
+        }
+        if it >= 3 && rel > first_residual * 10.0 {
+            return Err(format!(
+                "corrector diverging at {:.6} Hz: relative residual {rel:.3e} after {it} iterations",
+                omega / TWO_PI
+            ));
+        }
+        // Chord step while it contracts fast enough; fresh Jacobian otherwise.
+        let (ev, refreshed) = if !refresh && rel > 0.5 * prev_residual {
+            (system.evaluate(&z, omega, level, true), true)
+        } else {
+            (ev, refresh)
+        };
+        if refreshed {
+            jacobians += 1;
+            let a = bordered_matrix(&ev.jacobian, &ev.d_omega, t, zs, ws);
+            lu = Some((a.lu(), ev.jacobian.clone(), ev.d_omega.clone()));
+        }
+        prev_residual = rel;
+        let g = t.dot(&(&y - yp));
+        let mut b = DVector::zeros(n + 1);
+        b.rows_mut(0, n).copy_from(&(-&ev.residual));
+        b[n] = -g;
+        let dy = lu
+            .as_ref()
+            .expect("factorised")
+            .0
+            .solve(&b)
+            .ok_or_else(|| format!("singular bordered Jacobian at {:.6} Hz", omega / TWO_PI))?;
+        y += dy;
+    }
+    Err("corrector: no iteration".into())
+}
+
+/// LU of the bordered matrix with the Jacobian blocks it was built from.
+type Factorised = (
+    nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    DMatrix<f64>,
+    DVector<f64>,
+);
+
+/// `[jz·zs, jw·ws; tᵀ]`.
+fn bordered_matrix(
+    jz: &DMatrix<f64>,
+    jw: &DVector<f64>,
+    t: &DVector<f64>,
+    zs: f64,
+    ws: f64,
+) -> DMatrix<f64> {
+    let n = jz.nrows();
+    let mut a = DMatrix::zeros(n + 1, n + 1);
+    a.view_mut((0, 0), (n, n)).copy_from(&(jz * zs));
+    a.view_mut((0, n), (n, 1)).copy_from(&(jw * ws));
+    for c in 0..=n {
+        a[(n, c)] = t[c];
+    }
+    a
+}

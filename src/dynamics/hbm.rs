@@ -1,0 +1,706 @@
+//! Multi-harmonic balance: residual, Jacobian and Newton's method at one frequency.
+//!
+//! Every coordinate is expanded in the retained harmonics ([`crate::dynamics::aft::Harmonics`]),
+//! `q(t) = Q0 + Σ_k (Q_k^c·cos kωt + Q_k^s·sin kωt)`, and the equation of motion is balanced
+//! harmonic by harmonic (Galerkin):
+//!
+//! ```text
+//! R(Q, ω) = Z(ω)·Q + Σ_e (P_e ⊗ I)ᵀ·f̂_e((P_e ⊗ I)·Q) − level·F̂ = 0
+//! Z(ω) on order k:  [K − (kω)²M,  kωC;  −kωC,  K − (kω)²M]   (order 0: K)
+//! ```
+//!
+//! with `f̂_e` the element force harmonics by AFT. Two formulations of the same equations:
+//!
+//! * [`Formulation::Coordinates`]: unknowns `Q` (`n × len`), the physical DOFs of a lumped model
+//!   or the modal coordinates of a reduced modal model. Jacobian
+//!   `Z + Σ_e (P_e ⊗ I)ᵀ J_e (P_e ⊗ I)`, assembled by contracting the element-DOF index and the
+//!   harmonic index separately (one matrix product over all elements, never the big sparse
+//!   Kronecker products).
+//! * [`Formulation::Receptance`]: unknowns the element displacements `U` (`n_c × len`, `n_c` the
+//!   contact DOFs), condensed with the receptance `H(Ω) = (K − Ω²M + iΩC)⁻¹` per harmonic
+//!   (see [`crate::dynamics::condensation`]): `U − G(ω)·(level·F̂ − f̂(U)) = 0`,
+//!   `G_k = P·H(kω)·Pᵀ`. The problem size is set by the contact DOFs, not by the model.
+//!
+//! [`FormulationChoice::Auto`] takes the one with fewer unknowns and says which
+//! ([`HbmSystem::formulation`]). Newton's method with a backtracking line search;
+//! convergence when `‖R‖ ≤ tolerance·(‖level·F̂‖ + ‖f̂_nl‖)` (coordinates) or
+//! `‖R‖ ≤ tolerance·(‖U_lin‖ + ‖G·f̂‖)` (receptance).
+
+use crate::dynamics::aft::{self, AftSettings, ElementCycle, Harmonics};
+use crate::dynamics::condensation::Receptance;
+use crate::dynamics::model::Structure;
+use crate::error::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Harmonic force `F(t) = level·force·cos(harmonic·ω·t)` on the coordinates (`force` in N per
+/// unit level for physical DOFs; `Φᵀ·f` for modal coordinates).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Excitation {
+    pub force: DVector<f64>,
+    /// Harmonic order of the excitation (usually 1).
+    pub harmonic: usize,
+}
+
+/// Which unknowns to solve for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FormulationChoice {
+    /// The formulation with fewer unknowns.
+    Auto,
+    Coordinates,
+    Receptance,
+}
+
+/// The formulation in use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Formulation {
+    /// Unknowns: harmonics of the structure's coordinates (physical or modal).
+    Coordinates,
+    /// Unknowns: harmonics of the element displacements (receptance condensation).
+    Receptance,
+}
+
+/// Newton settings.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct NewtonSettings {
+    /// Relative residual tolerance.
+    pub tolerance: f64,
+    /// Iteration cap.
+    pub max_iterations: usize,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-9,
+            max_iterations: 40,
+        }
+    }
+}
+
+/// Residual and (optionally) its derivatives at one point.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    pub residual: DVector<f64>,
+    /// `∂R/∂z` (empty `0 × 0` when not requested).
+    pub jacobian: DMatrix<f64>,
+    /// `∂R/∂ω`.
+    pub d_omega: DVector<f64>,
+    /// `∂R/∂level`.
+    pub d_level: DVector<f64>,
+    /// Scale of the residual (convergence is relative to it).
+    pub scale: f64,
+    /// Largest AFT periodicity error over the elements.
+    pub periodicity_error: f64,
+    /// Elements whose AFT state did not become periodic.
+    pub non_periodic: usize,
+}
+
+impl Evaluation {
+    /// `‖R‖ / scale`.
+    pub fn relative_residual(&self) -> f64 {
+        self.residual.norm() / self.scale.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// One converged (or reported) harmonic-balance solution.
+#[derive(Debug, Clone)]
+pub struct HbmPoint {
+    /// Angular frequency of the fundamental (rad/s).
+    pub omega: f64,
+    /// Excitation level (multiplies [`Excitation::force`]).
+    pub level: f64,
+    /// Unknowns of the formulation in use.
+    pub z: DVector<f64>,
+    pub iterations: usize,
+    /// Relative residual at the end.
+    pub residual: f64,
+    pub converged: bool,
+    pub periodicity_error: f64,
+    pub wall_time_s: f64,
+}
+
+/// A structure with its harmonic basis and excitation, ready to be solved.
+pub struct HbmSystem<'a> {
+    pub structure: &'a Structure,
+    pub harmonics: Harmonics,
+    pub excitation: Excitation,
+    pub aft: AftSettings,
+    pub newton: NewtonSettings,
+    formulation: Formulation,
+    /// All element maps stacked (`n_c × n`).
+    stacked_map: DMatrix<f64>,
+    /// First row of each element in the stack.
+    offsets: Vec<usize>,
+}
+
+impl<'a> HbmSystem<'a> {
+    /// Set up the harmonic-balance problem. The excitation harmonic must be retained; with the
+    /// receptance formulation the structure needs a non-singular dynamic stiffness.
+    pub fn new(
+        structure: &'a Structure,
+        harmonics: Harmonics,
+        excitation: Excitation,
+        choice: FormulationChoice,
+    ) -> Result<Self> {
+        if excitation.force.len() != structure.n() {
+            return Err(Error::param(
+                "excitation",
+                format!(
+                    "force vector has {} entries for {} coordinates",
+                    excitation.force.len(),
+                    structure.n()
+                ),
+            ));
+        }
+        if harmonics.index_of(excitation.harmonic).is_none() {
+            return Err(Error::param(
+                "excitation.harmonic",
+                format!(
+                    "harmonic {} is not among the retained orders {:?}",
+                    excitation.harmonic,
+                    harmonics.orders()
+                ),
+            ));
+        }
+        let n = structure.n();
+        let nc = structure.contact_dofs();
+        let mut stacked_map = DMatrix::zeros(nc, n);
+        let mut offsets = Vec::with_capacity(structure.elements.len());
+        let mut row = 0;
+        for e in &structure.elements {
+            offsets.push(row);
+            stacked_map
+                .rows_mut(row, e.element.dofs())
+                .copy_from(&e.map);
+            row += e.element.dofs();
+        }
+        let formulation = match choice {
+            FormulationChoice::Coordinates => Formulation::Coordinates,
+            FormulationChoice::Receptance => Formulation::Receptance,
+            FormulationChoice::Auto => {
+                if nc < n {
+                    Formulation::Receptance
+                } else {
+                    Formulation::Coordinates
+                }
+            }
+        };
+        Ok(Self {
+            structure,
+            harmonics,
+            excitation,
+            aft: AftSettings::default(),
+            newton: NewtonSettings::default(),
+            formulation,
+            stacked_map,
+            offsets,
+        })
+    }
+
+    /// The formulation in use.
+    pub fn formulation(&self) -> Formulation {
+        self.formulation
+    }
+
+    /// Number of unknowns of the Newton problem.
+    pub fn unknowns(&self) -> usize {
+        let len = self.harmonics.len();
+        match self.formulation {
+            Formulation::Coordinates => self.structure.n() * len,
+            Formulation::Receptance => self.structure.contact_dofs() * len,
+        }
+    }
+
+    /// Harmonics of the excitation per coordinate (`n × len`, coordinate-major), per unit level.
+    pub fn excitation_harmonics(&self) -> DVector<f64> {
+        let len = self.harmonics.len();
+        let (ci, _) = self
+            .harmonics
+            .index_of(self.excitation.harmonic)
+            .expect("checked in new");
+        let mut f = DVector::zeros(self.structure.n() * len);
+        for r in 0..self.structure.n() {
+            f[r * len + ci] = self.excitation.force[r];
+        }
+        f
+    }
+
+    /// Element displacement harmonics `(P_e ⊗ I)·Q` of every element (`n_c × len`).
+    fn element_displacements(&self, q: &DVector<f64>) -> DMatrix<f64> {
+        let len = self.harmonics.len();
+        let qm = DMatrix::from_row_slice(self.structure.n(), len, q.as_slice());
+        &self.stacked_map * qm
+    }
+
+    /// Force harmonics (and Jacobians) of every element for the element displacements `u`
+    /// (`n_c × len`).
+    pub(crate) fn element_forces(
+        &self,
+        u: &DMatrix<f64>,
+        jacobian: bool,
+    ) -> Vec<aft::ElementHarmonics> {
+        let len = self.harmonics.len();
+        self.structure
+            .elements
+            .par_iter()
+            .zip(self.offsets.par_iter())
+            .map(|(e, &off)| {
+                let d = e.element.dofs();
+                let mut ue = vec![0.0; d * len];
+                for c in 0..d {
+                    for h in 0..len {
+                        ue[c * len + h] = u[(off + c, h)];
+                    }
+                }
+                aft::evaluate(
+                    e.element.as_ref(),
+                    &self.harmonics,
+                    &ue,
+                    jacobian,
+                    &self.aft,
+                )
+            })
+            .collect()
+    }
+
+    /// Element force harmonics stacked like the element displacements (`n_c × len`).
+    pub(crate) fn stacked_forces(&self, forces: &[aft::ElementHarmonics]) -> DMatrix<f64> {
+        let len = self.harmonics.len();
+        let mut fe = DMatrix::zeros(self.stacked_map.nrows(), len);
+        for (e, r) in forces.iter().enumerate() {
+            let d = self.structure.elements[e].element.dofs();
+            for c in 0..d {
+                for h in 0..len {
+                    fe[(self.offsets[e] + c, h)] = r.forces[c * len + h];
+                }
+            }
+        }
+        fe
+    }
+
+    /// `Z(ω)·Q` and `∂(Z·Q)/∂ω` for coordinate harmonics `q` (`n × len`, coordinate-major).
+    fn linear_forces(&self, q: &DVector<f64>, omega: f64) -> (DVector<f64>, DVector<f64>) {
+        let s = self.structure;
+        let (n, len) = (s.n(), self.harmonics.len());
+        let mut out = DVector::zeros(n * len);
+        let mut dout = DVector::zeros(n * len);
+        let column = |idx: usize| DVector::from_iterator(n, (0..n).map(|r| q[r * len + idx]));
+        let mut c = 0;
+        for &k in self.harmonics.orders() {
+            if k == 0 {
+                let f = &s.stiffness * column(c);
+                for r in 0..n {
+                    out[r * len + c] = f[r];
+                }
+                c += 1;
+                continue;
+            }
+            let kw = k as f64 * omega;
+            let (a, b) = (column(c), column(c + 1));
+            let (ka, kb) = (&s.stiffness * &a, &s.stiffness * &b);
+            let (ma, mb) = (&s.mass * &a, &s.mass * &b);
+            let (ca, cb) = (&s.damping * &a, &s.damping * &b);
+            for r in 0..n {
+                out[r * len + c] = ka[r] - kw * kw * ma[r] + kw * cb[r];
+                out[r * len + c + 1] = kb[r] - kw * kw * mb[r] - kw * ca[r];
+                let kk = k as f64;
+                dout[r * len + c] = -2.0 * kk * kw * ma[r] + kk * cb[r];
+                dout[r * len + c + 1] = -2.0 * kk * kw * mb[r] - kk * ca[r];
+            }
+            c += 2;
+        }
+        (out, dout)
+    }
+
+    /// `Z(ω)` as a dense matrix in the coordinate-major ordering.
+    fn dynamic_stiffness(&self, omega: f64) -> DMatrix<f64> {
+        let s = self.structure;
+        let (n, len) = (s.n(), self.harmonics.len());
+        let mut z = DMatrix::zeros(n * len, n * len);
+        let mut c = 0;
+        for &k in self.harmonics.orders() {
+            if k == 0 {
+                for r in 0..n {
+                    for q in 0..n {
+                        z[(r * len + c, q * len + c)] = s.stiffness[(r, q)];
+                    }
+                }
+                c += 1;
+                continue;
+            }
+            let kw = k as f64 * omega;
+            for r in 0..n {
+                for q in 0..n {
+                    let d = s.stiffness[(r, q)] - kw * kw * s.mass[(r, q)];
+                    let v = kw * s.damping[(r, q)];
+                    z[(r * len + c, q * len + c)] = d;
+                    z[(r * len + c, q * len + c + 1)] = v;
+                    z[(r * len + c + 1, q * len + c + 1)] = d;
+                    z[(r * len + c + 1, q * len + c)] = -v;
+                }
+            }
+            c += 2;
+        }
+        z
+    }
+
+    /// `Σ_e (P_e ⊗ I)ᵀ J_e (P_e ⊗ I)`: contract the harmonic index with each element's Jacobian,
+    /// then the element-DOF index with the stacked map in one matrix product.
+    fn element_jacobian(&self, forces: &[aft::ElementHarmonics]) -> DMatrix<f64> {
+        let (n, len) = (self.structure.n(), self.harmonics.len());
+        let nc = self.stacked_map.nrows();
+        let wlen = len * n * len;
+        // W[(c,h),(s,h')] = Σ_c' J_e[(c,h),(c',h')]·P_e[c',s], stored row c, columns (h,s,h').
+        let mut w = vec![0.0; nc * wlen];
+        w.par_chunks_mut(wlen).enumerate().for_each(|(row, wrow)| {
+            let e = match self.offsets.binary_search(&row) {
+                Ok(i) => i,
+                Err(i) => i - 1,
+            };
+            let el = &self.structure.elements[e];
+            let d = el.element.dofs();
+            let c = row - self.offsets[e];
+            let je = &forces[e].jacobian;
+            let dl = d * len;
+            for h in 0..len {
+                let jrow = &je[(c * len + h) * dl..(c * len + h + 1) * dl];
+                for cp in 0..d {
+                    let jblock = &jrow[cp * len..(cp + 1) * len];
+                    for s in 0..n {
+                        let p = el.map[(cp, s)];
+                        if p == 0.0 {
+                            continue;
+                        }
+                        let out = &mut wrow[h * n * len + s * len..h * n * len + (s + 1) * len];
+                        for (o, j) in out.iter_mut().zip(jblock) {
+                            *o += p * j;
+                        }
+                    }
+                }
+            }
+        });
+        // Column-major (wlen × nc) view of W is Wᵀ; Wᵀ·P (wlen × n) is, read row-major, the
+        // n·len × n·len Jacobian block J[(r,h),(s,h')] = Σ_c P[c,r]·W[(c,h),(s,h')].
+        let wt = DMatrix::from_vec(wlen, nc, w);
+        let prod = wt * &self.stacked_map;
+        let nn = n * len;
+        DMatrix::from_row_slice(nn, nn, prod.as_slice())
+    }
+
+    /// Residual at `(z, ω, level)`, with the Jacobian `∂R/∂z` when `jacobian` is set.
+    pub fn evaluate(&self, z: &DVector<f64>, omega: f64, level: f64, jacobian: bool) -> Evaluation {
+        match self.formulation {
+            Formulation::Coordinates => self.evaluate_coordinates(z, omega, level, jacobian),
+            Formulation::Receptance => {
+                Receptance::new(self, omega).evaluate(self, z, level, jacobian)
+            }
+        }
+    }
+
+    fn evaluate_coordinates(
+        &self,
+        q: &DVector<f64>,
+        omega: f64,
+        level: f64,
+        jacobian: bool,
+    ) -> Evaluation {
+        let u = self.element_displacements(q);
+        let forces = self.element_forces(&u, jacobian);
+        let fex = self.excitation_harmonics();
+        let (lin, dlin) = self.linear_forces(q, omega);
+        // Σ_e P_eᵀ f̂_e.
+        let fnl = self.stacked_map.transpose() * self.stacked_forces(&forces);
+        let fnl = DVector::from_row_slice(fnl.transpose().as_slice());
+        let residual = &lin + &fnl - &fex * level;
+        let scale = (&fex * level).norm() + fnl.norm();
+        let jac = if jacobian {
+            let mut j = self.dynamic_stiffness(omega);
+            if !self.structure.elements.is_empty() {
+                j += self.element_jacobian(&forces);
+            }
+            j
+        } else {
+            DMatrix::zeros(0, 0)
+        };
+        let (perr, nonper) = periodicity(&forces);
+        Evaluation {
+            residual,
+            jacobian: jac,
+            d_omega: dlin,
+            d_level: -fex,
+            scale,
+            periodicity_error: perr,
+            non_periodic: nonper,
+        }
+    }
+
+    /// Harmonics of the coordinates (`n × len`, coordinate-major) of a solution.
+    pub fn coordinates(&self, point: &HbmPoint) -> DVector<f64> {
+        match self.formulation {
+            Formulation::Coordinates => point.z.clone(),
+            Formulation::Receptance => {
+                Receptance::new(self, point.omega).coordinates(self, &point.z, point.level)
+            }
+        }
+    }
+
+    /// Element displacement harmonics of a solution, one `d × len` vector per element.
+    pub fn element_displacement_harmonics(&self, point: &HbmPoint) -> Vec<Vec<f64>> {
+        let len = self.harmonics.len();
+        let u = match self.formulation {
+            Formulation::Coordinates => self.element_displacements(&point.z),
+            Formulation::Receptance => {
+                DMatrix::from_row_slice(self.stacked_map.nrows(), len, point.z.as_slice())
+            }
+        };
+        self.structure
+            .elements
+            .iter()
+            .zip(&self.offsets)
+            .map(|(e, &off)| {
+                let d = e.element.dofs();
+                let mut v = vec![0.0; d * len];
+                for c in 0..d {
+                    for h in 0..len {
+                        v[c * len + h] = u[(off + c, h)];
+                    }
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// Dissipated energy per cycle and contact-state fractions of every element at a solution.
+    pub fn element_cycles(&self, point: &HbmPoint) -> Vec<ElementCycle> {
+        let us = self.element_displacement_harmonics(point);
+        self.structure
+            .elements
+            .par_iter()
+            .zip(us.par_iter())
+            .map(|(e, u)| aft::cycle_summary(e.element.as_ref(), &self.harmonics, u, &self.aft))
+            .collect()
+    }
+
+    /// Newton's method at fixed frequency `omega` (rad/s) and excitation `level`, from `guess`
+    /// (warm start; `None`: from rest). Non-convergence is an error naming the frequency, the
+    /// residual and the iterations.
+    pub fn solve(&self, omega: f64, level: f64, guess: Option<&DVector<f64>>) -> Result<HbmPoint> {
+        let t0 = Instant::now();
+        let n = self.unknowns();
+        let mut z = guess.cloned().unwrap_or_else(|| DVector::zeros(n));
+        if z.len() != n {
+            return Err(Error::param(
+                "guess",
+                format!("{} unknowns expected, got {}", n, z.len()),
+            ));
+        }
+        let mut ev = self.evaluate(&z, omega, level, true);
+        for it in 0..=self.newton.max_iterations {
+            let rel = ev.relative_residual();
+            if rel <= self.newton.tolerance || ev.residual.norm() == 0.0 {
+                return Ok(HbmPoint {
+                    omega,
+                    level,
+                    z,
+                    iterations: it,
+                    residual: rel,
+                    converged: true,
+                    periodicity_error: ev.periodicity_error,
+                    wall_time_s: t0.elapsed().as_secs_f64(),
+                });
+            }
+            if it == self.newton.max_iterations {
+                break;
+            }
+            let step = solve_linear(&ev.jacobian, &(-&ev.residual), omega)?;
+            let (znew, evnew) = self.line_search(&z, &step, &ev, |zz, jac| {
+                self.evaluate(zz, omega, level, jac)
+            });
+            z = znew;
+            ev = evnew;
+        }
+        Err(Error::NonConvergence {
+            solver: format!(
+                "harmonic balance at {:.6} Hz (level {level:.4e})",
+                omega / (2.0 * std::f64::consts::PI)
+            ),
+            iterations: self.newton.max_iterations,
+            residual: ev.relative_residual(),
+            tolerance: self.newton.tolerance,
+        })
+    }
+
+    /// Backtracking line search along `step`: the full step is taken when it lowers `‖R‖`
+    /// (its Jacobian is then already computed), otherwise the step is halved up to 8 times.
+    fn line_search(
+        &self,
+        z: &DVector<f64>,
+        step: &DVector<f64>,
+        ev: &Evaluation,
+        eval: impl Fn(&DVector<f64>, bool) -> Evaluation,
+    ) -> (DVector<f64>, Evaluation) {
+        let r0 = ev.residual.norm();
+        let full = z + step;
+        let evf = eval(&full, true);
+        if evf.residual.norm() < r0 {
+            return (full, evf);
+        }
+        let mut lambda = 0.5;
+        for _ in 0..8 {
+            let trial = z + step * lambda;
+            let evt = eval(&trial, false);
+            if evt.residual.norm() < r0 {
+                return (trial.clone(), eval(&trial, true));
+            }
+            lambda *= 0.5;
+        }
+        (full, evf)
+    }
+
+    /// Force level that holds the amplitude of the excitation harmonic of `observation·q` at
+    /// `target` (response-controlled test, e.g. a constant modal amplitude), at frequency
+    /// `omega`. Unknowns: the harmonics and the level, with the extra equation
+    /// `√(a² + b²) = target`. Warm start from `guess = (z, level)`; without one, a first solve at
+    /// unit level is scaled to the target. Coordinates formulation only.
+    pub fn solve_response_controlled(
+        &self,
+        omega: f64,
+        target: f64,
+        observation: &DVector<f64>,
+        guess: Option<(&DVector<f64>, f64)>,
+    ) -> Result<HbmPoint> {
+        let t0 = Instant::now();
+        if self.formulation != Formulation::Coordinates {
+            return Err(Error::param(
+                "formulation",
+                "response control is implemented for the coordinates formulation",
+            ));
+        }
+        crate::error::require_positive("target amplitude", target)?;
+        if observation.len() != self.structure.n() {
+            return Err(Error::param(
+                "observation",
+                format!(
+                    "{} entries for {} coordinates",
+                    observation.len(),
+                    self.structure.n()
+                ),
+            ));
+        }
+        let len = self.harmonics.len();
+        let n = self.structure.n();
+        let (ci, si) = self
+            .harmonics
+            .index_of(self.excitation.harmonic)
+            .expect("checked in new");
+        let (mut z, mut level) = match guess {
+            Some((z, l)) => (z.clone(), l),
+            None => {
+                let p = self.solve(omega, 1.0, None)?;
+                let a = amplitude(&p.z, observation, len, ci, si);
+                if a == 0.0 {
+                    return Err(Error::Data(
+                        "the observed response does not respond to the excitation".into(),
+                    ));
+                }
+                let f = target / a;
+                (&p.z * f, f)
+            }
+        };
+        let nn = n * len;
+        let mut iterations = 0;
+        let mut rel = f64::INFINITY;
+        let mut perr = 0.0;
+        while iterations <= self.newton.max_iterations {
+            let ev = self.evaluate(&z, omega, level, true);
+            perr = ev.periodicity_error;
+            let a = amplitude(&z, observation, len, ci, si);
+            let g = a - target;
+            rel = ev.relative_residual().max(g.abs() / target);
+            if rel <= self.newton.tolerance {
+                return Ok(HbmPoint {
+                    omega,
+                    level,
+                    z,
+                    iterations,
+                    residual: rel,
+                    converged: true,
+                    periodicity_error: perr,
+                    wall_time_s: t0.elapsed().as_secs_f64(),
+                });
+            }
+            iterations += 1;
+            let mut j = DMatrix::zeros(nn + 1, nn + 1);
+            j.view_mut((0, 0), (nn, nn)).copy_from(&ev.jacobian);
+            j.view_mut((0, nn), (nn, 1)).copy_from(&ev.d_level);
+            let (ac, as_) = (
+                (0..n)
+                    .map(|r| observation[r] * z[r * len + ci])
+                    .sum::<f64>(),
+                (0..n)
+                    .map(|r| observation[r] * z[r * len + si])
+                    .sum::<f64>(),
+            );
+            let am = a.max(f64::MIN_POSITIVE);
+            for r in 0..n {
+                j[(nn, r * len + ci)] = observation[r] * ac / am;
+                j[(nn, r * len + si)] = observation[r] * as_ / am;
+            }
+            let mut rhs = DVector::zeros(nn + 1);
+            rhs.rows_mut(0, nn).copy_from(&(-&ev.residual));
+            rhs[nn] = -g;
+            let step = solve_linear(&j, &rhs, omega)?;
+            z += step.rows(0, nn);
+            level += step[nn];
+        }
+        Err(Error::NonConvergence {
+            solver: format!(
+                "response-controlled harmonic balance at {:.6} Hz (target amplitude {target:.4e}, periodicity error {perr:.1e})",
+                omega / (2.0 * std::f64::consts::PI)
+            ),
+            iterations: self.newton.max_iterations,
+            residual: rel,
+            tolerance: self.newton.tolerance,
+        })
+    }
+}
+
+/// Amplitude `√(a² + b²)` of harmonic `(ci, si)` of `observation·q`.
+pub fn amplitude(
+    q: &DVector<f64>,
+    observation: &DVector<f64>,
+    len: usize,
+    ci: usize,
+    si: usize,
+) -> f64 {
+    let n = observation.len();
+    let a: f64 = (0..n).map(|r| observation[r] * q[r * len + ci]).sum();
+    let b: f64 = (0..n).map(|r| observation[r] * q[r * len + si]).sum();
+    a.hypot(b)
+}
+
+fn periodicity(forces: &[aft::ElementHarmonics]) -> (f64, usize) {
+    (
+        forces
+            .iter()
+            .map(|f| f.periodicity_error)
+            .fold(0.0, f64::max),
+        forces.iter().filter(|f| !f.periodic).count(),
+    )
+}
+
+/// Dense LU solve; a singular matrix is an error naming the frequency and the likely cause.
+pub fn solve_linear(a: &DMatrix<f64>, b: &DVector<f64>, omega: f64) -> Result<DVector<f64>> {
+    a.clone().lu().solve(b).ok_or_else(|| {
+        Error::Data(format!(
+            "singular harmonic-balance Jacobian at {:.6} Hz (a coordinate without stiffness in some \
+             harmonic, e.g. the mean position of a DOF held only by friction: add its support \
+             stiffness or use odd harmonics only)",
+            omega / (2.0 * std::f64::consts::PI)
+        ))
+    })
+}

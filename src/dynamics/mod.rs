@@ -1,0 +1,26 @@
+//! Nonlinear forced response of structures with contact elements: multi-harmonic balance (HBM)
+//! with the alternating frequency–time method (AFT) and pseudo-arclength continuation.
+//!
+//! Data flow, one module per concept:
+//!
+//! ```text
+//! model (linear part: lumped M, C, K or a reduced modal model; elements on node pairs)
+//!   ──► nonlinear (time-discrete hysteretic elements) ──► aft (harmonics ⇄ time, periodic state)
+//!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
+//!   ──► continuation (pseudo-arclength in frequency, turning points)
+//! time_integration: reference steady state by Newmark time stepping (validation)
+//! ```
+
+// Index loops over DOFs, harmonics and samples read like the equations they implement.
+#![allow(clippy::needless_range_loop)]
+
+pub mod aft;
+pub mod condensation;
+pub mod contact;
+pub mod continuation;
+pub mod hbm;
+pub mod model;
+pub mod model_file;
+pub mod nonlinear;
+pub mod report;
+pub mod time_integration;

@@ -1,0 +1,278 @@
+//! The linear part of a structure and the elements attached to it, in generalised coordinates.
+//!
+//! `M·q̈ + C·q̇ + K·q + Σ_e P_eᵀ·f_e(P_e·q) = F(t)`, where `q` are either the physical degrees of
+//! freedom of a lumped model ([`Structure::lumped`]: M, C, K given) or the modal coordinates of a
+//! reduced modal model ([`Structure::modal`]: `M = I`, `C = diag(2ζ_r ω_r)`, `K = diag(ω_r²)`,
+//! mass-normalised mode shapes), and `P_e` (`d × n`) maps the coordinates onto element `e`'s
+//! local relative displacements `u_e = P_e·q` (for a node pair `a`–`b` with local frame `R`:
+//! `u_e = R·(x_a − x_b)`; against ground `x_b = 0`; in modal coordinates `x = Φ·q`, so
+//! `P_e = R·(Φ_a − Φ_b)`). Units: SI (kg, N/m, N·s/m; modal coordinates in m·kg^½ with mass
+//! normalised shapes in kg^-½).
+
+use crate::dynamics::nonlinear::HystereticElement;
+use crate::error::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
+
+/// What the coordinates of a [`Structure`] are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CoordinateKind {
+    /// Physical degrees of freedom of a lumped model.
+    Physical,
+    /// Modal coordinates of a reduced modal model.
+    Modal,
+}
+
+/// An element and the map from the structure's coordinates to its local displacements.
+#[derive(Debug, Clone)]
+pub struct AttachedElement {
+    /// Name used in outputs (e.g. the element table id).
+    pub label: String,
+    pub element: Arc<dyn HystereticElement>,
+    /// `P_e`, `d × n`: `u_e = P_e·q`.
+    pub map: DMatrix<f64>,
+}
+
+/// Linear structure in generalised coordinates with nonlinear elements attached.
+#[derive(Debug, Clone)]
+pub struct Structure {
+    pub kind: CoordinateKind,
+    /// One label per coordinate (`node.x` for lumped DOFs, `mode 3` for modal coordinates).
+    pub labels: Vec<String>,
+    pub mass: DMatrix<f64>,
+    pub damping: DMatrix<f64>,
+    pub stiffness: DMatrix<f64>,
+    pub elements: Vec<AttachedElement>,
+}
+
+fn check_square(name: &str, a: &DMatrix<f64>, n: usize) -> Result<()> {
+    if a.nrows() != n || a.ncols() != n {
+        return Err(Error::param(
+            name,
+            format!("must be {n} × {n}, got {} × {}", a.nrows(), a.ncols()),
+        ));
+    }
+    if let Some(v) = a.iter().find(|v| !v.is_finite()) {
+        return Err(Error::param(name, format!("entry {v} is not finite")));
+    }
+    Ok(())
+}
+
+fn check_symmetric(name: &str, a: &DMatrix<f64>) -> Result<()> {
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for r in 0..a.nrows() {
+        for c in 0..r {
+            if (a[(r, c)] - a[(c, r)]).abs() > 1e-9 * scale {
+                return Err(Error::param(
+                    name,
+                    format!(
+                        "must be symmetric: entry ({}, {}) = {} but ({}, {}) = {}",
+                        r + 1,
+                        c + 1,
+                        a[(r, c)],
+                        c + 1,
+                        r + 1,
+                        a[(c, r)]
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Smallest eigenvalue of a symmetric matrix relative to its largest magnitude.
+fn relative_min_eigenvalue(a: &DMatrix<f64>) -> f64 {
+    let e = a.clone().symmetric_eigen().eigenvalues;
+    let max = e.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let min = e.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+    if max == 0.0 {
+        0.0
+    } else {
+        min / max
+    }
+}
+
+impl Structure {
+    /// Lumped model: symmetric positive definite `M` and `K`, symmetric positive semi-definite
+    /// `C` (no negative damping), all `n × n` with `n = labels.len()`. Errors name `mass`,
+    /// `stiffness` or `damping`.
+    pub fn lumped(
+        labels: Vec<String>,
+        mass: DMatrix<f64>,
+        damping: DMatrix<f64>,
+        stiffness: DMatrix<f64>,
+    ) -> Result<Self> {
+        let n = labels.len();
+        if n == 0 {
+            return Err(Error::param("mass", "the model has no degree of freedom"));
+        }
+        for (name, a) in [
+            ("mass", &mass),
+            ("damping", &damping),
+            ("stiffness", &stiffness),
+        ] {
+            check_square(name, a, n)?;
+            check_symmetric(name, a)?;
+        }
+        for (name, a) in [("mass", &mass), ("stiffness", &stiffness)] {
+            let r = relative_min_eigenvalue(a);
+            if r <= 1e-12 {
+                return Err(Error::param(
+                    name,
+                    format!(
+                        "must be positive definite (non-singular); smallest eigenvalue / largest = {r:.3e}"
+                    ),
+                ));
+            }
+        }
+        let r = relative_min_eigenvalue(&damping);
+        if r < -1e-12 {
+            return Err(Error::param(
+                "damping",
+                format!(
+                    "negative damping: the matrix has a negative eigenvalue (relative {r:.3e})"
+                ),
+            ));
+        }
+        Ok(Self {
+            kind: CoordinateKind::Physical,
+            labels,
+            mass,
+            damping,
+            stiffness,
+            elements: Vec::new(),
+        })
+    }
+
+    /// Reduced modal model from natural frequencies (Hz, > 0) and modal damping ratios (≥ 0).
+    /// Errors name `frequency_Hz` or `damping_ratio` with the mode number (1-based).
+    pub fn modal(frequencies_hz: &[f64], damping_ratios: &[f64]) -> Result<Self> {
+        let n = frequencies_hz.len();
+        if n == 0 || damping_ratios.len() != n {
+            return Err(Error::param(
+                "damping_ratio",
+                format!(
+                    "{} frequencies and {} damping ratios (need one of each per mode, at least one mode)",
+                    n,
+                    damping_ratios.len()
+                ),
+            ));
+        }
+        for (r, (&f, &z)) in frequencies_hz.iter().zip(damping_ratios).enumerate() {
+            if !(f.is_finite() && f > 0.0) {
+                return Err(Error::param(
+                    "frequency_Hz",
+                    format!(
+                        "mode {}: natural frequency must be finite and > 0, got {f}",
+                        r + 1
+                    ),
+                ));
+            }
+            if !(z.is_finite() && z >= 0.0) {
+                return Err(Error::param(
+                    "damping_ratio",
+                    format!("mode {}: negative or non-finite damping ratio {z}", r + 1),
+                ));
+            }
+        }
+        let w: Vec<f64> = frequencies_hz
+            .iter()
+            .map(|f| 2.0 * std::f64::consts::PI * f)
+            .collect();
+        Ok(Self {
+            kind: CoordinateKind::Modal,
+            labels: (1..=n).map(|r| format!("mode {r}")).collect(),
+            mass: DMatrix::identity(n, n),
+            damping: DMatrix::from_diagonal(&DVector::from_iterator(
+                n,
+                w.iter().zip(damping_ratios).map(|(w, z)| 2.0 * z * w),
+            )),
+            stiffness: DMatrix::from_diagonal(&DVector::from_iterator(n, w.iter().map(|w| w * w))),
+            elements: Vec::new(),
+        })
+    }
+
+    /// A single mass-normalised mode (frequency in Hz, damping ratio): the 1-DOF modal model
+    /// of a nonlinear mode. Attach a joint element on the modal coordinate with
+    /// `attach(label, element, DMatrix::from_element(1, 1, φ))`, `φ` the mode shape's value
+    /// across the joint (1 for an element acting directly on the modal coordinate).
+    pub fn single_mode(frequency_hz: f64, damping_ratio: f64) -> Result<Self> {
+        Self::modal(&[frequency_hz], &[damping_ratio])
+    }
+
+    /// Number of coordinates.
+    pub fn n(&self) -> usize {
+        self.labels.len()
+    }
+
+    /// Whether the modal matrices are diagonal (modal coordinates).
+    pub fn is_modal(&self) -> bool {
+        self.kind == CoordinateKind::Modal
+    }
+
+    /// Attach an element with its map `P_e` (`d × n`).
+    pub fn attach(
+        &mut self,
+        label: impl Into<String>,
+        element: Arc<dyn HystereticElement>,
+        map: DMatrix<f64>,
+    ) -> Result<()> {
+        let label = label.into();
+        if map.nrows() != element.dofs() || map.ncols() != self.n() {
+            return Err(Error::param(
+                "map",
+                format!(
+                    "element {label}: map must be {} × {}, got {} × {}",
+                    element.dofs(),
+                    self.n(),
+                    map.nrows(),
+                    map.ncols()
+                ),
+            ));
+        }
+        if map.iter().any(|v| !v.is_finite()) {
+            return Err(Error::param("map", format!("element {label}: not finite")));
+        }
+        self.elements.push(AttachedElement {
+            label,
+            element,
+            map,
+        });
+        Ok(())
+    }
+
+    /// Total number of element displacement components (the size of the contact problem).
+    pub fn contact_dofs(&self) -> usize {
+        self.elements.iter().map(|e| e.element.dofs()).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_matrices_are_refused() {
+        let l = vec!["a.x".to_string(), "b.x".to_string()];
+        let m = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 2.0]);
+        let k = DMatrix::from_row_slice(2, 2, &[2.0, -1.0, -1.0, 1.0]);
+        let c = DMatrix::zeros(2, 2);
+        assert!(Structure::lumped(l.clone(), m.clone(), c.clone(), k.clone()).is_ok());
+        let bad = DMatrix::from_row_slice(2, 2, &[2.0, -1.0, -0.5, 1.0]);
+        let e = Structure::lumped(l.clone(), m.clone(), c.clone(), bad).unwrap_err();
+        assert!(e.to_string().contains("stiffness") && e.to_string().contains("symmetric"));
+        let sing = DMatrix::from_row_slice(2, 2, &[1.0, -1.0, -1.0, 1.0]);
+        let e = Structure::lumped(l.clone(), m.clone(), c.clone(), sing).unwrap_err();
+        assert!(e.to_string().contains("stiffness") && e.to_string().contains("singular"));
+        let e =
+            Structure::lumped(l.clone(), DMatrix::zeros(2, 2), c.clone(), k.clone()).unwrap_err();
+        assert!(e.to_string().contains("mass"));
+        let neg = DMatrix::from_row_slice(2, 2, &[-0.1, 0.0, 0.0, 0.1]);
+        let e = Structure::lumped(l, m, neg, k).unwrap_err();
+        assert!(e.to_string().contains("negative damping"), "{e}");
+        assert!(Structure::modal(&[10.0], &[-0.01]).is_err());
+        assert!(Structure::modal(&[0.0], &[0.01]).is_err());
+    }
+}

@@ -1,0 +1,678 @@
+//! The model file of `asperity response` (TOML) and the files it names.
+//!
+//! ```toml
+//! [linear]                      # either a lumped model ...
+//! mass = "mass.csv"             # CSV matrices: `# unit: kg` | `# unit: N/m` | `# unit: N*s/m`
+//! damping = "damping.csv"       #   line, a header row of DOF labels `node.x|y|z`, n rows
+//! stiffness = "stiffness.csv"
+//! # modes = "modes.csv"         # ... or a reduced modal model: mode,frequency_Hz,damping_ratio
+//! # shapes = "shapes.csv"       #   node,direction,mode_1_per_sqrt_kg,… (mass-normalised)
+//!
+//! [[contact]]                   # one or more element tables
+//! elements = "elements.csv"     # written by `asperity elements`
+//! law = "valanis"               # valanis (3-D microslip) | jenkins (2-D circular + normal)
+//! node_a = "damper"             # one node pair for every row ...
+//! node_b = "blade1"             #   (`ground` for a fixed side)
+//! # pairs = "pairs.csv"         # ... or element_id,node_a,node_b
+//! normal = [0.0, 0.0, 1.0]      # from node_a towards node_b
+//! tangent = [1.0, 0.0, 0.0]
+//!
+//! [excitation]
+//! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)
+//! weights = [1.0, -1.0]         # optional (default 1 each): out-of-phase forcing
+//! harmonic = 1
+//! levels_n = [0.5, 2.0, 8.0]    # force amplitudes (N)
+//!
+//! [response]
+//! dofs = ["blade1.x", "blade2.x"]
+//!
+//! [sweep]
+//! frequency_start_hz = 100.0
+//! frequency_end_hz = 300.0
+//! points = 200                  # at least this many points over the span
+//! harmonics = 7                 # highest harmonic
+//! odd_only = false
+//! time_samples = 128            # optional (default: power of two ≥ 16·harmonics)
+//! formulation = "auto"          # auto | coordinates | receptance
+//! ```
+//!
+//! Paths are relative to the model file. Every error names the file, line and key or column.
+
+use crate::dynamics::contact::{self, contact_frame, TableElement};
+use crate::dynamics::hbm::FormulationChoice;
+use crate::dynamics::model::Structure;
+use crate::dynamics::nonlinear::ContactLaw;
+use crate::error::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearSection {
+    pub mass: Option<PathBuf>,
+    pub damping: Option<PathBuf>,
+    pub stiffness: Option<PathBuf>,
+    pub modes: Option<PathBuf>,
+    pub shapes: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSection {
+    pub elements: PathBuf,
+    pub law: ContactLaw,
+    pub node_a: Option<String>,
+    pub node_b: Option<String>,
+    pub pairs: Option<PathBuf>,
+    pub normal: [f64; 3],
+    pub tangent: [f64; 3],
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExcitationSection {
+    /// DOFs loaded by the force, each with a weight (default 1): `F = level·Σ w_i·e_i`.
+    pub dofs: Vec<String>,
+    pub weights: Option<Vec<f64>>,
+    #[serde(default = "one")]
+    pub harmonic: usize,
+    pub levels_n: Vec<f64>,
+}
+
+fn one() -> usize {
+    1
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResponseSection {
+    pub dofs: Vec<String>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSection {
+    pub frequency_start_hz: f64,
+    pub frequency_end_hz: f64,
+    #[serde(default = "default_points")]
+    pub points: usize,
+    pub harmonics: usize,
+    #[serde(default)]
+    pub odd_only: bool,
+    pub time_samples: Option<usize>,
+    #[serde(default = "default_formulation")]
+    pub formulation: FormulationChoice,
+}
+
+fn default_points() -> usize {
+    200
+}
+
+fn default_formulation() -> FormulationChoice {
+    FormulationChoice::Auto
+}
+
+/// The whole model file.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    pub linear: LinearSection,
+    #[serde(default)]
+    pub contact: Vec<ContactSection>,
+    pub excitation: ExcitationSection,
+    pub response: ResponseSection,
+    pub sweep: SweepSection,
+}
+
+/// A model ready to solve: the structure, the excitation and observation vectors, and every
+/// file that was read (for the provenance record).
+#[derive(Debug)]
+pub struct LoadedModel {
+    pub file: ModelFile,
+    pub path: PathBuf,
+    pub structure: Structure,
+    /// Force on the coordinates per newton of excitation.
+    pub force: DVector<f64>,
+    /// One observation row per response DOF (label, row).
+    pub responses: Vec<(String, DVector<f64>)>,
+    /// `(role, path)` of every input file.
+    pub inputs: Vec<(String, PathBuf)>,
+    /// Element ids per contact section, and how many were out of the calibration range.
+    pub out_of_range: usize,
+}
+
+/// 1-based line of `key = …` in TOML text (first occurrence), or 0.
+fn key_line(text: &str, key: &str) -> usize {
+    text.lines()
+        .position(|l| {
+            l.split('#')
+                .next()
+                .and_then(|s| s.split_once('='))
+                .is_some_and(|(k, _)| k.trim() == key)
+        })
+        .map(|i| i + 1)
+        .unwrap_or(0)
+}
+
+impl ModelFile {
+    /// Parse and validate TOML text (`path` names it in errors).
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        let f: Self = toml::from_str(text).map_err(|e| crate::input::toml_error(path, text, e))?;
+        f.validate().map_err(|e| match e {
+            Error::InvalidParameter { name, message } => {
+                let key = name.rsplit('.').next().unwrap_or(&name).to_string();
+                Error::parse(
+                    path,
+                    key_line(text, &key),
+                    format!("invalid `{name}`: {message}"),
+                )
+            }
+            other => other,
+        })?;
+        Ok(f)
+    }
+
+    fn validate(&self) -> Result<()> {
+        let l = &self.linear;
+        let lumped = l.mass.is_some() || l.damping.is_some() || l.stiffness.is_some();
+        let modal = l.modes.is_some() || l.shapes.is_some();
+        if lumped == modal
+            || (lumped && (l.mass.is_none() || l.damping.is_none() || l.stiffness.is_none()))
+            || (modal && (l.modes.is_none() || l.shapes.is_none()))
+        {
+            return Err(Error::param(
+                "linear.mass",
+                "give either mass, damping and stiffness (lumped) or modes and shapes (modal)",
+            ));
+        }
+        for (i, c) in self.contact.iter().enumerate() {
+            let pair = c.node_a.is_some() && c.node_b.is_some();
+            if pair == c.pairs.is_some() || (c.node_a.is_some() != c.node_b.is_some()) {
+                return Err(Error::param(
+                    "contact.node_a",
+                    format!("contact {}: give node_a and node_b, or pairs", i + 1),
+                ));
+            }
+            contact_frame(c.normal, c.tangent).map_err(|e| match e {
+                Error::InvalidParameter { name, message } => {
+                    Error::param(format!("contact.{name}"), message)
+                }
+                o => o,
+            })?;
+        }
+        let e = &self.excitation;
+        if e.levels_n.is_empty() {
+            return Err(Error::param(
+                "excitation.levels_n",
+                "give at least one level",
+            ));
+        }
+        if let Some(v) = e.levels_n.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(Error::param(
+                "excitation.levels_n",
+                format!("levels must be finite and > 0, got {v}"),
+            ));
+        }
+        if e.dofs.is_empty() {
+            return Err(Error::param("excitation.dofs", "give at least one DOF"));
+        }
+        if let Some(w) = &e.weights {
+            if w.len() != e.dofs.len() || w.iter().any(|v| !v.is_finite()) {
+                return Err(Error::param(
+                    "excitation.weights",
+                    "one finite weight per excitation DOF",
+                ));
+            }
+        }
+        if e.harmonic == 0 {
+            return Err(Error::param("excitation.harmonic", "must be ≥ 1"));
+        }
+        if self.response.dofs.is_empty() {
+            return Err(Error::param("response.dofs", "give at least one DOF"));
+        }
+        let s = &self.sweep;
+        for (k, v) in [
+            ("sweep.frequency_start_hz", s.frequency_start_hz),
+            ("sweep.frequency_end_hz", s.frequency_end_hz),
+        ] {
+            crate::error::require_positive(k, v)?;
+        }
+        if s.frequency_start_hz == s.frequency_end_hz {
+            return Err(Error::param(
+                "sweep.frequency_end_hz",
+                "must differ from the start",
+            ));
+        }
+        if s.harmonics == 0 {
+            return Err(Error::param("sweep.harmonics", "must be ≥ 1"));
+        }
+        if s.points < 2 {
+            return Err(Error::param("sweep.points", "must be ≥ 2"));
+        }
+        if e.harmonic > s.harmonics || (s.odd_only && e.harmonic.is_multiple_of(2)) {
+            return Err(Error::param(
+                "excitation.harmonic",
+                "must be one of the retained harmonics",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Split `node.x` into `(node, axis)`.
+fn split_dof(label: &str) -> Option<(&str, usize)> {
+    let (node, dir) = label.rsplit_once('.')?;
+    let axis = match dir {
+        "x" => 0,
+        "y" => 1,
+        "z" => 2,
+        _ => return None,
+    };
+    (!node.is_empty()).then_some((node, axis))
+}
+
+/// Read a square matrix CSV: a `# unit: <unit>` line naming `unit`, a header of DOF labels,
+/// and one row per DOF.
+pub fn read_matrix(path: &Path, unit: &[&str]) -> Result<(Vec<String>, DMatrix<f64>)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut found_unit = None;
+    let mut labels: Option<Vec<String>> = None;
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.trim();
+        if l.is_empty() {
+            continue;
+        }
+        if let Some(c) = l.strip_prefix('#') {
+            if let Some(u) = c.trim().strip_prefix("unit:") {
+                found_unit = Some((u.trim().to_string(), line));
+            }
+            continue;
+        }
+        let cells: Vec<&str> = l.split(',').map(|s| s.trim()).collect();
+        match &labels {
+            None => {
+                for c in &cells {
+                    if split_dof(c).is_none() {
+                        return Err(Error::parse(
+                            path,
+                            line,
+                            format!("header: `{c}` is not a DOF label `node.x|y|z`"),
+                        ));
+                    }
+                }
+                labels = Some(cells.iter().map(|s| s.to_string()).collect());
+            }
+            Some(h) => {
+                if cells.len() != h.len() {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!("expected {} values, found {}", h.len(), cells.len()),
+                    ));
+                }
+                let mut row = Vec::with_capacity(cells.len());
+                for c in cells {
+                    let v: f64 = c
+                        .parse()
+                        .map_err(|_| Error::parse(path, line, format!("`{c}` is not a number")))?;
+                    if !v.is_finite() {
+                        return Err(Error::parse(path, line, format!("{v} is not finite")));
+                    }
+                    row.push(v);
+                }
+                rows.push(row);
+            }
+        }
+    }
+    match found_unit {
+        Some((u, line)) if !unit.contains(&u.as_str()) => {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("unit `{u}`, expected {}", unit.join(" or ")),
+            ))
+        }
+        None => {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("no `# unit: {}` line", unit[0]),
+            ))
+        }
+        _ => {}
+    }
+    let labels = labels.ok_or_else(|| Error::parse(path, 0, "no header row"))?;
+    let n = labels.len();
+    if rows.len() != n {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "{} DOF labels but {} rows: the matrix must be square",
+                n,
+                rows.len()
+            ),
+        ));
+    }
+    let mut seen = HashMap::new();
+    for l in &labels {
+        if seen.insert(l.clone(), ()).is_some() {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("DOF `{l}` appears twice in the header"),
+            ));
+        }
+    }
+    Ok((labels, DMatrix::from_fn(n, n, |r, c| rows[r][c])))
+}
+
+/// Modal data: frequencies (Hz), damping ratios, and shapes per (node, axis).
+type Shapes = HashMap<(String, usize), Vec<f64>>;
+
+fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
+    let mut rdr = crate::input::csv_reader(path)?;
+    let h = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
+    if h.iter().ne(["mode", "frequency_Hz", "damping_ratio"]) {
+        return Err(Error::parse(
+            path,
+            0,
+            "expected the header `mode,frequency_Hz,damping_ratio`",
+        ));
+    }
+    let (mut f, mut z) = (Vec::new(), Vec::new());
+    for rec in rdr.records() {
+        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let num = |i: usize, name: &str| -> Result<f64> {
+            rec.get(i)
+                .and_then(|s| s.parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| Error::parse(path, line, format!("`{name}` is not a finite number")))
+        };
+        let m = num(0, "mode")? as usize;
+        if m != f.len() + 1 {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("modes must be numbered 1, 2, … in order; got {m}"),
+            ));
+        }
+        let (fr, zr) = (num(1, "frequency_Hz")?, num(2, "damping_ratio")?);
+        if fr <= 0.0 {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("`frequency_Hz` must be > 0, got {fr}"),
+            ));
+        }
+        if zr < 0.0 {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("negative damping: `damping_ratio` = {zr}"),
+            ));
+        }
+        f.push(fr);
+        z.push(zr);
+    }
+    if f.is_empty() {
+        return Err(Error::parse(path, 0, "no modes"));
+    }
+    Ok((f, z))
+}
+
+fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
+    let mut rdr = crate::input::csv_reader(path)?;
+    let h = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
+    let ok = h.len() == n_modes + 2
+        && h.get(0) == Some("node")
+        && h.get(1) == Some("direction")
+        && (0..n_modes)
+            .all(|r| h.get(r + 2) == Some(format!("mode_{}_per_sqrt_kg", r + 1).as_str()));
+    if !ok {
+        return Err(Error::parse(
+            path,
+            0,
+            format!("expected the header `node,direction,mode_1_per_sqrt_kg,…,mode_{n_modes}_per_sqrt_kg` (mass-normalised shapes, one column per mode of the modes file)"),
+        ));
+    }
+    let mut out = Shapes::new();
+    for rec in rdr.records() {
+        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let node = rec.get(0).unwrap_or("").to_string();
+        let axis = match rec.get(1).unwrap_or("") {
+            "x" => 0,
+            "y" => 1,
+            "z" => 2,
+            d => {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("direction `{d}`: expected x, y or z"),
+                ))
+            }
+        };
+        let mut v = Vec::with_capacity(n_modes);
+        for r in 0..n_modes {
+            let s = rec.get(r + 2).unwrap_or("");
+            let x: f64 = s
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| {
+                    Error::parse(
+                        path,
+                        line,
+                        format!("mode {}: `{s}` is not a finite number", r + 1),
+                    )
+                })?;
+            v.push(x);
+        }
+        if out.insert((node.clone(), axis), v).is_some() {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("node {node} direction {} repeated", ["x", "y", "z"][axis]),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// How a node's displacement (x, y, z) depends on the coordinates: three rows of length n.
+struct Kinematics {
+    n: usize,
+    /// node → 3 rows (None for an axis without a DOF / shape: that component is zero).
+    nodes: HashMap<String, [Option<Vec<f64>>; 3]>,
+}
+
+impl Kinematics {
+    fn row(&self, label: &str) -> Option<Vec<f64>> {
+        let (node, axis) = split_dof(label)?;
+        self.nodes.get(node)?[axis].clone()
+    }
+    /// `R·(x_a − x_b)` as a `3 × n` map; `Err(node)` if a node is unknown.
+    fn pair_map(
+        &self,
+        a: &str,
+        b: &str,
+        r: &[[f64; 3]; 3],
+    ) -> std::result::Result<DMatrix<f64>, String> {
+        let mut p = DMatrix::zeros(3, self.n);
+        for (node, sign) in [(a, 1.0), (b, -1.0)] {
+            if node == "ground" {
+                continue;
+            }
+            let rows = self.nodes.get(node).ok_or_else(|| node.to_string())?;
+            for (axis, row) in rows.iter().enumerate() {
+                if let Some(row) = row {
+                    for c in 0..3 {
+                        for j in 0..self.n {
+                            p[(c, j)] += sign * r[c][axis] * row[j];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(p)
+    }
+}
+
+/// Read the model file and everything it names; build the structure with its elements.
+pub fn load(path: &Path) -> Result<LoadedModel> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let file = ModelFile::parse(&text, path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let resolve = |p: &Path| base.join(p);
+    let mut inputs = vec![("model".to_string(), path.to_path_buf())];
+    let l = &file.linear;
+    let (mut structure, kin) =
+        if let (Some(m), Some(c), Some(k)) = (&l.mass, &l.damping, &l.stiffness) {
+            let (mp, cp, kp) = (resolve(m), resolve(c), resolve(k));
+            let (lm, mm) = read_matrix(&mp, &["kg"])?;
+            let (lc, cm) = read_matrix(&cp, &["N*s/m", "N·s/m", "Ns/m"])?;
+            let (lk, km) = read_matrix(&kp, &["N/m"])?;
+            for (p, lab) in [(&cp, &lc), (&kp, &lk)] {
+                if lab != &lm {
+                    return Err(Error::parse(
+                        p,
+                        0,
+                        format!("DOF labels differ from those of {}", mp.display()),
+                    ));
+                }
+            }
+            let n = lm.len();
+            let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
+            for (i, label) in lm.iter().enumerate() {
+                let (node, axis) = split_dof(label).expect("checked by read_matrix");
+                let mut row = vec![0.0; n];
+                row[i] = 1.0;
+                nodes.entry(node.to_string()).or_default()[axis] = Some(row);
+            }
+            let s = Structure::lumped(lm, mm, cm, km).map_err(|e| match e {
+                Error::InvalidParameter { name, message } => {
+                    let p = match name.as_str() {
+                        "mass" => &mp,
+                        "damping" => &cp,
+                        _ => &kp,
+                    };
+                    Error::parse(p, 0, message)
+                }
+                o => o,
+            })?;
+            inputs.push(("mass".into(), mp));
+            inputs.push(("damping".into(), cp));
+            inputs.push(("stiffness".into(), kp));
+            (s, Kinematics { n, nodes })
+        } else {
+            let (mp, sp) = (
+                resolve(l.modes.as_ref().expect("validated")),
+                resolve(l.shapes.as_ref().expect("validated")),
+            );
+            let (f, z) = read_modes(&mp)?;
+            let shapes = read_shapes(&sp, f.len())?;
+            let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
+            for ((node, axis), v) in shapes {
+                nodes.entry(node).or_default()[axis] = Some(v);
+            }
+            let s = Structure::modal(&f, &z).map_err(|e| Error::parse(&mp, 0, e.to_string()))?;
+            inputs.push(("modes".into(), mp));
+            inputs.push(("shapes".into(), sp));
+            let n = f.len();
+            (s, Kinematics { n, nodes })
+        };
+    let mut out_of_range = 0;
+    for (ci, c) in file.contact.iter().enumerate() {
+        let ep = resolve(&c.elements);
+        let table: Vec<TableElement> = contact::read_element_table(&ep)?;
+        out_of_range += table.iter().filter(|e| e.out_of_range != 0).count();
+        let frame = contact_frame(c.normal, c.tangent)?;
+        let pairs = match &c.pairs {
+            Some(pp) => {
+                let pp = resolve(pp);
+                let pairs = contact::read_pairs(&pp)?;
+                inputs.push((format!("contact {} pairs", ci + 1), pp.clone()));
+                Some((pp, pairs))
+            }
+            None => None,
+        };
+        for e in &table {
+            let (a, b, where_) = match &pairs {
+                Some((pp, map)) => {
+                    let (a, b, line) = map.get(&e.id).ok_or_else(|| {
+                        Error::parse(
+                            &ep,
+                            e.line,
+                            format!("element {} has no row in {}", e.id, pp.display()),
+                        )
+                    })?;
+                    (a.clone(), b.clone(), Error::parse(pp, *line, ""))
+                }
+                None => (
+                    c.node_a.clone().expect("validated"),
+                    c.node_b.clone().expect("validated"),
+                    Error::parse(&ep, e.line, ""),
+                ),
+            };
+            let map = kin.pair_map(&a, &b, &frame).map_err(|node| {
+                let what = if structure.is_modal() {
+                    "has no mode shape"
+                } else {
+                    "is not a node of the lumped model"
+                };
+                match &where_ {
+                    Error::Parse { path, line, .. } => Error::parse(
+                        path,
+                        *line,
+                        format!("element {}: contact node `{node}` {what}", e.id),
+                    ),
+                    _ => unreachable!(),
+                }
+            })?;
+            let el = contact::element_for(c.law, e)
+                .map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
+            structure.attach(format!("{}", e.id), el, map)?;
+        }
+        inputs.push((format!("contact {} elements", ci + 1), ep));
+    }
+    let dof_err = |key: &str, label: &str| {
+        Error::parse(
+            path,
+            key_line(&text, key),
+            format!("`{key}`: unknown DOF `{label}` (expected node.x|y|z of the model)"),
+        )
+    };
+    let mut force = DVector::zeros(structure.n());
+    for (i, d) in file.excitation.dofs.iter().enumerate() {
+        let w = file
+            .excitation
+            .weights
+            .as_ref()
+            .map(|w| w[i])
+            .unwrap_or(1.0);
+        force += DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?) * w;
+    }
+    let mut responses = Vec::new();
+    for d in &file.response.dofs {
+        let row = kin.row(d).ok_or_else(|| dof_err("dofs", d))?;
+        responses.push((d.clone(), DVector::from_vec(row)));
+    }
+    Ok(LoadedModel {
+        file,
+        path: path.to_path_buf(),
+        structure,
+        force,
+        responses,
+        inputs,
+        out_of_range,
+    })
+}

@@ -1,0 +1,228 @@
+//! Output files of a frequency-response run: one CSV per excitation level, the element energies
+//! and contact states at each level's peak, and the PNG of the FRF family. Every file is written
+//! atomically ([`crate::output`]).
+
+use crate::dynamics::aft::ElementCycle;
+use crate::dynamics::continuation::Branch;
+use crate::dynamics::hbm::HbmSystem;
+use crate::error::{Error, Result};
+use crate::plot::{line_plot, LinePlot, Scale, Series};
+use nalgebra::DVector;
+use std::path::Path;
+
+const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// Everything written for one excitation level.
+#[derive(Debug, Clone)]
+pub struct LevelResult {
+    pub level_n: f64,
+    pub branch: Branch,
+    /// Per point: total dissipated energy (J) and element-averaged stick/slip/separation.
+    pub totals: Vec<[f64; 4]>,
+    /// Index of the point with the largest first-harmonic amplitude of the first response DOF.
+    pub peak: usize,
+    /// Element cycles at the peak.
+    pub peak_elements: Vec<ElementCycle>,
+}
+
+/// Amplitude and phase (of the complex amplitude `a − i·b`) of order `k` of `row·x`.
+pub fn harmonic_of(
+    system: &HbmSystem<'_>,
+    x: &DVector<f64>,
+    row: &DVector<f64>,
+    k: usize,
+) -> (f64, f64) {
+    let len = system.harmonics.len();
+    let n = row.len();
+    if k == 0 {
+        let m: f64 = (0..n).map(|r| row[r] * x[r * len]).sum();
+        return (m, 0.0);
+    }
+    let (ci, si) = system.harmonics.index_of(k).expect("retained order");
+    let a: f64 = (0..n).map(|r| row[r] * x[r * len + ci]).sum();
+    let b: f64 = (0..n).map(|r| row[r] * x[r * len + si]).sum();
+    (a.hypot(b), (-b).atan2(a))
+}
+
+/// Solve the element cycles along a branch and find its peak.
+pub fn summarise(
+    system: &HbmSystem<'_>,
+    level_n: f64,
+    branch: Branch,
+    peak_row: &DVector<f64>,
+) -> LevelResult {
+    let mut totals = Vec::with_capacity(branch.points.len());
+    let mut peak = 0;
+    let mut best = f64::NEG_INFINITY;
+    let ne = system.structure.elements.len().max(1) as f64;
+    for (i, p) in branch.points.iter().enumerate() {
+        let x = system.coordinates(p);
+        let (a, _) = harmonic_of(system, &x, peak_row, system.excitation.harmonic);
+        if a > best {
+            best = a;
+            peak = i;
+        }
+        let cycles = system.element_cycles(p);
+        let mut t = [0.0; 4];
+        for c in &cycles {
+            t[0] += c.dissipated_energy_j;
+            t[1] += c.stick_fraction / ne;
+            t[2] += c.slip_fraction / ne;
+            t[3] += c.separation_fraction / ne;
+        }
+        totals.push(t);
+    }
+    let peak_elements = system.element_cycles(&branch.points[peak]);
+    LevelResult {
+        level_n,
+        branch,
+        totals,
+        peak,
+        peak_elements,
+    }
+}
+
+/// CSV of one level: frequency, amplitude and phase per response DOF and harmonic, energy and
+/// contact-state fractions, Newton iterations and residual.
+pub fn write_level_csv(
+    path: &Path,
+    system: &HbmSystem<'_>,
+    responses: &[(String, DVector<f64>)],
+    result: &LevelResult,
+    header: &str,
+) -> Result<()> {
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        for l in header.lines() {
+            writeln!(w, "# {l}").map_err(io)?;
+        }
+        writeln!(
+            w,
+            "# excitation level {} N (force amplitude of cos(ωt) on the excitation DOF)",
+            result.level_n
+        )
+        .map_err(io)?;
+        writeln!(w, "# units: frequency_Hz in Hz; amplitudes in m (h0: mean displacement); phase_rad = arg(a − i·b) of x = a·cos(kωt) + b·sin(kωt), relative to the force cos(ωt);").map_err(io)?;
+        writeln!(w, "#   dissipated_energy_J: sum over elements of ∮f·du per cycle; stick/slip/separation: element-averaged fractions of the period").map_err(io)?;
+        let mut cols = vec!["frequency_Hz".to_string()];
+        for (label, _) in responses {
+            for &k in system.harmonics.orders() {
+                if k == 0 {
+                    cols.push(format!("{label}_h0_mean_m"));
+                } else {
+                    cols.push(format!("{label}_h{k}_amplitude_m"));
+                    cols.push(format!("{label}_h{k}_phase_rad"));
+                }
+            }
+        }
+        for c in [
+            "dissipated_energy_J",
+            "stick_fraction",
+            "slip_fraction",
+            "separation_fraction",
+            "newton_iterations",
+            "relative_residual",
+        ] {
+            cols.push(c.to_string());
+        }
+        writeln!(w, "{}", cols.join(",")).map_err(io)?;
+        for (p, t) in result.branch.points.iter().zip(&result.totals) {
+            let x = system.coordinates(p);
+            let mut v = vec![format!("{:.9e}", p.omega / TWO_PI)];
+            for (_, row) in responses {
+                for &k in system.harmonics.orders() {
+                    let (a, ph) = harmonic_of(system, &x, row, k);
+                    v.push(format!("{a:.9e}"));
+                    if k != 0 {
+                        v.push(format!("{ph:.6}"));
+                    }
+                }
+            }
+            for x in t {
+                v.push(format!("{x:.6e}"));
+            }
+            v.push(p.iterations.to_string());
+            v.push(format!("{:.3e}", p.residual));
+            writeln!(w, "{}", v.join(",")).map_err(io)?;
+        }
+        Ok(())
+    })
+}
+
+/// CSV of the elements at a level's peak.
+pub fn write_elements_csv(path: &Path, system: &HbmSystem<'_>, result: &LevelResult) -> Result<()> {
+    let peak = &result.branch.points[result.peak];
+    crate::output::write_atomic(path, |w| {
+        let io = |e: std::io::Error| Error::io(path, e);
+        writeln!(
+            w,
+            "# elements at the resonance peak of level {} N: {:.6} Hz",
+            result.level_n,
+            peak.omega / TWO_PI
+        )
+        .map_err(io)?;
+        writeln!(
+            w,
+            "# units: dissipated_energy_J in J per cycle; fractions of the period"
+        )
+        .map_err(io)?;
+        writeln!(
+            w,
+            "element,law,dissipated_energy_J,stick_fraction,slip_fraction,separation_fraction"
+        )
+        .map_err(io)?;
+        for (e, c) in system.structure.elements.iter().zip(&result.peak_elements) {
+            writeln!(
+                w,
+                "{},{},{:.6e},{:.6},{:.6},{:.6}",
+                e.label,
+                e.element.name(),
+                c.dissipated_energy_j,
+                c.stick_fraction,
+                c.slip_fraction,
+                c.separation_fraction
+            )
+            .map_err(io)?;
+        }
+        Ok(())
+    })
+}
+
+/// PNG of the FRF family: first-harmonic receptance `|X1|/F` (m/N) of one response DOF versus
+/// frequency, one curve per level.
+pub fn plot_frf_family(
+    path: &Path,
+    system: &HbmSystem<'_>,
+    label: &str,
+    row: &DVector<f64>,
+    results: &[LevelResult],
+) -> Result<()> {
+    let series: Vec<Series> = results
+        .iter()
+        .map(|r| {
+            let pts = r
+                .branch
+                .points
+                .iter()
+                .map(|p| {
+                    let x = system.coordinates(p);
+                    let (a, _) = harmonic_of(system, &x, row, system.excitation.harmonic);
+                    (p.omega / TWO_PI, a / r.level_n)
+                })
+                .collect();
+            Series::line(format!("F = {} N", r.level_n), pts)
+        })
+        .collect();
+    let title = format!("FRF family at {label}: first-harmonic receptance");
+    line_plot(
+        path,
+        &LinePlot {
+            title: &title,
+            x_label: "frequency (Hz)",
+            y_label: "|X1| / F (m/N)",
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+        },
+        &series,
+    )
+}

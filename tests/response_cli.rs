@@ -1,0 +1,163 @@
+//! `asperity response` end to end on a small lumped model, and every bad input the issue lists:
+//! a clear error naming the file, line or parameter, a non-zero exit, and no output written.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+const ELEMENTS: &str = "# units: N0_N in N; kn, E0, Et in N/m\n\
+id,x_m,y_m,area_m2,pressure_Pa,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m,out_of_range\n\
+7,0,0,1e-6,2e6,2.0,1e6,2.0e4,0.3,0.5,0,0\n\
+11,0,0,1e-6,2e6,1.0,1e6,1.0e4,0.5,0.5,0,0\n";
+
+/// Two masses (m1 on a ground spring, m2 on m1); the element table joins m2 to ground.
+fn write_model(dir: &Path) -> PathBuf {
+    let w = |name: &str, text: &str| std::fs::write(dir.join(name), text).unwrap();
+    w("mass.csv", "# unit: kg\nm1.x,m2.x\n1.0,0\n0,0.5\n");
+    w(
+        "stiffness.csv",
+        "# unit: N/m\nm1.x,m2.x\n6e4,-2e4\n-2e4,2e4\n",
+    );
+    w("damping.csv", "# unit: N*s/m\nm1.x,m2.x\n2,0\n0,1\n");
+    w("elements.csv", ELEMENTS);
+    w(
+        "pairs.csv",
+        "element_id,node_a,node_b\n7,m2,ground\n11,m2,ground\n",
+    );
+    let model = "[linear]\nmass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"\n\n\
+[[contact]]\nelements = \"elements.csv\"\nlaw = \"valanis\"\npairs = \"pairs.csv\"\n\
+normal = [0.0, 0.0, 1.0]\ntangent = [1.0, 0.0, 0.0]\n\n\
+[excitation]\ndofs = [\"m1.x\"]\nlevels_n = [0.02, 0.5]\n\n\
+[response]\ndofs = [\"m1.x\", \"m2.x\"]\n\n\
+[sweep]\nfrequency_start_hz = 15.0\nfrequency_end_hz = 50.0\npoints = 15\nharmonics = 3\nodd_only = true\n";
+    w("model.toml", model);
+    dir.join("model.toml")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn response_writes_every_output_and_the_peak_falls_with_the_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = write_model(dir.path());
+    let out = dir.path().join("out");
+    let o = run(&["response", s(&model), "--out-dir", s(&out)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "response_level_1.csv",
+        "response_level_2.csv",
+        "elements_level_1.csv",
+        "frf_m1.x.png",
+        "frf_m2.x.png",
+        "response.json",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("response.json")).unwrap()).unwrap();
+    let inputs = json["inputs"].as_array().unwrap();
+    assert!(inputs
+        .iter()
+        .any(|i| i["role"] == "contact 1 elements" && i["sha256"].as_str().unwrap().len() == 64));
+    // Friction: from stuck to microslip the peak receptance |X|/F falls as the level grows.
+    let levels = json["summary"]["levels"].as_array().unwrap();
+    let r: Vec<f64> = levels
+        .iter()
+        .map(|l| l["peak_amplitude_m"].as_f64().unwrap() / l["level_N"].as_f64().unwrap())
+        .collect();
+    assert!(r[1] < 0.9 * r[0], "peak receptance {r:?}");
+    let csv = std::fs::read_to_string(out.join("response_level_2.csv")).unwrap();
+    assert!(csv.contains("frequency_Hz,m1.x_h1_amplitude_m,m1.x_h1_phase_rad"));
+}
+
+fn assert_fails(dir: &Path, needles: &[&str]) {
+    let out = dir.join("out-bad");
+    let o = run(&["response", s(&dir.join("model.toml")), "--out-dir", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "should fail: {needles:?}");
+    for n in needles {
+        assert!(err.contains(n), "stderr should mention `{n}`: {err}");
+    }
+    assert!(
+        !out.exists() || std::fs::read_dir(&out).unwrap().count() == 0,
+        "output written"
+    );
+}
+
+#[test]
+fn bad_inputs_fail_clearly_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    write_model(p);
+    let edit = |name: &str, from: &str, to: &str| {
+        let t = std::fs::read_to_string(p.join(name)).unwrap();
+        assert!(t.contains(from), "{from}");
+        std::fs::write(p.join(name), t.replacen(from, to, 1)).unwrap();
+    };
+    let reset = || write_model(p);
+    edit("stiffness.csv", "-2e4,2e4", "-1e4,2e4");
+    assert_fails(p, &["stiffness.csv", "symmetric"]);
+    reset();
+    edit("mass.csv", "0,0.5", "0,0");
+    assert_fails(p, &["mass.csv", "positive definite"]);
+    reset();
+    edit("damping.csv", "0,1\n", "0,-1\n");
+    assert_fails(p, &["damping.csv", "negative damping"]);
+    reset();
+    edit("stiffness.csv", "# unit: N/m", "# unit: kN/m");
+    assert_fails(p, &["stiffness.csv:1", "unit"]);
+    reset();
+    edit("pairs.csv", "11,m2,ground", "11,m9,ground");
+    assert_fails(p, &["pairs.csv:3", "m9"]);
+    reset();
+    edit("elements.csv", "1.0,1e6,1.0e4", "1.0,0,1.0e4");
+    assert_fails(p, &["elements.csv:4", "kn_N_per_m"]);
+    reset();
+    edit("elements.csv", "2.0,1e6,2.0e4", "2.0,1e6,-2.0e4");
+    assert_fails(p, &["elements.csv:3", "E0_N_per_m"]);
+    reset();
+    edit("elements.csv", "0.3,0.5,0,0", "0.3,0.0,0,0");
+    assert_fails(p, &["elements.csv:3", "mu"]);
+    reset();
+    edit(
+        "model.toml",
+        "levels_n = [0.02, 0.5]",
+        "levels_n = [0.5, -5.0]",
+    );
+    assert_fails(p, &["model.toml:15", "excitation.levels_n"]);
+    reset();
+    edit("model.toml", "dofs = [\"m1.x\"]", "dofs = [\"m7.x\"]");
+    assert_fails(p, &["model.toml", "m7.x"]);
+    reset();
+    // A modal model whose contact node has no mode shape.
+    std::fs::write(
+        p.join("modes.csv"),
+        "mode,frequency_Hz,damping_ratio\n1,20,0.01\n2,45,0.01\n",
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("shapes.csv"),
+        "# mass-normalised shapes\nnode,direction,mode_1_per_sqrt_kg,mode_2_per_sqrt_kg\nm1,x,0.8,0.5\n",
+    )
+    .unwrap();
+    edit(
+        "model.toml",
+        "mass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"",
+        "modes = \"modes.csv\"\nshapes = \"shapes.csv\"",
+    );
+    assert_fails(p, &["pairs.csv:2", "m2", "no mode shape"]);
+    std::fs::write(
+        p.join("modes.csv"),
+        "mode,frequency_Hz,damping_ratio\n1,20,-0.01\n2,45,0.01\n",
+    )
+    .unwrap();
+    assert_fails(p, &["modes.csv:2", "negative damping"]);
+}
