@@ -37,6 +37,10 @@ pub enum Error {
     /// Input data that is well formed but cannot be used (no contact, no complete cycle, ...).
     #[error("{0}")]
     Data(String),
+    /// A request that would exceed a documented resource limit (grid size, memory, file size,
+    /// number of steps), refused before any allocation (see [`crate::limits`]).
+    #[error("resource limit `{name}`: {message}")]
+    Limit { name: String, message: String },
 }
 
 /// Result alias used across the crate.
@@ -60,12 +64,45 @@ impl Error {
         }
     }
 
+    /// Shorthand for [`Error::Limit`].
+    pub fn limit(name: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Limit {
+            name: name.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Attach the file an error came from: a [`Error::Data`] message gets the file's name in
+    /// front (as `file: message`), an [`Error::InvalidParameter`] raised on the file's content
+    /// becomes a [`Error::Parse`] of the file. Errors that already name a file, a flag or a
+    /// limit are returned unchanged.
+    pub fn in_file(self, path: &std::path::Path) -> Self {
+        match self {
+            Error::Data(m) => Error::parse(path, 0, m),
+            Error::InvalidParameter { name, message } if !name.starts_with('-') => {
+                Error::parse(path, 0, format!("{name}: {message}"))
+            }
+            other => other,
+        }
+    }
+
     /// Shorthand for [`Error::Io`].
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
             source,
         }
+    }
+}
+
+/// A number for a message: Rust's shortest round-trip form for ordinary magnitudes, scientific
+/// notation outside `[1e-4, 1e6)` (so that `1e300` is not printed as 301 digits), `NaN`, `inf`.
+pub fn num(value: f64) -> String {
+    let a = value.abs();
+    if !value.is_finite() || value == 0.0 || (1e-4..1e6).contains(&a) {
+        format!("{value}")
+    } else {
+        format!("{value:e}")
     }
 }
 
@@ -76,7 +113,7 @@ pub fn require_positive(name: &str, value: f64) -> Result<f64> {
     } else {
         Err(Error::param(
             name,
-            format!("must be finite and > 0, got {value}"),
+            format!("must be finite and > 0, got {}", num(value)),
         ))
     }
 }
@@ -86,6 +123,25 @@ pub fn require_finite(name: &str, value: f64) -> Result<f64> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(Error::param(name, format!("must be finite, got {value}")))
+        Err(Error::param(
+            name,
+            format!("must be finite, got {}", num(value)),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        assert_eq!(num(1e300), "1e300");
+        assert_eq!(num(-2.5e-300), "-2.5e-300");
+        assert_eq!(num(0.6), "0.6");
+        assert_eq!(num(210e9), "2.1e11");
+        assert_eq!(num(f64::NAN), "NaN");
+        let e = require_positive("--x", -1e300).unwrap_err().to_string();
+        assert!(e.len() < 60, "{e}");
     }
 }

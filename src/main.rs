@@ -37,6 +37,8 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
+    // An interrupt removes staged and temporary files and exits 130 (asperity::output).
+    asperity::output::install_interrupt_handler();
     let result = match cli.command {
         Command::Surface(c) => cli::surface::run(c),
         Command::Contact(c) => cli::contact::run(c),

@@ -1,12 +1,96 @@
-//! Output files that are either complete or absent.
+//! Output files that are either complete or absent, singly and as a set.
 //!
-//! Every writer in the crate goes through [`write_atomic`]: the content is written to a temporary
-//! file in the destination directory and renamed over the destination only when the writer
-//! succeeded, so an error never leaves a half-written CSV, PNG or table behind.
+//! **Single files.** Every writer in the crate goes through [`write_atomic`] (or
+//! [`write_atomic_via_path`] for encoders that need a path): the content is written to a
+//! temporary file in the destination directory and renamed over the destination only when the
+//! writer succeeded, so an error never leaves a half-written CSV, PNG or table behind. Results
+//! are created `0644` like any other tool's (temporary files start private).
+//!
+//! **Sets of files: [`OutputSet`].** A command writes several files (a table, its plots, a JSON
+//! sidecar); they must appear together or not at all. A command adopts this with three calls:
+//!
+//! ```text
+//! let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;   // before any computation:
+//!                                         // refuses an --out-dir that is a file or not writable
+//! ... compute ...
+//! write_string_atomic(&out.path("table.csv")?, &text)?;            // staged, not yet visible
+//! heatmap(&out.path("map.png")?, ...)?;                             // (same for every file)
+//! let written = out.commit()?;                                      // all appear, or none
+//! ```
+//!
+//! or, for explicit file names (`-o a.npy -o a.png`), `OutputSet::for_files(&paths, "--out")`
+//! and `out.file(&target)`. Files are staged in a hidden directory `.asperity-staging-*` beside
+//! their targets (same file system) and renamed into place by [`OutputSet::commit`], which
+//! restores the previous files if any rename fails. Dropping an uncommitted set (an error, a
+//! `?`) removes everything staged. The same target twice (e.g. a sidecar that would overwrite
+//! its data file) is refused when it is staged.
+//!
+//! **Interrupts.** [`install_interrupt_handler`] (called once by the CLI) handles SIGINT,
+//! SIGTERM and SIGHUP: it waits for a commit in progress to finish, removes every staging
+//! directory and temporary file of the process, and exits with status 130. So an interrupt
+//! leaves either the complete previous outputs or the complete new ones, and no temporary
+//! files. (A SIGKILL or power loss during the few renames of a commit can still leave a mix;
+//! staging directories left by a killed process are hidden and named `.asperity-staging-*`.)
 
 use crate::error::{Error, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Paths (staging directories and temporary files) to remove if the process is interrupted.
+static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Held while an [`OutputSet`] moves its files into place; the interrupt handler waits for it.
+static COMMIT: Mutex<()> = Mutex::new(());
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn register(path: &Path) {
+    lock(&CLEANUP).push(path.to_path_buf());
+}
+
+fn deregister(path: &Path) {
+    lock(&CLEANUP).retain(|p| p != path);
+}
+
+fn remove_path(p: &Path) {
+    // A writer may still be creating files in a staging directory: retry a few times.
+    for _ in 0..5 {
+        let r = if p.is_dir() {
+            std::fs::remove_dir_all(p)
+        } else {
+            std::fs::remove_file(p)
+        };
+        if r.is_ok() || !p.exists() {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// Remove every staging directory and temporary file of this process (what the interrupt
+/// handler does before exiting). Waits for a commit in progress.
+pub fn remove_partial_outputs() {
+    let _commit = lock(&COMMIT);
+    let paths: Vec<PathBuf> = std::mem::take(&mut *lock(&CLEANUP));
+    for p in paths.iter().rev() {
+        remove_path(p);
+    }
+}
+
+/// Handle SIGINT, SIGTERM and SIGHUP: remove partial outputs (see the module documentation),
+/// print a line and exit with status 130. Call once, at the start of `main`.
+pub fn install_interrupt_handler() {
+    let r = ctrlc::set_handler(|| {
+        remove_partial_outputs();
+        eprintln!("interrupted: stopped before writing; no partial output is left");
+        std::process::exit(130);
+    });
+    if let Err(e) = r {
+        eprintln!("warning: cannot install the interrupt handler: {e}");
+    }
+}
 
 /// Write `path` atomically: `fill` writes into a temporary file beside `path`, which is renamed
 /// onto `path` only if `fill` returns `Ok`. Parent directories are created as needed.
@@ -19,28 +103,37 @@ where
         _ => std::path::PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| Error::io(&dir, e))?;
-    {
-        let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
-        fill(&mut buf)?;
-        buf.flush().map_err(|e| Error::io(path, e))?;
-    }
-    make_readable(tmp.path())?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".asperity-tmp-")
+        .tempfile_in(&dir)
+        .map_err(|e| Error::io(&dir, e))?;
+    let tmp_path = tmp.path().to_path_buf();
+    register(&tmp_path);
+    let result = (|| {
+        {
+            let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
+            fill(&mut buf)?;
+            buf.flush().map_err(|e| Error::io(path, e))?;
+        }
+        make_readable(tmp.path(), path)?;
+        tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+        Ok(())
+    })();
+    deregister(&tmp_path);
+    result
 }
 
 /// Temporary files are created private (0600); results are ordinary files (0644), as any
-/// other tool would write them.
-fn make_readable(path: &Path) -> Result<()> {
+/// other tool would write them. Errors name the destination, not the temporary file.
+fn make_readable(tmp: &Path, dest: &Path) -> Result<()> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| Error::io(path, e))?;
+        std::fs::set_permissions(tmp, std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| Error::io(dest, e))?;
     }
     #[cfg(not(unix))]
-    let _ = path;
+    let _ = (tmp, dest);
     Ok(())
 }
 
@@ -67,15 +160,318 @@ where
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
     let tmp = tempfile::Builder::new()
+        .prefix(".asperity-tmp-")
         .suffix(&ext)
         .tempfile_in(&dir)
         .map_err(|e| Error::io(&dir, e))?;
     let tmp_path = tmp.into_temp_path();
-    fill(&tmp_path)?;
-    tmp_path
-        .persist(path)
-        .map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+    let registered = tmp_path.to_path_buf();
+    register(&registered);
+    let result = (|| {
+        // Errors of the encoder name the destination, not the temporary file.
+        let tmp_name = tmp_path.display().to_string();
+        fill(&tmp_path).map_err(|e| rename_in_error(e, &tmp_name, path))?;
+        make_readable(&tmp_path, path)?;
+        tmp_path
+            .persist(path)
+            .map_err(|e| Error::io(path, e.error))?;
+        Ok(())
+    })();
+    deregister(&registered);
+    result
+}
+
+/// Replace the temporary file's name by the destination's in an error.
+fn rename_in_error(e: Error, tmp_name: &str, dest: &Path) -> Error {
+    let dest_name = dest.display().to_string();
+    match e {
+        Error::Io { source, .. } => Error::io(dest, source),
+        Error::Parse { line, message, .. } => {
+            Error::parse(dest, line, message.replace(tmp_name, &dest_name))
+        }
+        Error::Data(m) => Error::Data(m.replace(tmp_name, &dest_name)),
+        other => other,
+    }
+}
+
+/// A set of output files that appear together or not at all (see the module documentation).
+#[derive(Debug, Default)]
+pub struct OutputSet {
+    /// Output directory of [`OutputSet::in_dir`] and the flag naming it.
+    dir: Option<(PathBuf, String)>,
+    /// `(existing directory, staging directory inside it)`.
+    stagings: Vec<(PathBuf, PathBuf)>,
+    /// Targets staged so far (as given), with the flag or role that named them.
+    targets: Vec<(PathBuf, String)>,
+    committed: bool,
+}
+
+/// A relative `path` with an explicit leading `./` (so that it lies below the anchor `.`).
+fn with_dir(path: &Path) -> PathBuf {
+    if path.is_relative() && !path.starts_with(".") {
+        Path::new(".").join(path)
+    } else {
+        path.to_path_buf()
+    }
+}
+
+/// The nearest existing ancestor directory of `dir` (`dir` itself if it exists); an error
+/// naming `flag` when `dir` or an ancestor exists but is not a directory.
+fn existing_ancestor(dir: &Path, flag: &str) -> Result<PathBuf> {
+    for a in dir.ancestors() {
+        let a = if a.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            a
+        };
+        match std::fs::metadata(a) {
+            Ok(m) if m.is_dir() => return Ok(a.to_path_buf()),
+            Ok(_) => {
+                return Err(Error::param(
+                    flag,
+                    format!(
+                        "`{}` cannot be created: `{}` exists and is not a directory",
+                        dir.display(),
+                        a.display()
+                    ),
+                ))
+            }
+            Err(_) => continue,
+        }
+    }
+    Ok(PathBuf::from("."))
+}
+
+impl OutputSet {
+    /// An empty set; add targets with [`OutputSet::file`].
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A set of files in the output directory `dir` (named by `flag` in errors). Checks now,
+    /// before any computation, that `dir` is (or can be created as) a writable directory.
+    pub fn in_dir(dir: &Path, flag: &str) -> Result<Self> {
+        let mut set = Self::new();
+        if dir.exists() && !dir.is_dir() {
+            return Err(Error::param(
+                flag,
+                format!("`{}` exists and is not a directory", dir.display()),
+            ));
+        }
+        set.staging_for(&with_dir(&dir.join("x")), flag)?;
+        set.dir = Some((dir.to_path_buf(), flag.to_string()));
+        Ok(set)
+    }
+
+    /// A set of explicitly named files (named by `flag` in errors), all checked now: none is an
+    /// existing directory, none is given twice, and each one's directory is writable.
+    pub fn for_files(paths: &[PathBuf], flag: &str) -> Result<Self> {
+        let mut set = Self::new();
+        for p in paths {
+            set.stage(p, flag)?;
+        }
+        set.targets.clear();
+        Ok(set)
+    }
+
+    /// The staging directory for files whose final directory lies below the existing
+    /// ancestor of `target`'s directory; created (and checked writable) on first use.
+    fn staging_for(&mut self, target: &Path, flag: &str) -> Result<(PathBuf, PathBuf)> {
+        let parent = target.parent().unwrap_or(Path::new("."));
+        let anchor = existing_ancestor(parent, flag)?;
+        if let Some((a, s)) = self.stagings.iter().find(|(a, _)| *a == anchor) {
+            return Ok((a.clone(), s.clone()));
+        }
+        let staging = tempfile::Builder::new()
+            .prefix(".asperity-staging-")
+            .tempdir_in(&anchor)
+            .map_err(|e| {
+                Error::param(
+                    flag,
+                    format!("cannot write into `{}`: {e}", anchor.display()),
+                )
+            })?
+            .keep();
+        register(&staging);
+        self.stagings.push((anchor.clone(), staging.clone()));
+        Ok((anchor, staging))
+    }
+
+    /// Stage `target` (named by `flag` in errors): returns the path to write it to now; it
+    /// appears at `target` on [`OutputSet::commit`]. Refuses a target that is an existing
+    /// directory or was already staged (e.g. a sidecar that would overwrite its data file).
+    pub fn stage(&mut self, target: &Path, flag: &str) -> Result<PathBuf> {
+        if target.is_dir() {
+            return Err(Error::param(
+                flag,
+                format!("`{}` is a directory, not a file", target.display()),
+            ));
+        }
+        let t = with_dir(target);
+        if let Some((_, other)) = self.targets.iter().find(|(p, _)| with_dir(p) == t) {
+            return Err(Error::param(
+                flag,
+                format!(
+                    "`{}` would be written twice (also as {other}): one output would overwrite                      another",
+                    target.display()
+                ),
+            ));
+        }
+        let (anchor, staging) = self.staging_for(&t, flag)?;
+        let rel = t
+            .strip_prefix(&anchor)
+            .map_err(|_| Error::param(flag, format!("cannot stage `{}`", target.display())))?;
+        self.targets.push((target.to_path_buf(), flag.to_string()));
+        Ok(staging.join(rel))
+    }
+
+    /// Stage `target` (see [`OutputSet::stage`]) under the role `role` (used in errors).
+    pub fn file(&mut self, target: &Path, role: &str) -> Result<PathBuf> {
+        self.stage(target, role)
+    }
+
+    /// Stage the file `name` of the output directory of [`OutputSet::in_dir`].
+    pub fn path(&mut self, name: &str) -> Result<PathBuf> {
+        let (dir, flag) = self
+            .dir
+            .clone()
+            .ok_or_else(|| Error::Data("output set has no directory".into()))?;
+        self.stage(&dir.join(name), &format!("{flag} file `{name}`"))
+    }
+
+    /// The staging directory standing for the output directory of [`OutputSet::in_dir`], for
+    /// library functions that write a set of files into a directory: everything written below
+    /// it appears in the output directory on [`OutputSet::commit`].
+    pub fn staging_dir(&mut self) -> Result<PathBuf> {
+        let (dir, flag) = self
+            .dir
+            .clone()
+            .ok_or_else(|| Error::Data("output set has no directory".into()))?;
+        let marker = with_dir(&dir.join("x"));
+        let (anchor, staging) = self.staging_for(&marker, &flag)?;
+        let rel = with_dir(&dir)
+            .strip_prefix(&anchor)
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let staged = staging.join(rel);
+        std::fs::create_dir_all(&staged).map_err(|e| Error::io(&dir, e))?;
+        Ok(staged)
+    }
+
+    /// Where a staged file will appear (for messages written before the commit).
+    pub fn final_path(&self, staged: &Path) -> PathBuf {
+        for (anchor, staging) in &self.stagings {
+            if let Ok(rel) = staged.strip_prefix(staging) {
+                return anchor.join(rel);
+            }
+        }
+        staged.to_path_buf()
+    }
+
+    /// Move every staged file into place, all or none: on a failed rename the files already
+    /// moved are taken back and the previous files restored. Returns the final paths, sorted.
+    pub fn commit(mut self) -> Result<Vec<PathBuf>> {
+        let _commit = lock(&COMMIT);
+        let mut moves: Vec<(PathBuf, PathBuf)> = Vec::new();
+        for (anchor, staging) in &self.stagings {
+            for f in files_below(staging) {
+                let rel = f.strip_prefix(staging).expect("file below its staging dir");
+                moves.push((f.clone(), anchor.join(rel)));
+            }
+        }
+        moves.sort_by(|a, b| a.1.cmp(&b.1));
+        // (staged, target, backup of the previous target, directories created)
+        let mut done: Vec<(PathBuf, PathBuf, Option<PathBuf>)> = Vec::new();
+        let mut created: Vec<PathBuf> = Vec::new();
+        let mut failure = None;
+        for (k, (staged, target)) in moves.iter().enumerate() {
+            let mut step = || -> Result<Option<PathBuf>> {
+                if let Some(parent) = target.parent() {
+                    for a in parent.ancestors().collect::<Vec<_>>().into_iter().rev() {
+                        if !a.as_os_str().is_empty() && !a.exists() {
+                            std::fs::create_dir(a).map_err(|e| Error::io(a, e))?;
+                            created.push(a.to_path_buf());
+                        }
+                    }
+                }
+                let backup = if target.is_dir() {
+                    return Err(Error::Data(format!(
+                        "{}: is a directory; not replaced by an output file",
+                        target.display()
+                    )));
+                } else if target.exists() {
+                    let b = staged.with_file_name(format!(".asperity-previous-{k}"));
+                    std::fs::rename(target, &b).map_err(|e| Error::io(target, e))?;
+                    Some(b)
+                } else {
+                    None
+                };
+                if let Err(e) = std::fs::rename(staged, target) {
+                    if let Some(b) = &backup {
+                        let _ = std::fs::rename(b, target);
+                    }
+                    return Err(Error::io(target, e));
+                }
+                Ok(backup)
+            };
+            match step() {
+                Ok(backup) => done.push((staged.clone(), target.clone(), backup)),
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            }
+        }
+        if let Some(e) = failure {
+            for (staged, target, backup) in done.into_iter().rev() {
+                let _ = std::fs::rename(&target, &staged);
+                if let Some(b) = backup {
+                    let _ = std::fs::rename(&b, &target);
+                }
+            }
+            for d in created.iter().rev() {
+                let _ = std::fs::remove_dir(d);
+            }
+            return Err(e);
+        }
+        self.committed = true;
+        for (_, staging) in &self.stagings {
+            remove_path(staging);
+            deregister(staging);
+        }
+        Ok(moves.into_iter().map(|m| m.1).collect())
+    }
+}
+
+impl Drop for OutputSet {
+    fn drop(&mut self) {
+        if !self.committed {
+            for (_, staging) in &self.stagings {
+                remove_path(staging);
+                deregister(staging);
+            }
+        }
+    }
+}
+
+/// Every file below `dir` (recursively), sorted.
+fn files_below(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        if let Ok(rd) = std::fs::read_dir(&d) {
+            for e in rd.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out.sort();
+    out
 }
 
 #[cfg(test)]
@@ -93,6 +489,88 @@ mod tests {
         assert!(r.is_err());
         assert!(!p.exists());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn an_output_set_appears_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("old.csv"), "previous").unwrap();
+        std::fs::write(out.join("a.csv"), "previous a").unwrap();
+        // An error before the commit: nothing new appears, the old files stay, nothing staged
+        // is left over.
+        {
+            let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+            write_string_atomic(&set.path("a.csv").unwrap(), "new a").unwrap();
+            write_string_atomic(&set.path("b.csv").unwrap(), "new b").unwrap();
+        }
+        let names = |d: &Path| {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(names(&out), vec!["a.csv", "old.csv"]);
+        assert_eq!(
+            std::fs::read_to_string(out.join("a.csv")).unwrap(),
+            "previous a"
+        );
+        // A commit: both appear.
+        let mut set = OutputSet::in_dir(&out.join("sub"), "--out-dir").unwrap();
+        write_string_atomic(&set.path("a.csv").unwrap(), "new a").unwrap();
+        write_string_atomic(&set.path("b.csv").unwrap(), "new b").unwrap();
+        let written = set.commit().unwrap();
+        assert_eq!(written.len(), 2);
+        assert_eq!(names(&out.join("sub")), vec!["a.csv", "b.csv"]);
+        assert_eq!(names(&out), vec!["a.csv", "old.csv", "sub"]);
+        // The same target twice is refused when staged.
+        let mut set = OutputSet::new();
+        set.file(&out.join("x.json"), "--out").unwrap();
+        let e = set.file(&out.join("x.json"), "sidecar").unwrap_err();
+        assert!(e.to_string().contains("written twice"), "{e}");
+        // An --out-dir that is a file is refused before anything is computed.
+        let e = OutputSet::in_dir(&out.join("old.csv"), "--out-dir").unwrap_err();
+        assert!(e.to_string().contains("--out-dir"), "{e}");
+        let e = OutputSet::in_dir(&out.join("old.csv").join("deeper"), "--out-dir").unwrap_err();
+        assert!(e.to_string().contains("not a directory"), "{e}");
+    }
+
+    #[test]
+    fn a_failed_rename_restores_the_previous_files() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.csv"), "old a").unwrap();
+        let mut set = OutputSet::in_dir(dir.path(), "--out-dir").unwrap();
+        write_string_atomic(&set.path("a.csv").unwrap(), "new a").unwrap();
+        write_string_atomic(&set.path("z.csv").unwrap(), "new z").unwrap();
+        // z.csv becomes a directory after staging: its rename fails, a.csv is restored.
+        std::fs::create_dir(dir.path().join("z.csv")).unwrap();
+        assert!(set.commit().is_err());
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("a.csv")).unwrap(),
+            "old a"
+        );
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left.len(), 2, "{left:?}");
+    }
+
+    #[test]
+    fn files_via_path_are_readable_by_others() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("x.bin");
+        write_atomic_via_path(&p, |t| std::fs::write(t, b"x").map_err(|e| Error::io(t, e)))
+            .unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+            assert_eq!(mode & 0o777, 0o644);
+        }
     }
 
     #[test]

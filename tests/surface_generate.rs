@@ -80,15 +80,15 @@ fn generate_rejects_bad_parameters() {
     let o = out.to_str().unwrap();
     let base = ["surface", "generate", "--out", o];
     let cases: &[(&[&str], &str)] = &[
-        (&["--rq-m", "0"], "rq_m"),
-        (&["--rq-m", "-1e-6"], "rq_m"),
-        (&["--rq-m", "nan"], "rq_m"),
-        (&["--cl-m", "0"], "clx_m"),
-        (&["--cly-m", "-1e-6"], "cly_m"),
-        (&["--size-m", "0"], "lx_m"),
-        (&["--ly-m", "-1"], "ly_m"),
-        (&["--n", "0"], "nx"),
-        (&["--ny", "1"], "ny"),
+        (&["--rq-m", "0"], "--rq-m"),
+        (&["--rq-m", "-1e-6"], "--rq-m"),
+        (&["--rq-m", "nan"], "--rq-m"),
+        (&["--cl-m", "0"], "--cl-m"),
+        (&["--cly-m", "-1e-6"], "--cly-m"),
+        (&["--size-m", "0"], "--size-m"),
+        (&["--ly-m", "-1"], "--ly-m"),
+        (&["--n", "0"], "--n"),
+        (&["--ny", "1"], "--ny"),
         (&["--cl-m", "4e-7"], "under-resolved"),
     ];
     for (extra, want) in cases {

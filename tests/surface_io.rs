@@ -150,8 +150,11 @@ fn bad_text_input_names_file_and_line() {
     assert_stats_fails(&f, &["blank.txt", "empty file"]);
     let f = write("letters.csv", "x_um,height_um\n0,1\n1,2\n2,abc\n3,4\n");
     assert_stats_fails(&f, &["letters.csv:4", "column 2", "`abc` is not a number"]);
-    let f = write("nan.csv", "x_um,height_um\n0,1\n1,NaN\n2,3\n");
-    assert_stats_fails(&f, &["nan.csv:3", "non-finite"]);
+    let f = write("inf.csv", "x_um,height_um\n0,1\n1,inf\n2,3\n");
+    assert_stats_fails(&f, &["inf.csv:3", "non-finite"]);
+    // A missing height (nan) is a missing point, but the PSD needs every point.
+    let f = write("nan.csv", "x_um,height_um\n0,1\n1,NaN\n2,3\n3,1\n");
+    assert_stats_fails(&f, &["--psd-out", "nan.csv", "missing", "--fill"]);
     let f = write("nounits.csv", "x,height\n0,1\n1,2\n");
     assert_stats_fails(&f, &["nounits.csv:1", "unit"]);
     let f = write("noheader.csv", "0,1\n1,2\n");
@@ -166,10 +169,10 @@ fn bad_text_input_names_file_and_line() {
     );
     assert_stats_fails(&f, &["matrix.txt:3", "row has 2 values"]);
     let f = write(
-        "matrixnan.txt",
-        "# unit: m, dx_m: 1e-6, dy_m: 1e-6\n1,2,3\n4,nan,6\n",
+        "matrixinf.txt",
+        "# unit: m, dx_m: 1e-6, dy_m: 1e-6\n1,2,3\n4,-inf,6\n",
     );
-    assert_stats_fails(&f, &["matrixnan.txt:3", "non-finite"]);
+    assert_stats_fails(&f, &["matrixinf.txt:3", "non-finite"]);
     let f = write(
         "matrixdx.txt",
         "# unit: m, dx_m: -1e-6, dy_m: 1e-6\n1,2,3\n4,5,6\n",
@@ -249,7 +252,7 @@ fn bad_x3p_is_refused() {
             b
         }
     });
-    assert_stats_fails(&inconsistent, &["inconsistent.x3p", "SizeX × SizeY"]);
+    assert_stats_fails(&inconsistent, &["inconsistent.x3p", "main.xml promises"]);
 
     let corrupted = d.join("corrupted.x3p");
     rewrite_x3p(&good, &corrupted, |n, mut b| {
@@ -263,7 +266,7 @@ fn bad_x3p_is_refused() {
     let nan = d.join("nan.x3p");
     rewrite_x3p(&good, &nan, |n, mut b| {
         if n == "main.xml" {
-            // Drop the checksum so the NaN itself is what is caught.
+            // Drop the checksum so the NaN itself is what is read.
             let x = String::from_utf8(b).unwrap();
             let start = x.find("<MD5ChecksumPointData>").unwrap();
             let end = x.find("</MD5ChecksumPointData>").unwrap() + "</MD5ChecksumPointData>".len();
@@ -274,7 +277,11 @@ fn bad_x3p_is_refused() {
         }
         b
     });
-    assert_stats_fails(&nan, &["nan.x3p", "(1, 0)", "missing data"]);
+    // A NaN height is a missing point: the statistics exclude it, the PSD needs it filled.
+    assert_stats_fails(
+        &nan,
+        &["--psd-out", "nan.x3p", "1 missing points", "--fill"],
+    );
 
     let noxml = d.join("noxml.x3p");
     rewrite_x3p(&good, &noxml, |n, b| {

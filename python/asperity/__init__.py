@@ -64,6 +64,7 @@ from .errors import (
     FileError,
     ParameterError,
     ParseError,
+    ResourceLimitError,
 )
 
 __all__ = [

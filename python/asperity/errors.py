@@ -19,6 +19,8 @@ class                       also a                 raised for
                                                    ``iterations``, ``residual``, ``tolerance``)
 ``ArrayTypeError``          ``TypeError``          an argument that is not a numpy array of
                                                    the required dtype (float64)
+``ResourceLimitError``      ``MemoryError``        a request beyond a documented limit (grid
+                                                   size, memory, file size, steps; ``name``)
 ==========================  =====================  =========================================
 """
 
@@ -54,6 +56,10 @@ class ArrayTypeError(Error, TypeError):
     """An argument is not a numpy array of the required dtype (float64)."""
 
 
+class ResourceLimitError(Error, MemoryError):
+    """A request beyond a documented resource limit, refused before allocation. Attribute: ``name``."""
+
+
 __all__ = [
     "Error",
     "FileError",
@@ -62,4 +68,5 @@ __all__ = [
     "DataError",
     "ConvergenceError",
     "ArrayTypeError",
+    "ResourceLimitError",
 ]

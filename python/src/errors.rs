@@ -8,6 +8,7 @@
 //! | `InvalidParameter` | `asperity.ParameterError` (`.name`) | `ValueError` |
 //! | `NonConvergence` | `asperity.ConvergenceError` (`.solver`, `.iterations`, `.residual`, `.tolerance`) | `RuntimeError` |
 //! | `Data` | `asperity.DataError` | `ValueError` |
+//! | `Limit` | `asperity.ResourceLimitError` (`.name`) | `MemoryError` |
 //!
 //! and, for arrays of the wrong type or dtype, `asperity.ArrayTypeError` (a `TypeError`). All
 //! derive from `asperity.Error`.
@@ -85,6 +86,11 @@ pub fn to_py(e: asperity::Error) -> PyErr {
                 d.set_item("tolerance", tolerance)
             }),
             asperity::Error::Data(_) => exception(py, "DataError", message, |_| Ok(())),
+            asperity::Error::Limit { name, .. } => {
+                exception(py, "ResourceLimitError", message, |d| {
+                    d.set_item("name", name)
+                })
+            }
         }
     })
 }

@@ -31,7 +31,7 @@ impl Surface {
     pub fn grid(&self) -> &Grid2 {
         match &self.topo {
             Topography::Area(g) => g,
-            Topography::Profile(_) => unreachable!("a Surface holds an area"),
+            _ => unreachable!("a Surface holds a complete area"),
         }
     }
 
@@ -232,7 +232,7 @@ impl Profile {
     fn profile(&self) -> &RsProfile {
         match &self.topo {
             Topography::Profile(p) => p,
-            Topography::Area(_) => unreachable!("a Profile holds a profile"),
+            _ => unreachable!("a Profile holds a profile"),
         }
     }
 }
@@ -301,9 +301,17 @@ impl Profile {
 #[pyfunction]
 pub fn read_topography(py: Python<'_>, path: PathBuf) -> PyResult<Py<PyAny>> {
     let topo = py.detach(|| asperity::surface::io::read(&path)).py()?;
+    // A map with missing points is refused, naming the file and `--fill` (fill it with
+    // `asperity surface convert --fill harmonic|nearest` first).
+    let topo = match topo {
+        t @ Topography::MaskedArea(_) => {
+            Topography::Area(t.into_area(&path.display().to_string()).py()?)
+        }
+        t => t,
+    };
     Ok(match topo {
-        Topography::Area(_) => Py::new(py, Surface { topo })?.into_any(),
         Topography::Profile(_) => Py::new(py, Profile { topo })?.into_any(),
+        _ => Py::new(py, Surface { topo })?.into_any(),
     })
 }
 

@@ -159,7 +159,8 @@ impl CalibrationConfig {
         }
     }
 
-    /// Parse TOML text and validate. Errors carry the dotted key and, via [`Self::read`], the
+    /// Parse TOML text and validate (texts above [`crate::limits::MAX_TEXT_FILE_BYTES`] are
+    /// refused by [`Self::read`] before they are read). Errors carry the dotted key and, via [`Self::read`], the
     /// file and line.
     pub fn from_toml_str(text: &str) -> Result<Self> {
         Self::parse(text, Path::new("<config>"))
@@ -167,6 +168,7 @@ impl CalibrationConfig {
 
     /// Read and validate a TOML configuration file.
     pub fn read(path: &Path) -> Result<Self> {
+        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Self::parse(&text, path)
     }
@@ -178,6 +180,10 @@ impl CalibrationConfig {
             Error::InvalidParameter { name, message } => {
                 let line = key_line(text, &name);
                 Error::parse(path, line, format!("invalid `{name}`: {message}"))
+            }
+            Error::Limit { name, message } => {
+                let line = key_line(text, &name);
+                Error::parse(path, line, format!("`{name}`: resource limit: {message}"))
             }
             other => other,
         })?;
@@ -213,8 +219,16 @@ impl CalibrationConfig {
                 format!("friction coefficient must be finite and > 0, got {}", c.mu),
             ));
         }
-        crate::error::require_positive("contact.normal_tolerance", c.normal_tolerance)?;
-        crate::error::require_positive("contact.tangential_tolerance", c.tangential_tolerance)?;
+        crate::sanity::tolerance("contact.normal_tolerance", c.normal_tolerance)?;
+        crate::sanity::tolerance("contact.tangential_tolerance", c.tangential_tolerance)?;
+        // Resource limits (before anything is allocated) and pressures the model resolves.
+        let s = &self.surface;
+        crate::limits::check_grid(
+            "surface.nx",
+            s.nx,
+            s.ny,
+            crate::limits::CONTACT_BYTES_PER_POINT,
+        )?;
         let l = &self.loading;
         if l.pressures_pa.is_empty() {
             return Err(Error::param("loading.pressures_pa", "no pressure given"));
@@ -236,6 +250,28 @@ impl CalibrationConfig {
                 ));
             }
         }
+        crate::limits::check_count(
+            "loading.pressures_pa",
+            l.pressures_pa.len(),
+            crate::limits::MAX_PRESSURES,
+        )?;
+        let material = crate::surface::combine::Material {
+            youngs_modulus_pa: self.material.youngs_modulus_pa,
+            poisson_ratio: self.material.poisson_ratio,
+        };
+        let e_star = crate::surface::combine::composite_modulus(material, material)?;
+        crate::sanity::contact_pressures_for(
+            "loading.pressures_pa",
+            &l.pressures_pa,
+            e_star,
+            s.lx_m.max(s.ly_m),
+            8.0 * s.rq_m,
+        )?;
+        crate::limits::check_count(
+            "loading.steps_per_cycle",
+            l.steps_per_cycle,
+            crate::limits::MAX_STEPS_PER_CYCLE,
+        )?;
         crate::calibrate::amplitudes::check_factors(&l.amplitude_factors).map_err(|e| match e {
             Error::InvalidParameter { message, .. } => {
                 Error::param("loading.amplitude_factors", message)
@@ -248,6 +284,7 @@ impl CalibrationConfig {
         let c = &self.convergence;
         crate::error::require_positive("convergence.relative_tolerance", c.relative_tolerance)?;
         crate::error::require_positive("convergence.k_tolerance", c.k_tolerance)?;
+        crate::limits::check_count("realisations.count", self.realisations.count, 1000)?;
         if l.steps_per_cycle < 8 || !l.steps_per_cycle.is_multiple_of(4) {
             return Err(Error::param(
                 "loading.steps_per_cycle",
@@ -274,6 +311,8 @@ impl CalibrationConfig {
         if f.max_iterations == 0 {
             return Err(Error::param("fit.max_iterations", "must be at least 1"));
         }
+        crate::limits::check_count("fit.k_starts", f.k_starts.len(), 100)?;
+        crate::limits::check_count("fit.max_iterations", f.max_iterations as usize, 1_000_000)?;
         Ok(())
     }
 }

@@ -38,6 +38,8 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(args: CalibrateArgs) -> Result<()> {
+    // Refused now, before the computation: an --out-dir that is a file or not writable.
+    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let (mut config, source) = match &args.config {
         Some(path) => {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -60,9 +62,10 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
         }
         config.surface.nx = n;
         config.surface.ny = n;
-        config
-            .validate()
-            .map_err(|e| super::rename_param(e, "--grid"))?;
+        config.validate().map_err(|e| match e {
+            Error::Limit { message, .. } => Error::limit("--grid", message),
+            e => super::rename_param(e, "--grid"),
+        })?;
     }
     if let Some(n) = args.realisations {
         if !args.surface.is_empty() && n != 1 {
@@ -108,7 +111,9 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
     let result = pipeline::run(&config, &surfaces, &bar);
     bar.finish_and_clear();
     let result = result?;
-    let (written, output_s) = output::write_outputs(&result, &source, &args.out_dir)?;
+    // Every file is staged and appears at once (or not at all, on an error or an interrupt).
+    let (_, output_s) = output::write_outputs(&result, &source, &out.staging_dir()?)?;
+    let written = out.commit()?;
 
     let n = result.realisations.len();
     println!(

@@ -26,6 +26,10 @@ pub struct NormalArgs {
     /// cl 6.6 µm, 250 µm, 1024², seed 1).
     #[arg(long, conflicts_with_all = ["seeds", "grid"])]
     surface: Vec<PathBuf>,
+    /// Fill missing points of the --surface files first: `harmonic` (Laplace interpolation) or
+    /// `nearest`. Without it a surface with missing points is refused.
+    #[arg(long, requires = "surface")]
+    fill: Option<asperity::surface::missing::Fill>,
     /// Seeds of generated reference surfaces, one surface each: a list and/or ranges, e.g.
     /// `1-8` or `1,2,5-7`.
     #[arg(long)]
@@ -39,10 +43,10 @@ pub struct NormalArgs {
     #[arg(long, value_delimiter = ',', num_args = 1..)]
     pressures_pa: Option<Vec<f64>>,
     /// Young's modulus of both bodies (Pa).
-    #[arg(long, default_value_t = 210e9)]
+    #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
     youngs_modulus_pa: f64,
     /// Poisson's ratio of both bodies (-).
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     poisson_ratio: f64,
     /// Output directory.
     #[arg(long, default_value = "out/contact-normal")]
@@ -51,7 +55,7 @@ pub struct NormalArgs {
     #[arg(long)]
     pressure_maps: bool,
     /// Tolerance on the relative gap error of the contact solver.
-    #[arg(long, default_value_t = NormalOptions::DEFAULT_TOLERANCE)]
+    #[arg(long, default_value_t = NormalOptions::DEFAULT_TOLERANCE, allow_hyphen_values = true)]
     tolerance: f64,
     /// Iteration cap per solve (exceeding it is an error).
     #[arg(long, default_value_t = NormalOptions::default().max_iterations)]
@@ -100,7 +104,7 @@ fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
         return args
             .surface
             .iter()
-            .map(|p| SurfaceSource::file(p))
+            .map(|p| SurfaceSource::file_filled(p, args.fill))
             .collect();
     }
     let seeds = match &args.seeds {
@@ -114,6 +118,12 @@ fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
         spec.validate()
             .map_err(|e| super::rename_param(e, "--grid"))?;
     }
+    asperity::limits::check_grid(
+        "--grid",
+        spec.nx,
+        spec.ny,
+        asperity::limits::CONTACT_BYTES_PER_POINT,
+    )?;
     Ok(seeds
         .into_iter()
         .map(|seed| SurfaceSource::Generated {
@@ -124,6 +134,10 @@ fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
 
 /// The sweep from the flags, every input checked, errors naming the flag.
 fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
+    asperity::sanity::tolerance("--tolerance", args.tolerance)?;
+    if let Some(p) = &args.pressures_pa {
+        asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
+    }
     let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
     let pressures_pa = sweep::checked_pressures(
         args.pressures_pa
@@ -204,8 +218,11 @@ fn write_pressure_maps(
 }
 
 pub fn run(args: NormalArgs) -> Result<()> {
-    // Check every input before any work or output.
+    // Check every input before any work or output; the files are staged and appear together
+    // at the end (asperity::output::OutputSet).
+    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let sweep = sweep_from_args(&args)?;
+    let staged = out.staging_dir()?;
     let shard = match &args.shard {
         Some(text) => text
             .parse::<Shard>()
@@ -238,13 +255,14 @@ pub fn run(args: NormalArgs) -> Result<()> {
         let (result, solutions) =
             sweep.run_unit(k, args.pressure_maps, |j| bar.set_position(done + j as u64))?;
         done += per_unit;
-        write_pressure_maps(&args.out_dir, &sweep, k, &solutions)?;
+        write_pressure_maps(&staged, &sweep, k, &solutions)?;
         Ok(result)
     });
     bar.finish_and_clear();
     let units = units?;
     if args.shard.is_some() {
-        let path = shard::write_shard(&args.out_dir, &sweep, shard, &units)?;
+        let path = out.final_path(&shard::write_shard(&staged, &sweep, shard, &units)?);
+        out.commit()?;
         println!(
             "wrote {} (shard {shard}: {} of {} surfaces); merge all {} shards with `asperity merge`",
             path.display(),
@@ -254,9 +272,14 @@ pub fn run(args: NormalArgs) -> Result<()> {
         );
         return Ok(());
     }
-    write_outputs(&sweep, &units, &args.out_dir)?;
+    write_outputs(&sweep, &units, &staged)?;
     print_summary(&units)?;
-    println!("wrote {}", args.out_dir.display());
+    let written = out.commit()?;
+    println!(
+        "wrote {} files in {}",
+        written.len(),
+        args.out_dir.display()
+    );
     Ok(())
 }
 

@@ -53,10 +53,10 @@ pub struct TangentialArgs {
     #[arg(long, num_args = 1)]
     surface: Vec<PathBuf>,
     /// Young's modulus of both bodies (Pa).
-    #[arg(long, default_value_t = 210e9)]
+    #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
     youngs_modulus_pa: f64,
     /// Poisson's ratio of both bodies (-).
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     poisson_ratio: f64,
     /// Compliance operator of the tangential solver: auto, dense or fft.
     #[arg(long, default_value = "auto")]
@@ -73,7 +73,18 @@ pub struct TangentialArgs {
 }
 
 pub fn run(args: TangentialArgs) -> Result<()> {
-    // Every input is checked before any work or output.
+    // Every input is checked before any work or output; the files are staged and appear
+    // together at the end (asperity::output::OutputSet).
+    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    asperity::limits::check_steps(
+        "--cycles",
+        args.cycles,
+        "--steps-per-cycle",
+        args.steps_per_cycle,
+    )?;
+    if let Some(p) = &args.pressures_pa {
+        asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
+    }
     let mu = args.friction_coefficient;
     if !(mu.is_finite() && mu > 0.0) {
         return Err(Error::param(
@@ -119,7 +130,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         max_iterations: args.max_iterations,
         operator,
     };
-    asperity::error::require_positive("--tolerance", args.tolerance)?;
+    asperity::sanity::tolerance("--tolerance", args.tolerance)?;
     let started = std::time::Instant::now();
     let (surface, source) = if args.surface.is_empty() {
         let mut spec = GaussianSurfaceSpec::reference();
@@ -135,6 +146,12 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         }
         spec.validate()
             .map_err(|e| super::rename_param(e, "--grid"))?;
+        asperity::limits::check_grid(
+            "--grid",
+            spec.nx,
+            spec.ny,
+            asperity::limits::CONTACT_BYTES_PER_POINT,
+        )?;
         (
             generate(&spec)?,
             format!(
@@ -152,6 +169,14 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         asperity::surface::io::read_equivalent_surface(&args.surface)
             .map_err(|e| super::rename_param(e, "--surface"))?
     };
+    asperity::limits::check_grid(
+        &source,
+        surface.nx(),
+        surface.ny(),
+        asperity::limits::CONTACT_BYTES_PER_POINT,
+    )?;
+    asperity::sanity::contact_surface(&surface, &source)?;
+    asperity::sanity::contact_pressures("--pressures-pa", &pressures, e_star, &surface)?;
     let boundary = if surface.periodic {
         Boundary::Periodic
     } else {
@@ -235,6 +260,16 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             },
             |i, _| bar.set_position(done + i as u64),
         )?;
+        for c in &r.cycles {
+            asperity::sanity::finite_result(
+                &format!(
+                    "the energy of cycle {} at {} Pa",
+                    c.cycle,
+                    asperity::error::num(p)
+                ),
+                c.dissipated_j_per_m2,
+            )?;
+        }
         results.push(r);
     }
     bar.finish_and_clear();
@@ -311,8 +346,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             );
         }
     }
-    asperity::output::write_string_atomic(&args.out_dir.join("tangential_loops.csv"), &loops)?;
-    asperity::output::write_string_atomic(&args.out_dir.join("tangential_energy.csv"), &energy)?;
+    asperity::output::write_string_atomic(&out.path("tangential_loops.csv")?, &loops)?;
+    asperity::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
 
     let series = |norm: bool| -> Vec<Series> {
         pressures
@@ -331,7 +366,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             .collect()
     };
     line_plot(
-        &args.out_dir.join("tangential_loops.png"),
+        &out.path("tangential_loops.png")?,
         &LinePlot {
             title: "Tangential hysteresis loops (mean shear stress vs displacement)",
             x_label: "tangential displacement (µm)",
@@ -342,7 +377,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         &series(false),
     )?;
     line_plot(
-        &args.out_dir.join("tangential_loops_normalised.png"),
+        &out.path("tangential_loops_normalised.png")?,
         &LinePlot {
             title: "Tangential hysteresis loops, normalised by μ p",
             x_label: "tangential displacement (µm)",
@@ -364,8 +399,10 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             r.wall_time_s + r.metadata.setup_time_s
         );
     }
+    let written = out.commit()?;
     println!(
-        "wrote {} (total {:.1} s)",
+        "wrote {} files in {} (total {:.1} s)",
+        written.len(),
         args.out_dir.display(),
         started.elapsed().as_secs_f64()
     );

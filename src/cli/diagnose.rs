@@ -38,10 +38,10 @@ pub struct Flags {
     #[arg(long, requires_all = ["pressure_pa", "area_m2"])]
     pub table: Option<PathBuf>,
     /// Nominal contact pressure (Pa) at which the table is read.
-    #[arg(long, requires = "table")]
+    #[arg(long, requires = "table", allow_hyphen_values = true)]
     pub pressure_pa: Option<f64>,
     /// Nominal contact area (m²): per-area stiffnesses × area give the element's (N/m).
-    #[arg(long, requires = "table")]
+    #[arg(long, requires = "table", allow_hyphen_values = true)]
     pub area_m2: Option<f64>,
     /// Maximum number of effects to add (each must be supported by the held-out evidence).
     #[arg(long, default_value_t = 2)]
@@ -56,6 +56,7 @@ pub struct Flags {
 fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String)> {
     require_positive("--pressure-pa", p)?;
     require_positive("--area-m2", a)?;
+    asperity::limits::check_file_size(path, asperity::limits::MAX_TEXT_FILE_BYTES)?;
     let table = CalibrationTable::read_csv(path)?;
     let row = table.interpolate(p);
     let valanis = ValanisParams::new(row.e0_n_per_m3 * a, row.k, row.et_n_per_m3 * a, row.mu)?;
@@ -80,8 +81,42 @@ fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String
     ))
 }
 
+/// A table baseline whose slip force `μ·p·A` is not within a factor 100 of the measured force
+/// amplitude cannot describe the record: `--pressure-pa` or `--area-m2` is wrong (e.g. an
+/// area in mm² given as m²).
+fn check_slip_force(baseline: &BaselineSource, record: &Record) -> Result<()> {
+    let BaselineSource::Given(b) = baseline else {
+        return Ok(());
+    };
+    let slip = b.valanis.mu * b.normal_n;
+    let (lo, hi) = record
+        .force_n
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &f| {
+            (a.min(f), c.max(f))
+        });
+    let amplitude = 0.5 * (hi - lo);
+    let ratio = slip / amplitude;
+    if !(ratio.is_finite() && (1e-2..=1e2).contains(&ratio)) {
+        return Err(Error::param(
+            "--pressure-pa / --area-m2",
+            format!(
+                "the table baseline's slip force μ·p·A = {} N is {} times the measured force \
+                 amplitude {} N: check the pressure and the area (m²)",
+                asperity::error::num(slip),
+                asperity::error::num(ratio),
+                asperity::error::num(amplitude)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 pub fn run(args: DiagnoseArgs) -> Result<()> {
     let args = *args.args;
+    // Refused now, before the analysis: an --out-dir that is a file or not writable.
+    let mut out_set = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    asperity::limits::check_count("--max-effects", args.max_effects, 8)?;
     let columns = Columns {
         time: args.time_column.clone(),
         displacement: args.displacement_column.clone(),
@@ -90,7 +125,11 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
     };
     let record = Record::read_csv(&args.record, &columns)?;
     let (baseline, source) = match (&args.table, args.pressure_pa, args.area_m2) {
-        (Some(table), Some(p), Some(a)) => table_baseline(table, p, a)?,
+        (Some(table), Some(p), Some(a)) => {
+            let b = table_baseline(table, p, a)?;
+            check_slip_force(&b.0, &record)?;
+            b
+        }
         _ => (
             BaselineSource::Fitted,
             "fitted to the training cycles".to_string(),
@@ -101,13 +140,11 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
         max_effects: args.max_effects,
         ..Options::default()
     };
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_message(format!(
+    let bar = super::spinner(&format!(
         "diagnosing {} ({} samples): fitting baseline and candidate effects",
         args.record.display(),
         record.len()
     ));
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let result = diagnose(&record, &options);
     bar.finish_and_clear();
     // Data errors of the analysis (no complete cycle, constant displacement, ...) name the file.
@@ -125,8 +162,22 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
             baseline_source: source,
         },
     );
+    for (what, e) in [("before", &rep.errors_before), ("after", &rep.errors_after)] {
+        for (name, v) in [
+            ("normalised RMS error", e.nrms),
+            ("peak force error", e.peak_force_error),
+            ("energy-per-cycle error", e.energy_error),
+        ] {
+            asperity::sanity::finite_result(
+                &format!("{}: the {name} {what}", args.record.display()),
+                v,
+            )?;
+        }
+    }
+    // Every file is staged and appears at once (or not at all).
+    report::write(&d, &rep, &Outputs::in_dir(&out_set.staging_dir()?))?;
+    out_set.commit()?;
     let out = Outputs::in_dir(&args.out_dir);
-    report::write(&d, &rep, &out)?;
     print!("{}", rep.text());
     println!(
         "\nwrote {}, {}, {}, {}, {}",

@@ -23,6 +23,20 @@ pub struct ElementsArgs {
 }
 
 pub fn run(args: ElementsArgs) -> Result<()> {
+    let sidecar = args.out.with_extension("json");
+    if sidecar == args.out {
+        return Err(Error::param(
+            "--out",
+            format!(
+                "the element table `{}` would be overwritten by its JSON sidecar (same name): \
+                 give the table a .csv name",
+                args.out.display()
+            ),
+        ));
+    }
+    let mut out = asperity::output::OutputSet::new();
+    let table_staged = out.file(&args.out, "--out")?;
+    let sidecar_staged = out.file(&sidecar, "the JSON sidecar of --out")?;
     let pre = read_preloads_csv(&args.preload)?;
     let table = CalibrationTable::read_csv(&args.table)?;
     let (rows, summary) = join(&pre, &table)?;
@@ -30,18 +44,18 @@ pub fn run(args: ElementsArgs) -> Result<()> {
         InputFile::new("preload", &args.preload)?,
         InputFile::new("calibration_table", &args.table)?,
     ];
-    let sidecar = args.out.with_extension("json");
     let json = provenance_json(
         "elements",
         &inputs,
         serde_json::json!({ "output": args.out.display().to_string() }),
         serde_json::to_value(&summary).map_err(|e| Error::Data(e.to_string()))?,
     );
-    write_csv(&args.out, &rows)?;
+    write_csv(&table_staged, &rows)?;
     write_string_atomic(
-        &sidecar,
+        &sidecar_staged,
         &serde_json::to_string_pretty(&json).map_err(|e| Error::Data(e.to_string()))?,
     )?;
+    out.commit()?;
     println!(
         "{} elements, total area {:.6e} m², total preload {:.6e} N; table range {:.4e}–{:.4e} Pa, element pressures {:.4e}–{:.4e} Pa",
         summary.n_elements,

@@ -9,9 +9,11 @@ use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placem
 use asperity::film::polyfit::{self, PolyFit2};
 use asperity::film::reduce::reduce;
 use asperity::film::regions::{
-    detect_patches, roi_region, summarise, write_region_pixels_csv, write_summary_csv, FilmMap,
-    Region, Roi, DEFAULT_RIM_PIXELS,
+    detect_below_range, detect_patches_with, roi_region, summarise, write_region_pixels_csv,
+    write_summary_csv, FilmMap, PatchOptions, Region, Roi, DEFAULT_MAX_ELONGATION,
+    DEFAULT_MIN_SOLIDITY, DEFAULT_RIM_PIXELS,
 };
+use asperity::film::scan::{self, Channel};
 use asperity::output::write_string_atomic;
 use asperity::plot::{heatmap, HeatMap};
 use asperity::{Error, Result};
@@ -34,9 +36,10 @@ pub struct FilmOptions {
     /// Film image (PNG, JPEG or TIFF; 8 or 16 bit).
     #[arg(long)]
     image: PathBuf,
-    /// Pixel size in mm (square pixels).
-    #[arg(long)]
-    pixel_size_mm: f64,
+    /// Pixel size in mm (square pixels). Default: from the resolution the image declares
+    /// (PNG pHYs, TIFF XResolution, JPEG JFIF dpi); an error when it declares none.
+    #[arg(long, allow_hyphen_values = true)]
+    pixel_size_mm: Option<f64>,
     /// Colour table CSV (pressure, R, G, B; vendor format in MPa).
     #[arg(
         long,
@@ -50,6 +53,23 @@ pub struct FilmOptions {
     /// Density calibration CSV (density,pressure_MPa) for raw scans, instead of a colour table.
     #[arg(long)]
     density_calibration: Option<PathBuf>,
+    /// Channel the density is read in (density mode): luma, red, green, blue, or complement
+    /// (the channel in which the stain, --stain-rgb, is darkest: green for a magenta-red stain).
+    #[arg(long, default_value = "luma", requires = "density_calibration")]
+    channel: String,
+    /// Colour of the stain `R,G,B` (0–255) in density mode: selects --channel complement, and
+    /// makes pixels of another hue (black or blue pen ink) off-curve instead of stain.
+    #[arg(long, value_delimiter = ',', requires = "density_calibration")]
+    stain_rgb: Option<Vec<f64>>,
+    /// Density of unstained paper (density mode): at or below it a pixel is unstained, above it
+    /// and below the first calibration point below range. Default: estimated from the scan
+    /// (mode of the density histogram + 5 × its noise).
+    #[arg(long, requires = "density_calibration", allow_hyphen_values = true)]
+    unstained_density: Option<f64>,
+    /// Gaussian smoothing of the image before it is read, standard deviation in mm (against
+    /// scanner speckle). Default: none.
+    #[arg(long, allow_hyphen_values = true)]
+    smooth_mm: Option<f64>,
     /// Rectangular region of interest `x0,y0,x1,y1` in mm (film frame).
     #[arg(
         long,
@@ -67,6 +87,14 @@ pub struct FilmOptions {
     /// Width (pixels) of the stained below-range rim joined to a detected patch.
     #[arg(long, default_value_t = DEFAULT_RIM_PIXELS)]
     rim_pixels: usize,
+    /// Largest elongation (ratio of principal axes) of a detected patch: longer shapes are
+    /// rejected as pen strokes or tape edges.
+    #[arg(long, default_value_t = DEFAULT_MAX_ELONGATION)]
+    max_elongation: f64,
+    /// Smallest solidity (stained pixels / convex hull area) of a detected patch: hollower
+    /// shapes are rejected as handwriting and labels.
+    #[arg(long, default_value_t = DEFAULT_MIN_SOLIDITY)]
+    min_solidity: f64,
     /// Order of the 2-D polynomial fitted to each region's in-range pressures.
     #[arg(long, default_value_t = 4)]
     fit_order: usize,
@@ -148,11 +176,55 @@ fn plot_region(
     )
 }
 
+/// A region-of-interest error named by its flag.
+fn roi_error(e: Error, flag: &str) -> Error {
+    match e {
+        Error::InvalidParameter { message, .. } | Error::Data(message) => {
+            Error::param(flag, message)
+        }
+        other => other,
+    }
+}
+
+/// The channel of `--channel` (with `--stain-rgb` for `complement`).
+fn channel_from_flags(name: &str, stain: Option<&[f64]>) -> Result<Channel> {
+    Ok(match name {
+        "luma" => Channel::Luma,
+        "red" => Channel::Red,
+        "green" => Channel::Green,
+        "blue" => Channel::Blue,
+        "complement" => {
+            let s = stain.ok_or_else(|| {
+                Error::param(
+                    "--channel",
+                    "`complement` needs the stain's colour: give --stain-rgb R,G,B",
+                )
+            })?;
+            if s.len() != 3
+                || s.iter()
+                    .any(|v| !(v.is_finite() && (0.0..=255.0).contains(v)))
+            {
+                return Err(Error::param(
+                    "--stain-rgb",
+                    "needs three values R,G,B in 0–255",
+                ));
+            }
+            Channel::complement_of([s[0], s[1], s[2]])
+        }
+        other => {
+            return Err(Error::param(
+                "--channel",
+                format!("expected luma, red, green, blue or complement, got `{other}`"),
+            ))
+        }
+    })
+}
+
 pub fn run(args: FilmArgs) -> Result<()> {
     let args = *args.opts;
-    let pixel_size_m =
-        asperity::error::require_positive("--pixel-size-mm", args.pixel_size_mm)? * 1e-3;
-    let (reader, table_path) = match (&args.colour_table, &args.density_calibration) {
+    // Refused now, before any work: an --out-dir that is a file or not writable.
+    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let (mut reader, table_path) = match (&args.colour_table, &args.density_calibration) {
         (Some(t), None) => (
             ColourToPressure::Table(ColourTable::read_csv(t, args.max_colour_distance)?),
             t.clone(),
@@ -168,14 +240,109 @@ pub fn run(args: FilmArgs) -> Result<()> {
             ))
         }
     };
-    let map = FilmMap::read_image(&args.image, &reader, pixel_size_m)?;
+    let channel = channel_from_flags(&args.channel, args.stain_rgb.as_deref())?;
+    let mut img = scan::read_rgb(&args.image)?;
+    let (pixel_size_m, pixel_source) = match args.pixel_size_mm {
+        Some(v) => (
+            asperity::error::require_positive("--pixel-size-mm", v)? * 1e-3,
+            "--pixel-size-mm".to_string(),
+        ),
+        None => match scan::resolution(&args.image)? {
+            Some(r) => (
+                r.pixel_size_m,
+                format!(
+                    "{} dpi declared by the image ({})",
+                    asperity::error::num((r.dpi * 1e6).round() / 1e6),
+                    r.source
+                ),
+            ),
+            None => {
+                return Err(Error::param(
+                    "--pixel-size-mm",
+                    format!(
+                        "not given, and {} declares no resolution (dpi): give the pixel size",
+                        args.image.display()
+                    ),
+                ))
+            }
+        },
+    };
+    let pixel_size_mm = pixel_size_m * 1e3;
+    if let Some(s) = args.smooth_mm {
+        asperity::error::require_positive("--smooth-mm", s)?;
+        scan::smooth(&mut img, s / pixel_size_mm)
+            .map_err(|e| super::rename_param(e, "--smooth-mm"))?;
+    }
+    // Density mode: the channel and the paper level.
+    let mut paper = None;
+    if let ColourToPressure::Density(d) = &mut reader {
+        d.channel = channel;
+        if let Some(st) = &args.stain_rgb {
+            if st.len() != 3
+                || st
+                    .iter()
+                    .any(|v| !(v.is_finite() && (0.0..=255.0).contains(v)))
+            {
+                return Err(Error::param(
+                    "--stain-rgb",
+                    "needs three values R,G,B in 0–255",
+                ));
+            }
+            *d = d
+                .clone()
+                .with_stain([st[0], st[1], st[2]])
+                .map_err(|e| super::rename_param(e, "--stain-rgb"))?;
+        }
+        let first = d.points[0].0;
+        let level = match args.unstained_density {
+            Some(u) => {
+                asperity::error::require_finite("--unstained-density", u)?;
+                if u > first {
+                    return Err(Error::param(
+                        "--unstained-density",
+                        format!(
+                            "{} exceeds the first calibration density {}: calibrated stain \
+                             would read as paper",
+                            asperity::error::num(u),
+                            asperity::error::num(first)
+                        ),
+                    ));
+                }
+                u
+            }
+            None => {
+                let (w, h) = img.dim();
+                let p =
+                    scan::paper_level((0..w * h).map(|k| channel.density(img.rgb(k % w, k / w))));
+                paper = Some(p);
+                p.stained_above.min(first)
+            }
+        };
+        d.unstained_density = level;
+        eprintln!(
+            "density in the {} channel; unstained paper at or below density {:.4}{}",
+            channel.name(),
+            level,
+            paper.map_or(String::new(), |p| format!(
+                " (estimated: paper {:.4} ± {:.4})",
+                p.density, p.noise
+            ))
+        );
+    } else if args.channel != "luma" || args.unstained_density.is_some() {
+        return Err(Error::param(
+            "--channel",
+            "a colour table reads the whole colour; --channel is for --density-calibration",
+        ));
+    }
+    let map = FilmMap::from_image(&img, &reader, pixel_size_m)?;
+    drop(img);
     let (nx, ny) = map.dim();
     let (lo, hi) = reader.range_pa();
     let all = map.class_counts();
     eprintln!(
-        "{}: {nx} × {ny} px at {} mm; range {:.3}–{:.3} MPa; pixels in range {}, unstained {}, below range {}, above range {}, off-curve (rejected) {}",
+        "{}: {nx} × {ny} px at {} mm ({pixel_source}); range {:.3}–{:.3} MPa; pixels in range {}, unstained {}, below range {}, above range {}, off-curve (rejected) {}",
         args.image.display(),
-        args.pixel_size_mm,
+        asperity::error::num(pixel_size_mm),
         lo / 1e6,
         hi / 1e6,
         all.in_range,
@@ -184,9 +351,24 @@ pub fn run(args: FilmArgs) -> Result<()> {
         all.above_range,
         all.off_curve
     );
+    if all.below_range > 0 {
+        eprintln!(
+            "note: {} pixels ({:.2} % of the image) are stained below the film's measuring range \
+             (< {:.3} MPa): their pressure is unknown, they carry no pressure in the maps and fits",
+            all.below_range,
+            100.0 * all.below_range as f64 / all.total() as f64,
+            lo / 1e6
+        );
+    }
 
     // Regions.
-    let (regions, discarded) = if let Some(r) = &args.roi_rect_mm {
+    let patch_options = PatchOptions {
+        min_diameter_m: args.min_patch_diameter_mm * 1e-3,
+        rim_pixels: args.rim_pixels,
+        max_elongation: args.max_elongation,
+        min_solidity: args.min_solidity,
+    };
+    let (regions, discarded, rejected_marks) = if let Some(r) = &args.roi_rect_mm {
         if r.len() != 4 {
             return Err(Error::param(
                 "--roi-rect-mm",
@@ -199,43 +381,140 @@ pub fn run(args: FilmArgs) -> Result<()> {
             x1: r[2] * 1e-3,
             y1: r[3] * 1e-3,
         };
-        (vec![roi_region(&map, &roi, 1)?], 0)
+        (
+            vec![roi_region(&map, &roi, 1).map_err(|e| roi_error(e, "--roi-rect-mm"))?],
+            0,
+            0,
+        )
     } else if let Some(p) = &args.roi_polygon_mm {
         (
-            vec![roi_region(&map, &Roi::Polygon(parse_polygon(p)?), 1)?],
+            vec![roi_region(&map, &Roi::Polygon(parse_polygon(p)?), 1)
+                .map_err(|e| roi_error(e, "--roi-polygon-mm"))?],
+            0,
             0,
         )
     } else {
-        let d = detect_patches(&map, args.min_patch_diameter_mm * 1e-3, args.rim_pixels)?;
+        let d = detect_patches_with(&map, &patch_options).map_err(|e| match e {
+            Error::InvalidParameter { name, message } => Error::param(
+                match name.as_str() {
+                    "max_elongation" => "--max-elongation",
+                    "min_solidity" => "--min-solidity",
+                    _ => "--min-patch-diameter-mm",
+                },
+                message,
+            ),
+            other => other,
+        })?;
+        if d.rejected_marks > 0 {
+            eprintln!(
+                "{} components rejected by their shape as marks (elongation > {}, or solidity < {})",
+                d.rejected_marks, args.max_elongation, args.min_solidity
+            );
+        }
         if d.patches.is_empty() {
+            let below = detect_below_range(&map, &patch_options)?;
+            if !below.patches.is_empty() {
+                let diam: Vec<f64> = below
+                    .patches
+                    .iter()
+                    .map(|r| {
+                        (4.0 * r.pixels.len() as f64 / std::f64::consts::PI).sqrt() * pixel_size_mm
+                    })
+                    .collect();
+                let (dmin, dmax) = diam
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+                return Err(Error::Data(format!(
+                    "{}: {} stained patches ({:.1}–{:.1} mm across) lie entirely below the film's \
+                     measuring range (< {:.3} MPa): the contact pressure is below what this film \
+                     measures; use a film grade with a lower range, or check the calibration",
+                    args.image.display(),
+                    below.patches.len(),
+                    dmin,
+                    dmax,
+                    lo / 1e6
+                )));
+            }
             return Err(Error::Data(format!(
-                "{}: no pressure patch of at least {} mm found ({} smaller components discarded); check the colour table, --max-colour-distance or give a region of interest",
+                "{}: no pressure patch of at least {} mm found ({} smaller components discarded, {} rejected as marks); check the colour table, --max-colour-distance or give a region of interest",
                 args.image.display(),
                 args.min_patch_diameter_mm,
-                d.discarded_small
+                d.discarded_small,
+                d.rejected_marks
             )));
         }
-        (d.patches, d.discarded_small)
+        (d.patches, d.discarded_small, d.rejected_marks)
     };
+    // Stained patches entirely below the measuring range (not regions: no pressure is known).
+    let mut below_range_patches = Vec::new();
+    if args.roi_rect_mm.is_none() && args.roi_polygon_mm.is_none() {
+        let taken: std::collections::HashSet<(usize, usize)> = regions
+            .iter()
+            .flat_map(|r| r.pixels.iter().copied())
+            .collect();
+        for r in detect_below_range(&map, &patch_options)?.patches {
+            if r.pixels.iter().any(|p| taken.contains(p)) {
+                continue;
+            }
+            let n = r.pixels.len() as f64;
+            let (cx, cy) = r.pixels.iter().fold((0.0, 0.0), |(a, b), &(i, j)| {
+                (a + i as f64 / n, b + j as f64 / n)
+            });
+            below_range_patches.push(serde_json::json!({
+                "centre_x_m": cx * pixel_size_m,
+                "centre_y_m": cy * pixel_size_m,
+                "equivalent_diameter_m": (4.0 * n / std::f64::consts::PI).sqrt() * pixel_size_m,
+            }));
+        }
+        if !below_range_patches.is_empty() {
+            eprintln!(
+                "note: {} stained components of at least {} mm lie entirely below the film's \
+                 measuring range (< {:.3} MPa): patches loaded below the range, or tape and \
+                 marks; no pressure is known there (centres and sizes in film.json, \
+                 `below_range_patches`)",
+                below_range_patches.len(),
+                args.min_patch_diameter_mm,
+                lo / 1e6
+            );
+        }
+    }
 
-    // Fits and summaries.
+    // Fits and summaries: a region that cannot be fitted is skipped with a warning, the others
+    // are written.
     let mut fits: Vec<Option<PolyFit2>> = Vec::new();
     let mut summaries = Vec::new();
+    let mut skipped: Vec<serde_json::Value> = Vec::new();
     for r in &regions {
         let s = summarise(&map, r)?;
         let pts = map.pressure_points(&r.pixels);
-        if pts.is_empty() {
-            return Err(Error::Data(format!(
-                "region {} holds no in-range pixel ({} pixels: {:?}): nothing to fit",
-                r.id,
+        let fit = if pts.is_empty() {
+            Err(format!(
+                "no in-range pixel (of {}: {} below range, {} above range, {} unstained, {} rejected colours)",
                 r.pixels.len(),
-                s.counts
-            )));
+                s.counts.below_range,
+                s.counts.above_range,
+                s.counts.unstained,
+                s.counts.off_curve
+            ))
+        } else {
+            polyfit::fit(&pts, args.fit_order, None).map_err(|e| e.to_string())
+        };
+        match fit {
+            Ok(f) => fits.push(Some(f)),
+            Err(why) => {
+                eprintln!("warning: region {} skipped, not fitted: {why}", r.id);
+                skipped.push(serde_json::json!({ "region": r.id, "reason": why }));
+                fits.push(None);
+            }
         }
-        let fit = polyfit::fit(&pts, args.fit_order, None)
-            .map_err(|e| Error::Data(format!("region {}: {e}", r.id)))?;
-        fits.push(Some(fit));
         summaries.push(s);
+    }
+    if fits.iter().all(Option::is_none) {
+        return Err(Error::Data(format!(
+            "{}: none of the {} regions could be fitted (see the warnings above)",
+            args.image.display(),
+            regions.len()
+        )));
     }
 
     // Nodes.
@@ -267,7 +546,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
             }
         };
         let region = &regions[region_idx];
-        let fit = fits[region_idx].as_ref().expect("every region is fitted");
+        let fit = fits[region_idx].as_ref().ok_or_else(|| {
+            Error::param(
+                "--nodes-region",
+                format!(
+                    "region {} could not be fitted (see the warning above)",
+                    region.id
+                ),
+            )
+        })?;
         let nodes = read_nodes_csv(nodes_path)?;
         let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
         if off.len() != 2 {
@@ -336,24 +623,29 @@ pub fn run(args: FilmArgs) -> Result<()> {
         });
     }
 
-    // Every input is checked: write the outputs.
-    let out = &args.out_dir;
+    // Every input is checked: stage the outputs (they appear together at the end).
+    let staged = out.staging_dir()?;
+    let out_dir = &staged;
     let pairs: Vec<_> = summaries
         .iter()
         .cloned()
         .zip(fits.iter().map(|f| f.as_ref()))
         .collect();
-    write_summary_csv(&out.join("regions.csv"), &pairs)?;
-    write_region_pixels_csv(&out.join("pressure_map.csv"), &map, &regions)?;
-    let npy = out.join("pressure_map_Pa.npy");
-    asperity::output::write_atomic(&npy, |w| {
-        use ndarray_npy::WriteNpyExt;
-        map.pressure_pa
-            .write_npy(w)
-            .map_err(|e| Error::Data(format!("{}: {e}", npy.display())))
-    })?;
+    write_summary_csv(&out_dir.join("regions.csv"), &pairs)?;
+    write_region_pixels_csv(&out_dir.join("pressure_map.csv"), &map, &regions)?;
+    // With its sidecar (pixel size, unit Pa), so that it reads back with
+    // asperity::surface::io::npy::read_field.
+    asperity::surface::io::npy::write_field(
+        &out_dir.join("pressure_map_Pa.npy"),
+        &map.pressure_pa,
+        pixel_size_m,
+        pixel_size_m,
+        false,
+        "Pa",
+        Some("film contact pressure (NaN where not in the measuring range); film frame x right, y up"),
+    )?;
     heatmap(
-        &out.join("pressure_map.png"),
+        &out_dir.join("pressure_map.png"),
         &map.pressure_pa,
         pixel_size_m,
         pixel_size_m,
@@ -370,11 +662,11 @@ pub fn run(args: FilmArgs) -> Result<()> {
         .zip(&fits)
         .filter_map(|(r, f)| f.as_ref().map(|f| (r.id, f)))
         .collect();
-    polyfit::write_coefficients_csv(&out.join("fit_coefficients.csv"), &fit_refs)?;
+    polyfit::write_coefficients_csv(&out_dir.join("fit_coefficients.csv"), &fit_refs)?;
     for (r, f) in regions.iter().zip(&fits) {
         let Some(f) = f else { continue };
         plot_region(
-            &out.join(format!("region_{}_fitted.png", r.id)),
+            &out_dir.join(format!("region_{}_fitted.png", r.id)),
             &map,
             r,
             |i, j| {
@@ -388,7 +680,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
             "fitted pressure (MPa)",
         )?;
         plot_region(
-            &out.join(format!("region_{}_residual.png", r.id)),
+            &out_dir.join(format!("region_{}_residual.png", r.id)),
             &map,
             r,
             |i, j| {
@@ -420,14 +712,24 @@ pub fn run(args: FilmArgs) -> Result<()> {
     }
 
     if let Some((pre, pre_comment, reduced_rows)) = &node_outputs {
-        write_preloads_csv(&out.join("preload.csv"), pre, pre_comment)?;
+        write_preloads_csv(&out_dir.join("preload.csv"), pre, pre_comment)?;
         if let Some((rows, comment)) = reduced_rows {
-            write_preloads_csv(&out.join("preload_reduced.csv"), rows, comment)?;
+            write_preloads_csv(&out_dir.join("preload_reduced.csv"), rows, comment)?;
         }
     }
 
     let params = serde_json::json!({
         "pixel_size_m": pixel_size_m,
+        "pixel_size_source": pixel_source,
+        "density_channel": matches!(reader, ColourToPressure::Density(_)).then(|| channel.name()),
+        "unstained_density": match &reader {
+            ColourToPressure::Density(d) => Some(d.unstained_density),
+            ColourToPressure::Table(_) => None,
+        },
+        "paper_level_estimate": paper,
+        "smooth_mm": args.smooth_mm,
+        "max_elongation": args.max_elongation,
+        "min_solidity": args.min_solidity,
         "max_colour_distance_rgb": args.max_colour_distance,
         "calibrated_range_pa": [lo, hi],
         "fit_order": args.fit_order,
@@ -441,14 +743,18 @@ pub fn run(args: FilmArgs) -> Result<()> {
     let summary = serde_json::json!({
         "image_pixels": all,
         "discarded_small_components": discarded,
+        "rejected_marks": rejected_marks,
+        "below_range_patches": below_range_patches,
+        "regions_not_fitted": skipped,
         "regions": summaries,
         "fits": fits,
         "nodes": node_summary,
     });
     let json = provenance_json("film", &inputs, params, summary);
     write_string_atomic(
-        &out.join("film.json"),
+        &out_dir.join("film.json"),
         &serde_json::to_string_pretty(&json).map_err(|e| Error::Data(e.to_string()))?,
     )?;
+    out.commit()?;
     Ok(())
 }

@@ -9,6 +9,7 @@ pub mod diagnose;
 pub mod elements;
 pub mod film;
 pub mod merge;
+pub mod progress;
 pub mod response;
 pub mod surface;
 
@@ -68,14 +69,30 @@ pub fn material_from_flags(youngs_modulus_pa: f64, poisson_ratio: f64) -> Result
 }
 
 /// A progress bar on stderr for `len` units of work, labelled `label` (with the current step in
-/// its message), showing elapsed time and the estimate of what remains.
+/// its message), showing elapsed time and the estimate of what remains. When stderr is not a
+/// terminal (output redirected to a log), it prints plain log lines instead (see
+/// [`progress::LogLines`]).
 pub fn progress_bar(label: &str, len: u64) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(&format!(
-            "{label} {{msg:>16}} {{bar:30}} {{pos}}/{{len}} [{{elapsed_precise}} < {{eta}}]"
-        ))
-        .expect("valid template"),
-    );
+    let bar = indicatif::ProgressBar::with_draw_target(Some(len), progress::draw_target());
+    let template = if progress::is_terminal() {
+        format!("{label} {{msg:>16}} {{bar:30}} {{pos}}/{{len}} [{{elapsed_precise}} < {{eta}}]")
+    } else {
+        format!("{label}: {{msg}} {{pos}}/{{len}}, elapsed {{elapsed_precise}}, about {{eta}} left")
+    };
+    bar.set_style(indicatif::ProgressStyle::with_template(&template).expect("valid template"));
     bar
+}
+
+/// A spinner on stderr for work of unknown length (log lines when stderr is not a terminal).
+pub fn spinner(msg: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::with_draw_target(None, progress::draw_target());
+    if !progress::is_terminal() {
+        pb.set_style(
+            indicatif::ProgressStyle::with_template("{msg}, elapsed {elapsed_precise}")
+                .expect("valid template"),
+        );
+    }
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
 }

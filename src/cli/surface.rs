@@ -1,8 +1,10 @@
 //! `asperity surface …`: generate, analyse, convert and combine rough surfaces.
 
+use asperity::output::OutputSet;
 use asperity::plot::{line_plot, LinePlot, Scale, Series};
+use asperity::surface::missing::{fill_topography, Fill, FillReport};
 use asperity::surface::stats::Psd;
-use asperity::surface::{self, Detrend, GaussianSurfaceSpec, SurfaceStats};
+use asperity::surface::{self, Detrend, GaussianSurfaceSpec, SurfaceStats, Topography};
 use asperity::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -58,9 +60,13 @@ pub struct SelfAffineArgs {
 pub struct ConvertArgs {
     /// Input height map (any readable area format).
     input: PathBuf,
-    /// Output file(s); the format follows the extension. Repeatable.
+    /// Output file(s); the format follows the extension. Repeatable. All are written, or none.
+    /// Missing points are kept (NaN; x3p validity mask) unless --fill is given.
     #[arg(long = "out", short = 'o', required = true)]
     out: Vec<PathBuf>,
+    /// Fill missing points before writing: `harmonic` (Laplace interpolation) or `nearest`.
+    #[arg(long)]
+    fill: Option<Fill>,
 }
 
 #[derive(clap::Args)]
@@ -97,6 +103,9 @@ pub struct CombineArgs {
     /// Poisson's ratio of body 2.
     #[arg(long, allow_hyphen_values = true, requires = "e1_pa")]
     nu2: Option<f64>,
+    /// Fill missing points of the surfaces first: `harmonic` or `nearest`.
+    #[arg(long)]
+    fill: Option<Fill>,
 }
 
 #[derive(clap::Args)]
@@ -109,10 +118,14 @@ pub struct StatsArgs {
     /// What to remove first: `mean` (default) or `plane` (least-squares plane / line).
     #[arg(long, default_value = "mean")]
     detrend: String,
-    /// PSD table to write (CSV); the plot goes beside it with extension .png.
-    /// Default: `<file stem>-psd.csv` in the current directory.
+    /// Also write the power spectral density: this CSV table and a log-log plot beside it
+    /// (same name, extension .png). Without it no file is written.
     #[arg(long)]
     psd_out: Option<PathBuf>,
+    /// Fill missing points first (`harmonic` or `nearest`); without it the statistics are
+    /// computed over the measured points only (and no PSD can be written).
+    #[arg(long)]
+    fill: Option<Fill>,
 }
 
 #[derive(clap::Args)]
@@ -155,6 +168,7 @@ pub struct GenerateArgs {
     #[arg(long)]
     seed: Option<u64>,
     /// Output files; the format follows the extension (.npy, .x3p, .csv, .png). Repeatable.
+    /// All are written, or none.
     #[arg(long = "out", short = 'o', default_values = ["surface.npy", "surface.png"])]
     out: Vec<PathBuf>,
 }
@@ -185,13 +199,55 @@ impl GenerateArgs {
         if let Some(seed) = self.seed {
             s.seed = seed;
         }
-        s.validate()?;
+        s.validate().map_err(|e| self.name_source(e))?;
+        // Refused before the noise and its transforms are allocated.
+        let grid_flag = if self.n.is_some() {
+            "--n".to_string()
+        } else if self.nx.is_some() || self.ny.is_some() {
+            "--nx × --ny".to_string()
+        } else if let Some(c) = &self.config {
+            format!("{} (nx × ny)", c.display())
+        } else {
+            "--n".to_string()
+        };
+        asperity::limits::check_grid(
+            &grid_flag,
+            s.nx,
+            s.ny,
+            asperity::limits::GENERATE_BYTES_PER_POINT,
+        )?;
         Ok(s)
+    }
+
+    /// Name the flag (or the config file) of a parameter error of the spec.
+    fn name_source(&self, e: Error) -> Error {
+        let Error::InvalidParameter { name, message } = e else {
+            return e;
+        };
+        let own = format!("--{}", name.replace('_', "-"));
+        let (flag, given) = match name.as_str() {
+            "rq_m" => (own, self.rq_m.is_some()),
+            "clx_m" | "cly_m" if self.cl_m.is_some() => ("--cl-m".to_string(), true),
+            "clx_m" => (own, self.clx_m.is_some()),
+            "cly_m" => (own, self.cly_m.is_some()),
+            "lx_m" | "ly_m" if self.size_m.is_some() => ("--size-m".to_string(), true),
+            "lx_m" => (own, self.lx_m.is_some()),
+            "ly_m" => (own, self.ly_m.is_some()),
+            "nx" | "ny" if self.n.is_some() => ("--n".to_string(), true),
+            "nx" => (own, self.nx.is_some()),
+            "ny" => (own, self.ny.is_some()),
+            _ => (own, false),
+        };
+        match (&self.config, given) {
+            (Some(c), false) => Error::parse(c, 0, format!("invalid `{name}`: {message}")),
+            _ => Error::param(flag, message),
+        }
     }
 }
 
 /// Read a surface spec from TOML (all fields required).
 fn read_spec(path: &Path) -> Result<GaussianSurfaceSpec> {
+    asperity::limits::check_file_size(path, asperity::limits::MAX_TEXT_FILE_BYTES)?;
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     toml::from_str(&text).map_err(|e| {
         let line = e
@@ -202,13 +258,7 @@ fn read_spec(path: &Path) -> Result<GaussianSurfaceSpec> {
     })
 }
 
-/// A spinner on stderr for work that can take seconds (hidden when stderr is not a terminal).
-fn spinner(msg: &str) -> indicatif::ProgressBar {
-    let pb = indicatif::ProgressBar::new_spinner();
-    pb.set_message(msg.to_string());
-    pb.enable_steady_tick(std::time::Duration::from_millis(120));
-    pb
-}
+use super::spinner;
 
 pub fn run(cmd: SurfaceCommand) -> Result<()> {
     match cmd {
@@ -292,8 +342,9 @@ fn flag_of(e: &Error) -> String {
 fn generate(a: GenerateArgs) -> Result<()> {
     let spec = a.spec()?;
     for p in &a.out {
-        surface::io::check_writable_format(p)?;
+        surface::io::check_writable_format(p).map_err(|e| super::rename_param(e, "--out"))?;
     }
+    let mut out = OutputSet::for_files(&a.out, "--out")?;
     let pb = spinner(&format!("generating {}×{} patch", spec.nx, spec.ny));
     let t0 = Instant::now();
     let grid = surface::generate(&spec)?;
@@ -307,12 +358,14 @@ fn generate(a: GenerateArgs) -> Result<()> {
         spec.seed
     );
     for p in &a.out {
+        let staged = out.file(p, "--out")?;
         if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-            surface::io::png::write(p, &grid, &title)?;
+            surface::io::png::write(&staged, &grid, &title)?;
         } else {
-            surface::io::write(p, &grid)?;
+            surface::io::write(&staged, &grid)?;
         }
     }
+    let written = out.commit()?;
     pb.finish_and_clear();
     println!(
         "generated {}×{} patch {:.4e} m × {:.4e} m (dx {:.4e} m, dy {:.4e} m), Rq {:.6e} m, \
@@ -329,46 +382,95 @@ fn generate(a: GenerateArgs) -> Result<()> {
         spec.seed,
         t_gen
     );
-    for p in &a.out {
+    for p in written {
         println!("wrote {}", p.display());
     }
     Ok(())
 }
 
-fn stats(a: StatsArgs) -> Result<()> {
-    let detrend: Detrend = a.detrend.parse()?;
-    let psd_csv = a.psd_out.clone().unwrap_or_else(|| {
-        let stem = a
-            .file
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "surface".into());
-        PathBuf::from(format!("{stem}-psd.csv"))
-    });
-    if psd_csv.extension().is_none_or(|e| e != "csv") {
-        return Err(Error::param(
-            "psd-out",
-            format!("must end in .csv, got {}", psd_csv.display()),
-        ));
+/// Read a topography and fill its missing points when asked; errors name the file.
+fn read_filled(file: &Path, fill: Option<Fill>) -> Result<(Topography, Option<FillReport>)> {
+    let topo = surface::io::read(file)?;
+    match fill {
+        Some(f) => fill_topography(topo, f).map_err(|e| e.in_file(file)),
+        None => Ok((topo, None)),
     }
-    let psd_png = psd_csv.with_extension("png");
+}
+
+fn stats(a: StatsArgs) -> Result<()> {
+    let detrend: Detrend = a
+        .detrend
+        .parse()
+        .map_err(|e| super::rename_param(e, "--detrend"))?;
+    let psd_paths = match &a.psd_out {
+        Some(csv) => {
+            if csv.extension().is_none_or(|e| e != "csv") {
+                return Err(Error::param(
+                    "--psd-out",
+                    format!("must end in .csv, got {}", csv.display()),
+                ));
+            }
+            Some((csv.clone(), csv.with_extension("png")))
+        }
+        None => None,
+    };
+    let mut out = match &psd_paths {
+        Some((csv, png)) => Some(OutputSet::for_files(
+            &[csv.clone(), png.clone()],
+            "--psd-out",
+        )?),
+        None => None,
+    };
     let pb = spinner(&format!("reading {}", a.file.display()));
     let t0 = Instant::now();
-    let topo = surface::io::read(&a.file)?;
+    let (topo, fill) = read_filled(&a.file, a.fill)?;
     let t_read = t0.elapsed().as_secs_f64();
+    if let Some(r) = &fill {
+        eprintln!("{}: {}", a.file.display(), r.describe());
+    }
     pb.set_message("statistics and PSD");
     let t1 = Instant::now();
-    let s = surface::stats(&topo, detrend)?;
-    let psd = surface::stats::power_spectrum(&topo, detrend)?;
+    let s = surface::stats(&topo, detrend).map_err(|e| e.in_file(&a.file))?;
+    let psd = match &psd_paths {
+        Some(_) if topo.missing() > 0 => {
+            return Err(Error::param(
+                "--psd-out",
+                format!(
+                    "{} has {} missing points and the power spectrum needs every point: add \
+                     --fill harmonic or --fill nearest",
+                    a.file.display(),
+                    topo.missing()
+                ),
+            ))
+        }
+        Some(_) => {
+            Some(surface::stats::power_spectrum(&topo, detrend).map_err(|e| e.in_file(&a.file))?)
+        }
+        None => None,
+    };
     let t_stats = t1.elapsed().as_secs_f64();
-    write_psd(&psd_csv, &psd_png, &a.file, &psd, detrend)?;
+    if let (Some((csv, png)), Some(psd), Some(set)) = (&psd_paths, &psd, out.as_mut()) {
+        let (c, p) = (set.file(csv, "--psd-out")?, set.file(png, "--psd-out")?);
+        write_psd(&c, &p, &a.file, psd, detrend)?;
+    }
+    if let Some(set) = out {
+        set.commit()?;
+    }
     pb.finish_and_clear();
     if a.json {
         let mut v = serde_json::to_value(&s).map_err(|e| Error::Data(e.to_string()))?;
         if let Some(o) = v.as_object_mut() {
             o.insert("file".into(), a.file.display().to_string().into());
-            o.insert("psd_csv".into(), psd_csv.display().to_string().into());
-            o.insert("psd_png".into(), psd_png.display().to_string().into());
+            if let Some((csv, png)) = &psd_paths {
+                o.insert("psd_csv".into(), csv.display().to_string().into());
+                o.insert("psd_png".into(), png.display().to_string().into());
+            }
+            if let Some(r) = &fill {
+                o.insert(
+                    "fill".into(),
+                    serde_json::to_value(r).map_err(|e| Error::Data(e.to_string()))?,
+                );
+            }
             o.insert("read_time_s".into(), t_read.into());
             o.insert("stats_time_s".into(), t_stats.into());
         }
@@ -378,7 +480,9 @@ fn stats(a: StatsArgs) -> Result<()> {
         );
     } else {
         print_stats_table(&a.file, &s);
-        println!("PSD: {} and {}", psd_csv.display(), psd_png.display());
+        if let Some((csv, png)) = &psd_paths {
+            println!("PSD: {} and {}", csv.display(), png.display());
+        }
         println!("read {t_read:.3} s, statistics {t_stats:.3} s");
     }
     Ok(())
@@ -407,12 +511,22 @@ fn print_stats_table(file: &Path, s: &SurfaceStats) {
         )
     };
     println!(
-        "{}: {} {shape}, periodic {}, detrend {:?}",
+        "{}: {} {shape}, periodic {}, detrend {}",
         file.display(),
         s.kind,
         s.periodic,
-        s.detrend
+        match s.detrend {
+            Detrend::Mean => "mean",
+            Detrend::Plane => "plane",
+        }
     );
+    if s.missing_points > 0 {
+        println!(
+            "  missing points         {} of {} (statistics over the measured points)",
+            s.missing_points,
+            s.nx * s.ny
+        );
+    }
     println!("  Ra                     {:.6e} m", s.ra_m);
     println!("  Rq (rms height)        {:.6e} m", s.rq_m);
     println!("  Rsk                    {:.6}", s.rsk);
@@ -453,14 +567,17 @@ fn write_psd(csv: &Path, png: &Path, source: &Path, psd: &Psd, detrend: Detrend)
     let mut text = String::new();
     let _ = writeln!(
         text,
-        "# power spectral density of {} ({}, detrend {:?}); q angular wavenumber",
+        "# power spectral density of {} ({}, detrend {}); q angular wavenumber",
         source.display(),
         if psd.dim == 1 {
             "1-D profile"
         } else {
             "2-D, radially averaged"
         },
-        detrend
+        match detrend {
+            Detrend::Mean => "mean",
+            Detrend::Plane => "plane",
+        }
     );
     let _ = writeln!(text, "q_rad_per_m,{col},count");
     for ((q, c), n) in psd.q.iter().zip(&psd.c).zip(&psd.count) {
@@ -531,13 +648,23 @@ fn combine(a: CombineArgs) -> Result<()> {
         )?),
         _ => None,
     };
+    let mut out = None;
     let eq = match (&a.surface1, &a.surface2) {
         (Some(p1), Some(p2)) => {
             for p in &a.out {
-                surface::io::check_writable_format(p)?;
+                surface::io::check_writable_format(p)
+                    .map_err(|e| super::rename_param(e, "--out"))?;
             }
-            let g1 = surface::io::read(p1)?.into_area(&p1.display().to_string())?;
-            let g2 = surface::io::read(p2)?.into_area(&p2.display().to_string())?;
+            out = Some(OutputSet::for_files(&a.out, "--out")?);
+            let load = |p: &Path| -> Result<_> {
+                let (g, r) = surface::missing::load_area(p, a.fill)?;
+                if let Some(r) = r {
+                    eprintln!("{}: {}", p.display(), r.describe());
+                }
+                Ok(g)
+            };
+            let g1 = load(p1)?;
+            let g2 = load(p2)?;
             Some(equivalent_surface(&g1, &g2)?)
         }
         _ => None,
@@ -551,11 +678,12 @@ fn combine(a: CombineArgs) -> Result<()> {
     if let Some(v) = e_star {
         println!("composite modulus E*   {v:.6e} Pa");
     }
-    if let Some(g) = eq {
+    if let (Some(g), Some(mut set)) = (eq, out) {
         let s = surface::stats(&surface::Topography::Area(g.clone()), Detrend::Mean)?;
         for p in &a.out {
-            surface::io::write(p, &g)?;
+            surface::io::write(&set.file(p, "--out")?, &g)?;
         }
+        set.commit()?;
         println!(
             "equivalent surface {}×{}: Rq {:.6e} m, rms gradient {:.6e}",
             g.nx(),
@@ -572,20 +700,41 @@ fn combine(a: CombineArgs) -> Result<()> {
 
 fn convert(a: ConvertArgs) -> Result<()> {
     for p in &a.out {
-        surface::io::check_writable_format(p)?;
+        surface::io::check_writable_format(p).map_err(|e| super::rename_param(e, "--out"))?;
     }
-    let g = surface::io::read(&a.input)?.into_area(&a.input.display().to_string())?;
+    let mut out = OutputSet::for_files(&a.out, "--out")?;
+    let (topo, fill) = read_filled(&a.input, a.fill)?;
+    if let Topography::Profile(_) = topo {
+        return Err(Error::Data(format!(
+            "{}: a 1-D profile cannot be converted (the writers write height maps)",
+            a.input.display()
+        )));
+    }
+    if let Some(r) = &fill {
+        eprintln!("{}: {}", a.input.display(), r.describe());
+    } else if topo.missing() > 0 {
+        eprintln!(
+            "{}: {} missing points kept (NaN; x3p validity mask; blank in PNG)",
+            a.input.display(),
+            topo.missing()
+        );
+    }
     let title = a
         .input
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     for p in &a.out {
-        if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-            surface::io::png::write(p, &g, &title)?;
-        } else {
-            surface::io::write(p, &g)?;
+        let staged = out.file(p, "--out")?;
+        match (
+            &topo,
+            p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
+        ) {
+            (Topography::Area(g), true) => surface::io::png::write(&staged, g, &title)?,
+            _ => surface::io::write_topography(&staged, &topo)?,
         }
+    }
+    for p in out.commit()? {
         println!("wrote {}", p.display());
     }
     Ok(())

@@ -175,7 +175,7 @@ impl NormalOptions {
 
     /// Check the settings: tolerances finite and > 0, at least one iteration.
     pub fn validate(&self) -> Result<()> {
-        require_positive("tolerance", self.tolerance)?;
+        crate::sanity::tolerance("tolerance", self.tolerance)?;
         require_positive("approach_tolerance", self.approach_tolerance)?;
         if self.max_iterations == 0 {
             return Err(Error::param("max_iterations", "must be at least 1"));

@@ -27,16 +27,28 @@ pub enum SurfaceSource {
     /// A generated Gaussian patch (its seed names it).
     Generated { spec: GaussianSurfaceSpec },
     /// A topography file (any format [`crate::surface::io::read`] reads), with the SHA-256 of
-    /// its content so that every shard provably read the same file.
-    File { path: String, sha256: String },
+    /// its content so that every shard provably read the same file, and how its missing points
+    /// are filled (none: a file with missing points is refused).
+    File {
+        path: String,
+        sha256: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        fill: Option<crate::surface::missing::Fill>,
+    },
 }
 
 impl SurfaceSource {
     /// A topography file, hashed now.
     pub fn file(path: &Path) -> Result<Self> {
+        Self::file_filled(path, None)
+    }
+
+    /// A topography file, hashed now, whose missing points are filled by `fill`.
+    pub fn file_filled(path: &Path, fill: Option<crate::surface::missing::Fill>) -> Result<Self> {
         Ok(SurfaceSource::File {
             path: path.display().to_string(),
             sha256: crate::elements::sha256_file(path)?,
+            fill,
         })
     }
 
@@ -55,7 +67,10 @@ impl SurfaceSource {
                 "generated Gaussian surface (Rq {:e} m, correlation lengths {:e} x {:e} m, {:e} x {:e} m, {} x {} points, seed {})",
                 spec.rq_m, spec.clx_m, spec.cly_m, spec.lx_m, spec.ly_m, spec.nx, spec.ny, spec.seed
             ),
-            SurfaceSource::File { path, sha256 } => format!("{path} (sha256 {sha256})"),
+            SurfaceSource::File { path, sha256, fill } => match fill {
+                None => format!("{path} (sha256 {sha256})"),
+                Some(f) => format!("{path} (sha256 {sha256}; missing points filled: {f:?})"),
+            },
         }
     }
 
@@ -63,7 +78,7 @@ impl SurfaceSource {
     pub fn load(&self) -> Result<Grid2> {
         match self {
             SurfaceSource::Generated { spec } => generate(spec),
-            SurfaceSource::File { path, sha256 } => {
+            SurfaceSource::File { path, sha256, fill } => {
                 let p = Path::new(path);
                 let now = crate::elements::sha256_file(p)?;
                 if &now != sha256 {
@@ -71,7 +86,11 @@ impl SurfaceSource {
                         "{path}: content changed during the sweep (sha256 {now}, expected {sha256})"
                     )));
                 }
-                crate::surface::io::read(p)?.into_area(path)
+                let (grid, report) = crate::surface::missing::load_area(p, *fill)?;
+                if let Some(r) = report {
+                    eprintln!("{path}: {}", r.describe());
+                }
+                Ok(grid)
             }
         }
     }
@@ -162,6 +181,22 @@ impl SurfaceSweep {
             .get(k)
             .ok_or_else(|| Error::param("unit", format!("no surface {k}")))?;
         let surface = source.load()?;
+        // Limits and physical sanity (asperity::limits, asperity::sanity) before the solver
+        // allocates, and finite, positive results after it.
+        let label = source.label();
+        crate::limits::check_grid(
+            &label,
+            surface.nx(),
+            surface.ny(),
+            crate::limits::CONTACT_BYTES_PER_POINT,
+        )?;
+        crate::sanity::contact_surface(&surface, &label)?;
+        crate::sanity::contact_pressures(
+            "--pressures-pa",
+            &self.pressures_pa,
+            self.e_star_pa()?,
+            &surface,
+        )?;
         let mut solver = NormalSolver::new(
             &NormalProblem {
                 surface: &surface,
@@ -179,6 +214,13 @@ impl SurfaceSweep {
             Error::Data(m) => Error::Data(format!("{}: {m}", source.label())),
             other => other,
         })?;
+        for p in &sw.points {
+            let at = |q: &str| format!("{label}: {q} at {} Pa", crate::error::num(p.pressure_pa));
+            crate::sanity::positive_result(&at("kn"), p.kn_n_per_m3)?;
+            crate::sanity::finite_result(&at("the mean gap"), p.mean_gap_m)?;
+            crate::sanity::finite_result(&at("the approach"), p.approach_m)?;
+            crate::sanity::positive_result(&at("the contact area ratio"), p.contact_area_ratio)?;
+        }
         Ok((
             SurfaceResult {
                 grid: GridInfo {

@@ -8,6 +8,11 @@
 use crate::error::{Error, Result};
 use std::path::Path;
 
+/// Largest |displacement| a record may hold (10 m: no friction rig moves further).
+pub const MAX_DISPLACEMENT_M: f64 = 10.0;
+/// Largest |force| a record may hold (10¹² N).
+pub const MAX_FORCE_N: f64 = 1e12;
+
 /// Names of the CSV columns to read (units in the names, e.g. `displacement_m`).
 #[derive(Debug, Clone)]
 pub struct Columns {
@@ -133,7 +138,11 @@ impl Record {
     }
 
     /// Read the chosen columns of a CSV file (header row with column names, then numbers).
+    /// Errors name the file and line: non-numbers, non-finite values, time not increasing, a
+    /// normal force ≤ 0, and magnitudes no instrument records (|x| > [`MAX_DISPLACEMENT_M`],
+    /// |F| > [`MAX_FORCE_N`]: a unit or format error).
     pub fn read_csv(path: &Path, columns: &Columns) -> Result<Self> {
+        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let mut rdr = crate::input::csv_reader(path)?;
         let headers = rdr
             .headers()
@@ -157,6 +166,7 @@ impl Record {
         let inf = columns.normal_force.as_deref().map(find).transpose()?;
         let (mut t, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new());
         let mut nf = inf.map(|_| Vec::new());
+        let mut lines: Vec<usize> = Vec::new();
         for rec in rdr.records() {
             let (rec, line) = crate::input::csv_record(path, rec)?;
             if rec.len() != headers.len() {
@@ -189,12 +199,56 @@ impl Record {
                     ))
                 }
             };
-            t.push(get(it, &columns.time)?);
-            x.push(get(ix, &columns.displacement)?);
-            f.push(get(iff, &columns.force)?);
-            if let (Some(i), Some(v)) = (inf, nf.as_mut()) {
-                v.push(get(i, columns.normal_force.as_deref().unwrap_or(""))?);
+            let bounded = |i: usize, name: &str, max: f64, unit: &str| -> Result<f64> {
+                let v = get(i, name)?;
+                if v.abs() > max {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!(
+                            "column `{name}`: {} exceeds {} {unit} in magnitude (a unit or \
+                             format error)",
+                            crate::error::num(v),
+                            crate::error::num(max)
+                        ),
+                    ));
+                }
+                Ok(v)
+            };
+            let time = get(it, &columns.time)?;
+            if let Some(&prev) = t.last() {
+                if time <= prev {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!(
+                            "column `{}`: time {} does not increase (previous row: {})",
+                            columns.time,
+                            crate::error::num(time),
+                            crate::error::num(prev)
+                        ),
+                    ));
+                }
             }
+            t.push(time);
+            x.push(bounded(ix, &columns.displacement, MAX_DISPLACEMENT_M, "m")?);
+            f.push(bounded(iff, &columns.force, MAX_FORCE_N, "N")?);
+            if let (Some(i), Some(v)) = (inf, nf.as_mut()) {
+                let name = columns.normal_force.as_deref().unwrap_or("");
+                let n = bounded(i, name, MAX_FORCE_N, "N")?;
+                if n <= 0.0 {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!(
+                            "column `{name}`: a normal force must be > 0, got {}",
+                            crate::error::num(n)
+                        ),
+                    ));
+                }
+                v.push(n);
+            }
+            lines.push(line);
         }
         Record::new(t, x, f, nf).map_err(|e| match e {
             Error::Data(m) => Error::parse(path, 0, m),

@@ -173,6 +173,7 @@ impl ColourTable {
 
     /// Read a colour table file (format in the module documentation).
     pub fn read_csv(path: &Path, max_distance: f64) -> Result<Self> {
+        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let mut unit = 1e6; // vendor convention: MPa
         let mut rows = Vec::new();
@@ -406,14 +407,32 @@ pub fn optical_density(rgb: [f64; 3]) -> f64 {
 /// Calibration points optical density → pressure for raw scans, interpolated piecewise-linearly.
 ///
 /// File format: CSV with header `density,pressure_MPa` (or `density,pressure_Pa`), `#` comments;
-/// both columns strictly increasing. Densities below the first point read as unstained (a raw
-/// scan cannot tell faint stain from paper), above the last point as above range. Density readings cannot tell pen marks from pressure colour: restrict
-/// the region of interest when a raw scan carries marks.
+/// both columns strictly increasing. The density is read in [`DensityCalibration::channel`]
+/// (luma by default; see [`crate::film::scan::Channel`]). A pixel whose density is at most
+/// [`DensityCalibration::unstained_density`] (the paper level, estimated from the scan by
+/// [`crate::film::scan::paper_level`] or given) is unstained; stained but below the first point
+/// is **below range**; above the last point above range. Density alone cannot tell pen marks
+/// from stain: automatic patch detection rejects marks by their shape
+/// ([`crate::film::regions::PatchOptions`]).
 #[derive(Debug, Clone)]
 pub struct DensityCalibration {
     /// `(optical density, pressure in Pa)`, both strictly increasing.
     pub points: Vec<(f64, f64)>,
+    /// The channel the densities are read in.
+    pub channel: crate::film::scan::Channel,
+    /// Densities at or below this are unstained paper (default: the first point's density,
+    /// i.e. no below-range class until the paper level is set).
+    pub unstained_density: f64,
+    /// Hue check against marks: `(weak channel, limit)`. A stained pixel whose density in the
+    /// channel the stain hardly absorbs exceeds `limit ×` its density in the read channel is not
+    /// stain but ink (black or blue pen), and is off-curve (see [`Self::with_stain`]).
+    pub hue_check: Option<(crate::film::scan::Channel, f64)>,
 }
+
+/// A stained pixel is ink, not stain, when its density in the channel the stain absorbs least
+/// exceeds this fraction of its density in the read channel (Prescale's magenta-red: ≈ 0.12;
+/// black ink ≈ 1).
+pub const INK_DENSITY_RATIO: f64 = 0.5;
 
 impl DensityCalibration {
     /// Build from points; checks both columns increase strictly.
@@ -431,11 +450,40 @@ impl DensityCalibration {
                 )));
             }
         }
-        Ok(Self { points })
+        let unstained_density = points[0].0;
+        Ok(Self {
+            points,
+            channel: crate::film::scan::Channel::Luma,
+            unstained_density,
+            hue_check: None,
+        })
+    }
+
+    /// Enable the hue check for a stain of colour `stain_rgb` (0–255): the weak channel is the
+    /// one in which the stain is brightest. Refused when the stain itself is nearly neutral
+    /// (its own ratio at least [`INK_DENSITY_RATIO`]): ink could not be told from it.
+    pub fn with_stain(mut self, stain_rgb: [f64; 3]) -> Result<Self> {
+        use crate::film::scan::Channel;
+        let weak = [Channel::Red, Channel::Green, Channel::Blue][(0..3)
+            .max_by(|&a, &b| stain_rgb[a].total_cmp(&stain_rgb[b]))
+            .unwrap_or(0)];
+        let ratio = weak.density(stain_rgb) / self.channel.density(stain_rgb).max(1e-12);
+        if ratio.is_nan() || ratio >= INK_DENSITY_RATIO {
+            return Err(Error::param(
+                "stain colour",
+                format!(
+                    "the stain {stain_rgb:?} is too neutral to tell from ink (density ratio {ratio:.2} \
+                     ≥ {INK_DENSITY_RATIO}): read it in a channel where it is coloured"
+                ),
+            ));
+        }
+        self.hue_check = Some((weak, INK_DENSITY_RATIO));
+        Ok(self)
     }
 
     /// Read a density calibration CSV (format above).
     pub fn read_csv(path: &Path) -> Result<Self> {
+        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let mut unit = None;
         let mut pts = Vec::new();
@@ -487,11 +535,19 @@ impl DensityCalibration {
 
     /// Read one pixel.
     pub fn read(&self, rgb: [f64; 3]) -> PixelReading {
-        let d = optical_density(rgb);
+        let d = self.channel.density(rgb);
         let (first, last) = (self.points[0], self.points[self.points.len() - 1]);
-        if d < first.0 {
-            // A raw scan cannot tell faint stain from paper: below the first point is unstained.
+        if d <= self.unstained_density && d < first.0 {
             return PixelReading::of(PixelClass::Unstained);
+        }
+        if let Some((weak, limit)) = self.hue_check {
+            if weak.density(rgb) > limit * d {
+                return PixelReading::of(PixelClass::OffCurve);
+            }
+        }
+        if d < first.0 {
+            // Stained, but paler than the film's first calibrated density.
+            return PixelReading::of(PixelClass::BelowRange);
         }
         if d > last.0 {
             return PixelReading::of(PixelClass::AboveRange);
@@ -636,12 +692,25 @@ mod tests {
 
     #[test]
     fn density_calibration_interpolates_and_flags_range() {
-        let d = DensityCalibration::new(vec![(0.1, 1e6), (0.5, 5e6)], "d").unwrap();
+        let mut d = DensityCalibration::new(vec![(0.1, 1e6), (0.5, 5e6)], "d").unwrap();
+        assert_eq!(d.read([255.0; 3]).class, PixelClass::Unstained);
+        // With the paper level set, faint stain is below range, not unstained.
+        let faint = 255.0 / 10f64.powf(0.05);
+        assert_eq!(d.read([faint; 3]).class, PixelClass::Unstained);
+        d.unstained_density = 0.02;
+        assert_eq!(d.read([faint; 3]).class, PixelClass::BelowRange);
         assert_eq!(d.read([255.0; 3]).class, PixelClass::Unstained);
         assert_eq!(d.read([0.0; 3]).class, PixelClass::AboveRange);
         let grey = 255.0 / 10f64.powf(0.3);
         let r = d.read([grey; 3]);
         assert!((r.pressure_pa - 3e6).abs() < 1e-3, "{r:?}");
         assert!(DensityCalibration::new(vec![(0.1, 1e6), (0.5, 0.5e6)], "d").is_err());
+        // A magenta stain read in green; black and blue ink are off-curve, the stain is not.
+        let mut m = DensityCalibration::new(vec![(0.1, 1e6), (0.5, 5e6)], "d").unwrap();
+        m.channel = crate::film::scan::Channel::Green;
+        let m = m.with_stain([230.0, 110.0, 125.0]).unwrap();
+        assert_eq!(m.read([240.0, 120.0, 130.0]).class, PixelClass::InRange);
+        assert_eq!(m.read([60.0, 60.0, 60.0]).class, PixelClass::OffCurve);
+        assert_eq!(m.read([40.0, 60.0, 160.0]).class, PixelClass::OffCurve);
     }
 }

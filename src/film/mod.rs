@@ -6,12 +6,14 @@
 //! * [`polyfit`]: 2-D polynomial least-squares fit with R².
 //! * [`nodes`]: contact nodes, placement on the film, tributary areas, preloads `N0 = σ·A`.
 //! * [`reduce`]: node reduction on a coarse triangular mesh (area and load preserved).
+//! * [`scan`]: raw scans: reading the image (limits, dpi), smoothing, density channel, paper level.
 
 pub mod colour;
 pub mod nodes;
 pub mod polyfit;
 pub mod reduce;
 pub mod regions;
+pub mod scan;
 
 use crate::error::{Error, Result};
 

@@ -66,6 +66,7 @@ impl Placement {
 
 /// Read a nodes CSV (see the module documentation).
 pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
+    crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
     let mut rdr = crate::input::csv_reader(path)?;
     let headers = rdr
         .headers()
@@ -313,13 +314,21 @@ pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Resul
     })
 }
 
-/// Read a preload CSV written by [`write_preloads_csv`].
+/// Read a preload CSV written by [`write_preloads_csv`]. Errors name the file and line:
+/// missing columns, unparsable or non-finite values, area ≤ 0, negative pressure, a duplicate
+/// node id.
 pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
+    crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
     let mut rdr = crate::input::csv_reader(path)?;
+    let headers = rdr
+        .headers()
+        .map_err(|e| crate::input::csv_error(path, e))?
+        .clone();
     let mut out: Vec<Preload> = Vec::new();
-    for rec in rdr.deserialize::<Preload>() {
-        let p = rec.map_err(|e| {
-            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+    let mut seen = std::collections::HashMap::new();
+    for rec in rdr.records() {
+        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let p: Preload = rec.deserialize(Some(&headers)).map_err(|e| {
             Error::parse(
                 path,
                 line,
@@ -334,11 +343,18 @@ pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
         if !ok {
             return Err(Error::parse(
                 path,
-                out.len() + 1,
+                line,
                 format!(
                     "node {}: values must be finite, area > 0 and pressure ≥ 0",
                     p.id
                 ),
+            ));
+        }
+        if let Some(first) = seen.insert(p.id, line) {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("duplicate node id {} (first at line {first})", p.id),
             ));
         }
         out.push(p);

@@ -15,8 +15,17 @@
 //! the contact, where the film is coloured but below its range). Components whose core is smaller
 //! than a minimum equivalent diameter are discarded and counted. Below-range and off-curve pixels
 //! never seed a patch, so the green pen marks and tape of a vendor rendering are not patches.
+//!
+//! **Marks are rejected by their shape** ([`PatchOptions`]): on a raw scan read by density, pen
+//! strokes and handwriting are as dense as stain. A contact patch is compact; a stroke is thin
+//! and elongated, a written label is thin and hollow. Each candidate (holes filled) is rejected
+//! when its **elongation** `√(λ₁/λ₂)` (λ: principal second moments of its pixels) exceeds
+//! `max_elongation` (default 3), or its **solidity**, the stained pixels over the area of its
+//! convex hull, is below `min_solidity` (default 0.6: a filled disc has ≈ 1, the outline of a
+//! written `0` ≈ 0.5, a word much less). Rejected marks are counted.
 
 use super::colour::{ColourToPressure, PixelClass};
+use super::scan::RgbImage;
 use crate::error::{Error, Result};
 use ndarray::Array2;
 use std::path::Path;
@@ -71,16 +80,32 @@ impl FilmMap {
         reader: &ColourToPressure,
         pixel_size_m: f64,
     ) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(Error::Data("film image has no pixels".into()));
+        }
+        Self::from_image(
+            &RgbImage::from_fn(width, height, rgb_at),
+            reader,
+            pixel_size_m,
+        )
+    }
+
+    /// Build the map from an image in the film frame.
+    pub fn from_image(
+        img: &RgbImage,
+        reader: &ColourToPressure,
+        pixel_size_m: f64,
+    ) -> Result<Self> {
         crate::error::require_positive("pixel_size_m", pixel_size_m)?;
+        let (width, height) = img.dim();
         if width == 0 || height == 0 {
             return Err(Error::Data("film image has no pixels".into()));
         }
         let mut class = Array2::from_elem((width, height), PixelClass::Unstained);
         let mut pressure = Array2::from_elem((width, height), f64::NAN);
         for j in 0..height {
-            let row = height - 1 - j;
             for i in 0..width {
-                let r = reader.read(rgb_at(i, row));
+                let r = reader.read(img.rgb(i, j));
                 class[[i, j]] = r.class;
                 pressure[[i, j]] = r.pressure_pa;
             }
@@ -92,51 +117,11 @@ impl FilmMap {
         })
     }
 
-    /// Read a PNG, JPEG or TIFF image (8 or 16 bit; 16-bit precision is kept).
+    /// Read a PNG, JPEG or TIFF image (8 or 16 bit; 16-bit precision is kept), its size checked
+    /// against the limits first (see [`crate::film::scan::read_rgb`]).
     pub fn read_image(path: &Path, reader: &ColourToPressure, pixel_size_m: f64) -> Result<Self> {
-        if !path.exists() {
-            return Err(Error::io(
-                path,
-                std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
-            ));
-        }
-        let img = image::ImageReader::open(path)
-            .map_err(|e| Error::io(path, e))?
-            .with_guessed_format()
-            .map_err(|e| Error::io(path, e))?
-            .decode()
-            .map_err(|e| Error::parse(path, 0, format!("cannot read image: {e}")))?;
-        let (w, h) = (img.width() as usize, img.height() as usize);
-        // 8-bit images keep their exact integer values; deeper images keep their precision.
-        if img.color().bytes_per_pixel() / img.color().channel_count().max(1) <= 1 {
-            let rgb = img.to_rgb8();
-            Self::from_rgb(
-                w,
-                h,
-                |c, r| {
-                    let p = rgb.get_pixel(c as u32, r as u32).0;
-                    [p[0] as f64, p[1] as f64, p[2] as f64]
-                },
-                reader,
-                pixel_size_m,
-            )
-        } else {
-            let rgb = img.to_rgb32f();
-            Self::from_rgb(
-                w,
-                h,
-                |c, r| {
-                    let p = rgb.get_pixel(c as u32, r as u32).0;
-                    [
-                        p[0] as f64 * 255.0,
-                        p[1] as f64 * 255.0,
-                        p[2] as f64 * 255.0,
-                    ]
-                },
-                reader,
-                pixel_size_m,
-            )
-        }
+        let img = super::scan::read_rgb(path)?;
+        Self::from_image(&img, reader, pixel_size_m)
     }
 
     /// Pixel counts per class over the whole image.
@@ -265,10 +250,20 @@ pub fn roi_region(map: &FilmMap, roi: &Roi, id: usize) -> Result<Region> {
         }
     }
     if pixels.is_empty() {
+        let what = match roi {
+            Roi::Rectangle { x0, y0, x1, y1 } => format!(
+                "the rectangle {:.4}–{:.4} × {:.4}–{:.4} mm",
+                x0 * 1e3,
+                x1 * 1e3,
+                y0 * 1e3,
+                y1 * 1e3
+            ),
+            Roi::Polygon(p) => format!("the polygon of {} vertices", p.len()),
+        };
         return Err(Error::Data(format!(
-            "region of interest {roi:?} (m) contains no pixel of the {nx} × {ny} film map (extent {:.4} × {:.4} m)",
-            nx as f64 * map.pixel_size_m,
-            ny as f64 * map.pixel_size_m
+            "region of interest: {what} contains no pixel of the {nx} × {ny} film map (extent {:.4} × {:.4} mm)",
+            nx as f64 * map.pixel_size_m * 1e3,
+            ny as f64 * map.pixel_size_m * 1e3
         )));
     }
     Ok(Region { id, pixels })
@@ -281,6 +276,126 @@ pub struct PatchDetection {
     pub patches: Vec<Region>,
     /// Connected components discarded as smaller than the minimum diameter.
     pub discarded_small: usize,
+    /// Components of the minimum size rejected by their shape as marks (pen strokes, labels).
+    pub rejected_marks: usize,
+}
+
+/// Settings of automatic patch detection (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PatchOptions {
+    /// Smallest equivalent diameter `√(4A/π)` of a patch's pressure-bearing core (m).
+    pub min_diameter_m: f64,
+    /// Width of the below-range rim joined to a patch (pixels).
+    pub rim_pixels: usize,
+    /// Largest elongation `√(λ₁/λ₂)` of a patch.
+    pub max_elongation: f64,
+    /// Smallest solidity (stained pixels / convex hull area) of a patch.
+    pub min_solidity: f64,
+}
+
+/// Default largest elongation of a patch.
+pub const DEFAULT_MAX_ELONGATION: f64 = 3.0;
+/// Default smallest solidity of a patch.
+pub const DEFAULT_MIN_SOLIDITY: f64 = 0.6;
+
+impl PatchOptions {
+    /// Options with the default shape limits.
+    pub fn new(min_diameter_m: f64, rim_pixels: usize) -> Self {
+        Self {
+            min_diameter_m,
+            rim_pixels,
+            max_elongation: DEFAULT_MAX_ELONGATION,
+            min_solidity: DEFAULT_MIN_SOLIDITY,
+        }
+    }
+}
+
+/// Shape of a set of pixels: `(elongation, solidity)` with solidity = stained pixels of the
+/// set over the area of the convex hull of the pixels' squares.
+pub fn shape(map: &FilmMap, pixels: &[(usize, usize)]) -> (f64, f64) {
+    let n = pixels.len() as f64;
+    let (mx, my) = (
+        pixels.iter().map(|p| p.0 as f64).sum::<f64>() / n,
+        pixels.iter().map(|p| p.1 as f64).sum::<f64>() / n,
+    );
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for &(i, j) in pixels {
+        let (a, b) = (i as f64 - mx, j as f64 - my);
+        sxx += a * a;
+        syy += b * b;
+        sxy += a * b;
+    }
+    // A pixel is a unit square: its own second moment 1/12 along each axis.
+    let (sxx, syy, sxy) = (sxx / n + 1.0 / 12.0, syy / n + 1.0 / 12.0, sxy / n);
+    let tr = 0.5 * (sxx + syy);
+    let disc = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+    let elongation = ((tr + disc) / (tr - disc).max(1e-12)).sqrt();
+    // Convex hull of the pixel squares: the extreme squares of every row suffice.
+    let mut rows: std::collections::BTreeMap<usize, (usize, usize)> = Default::default();
+    for &(i, j) in pixels {
+        let e = rows.entry(j).or_insert((i, i));
+        e.0 = e.0.min(i);
+        e.1 = e.1.max(i);
+    }
+    let mut pts: Vec<(f64, f64)> = Vec::with_capacity(4 * rows.len());
+    for (&j, &(a, b)) in &rows {
+        let (y0, y1) = (j as f64 - 0.5, j as f64 + 0.5);
+        pts.extend([
+            (a as f64 - 0.5, y0),
+            (a as f64 - 0.5, y1),
+            (b as f64 + 0.5, y0),
+            (b as f64 + 0.5, y1),
+        ]);
+    }
+    let hull = convex_hull_area(pts);
+    let stained = pixels
+        .iter()
+        .filter(|&&(i, j)| {
+            matches!(
+                map.class[[i, j]],
+                PixelClass::InRange | PixelClass::AboveRange | PixelClass::BelowRange
+            )
+        })
+        .count() as f64;
+    (elongation, stained / hull.max(1.0))
+}
+
+/// Area of the convex hull of points (Andrew's monotone chain, shoelace formula).
+fn convex_hull_area(mut p: Vec<(f64, f64)>) -> f64 {
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    p.dedup();
+    if p.len() < 3 {
+        return 0.0;
+    }
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &q in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    let m = hull.len();
+    0.5 * (0..m)
+        .map(|k| {
+            let (a, b) = (hull[k], hull[(k + 1) % m]);
+            a.0 * b.1 - b.0 * a.1
+        })
+        .sum::<f64>()
+        .abs()
 }
 
 /// Default width of the below-range rim joined to a patch (pixels).
@@ -297,14 +412,50 @@ pub fn detect_patches(
     min_diameter_m: f64,
     rim_pixels: usize,
 ) -> Result<PatchDetection> {
+    detect_patches_with(map, &PatchOptions::new(min_diameter_m, rim_pixels))
+}
+
+/// Patches as [`detect_patches`], with shape limits against marks (see the module
+/// documentation).
+pub fn detect_patches_with(map: &FilmMap, opts: &PatchOptions) -> Result<PatchDetection> {
+    detect_components(map, opts, |c| {
+        matches!(c, PixelClass::InRange | PixelClass::AboveRange)
+    })
+}
+
+/// Stained regions entirely below the measuring range: components of below-range pixels of at
+/// least the minimum diameter that pass the shape test (for the message that says so when no
+/// pressure-bearing patch is found).
+pub fn detect_below_range(map: &FilmMap, opts: &PatchOptions) -> Result<PatchDetection> {
+    detect_components(
+        map,
+        &PatchOptions {
+            rim_pixels: 0,
+            ..*opts
+        },
+        |c| c == PixelClass::BelowRange,
+    )
+}
+
+fn detect_components(
+    map: &FilmMap,
+    opts: &PatchOptions,
+    seed: impl Fn(PixelClass) -> bool,
+) -> Result<PatchDetection> {
+    let (min_diameter_m, rim_pixels) = (opts.min_diameter_m, opts.rim_pixels);
     crate::error::require_positive("min_patch_diameter_m", min_diameter_m)?;
+    crate::error::require_positive("max_elongation", opts.max_elongation)?;
+    if !(opts.min_solidity.is_finite() && (0.0..=1.0).contains(&opts.min_solidity)) {
+        return Err(Error::param(
+            "min_solidity",
+            format!(
+                "must lie in [0, 1], got {}",
+                crate::error::num(opts.min_solidity)
+            ),
+        ));
+    }
     let (nx, ny) = map.dim();
-    let bearing = |i: usize, j: usize| {
-        matches!(
-            map.class[[i, j]],
-            PixelClass::InRange | PixelClass::AboveRange
-        )
-    };
+    let bearing = |i: usize, j: usize| seed(map.class[[i, j]]);
     let mut label = Array2::<usize>::zeros((nx, ny));
     let mut comps: Vec<Vec<(usize, usize)>> = Vec::new();
     // label: 0 = none, k = component k (1-based).
@@ -382,10 +533,17 @@ pub fn detect_patches(
             frontier = next;
         }
     }
-    let mut patches: Vec<Vec<(usize, usize)>> = kept
-        .iter()
-        .map(|(id, pix)| fill_holes(pix, &label, *id))
-        .collect();
+    let mut rejected_marks = 0;
+    let mut patches: Vec<Vec<(usize, usize)>> = Vec::with_capacity(kept.len());
+    for (id, pix) in &kept {
+        let filled = fill_holes(pix, &label, *id);
+        let (elongation, solidity) = shape(map, &filled);
+        if elongation > opts.max_elongation || solidity < opts.min_solidity {
+            rejected_marks += 1;
+        } else {
+            patches.push(filled);
+        }
+    }
     // Reading order: rows of patches from the top of the image (largest y first), left to right
     // within a row. A patch joins the current row when its centre lies less than the row's first
     // patch's equivalent diameter below it.
@@ -419,6 +577,7 @@ pub fn detect_patches(
             .map(|(k, pixels)| Region { id: k + 1, pixels })
             .collect(),
         discarded_small,
+        rejected_marks,
     })
 }
 

@@ -28,10 +28,31 @@
 //!
 //! Nonuniform profiles are resampled to their mean spacing by linear interpolation for the ACF
 //! and PSD only.
+//!
+//! ## Missing points
+//!
+//! A topography with missing points ([`crate::surface::missing`]) is analysed over its measured
+//! points, as SurfaceTopography 1.27 does (and reproduced to 1e-9 on files with missing points,
+//! tests/surface_missing.rs):
+//!
+//! - **Heights**: mean, Rq (its `Sq` for an area, `Rq` for a profile), Ra, Rsk, Rku over the
+//!   measured points only; `--detrend plane` fits the plane to the measured points.
+//! - **Slopes**: SurfaceTopography evaluates the difference `h(x+Δx) − h(x)` through its
+//!   piecewise-linear interpolant (on each grid cell split into a lower-left and an upper-right
+//!   triangle), whose zero weights still carry a NaN: a difference is missing when any point
+//!   of the triangle it is read from is missing, not only its two end points. The statistics
+//!   here evaluate the same interpolant at the same floating-point positions (`x_i = i·Lx/nx`
+//!   for areas, `x_i = i·Δx` for profiles), so the same differences are dropped; the rms is
+//!   taken over the remaining ones (for the gradient: the points where both components exist).
+//! - **ACF**: averaged over the pairs of measured points at each lag,
+//!   `C(δ) = Σ w(x)w(x+δ) h(x)h(x+δ) / Σ w(x)w(x+δ)` (w = 1 where measured), by FFT.
+//! - **PSD**: SurfaceTopography refuses it with missing points, and so does this module: fill
+//!   them first (`--fill harmonic|nearest`), and the PSD is that of the filled map.
 
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::halfspace::convolution::{Boundary, FftPlan};
+use crate::surface::missing::MaskedGrid;
 use crate::surface::topography::{Profile, Topography};
 use ndarray::{Array2, Axis};
 use std::f64::consts::PI;
@@ -76,6 +97,8 @@ pub struct SurfaceStats {
     pub nx: usize,
     /// Points along y (1 for a profile).
     pub ny: usize,
+    /// Missing points (not measured; excluded from every statistic).
+    pub missing_points: usize,
     /// Spacing along x (m); the mean spacing for a nonuniform profile.
     pub dx_m: f64,
     /// Spacing along y (m); `None` for a profile.
@@ -570,14 +593,32 @@ fn resample_uniform(x: &[f64], h: &[f64]) -> Vec<f64> {
 // Entry points
 // ---------------------------------------------------------------------------------------------
 
-fn check_not_flat(rq: f64) -> Result<()> {
-    if rq > 0.0 && rq.is_finite() {
-        Ok(())
-    } else {
-        Err(Error::Data(
-            "the topography is flat after detrending (Rq = 0): no statistics to compute".into(),
-        ))
+/// Refuse heights whose moments overflow, and a topography that is flat after detrending (its
+/// rms height is round-off of the largest height `max_abs`: Rsk, Rku would be noise).
+fn check_not_flat(rq: f64, rku: f64, max_abs: f64) -> Result<()> {
+    let overflow = !rq.is_finite() || !max_abs.is_finite() || rku.is_infinite();
+    if overflow {
+        return Err(Error::Data(format!(
+            "heights up to {} m overflow double precision in the statistics (the 4th power of \
+             a height must stay below 1.8e308): wrong unit?",
+            crate::error::num(max_abs)
+        )));
     }
+    if rq <= 64.0 * f64::EPSILON * max_abs || rq == 0.0 || rku.is_nan() {
+        return Err(Error::Data(format!(
+            "the topography is flat after detrending (Rq = {} m is round-off of heights up to \
+             {} m): no statistics to compute",
+            crate::error::num(rq),
+            crate::error::num(max_abs)
+        )));
+    }
+    Ok(())
+}
+
+/// Largest |height| of the measured (non-NaN) values.
+fn max_abs<'a>(h: impl Iterator<Item = &'a f64>) -> f64 {
+    h.filter(|v| !v.is_nan())
+        .fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
 /// Zero-mean, detrended uniform heights of a profile (resampled when nonuniform) for ACF / PSD.
@@ -591,7 +632,80 @@ fn uniform_profile_heights(p: &Profile, detrend: Detrend) -> Vec<f64> {
     }
 }
 
+/// Statistics of a profile from its moments `(Ra, Rq, Rsk, Rku)`, rms slope and ACF.
+fn profile_result(
+    p: &Profile,
+    detrend: Detrend,
+    (ra, rq, rsk, rku): (f64, f64, f64, f64),
+    slope: f64,
+    acf: &Acf,
+) -> SurfaceStats {
+    SurfaceStats {
+        kind: "profile",
+        uniform: p.is_uniform(),
+        periodic: p.periodic,
+        detrend,
+        nx: p.len(),
+        ny: 1,
+        missing_points: p.missing(),
+        dx_m: p.dx,
+        dy_m: None,
+        lx_m: p.length(),
+        ly_m: None,
+        ra_m: ra,
+        rq_m: rq,
+        rsk,
+        rku,
+        rms_slope: slope,
+        rms_slope_y: None,
+        rms_gradient: None,
+        correlation_length_1_over_e_m: acf.crossing((-1.0f64).exp()),
+        correlation_length_0_2_m: acf.crossing(0.2),
+        correlation_length_x_1_over_e_m: None,
+        correlation_length_y_1_over_e_m: None,
+    }
+}
+
+/// Statistics of an area (`nx × ny` points of spacing `dx × dy`, `missing` of them missing) from
+/// its moments, slopes `(x, y, gradient)` and ACFs `(radial, x, y)`.
+fn area_result(
+    (nx, ny, dx, dy, periodic, missing): (usize, usize, f64, f64, bool, usize),
+    detrend: Detrend,
+    (ra, rq, rsk, rku): (f64, f64, f64, f64),
+    (sx, sy, grad): (f64, f64, f64),
+    (radial, ax, ay): (&Acf, &Acf, &Acf),
+) -> SurfaceStats {
+    let e = (-1.0f64).exp();
+    SurfaceStats {
+        kind: "area",
+        uniform: true,
+        periodic,
+        detrend,
+        nx,
+        ny,
+        missing_points: missing,
+        dx_m: dx,
+        dy_m: Some(dy),
+        lx_m: nx as f64 * dx,
+        ly_m: Some(ny as f64 * dy),
+        ra_m: ra,
+        rq_m: rq,
+        rsk,
+        rku,
+        rms_slope: sx,
+        rms_slope_y: Some(sy),
+        rms_gradient: Some(grad),
+        correlation_length_1_over_e_m: radial.crossing(e),
+        correlation_length_0_2_m: radial.crossing(0.2),
+        correlation_length_x_1_over_e_m: ax.crossing(e),
+        correlation_length_y_1_over_e_m: ay.crossing(e),
+    }
+}
+
 fn profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
+    if p.missing() > 0 {
+        return masked_profile_stats(p, detrend);
+    }
     let (ra, rq, rsk, rku, slope) = match &p.positions {
         None => {
             let h = detrend_uniform_line(&p.heights, detrend);
@@ -612,31 +726,9 @@ fn profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
             (ra, rq, rsk, rku, (s / l).sqrt())
         }
     };
-    check_not_flat(rq)?;
+    check_not_flat(rq, rku, max_abs(p.heights.iter()))?;
     let acf = acf_profile(&uniform_profile_heights(p, detrend), p.dx, p.periodic);
-    Ok(SurfaceStats {
-        kind: "profile",
-        uniform: p.is_uniform(),
-        periodic: p.periodic,
-        detrend,
-        nx: p.len(),
-        ny: 1,
-        dx_m: p.dx,
-        dy_m: None,
-        lx_m: p.length(),
-        ly_m: None,
-        ra_m: ra,
-        rq_m: rq,
-        rsk,
-        rku,
-        rms_slope: slope,
-        rms_slope_y: None,
-        rms_gradient: None,
-        correlation_length_1_over_e_m: acf.crossing((-1.0f64).exp()),
-        correlation_length_0_2_m: acf.crossing(0.2),
-        correlation_length_x_1_over_e_m: None,
-        correlation_length_y_1_over_e_m: None,
-    })
+    Ok(profile_result(p, detrend, (ra, rq, rsk, rku), slope, &acf))
 }
 
 fn area_stats(g: &Grid2, detrend: Detrend) -> Result<SurfaceStats> {
@@ -648,33 +740,16 @@ fn area_stats(g: &Grid2, detrend: Detrend) -> Result<SurfaceStats> {
     }
     let h = detrend_area(&g.heights, detrend);
     let (ra, rq, rsk, rku) = sample_moments(h.iter());
-    check_not_flat(rq)?;
+    check_not_flat(rq, rku, max_abs(g.heights.iter()))?;
     let (sx, sy, grad) = rms_slopes_area(&h, g.dx, g.dy, g.periodic);
     let (radial, ax, ay) = acf_area(&h, g.dx, g.dy, g.periodic);
-    let e = (-1.0f64).exp();
-    Ok(SurfaceStats {
-        kind: "area",
-        uniform: true,
-        periodic: g.periodic,
+    Ok(area_result(
+        (nx, ny, g.dx, g.dy, g.periodic, 0),
         detrend,
-        nx,
-        ny,
-        dx_m: g.dx,
-        dy_m: Some(g.dy),
-        lx_m: g.lx(),
-        ly_m: Some(g.ly()),
-        ra_m: ra,
-        rq_m: rq,
-        rsk,
-        rku,
-        rms_slope: sx,
-        rms_slope_y: Some(sy),
-        rms_gradient: Some(grad),
-        correlation_length_1_over_e_m: radial.crossing(e),
-        correlation_length_0_2_m: radial.crossing(0.2),
-        correlation_length_x_1_over_e_m: ax.crossing(e),
-        correlation_length_y_1_over_e_m: ay.crossing(e),
-    })
+        (ra, rq, rsk, rku),
+        (sx, sy, grad),
+        (&radial, &ax, &ay),
+    ))
 }
 
 /// Statistics of a topography after removing the mean (or the plane).
@@ -682,12 +757,22 @@ pub fn stats(topo: &Topography, detrend: Detrend) -> Result<SurfaceStats> {
     match topo {
         Topography::Profile(p) => profile_stats(p, detrend),
         Topography::Area(g) => area_stats(g, detrend),
+        Topography::MaskedArea(m) => masked_area_stats(m, detrend),
     }
 }
 
-/// Power spectral density (radially averaged for areas) after detrending.
+/// Power spectral density (radially averaged for areas) after detrending. Refused when points
+/// are missing (fill them first, as SurfaceTopography requires).
 pub fn power_spectrum(topo: &Topography, detrend: Detrend) -> Result<Psd> {
+    let missing = topo.missing();
+    if missing > 0 {
+        return Err(Error::Data(format!(
+            "the power spectrum needs every point and {missing} are missing: fill them first \
+             (--fill harmonic or --fill nearest)"
+        )));
+    }
     match topo {
+        Topography::MaskedArea(_) => unreachable!("no missing points"),
         Topography::Profile(p) => Ok(psd_profile(
             &uniform_profile_heights(p, detrend),
             p.dx,
@@ -705,6 +790,14 @@ pub fn power_spectrum(topo: &Topography, detrend: Detrend) -> Result<Psd> {
 /// Radially averaged (area) or one-sided (profile) normalised autocorrelation function.
 pub fn autocorrelation(topo: &Topography, detrend: Detrend) -> Acf {
     match topo {
+        Topography::MaskedArea(m) => {
+            let h = masked_detrend(&m.heights, detrend);
+            acf_area_masked(&h, m.dx, m.dy, m.periodic).0
+        }
+        Topography::Profile(p) if p.missing() > 0 => {
+            let h = masked_detrend(&profile_column(&p.heights), detrend);
+            acf_profile_masked(&h, p.dx, p.periodic)
+        }
         Topography::Profile(p) => {
             acf_profile(&uniform_profile_heights(p, detrend), p.dx, p.periodic)
         }
@@ -712,6 +805,292 @@ pub fn autocorrelation(topo: &Topography, detrend: Detrend) -> Acf {
             acf_area(&detrend_area(&g.heights, detrend), g.dx, g.dy, g.periodic).0
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Missing points (SurfaceTopography's definitions; see the module documentation)
+// ---------------------------------------------------------------------------------------------
+
+/// A profile's heights as an `n × 1` array.
+fn profile_column(h: &[f64]) -> Array2<f64> {
+    Array2::from_shape_vec((h.len(), 1), h.to_vec()).expect("shape matches")
+}
+
+/// Heights with the mean (or the least-squares plane) of the measured points removed; missing
+/// points stay NaN. Works for profiles (`ny == 1`) too.
+fn masked_detrend(h: &Array2<f64>, detrend: Detrend) -> Array2<f64> {
+    let pts: Vec<(f64, f64, f64)> = h
+        .indexed_iter()
+        .filter(|(_, v)| !v.is_nan())
+        .map(|((i, j), &v)| (i as f64, j as f64, v))
+        .collect();
+    let n = pts.len() as f64;
+    let mean = pts.iter().map(|p| p.2).sum::<f64>() / n;
+    match detrend {
+        Detrend::Mean => h.mapv(|v| v - mean),
+        Detrend::Plane => {
+            let (xm, ym) = (
+                pts.iter().map(|p| p.0).sum::<f64>() / n,
+                pts.iter().map(|p| p.1).sum::<f64>() / n,
+            );
+            let (mut sxx, mut sxy, mut syy, mut sxh, mut syh) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for &(x, y, v) in &pts {
+                let (a, b, c) = (x - xm, y - ym, v - mean);
+                sxx += a * a;
+                sxy += a * b;
+                syy += b * b;
+                sxh += a * c;
+                syh += b * c;
+            }
+            let det = sxx * syy - sxy * sxy;
+            let (bx, by) = if det > 1e-12 * (sxx * syy).max(f64::MIN_POSITIVE) {
+                ((sxh * syy - syh * sxy) / det, (syh * sxx - sxh * sxy) / det)
+            } else if sxx > 0.0 {
+                (sxh / sxx, 0.0)
+            } else if syy > 0.0 {
+                (0.0, syh / syy)
+            } else {
+                (0.0, 0.0)
+            };
+            Array2::from_shape_fn(h.dim(), |(i, j)| {
+                h[[i, j]] - mean - bx * (i as f64 - xm) - by * (j as f64 - ym)
+            })
+        }
+    }
+}
+
+/// SurfaceTopography's piecewise-linear interpolant of an area at `(x, y)` (its
+/// `interpolate_linear`, periodic wrap): each cell split into a lower-left and an upper-right
+/// triangle; NaN wherever a point of the triangle is NaN, whatever its weight.
+fn st_linear_2d(h: &Array2<f64>, px: f64, py: f64, x: f64, y: f64) -> f64 {
+    let (nx, ny) = h.dim();
+    let (sx, sy) = (x / px, y / py);
+    let (fx0, fy0) = (sx.floor(), sy.floor());
+    let (fx, fy) = (sx - fx0, sy - fy0);
+    let ix = (fx0 as i64).rem_euclid(nx as i64) as usize;
+    let iy = (fy0 as i64).rem_euclid(ny as i64) as usize;
+    let (ix1, iy1) = ((ix + 1) % nx, (iy + 1) % ny);
+    if fx + fy > 1.0 {
+        (fx + fy - 1.0) * h[[ix1, iy1]] + (1.0 - fx) * h[[ix, iy1]] + (1.0 - fy) * h[[ix1, iy]]
+    } else {
+        (1.0 - fx - fy) * h[[ix, iy]] + fx * h[[ix1, iy]] + fy * h[[ix, iy1]]
+    }
+}
+
+/// SurfaceTopography's linear interpolant of a profile at `x` (periodic wrap).
+fn st_linear_1d(h: &[f64], px: f64, x: f64) -> f64 {
+    let n = h.len();
+    let s = x / px;
+    let f0 = s.floor();
+    let f = s - f0;
+    let i = (f0 as i64).rem_euclid(n as i64) as usize;
+    (1.0 - f) * h[i] + f * h[(i + 1) % n]
+}
+
+/// RMS of the finite values (NaN = missing difference).
+fn rms_finite(v: impl Iterator<Item = f64>) -> f64 {
+    let (s, n) = v
+        .filter(|x| x.is_finite())
+        .fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
+    (s / n as f64).sqrt()
+}
+
+/// Upwind differences of an area with missing points, as SurfaceTopography computes them
+/// (`derivative(1)` with linear interpolation): `(∂h/∂x, ∂h/∂y)` at the points `i < nx−1,
+/// j < ny−1` (all points when periodic), NaN where missing.
+fn masked_slopes_area(h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> (Vec<f64>, Vec<f64>) {
+    let (nx, ny) = h.dim();
+    let (sx, sy) = (nx as f64 * dx, ny as f64 * dy);
+    let (px, py) = (sx / nx as f64, sy / ny as f64);
+    let (mx, my) = if periodic { (nx, ny) } else { (nx - 1, ny - 1) };
+    let (mut gx, mut gy) = (Vec::with_capacity(mx * my), Vec::with_capacity(mx * my));
+    for i in 0..mx {
+        let x = i as f64 * sx / nx as f64;
+        for j in 0..my {
+            let y = j as f64 * sy / ny as f64;
+            let l0 = st_linear_2d(h, px, py, x + 0.0, y + 0.0);
+            let lx = st_linear_2d(h, px, py, x + px, y + 0.0);
+            let ly = st_linear_2d(h, px, py, x + 0.0, y + py);
+            gx.push((-l0 + lx) / px);
+            gy.push((-l0 + ly) / py);
+        }
+    }
+    (gx, gy)
+}
+
+/// Upwind differences of a profile with missing points (SurfaceTopography's `derivative(1)`):
+/// `n − 1` values (n when periodic), NaN where missing.
+fn masked_slopes_profile(h: &[f64], dx: f64, periodic: bool) -> Vec<f64> {
+    let n = h.len();
+    let px = n as f64 * dx / n as f64;
+    let m = if periodic { n } else { n - 1 };
+    (0..m)
+        .map(|i| {
+            let x = i as f64 * px;
+            (-st_linear_1d(h, px, x + 0.0) + st_linear_1d(h, px, x + px)) / px
+        })
+        .collect()
+}
+
+/// Raw correlation sums of `a` (see [`autocorrelation_sums`]), rounded when `count` (pair
+/// counts are integers).
+fn sums(a: &Array2<f64>, boundary: Boundary, count: bool) -> Array2<f64> {
+    let s = autocorrelation_sums(a, boundary);
+    if count {
+        s.mapv(f64::round)
+    } else {
+        s
+    }
+}
+
+/// Normalised ACF of a profile with missing points: pair-averaged products, lags up to `n/2`.
+fn acf_profile_masked(h: &Array2<f64>, dx: f64, periodic: bool) -> Acf {
+    let n = h.len();
+    let g = Array2::from_shape_fn((1, n), |(_, i)| {
+        let v = h[[i, 0]];
+        if v.is_nan() {
+            0.0
+        } else {
+            v
+        }
+    });
+    let w = Array2::from_shape_fn((1, n), |(_, i)| f64::from(u8::from(!h[[i, 0]].is_nan())));
+    let boundary = if periodic {
+        Boundary::Periodic
+    } else {
+        Boundary::ZeroPadded
+    };
+    let (sg, sw) = (sums(&g, boundary, false), sums(&w, boundary, true));
+    let c0 = sg[[0, 0]] / sw[[0, 0]];
+    let (mut r, mut c) = (Vec::new(), Vec::new());
+    for k in 0..=n / 2 {
+        if sw[[0, k]] >= 0.5 {
+            r.push(k as f64 * dx);
+            c.push(sg[[0, k]] / sw[[0, k]] / c0);
+        }
+    }
+    Acf { r, c }
+}
+
+/// Normalised ACF of an area with missing points (zero-mean heights, NaN missing): radially
+/// averaged, and along the x and y axes; each lag averages the products of the pairs of measured
+/// points at that lag.
+fn acf_area_masked(h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> (Acf, Acf, Acf) {
+    let (nx, ny) = h.dim();
+    let g = h.mapv(|v| if v.is_nan() { 0.0 } else { v });
+    let w = h.mapv(|v| f64::from(u8::from(!v.is_nan())));
+    let r_max = 0.5 * (nx as f64 * dx).min(ny as f64 * dy);
+    let mut bins = RadialBins::new(dx.min(dy), r_max);
+    let (hx, hy) = (nx / 2, ny / 2);
+    let axis = |s: &Array2<f64>, c: &Array2<f64>, c0: f64, along_x: bool| -> Acf {
+        let (mut r, mut v) = (Vec::new(), Vec::new());
+        let m = if along_x { hx } else { hy };
+        for k in 0..=m {
+            let (a, b) = if along_x { (k, 0) } else { (0, k) };
+            if c[[a, b]] >= 0.5 {
+                r.push(k as f64 * if along_x { dx } else { dy });
+                v.push(s[[a, b]] / c[[a, b]] / c0);
+            }
+        }
+        Acf { r, c: v }
+    };
+    let boundary = if periodic {
+        Boundary::Periodic
+    } else {
+        Boundary::ZeroPadded
+    };
+    let (s, c) = (sums(&g, boundary, false), sums(&w, boundary, true));
+    let c0 = s[[0, 0]] / c[[0, 0]];
+    if periodic {
+        for ((i, j), v) in s.indexed_iter() {
+            if c[[i, j]] < 0.5 {
+                continue;
+            }
+            let di = if i <= hx {
+                i as f64
+            } else {
+                i as f64 - nx as f64
+            };
+            let dj = if j <= hy {
+                j as f64
+            } else {
+                j as f64 - ny as f64
+            };
+            bins.add((di * dx).hypot(dj * dy), v / c[[i, j]] / c0, 1);
+        }
+    } else {
+        let mut gf = g.clone();
+        gf.invert_axis(Axis(1));
+        let mut wf = w.clone();
+        wf.invert_axis(Axis(1));
+        let sf = sums(&gf.as_standard_layout().into_owned(), boundary, false);
+        let cf = sums(&wf.as_standard_layout().into_owned(), boundary, true);
+        for i in 0..nx {
+            for j in 0..ny {
+                let r = (i as f64 * dx).hypot(j as f64 * dy);
+                if r > r_max + dx.min(dy) {
+                    continue;
+                }
+                let wgt = if i == 0 && j == 0 { 1 } else { 2 };
+                if c[[i, j]] >= 0.5 {
+                    bins.add(r, s[[i, j]] / c[[i, j]] / c0, wgt);
+                }
+                if i > 0 && j > 0 && cf[[i, j]] >= 0.5 {
+                    bins.add(r, sf[[i, j]] / cf[[i, j]] / c0, 2);
+                }
+            }
+        }
+    }
+    let ax = axis(&s, &c, c0, true);
+    let ay = axis(&s, &c, c0, false);
+    let radial = bins.finish();
+    (
+        Acf {
+            r: radial.iter().map(|b| b.0).collect(),
+            c: radial.iter().map(|b| b.1).collect(),
+        },
+        ax,
+        ay,
+    )
+}
+
+fn masked_profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
+    let h = masked_detrend(&profile_column(&p.heights), detrend);
+    let (ra, rq, rsk, rku) = sample_moments(h.iter().filter(|v| !v.is_nan()));
+    check_not_flat(rq, rku, max_abs(p.heights.iter()))?;
+    let hv: Vec<f64> = h.iter().copied().collect();
+    let slope = rms_finite(masked_slopes_profile(&hv, p.dx, p.periodic).into_iter());
+    let acf = acf_profile_masked(&h, p.dx, p.periodic);
+    Ok(profile_result(p, detrend, (ra, rq, rsk, rku), slope, &acf))
+}
+
+fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
+    let (nx, ny) = (m.nx(), m.ny());
+    if nx < 2 || ny < 2 {
+        return Err(Error::Data(format!(
+            "an area needs at least 2 × 2 points, got {nx} × {ny}"
+        )));
+    }
+    let h = masked_detrend(&m.heights, detrend);
+    let (ra, rq, rsk, rku) = sample_moments(h.iter().filter(|v| !v.is_nan()));
+    check_not_flat(rq, rku, max_abs(m.heights.iter()))?;
+    let (gx, gy) = masked_slopes_area(&h, m.dx, m.dy, m.periodic);
+    let sx = rms_finite(gx.iter().copied());
+    let sy = rms_finite(gy.iter().copied());
+    let grad = rms_finite(gx.iter().zip(&gy).map(|(a, b)| (a * a + b * b).sqrt()));
+    if !(sx.is_finite() && sy.is_finite() && grad.is_finite()) {
+        return Err(Error::Data(
+            "no two neighbouring points are both measured: slopes cannot be computed".into(),
+        ));
+    }
+    let (radial, ax, ay) = acf_area_masked(&h, m.dx, m.dy, m.periodic);
+    Ok(area_result(
+        (nx, ny, m.dx, m.dy, m.periodic, m.missing()),
+        detrend,
+        (ra, rq, rsk, rku),
+        (sx, sy, grad),
+        (&radial, &ax, &ay),
+    ))
 }
 
 #[cfg(test)]

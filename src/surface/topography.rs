@@ -1,7 +1,9 @@
-//! What the readers return and the statistics work on: a 1-D profile or a 2-D height map.
+//! What the readers return and the statistics work on: a 1-D profile or a 2-D height map,
+//! complete or with missing points (see [`crate::surface::missing`]).
 
 use crate::error::{require_positive, Error, Result};
 use crate::grid::Grid2;
+use crate::surface::missing::MaskedGrid;
 
 /// A line scan: heights (m) at `x = i·dx` (uniform) or at measured positions (nonuniform, e.g.
 /// a stylus profiler that writes rounded lateral positions).
@@ -41,6 +43,36 @@ impl Profile {
             positions: None,
             periodic,
         })
+    }
+
+    /// Build a uniform profile whose missing samples are `NaN` (a measurement with dropouts):
+    /// infinite values are errors, and at least 2 samples must be measured.
+    pub fn with_missing(heights: Vec<f64>, dx: f64, periodic: bool) -> Result<Self> {
+        require_positive("dx", dx)?;
+        if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| v.is_infinite()) {
+            return Err(Error::param(
+                "heights",
+                format!("infinite value {v} at sample {i}"),
+            ));
+        }
+        let measured = heights.iter().filter(|v| !v.is_nan()).count();
+        if measured < 2 {
+            return Err(Error::param(
+                "heights",
+                format!("a profile needs at least 2 measured points, got {measured}"),
+            ));
+        }
+        Ok(Self {
+            heights,
+            dx,
+            positions: None,
+            periodic,
+        })
+    }
+
+    /// Number of missing (NaN) samples.
+    pub fn missing(&self) -> usize {
+        self.heights.iter().filter(|v| v.is_nan()).count()
     }
 
     /// Build a nonuniform profile from positions and heights (m). Positions are shifted to start
@@ -115,19 +147,17 @@ impl Profile {
 pub enum Topography {
     /// 1-D line scan.
     Profile(Profile),
-    /// 2-D height map.
+    /// 2-D height map, every point measured.
     Area(Grid2),
+    /// 2-D height map with missing points (NaN).
+    MaskedArea(MaskedGrid),
 }
 
 impl Topography {
-    /// The 2-D height map, or an error saying a profile cannot be used where an area is needed.
+    /// The complete 2-D height map, or an error saying a profile cannot be used where an area
+    /// is needed, or that points are missing (with the `--fill` flag that fills them).
     pub fn into_area(self, what: &str) -> Result<Grid2> {
-        match self {
-            Topography::Area(g) => Ok(g),
-            Topography::Profile(_) => Err(Error::Data(format!(
-                "{what}: a 2-D height map is needed, got a 1-D profile"
-            ))),
-        }
+        crate::surface::missing::complete_area(self, what, None).map(|(g, _)| g)
     }
 
     /// Whether the topography is periodic.
@@ -135,6 +165,31 @@ impl Topography {
         match self {
             Topography::Profile(p) => p.periodic,
             Topography::Area(g) => g.periodic,
+            Topography::MaskedArea(m) => m.periodic,
+        }
+    }
+
+    /// A height map from a reader: [`Topography::MaskedArea`] when any height is NaN (a
+    /// missing point), [`Topography::Area`] otherwise; checked by the grid constructors.
+    pub fn from_heights(
+        heights: ndarray::Array2<f64>,
+        dx: f64,
+        dy: f64,
+        periodic: bool,
+    ) -> Result<Self> {
+        if heights.iter().any(|v| v.is_nan()) {
+            MaskedGrid::new(heights, dx, dy, periodic).map(Topography::MaskedArea)
+        } else {
+            Grid2::new(heights, dx, dy, periodic).map(Topography::Area)
+        }
+    }
+
+    /// Number of missing points (0 for a complete topography).
+    pub fn missing(&self) -> usize {
+        match self {
+            Topography::Profile(p) => p.missing(),
+            Topography::Area(_) => 0,
+            Topography::MaskedArea(m) => m.missing(),
         }
     }
 }

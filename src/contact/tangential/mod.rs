@@ -260,7 +260,7 @@ impl TangentialSolver {
         }
         let dx = require_positive("dx", problem.dx)?;
         let dy = require_positive("dy", problem.dy)?;
-        require_positive("tolerance", options.tolerance)?;
+        crate::sanity::tolerance("tolerance", options.tolerance)?;
         if options.max_iterations == 0 {
             return Err(Error::param("max_iterations", "must be at least 1"));
         }

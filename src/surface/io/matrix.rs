@@ -8,7 +8,9 @@
 //! ```
 //!
 //! `unit` is the unit of the heights (`m`, `mm`, `um`, `nm`); `dx_m`, `dy_m` are the grid
-//! spacings in metres; `periodic` is optional (default false). As in Gwyddion and
+//! spacings in metres; `periodic` is optional (default false). A missing point is written
+//! `nan` (any case); a matrix with missing points is read as a
+//! [`MaskedGrid`](crate::surface::missing::MaskedGrid). As in Gwyddion and
 //! SurfaceTopography, each text row holds the heights at successive x for one y. The writer
 //! prints every value with Rust's shortest round-trip representation, so a written matrix reads
 //! back bit for bit.
@@ -16,8 +18,9 @@
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::output::write_atomic;
-use crate::surface::io::text::{comment_pairs, fields, number, numbered_lines};
+use crate::surface::io::text::{comment_pairs, fields, height_or_missing, number, numbered_lines};
 use crate::surface::io::units::metres_per_unit;
+use crate::surface::topography::Topography;
 use ndarray::Array2;
 use std::path::Path;
 
@@ -32,7 +35,7 @@ pub fn detect(text: &str) -> bool {
 }
 
 /// Read a height matrix (see the module documentation).
-pub fn read(path: &Path, text: &str) -> Result<Grid2> {
+pub fn read(path: &Path, text: &str) -> Result<Topography> {
     let (mut unit, mut dx, mut dy, mut periodic) = (None, None, None, false);
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let mut first_row_line = 0;
@@ -76,7 +79,7 @@ pub fn read(path: &Path, text: &str) -> Result<Grid2> {
         let row = f
             .iter()
             .enumerate()
-            .map(|(c, s)| number(path, ln, c + 1, s))
+            .map(|(c, s)| height_or_missing(path, ln, c + 1, s))
             .collect::<Result<Vec<f64>>>()?;
         rows.push(row);
     }
@@ -95,35 +98,37 @@ pub fn read(path: &Path, text: &str) -> Result<Grid2> {
     }
     let (ny, nx) = (rows.len(), rows[0].len());
     let heights = Array2::from_shape_fn((nx, ny), |(i, j)| rows[j][i] * unit);
-    Grid2::new(heights, dx, dy, periodic).map_err(|e| Error::parse(path, 0, e.to_string()))
+    Topography::from_heights(heights, dx, dy, periodic)
+        .map_err(|e| Error::parse(path, 0, e.to_string()))
 }
 
 /// Write a height matrix (comma-separated, heights in m) atomically.
 pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
+    write_values(path, &grid.heights, grid.dx, grid.dy, grid.periodic)
+}
+
+/// Write heights (m; NaN written `NaN`: a missing point) as a matrix, atomically.
+pub fn write_values(path: &Path, h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> Result<()> {
+    let (nx, ny) = h.dim();
     write_atomic(path, |w| {
         let io = |e| Error::io(path, e);
         writeln!(w, "# asperity height matrix").map_err(io)?;
-        writeln!(
-            w,
-            "# unit: m, dx_m: {}, dy_m: {}, periodic: {}",
-            grid.dx, grid.dy, grid.periodic
-        )
-        .map_err(io)?;
+        writeln!(w, "# unit: m, dx_m: {dx}, dy_m: {dy}, periodic: {periodic}").map_err(io)?;
         writeln!(
             w,
             "# rows: y (j = 0..{}), columns: x (i = 0..{})",
-            grid.ny() - 1,
-            grid.nx() - 1
+            ny - 1,
+            nx - 1
         )
         .map_err(io)?;
         let mut line = String::new();
-        for j in 0..grid.ny() {
+        for j in 0..ny {
             line.clear();
-            for i in 0..grid.nx() {
+            for i in 0..nx {
                 if i > 0 {
                     line.push(',');
                 }
-                line.push_str(&format!("{:?}", grid.heights[[i, j]]));
+                line.push_str(&format!("{:?}", h[[i, j]]));
             }
             line.push('\n');
             w.write_all(line.as_bytes()).map_err(io)?;

@@ -9,6 +9,11 @@
 //! | text with a `# unit: …, dx_m: …, dy_m: …` header | area | area (`.csv`, `.txt`, `.asc`) | height matrix |
 //! | other text | profile | — | CSV / whitespace columns with a header naming units |
 //! | `.png` | — | area | height image with a colour bar |
+//!
+//! Missing points (NaN heights, the x3p validity mask, `nan` in text) are kept: such a map is
+//! read as [`Topography::MaskedArea`] (a profile keeps NaN samples) and written back with its
+//! missing points by [`write_topography`] (see [`crate::surface::missing`]). Text files larger
+//! than [`crate::limits::MAX_TEXT_FILE_BYTES`] are refused before they are read.
 
 pub mod dektak;
 pub mod matrix;
@@ -33,8 +38,8 @@ fn extension(path: &Path) -> String {
 /// Read a topography, choosing the reader from the extension and, for text, the content.
 pub fn read(path: &Path) -> Result<Topography> {
     match extension(path).as_str() {
-        "npy" => npy::read(path).map(Topography::Area),
-        "x3p" => x3p::read(path).map(Topography::Area),
+        "npy" => npy::read_topography(path),
+        "x3p" => x3p::read_topography(path),
         "png" | "jpg" | "jpeg" | "tif" | "tiff" | "zip" | "json" => Err(Error::parse(
             path,
             0,
@@ -57,7 +62,7 @@ pub fn read(path: &Path) -> Result<Topography> {
             if dektak::detect(&text) {
                 dektak::read(path, &text).map(Topography::Profile)
             } else if matrix::detect(&text) {
-                matrix::read(path, &text).map(Topography::Area)
+                matrix::read(path, &text)
             } else {
                 profile_text::read(path, &text).map(Topography::Profile)
             }
@@ -86,6 +91,43 @@ pub fn check_writable_format(path: &Path) -> Result<()> {
                     .join(", ")
             ),
         ))
+    }
+}
+
+/// Write an area (complete or with missing points), choosing the format from the extension.
+/// Missing points are written as NaN (`.npy`, matrix text, x3p with its validity mask) and
+/// left blank in a `.png`. A profile cannot be written.
+pub fn write_topography(path: &Path, topo: &Topography) -> Result<()> {
+    match topo {
+        Topography::Area(g) => write(path, g),
+        Topography::MaskedArea(m) => {
+            check_writable_format(path)?;
+            match extension(path).as_str() {
+                "npy" => npy::write_field(path, &m.heights, m.dx, m.dy, m.periodic, "m", None),
+                "x3p" => x3p::write_masked(path, m),
+                "png" => crate::plot::heatmap(
+                    path,
+                    &m.heights,
+                    m.dx,
+                    m.dy,
+                    &crate::plot::HeatMap {
+                        title: "height map (blank: missing points)",
+                        value_label: "height (µm)",
+                        value_scale: 1e6,
+                        length_scale: 1e6,
+                        length_unit: "µm",
+                    },
+                ),
+                _ => matrix::write_values(path, &m.heights, m.dx, m.dy, m.periodic),
+            }
+        }
+        Topography::Profile(_) => Err(Error::param(
+            "output",
+            format!(
+                "cannot write `{}`: profiles are read, not written",
+                path.display()
+            ),
+        )),
     }
 }
 

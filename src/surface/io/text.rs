@@ -5,7 +5,9 @@ use crate::error::{Error, Result};
 use std::path::Path;
 
 /// Read a text file as UTF-8, falling back to Latin-1 (instrument exports often use it for `µ`).
+/// Files above [`crate::limits::MAX_TEXT_FILE_BYTES`] are refused before they are read.
 pub fn read_text(path: &Path) -> Result<String> {
+    crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     Ok(match String::from_utf8(bytes) {
         Ok(s) => s,
@@ -49,6 +51,16 @@ pub fn number(path: &Path, line: usize, col: usize, field: &str) -> Result<f64> 
         ));
     }
     Ok(v)
+}
+
+/// Parse a height field that may be missing: `nan`/`NaN` (any case) is a missing point (NaN);
+/// everything else as [`number`].
+pub fn height_or_missing(path: &Path, line: usize, col: usize, field: &str) -> Result<f64> {
+    if field.eq_ignore_ascii_case("nan") {
+        Ok(f64::NAN)
+    } else {
+        number(path, line, col, field)
+    }
 }
 
 /// Whether every field of a line parses as a number.

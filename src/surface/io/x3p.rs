@@ -11,13 +11,25 @@
 //!   `(i·dx, j·dy)`; its length must be exactly `SizeX·SizeY·size(DataType)`. When
 //!   `MD5ChecksumPointData` is given it must match the data.
 //!
-//! Heights are in metres. Missing points (NaN) are an error: fill them before the analysis. The
-//! format has no notion of periodicity; the writer records a periodic patch as the comment
-//! `asperity:periodic` in `Record2/Comment`, which the reader honours.
+//! - Missing points: a NaN height (float types), or a clear bit in the validity mask
+//!   `Record3/DataLink/ValidPointsLink` (`bindata/valid.bin`: one bit per point in the order of
+//!   the heights, least-significant bit first, 1 = valid, `⌈SizeX·SizeY/8⌉` bytes; checked
+//!   against `MD5ChecksumValidPoints` when given). Such a map is read as a
+//!   [`MaskedGrid`](crate::surface::missing::MaskedGrid); the writer writes NaN heights and the
+//!   validity mask for it.
+//! - Limits: `SizeX·SizeY` is checked against [`crate::limits::MAX_GRID_POINTS`] and the memory
+//!   available, and every entry is read with at most the bytes `main.xml` promises, before
+//!   anything is allocated for it.
+//!
+//! Heights are in metres. The format has no notion of periodicity; the writer records a
+//! periodic patch as the comment `asperity:periodic` in `Record2/Comment`, which the reader
+//! honours.
 
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::output::write_atomic_via_path;
+use crate::surface::missing::MaskedGrid;
+use crate::surface::topography::Topography;
 use md5::{Digest, Md5};
 use ndarray::Array2;
 use quick_xml::events::Event;
@@ -76,6 +88,8 @@ struct Description {
     z_offset: f64,
     link: String,
     md5: Option<String>,
+    valid_link: Option<String>,
+    valid_md5: Option<String>,
     periodic: bool,
 }
 
@@ -169,6 +183,11 @@ fn describe(path: &Path, t: &HashMap<String, String>) -> Result<Description> {
         z_offset: opt("Record1/Axes/CZ/Offset", 0.0)?,
         link: get("Record3/DataLink/PointDataLink")?.to_string(),
         md5: t.get("Record3/DataLink/MD5ChecksumPointData").cloned(),
+        valid_link: t
+            .get("Record3/DataLink/ValidPointsLink")
+            .filter(|l| !l.is_empty())
+            .cloned(),
+        valid_md5: t.get("Record3/DataLink/MD5ChecksumValidPoints").cloned(),
         periodic: t
             .get("Record2/Comment")
             .is_some_and(|c| c.contains(PERIODIC_MARK)),
@@ -193,84 +212,144 @@ fn decode(data_type: char, b: &[u8]) -> f64 {
     }
 }
 
-/// Read an x3p file.
-pub fn read(path: &Path) -> Result<Grid2> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut zip = zip::ZipArchive::new(file)
-        .map_err(|e| Error::parse(path, 0, format!("not a valid x3p (zip) archive: {e}")))?;
-    let mut xml = String::new();
-    zip.by_name("main.xml")
-        .map_err(|e| Error::parse(path, 0, format!("x3p archive has no main.xml: {e}")))?
-        .read_to_string(&mut xml)
-        .map_err(|e| Error::parse(path, 0, format!("reading main.xml: {e}")))?;
-    let d = describe(path, &xml_texts(path, &xml)?)?;
-    let expected =
-        d.nx.checked_mul(d.ny)
-            .and_then(|n| n.checked_mul(bytes_per_value(d.data_type)))
-            .ok_or_else(|| Error::parse(path, 0, "x3p matrix dimensions overflow"))?;
-    let mut entry = zip.by_name(&d.link).map_err(|e| {
+/// Read at most `limit` bytes of the archive entry `name` (its declared size must equal
+/// `expected` when given).
+fn read_entry(
+    path: &Path,
+    zip: &mut zip::ZipArchive<std::fs::File>,
+    name: &str,
+    what: &str,
+    expected: Option<u64>,
+    limit: u64,
+) -> Result<Vec<u8>> {
+    let entry = zip.by_name(name).map_err(|e| {
         Error::parse(
             path,
             0,
-            format!("x3p point data `{}` missing from the archive: {e}", d.link),
+            format!("x3p {what} `{name}` missing from the archive: {e}"),
         )
     })?;
-    if entry.size() != expected as u64 {
-        return Err(Error::parse(
-            path,
-            0,
-            format!(
-                "x3p point data `{}` has {} bytes, but SizeX × SizeY × {} bytes ({} × {} × {}) = {expected}: \
-                 truncated or inconsistent",
-                d.link,
-                entry.size(),
-                d.data_type,
-                d.nx,
-                d.ny,
-                bytes_per_value(d.data_type)
-            ),
-        ));
+    if let Some(want) = expected {
+        if entry.size() != want {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "x3p {what} `{name}` has {} bytes, but main.xml promises {want}: truncated or \
+                     inconsistent",
+                    entry.size()
+                ),
+            ));
+        }
     }
-    let mut bin = Vec::with_capacity(expected);
+    let mut buf = Vec::with_capacity(entry.size().min(limit) as usize);
     entry
-        .read_to_end(&mut bin)
-        .map_err(|e| Error::parse(path, 0, format!("reading x3p point data `{}`: {e}", d.link)))?;
-    if bin.len() != expected {
-        return Err(Error::parse(
-            path,
-            0,
-            format!(
-                "x3p point data truncated: {} of {expected} bytes",
-                bin.len()
-            ),
+        .take(limit + 1)
+        .read_to_end(&mut buf)
+        .map_err(|e| Error::parse(path, 0, format!("reading x3p {what} `{name}`: {e}")))?;
+    if buf.len() as u64 > limit {
+        return Err(Error::limit(
+            path.display().to_string(),
+            format!("x3p {what} `{name}` holds more than {limit} bytes"),
         ));
     }
-    if let Some(want) = &d.md5 {
-        let got = format!("{:x}", Md5::digest(&bin));
+    if let Some(want) = expected {
+        if buf.len() as u64 != want {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "x3p {what} `{name}` truncated: {} of {want} bytes",
+                    buf.len()
+                ),
+            ));
+        }
+    }
+    Ok(buf)
+}
+
+/// Check an MD5 checksum given in main.xml.
+fn check_md5(path: &Path, bytes: &[u8], want: Option<&String>, what: &str) -> Result<()> {
+    if let Some(want) = want {
+        let got = format!("{:x}", Md5::digest(bytes));
         if !got.eq_ignore_ascii_case(want.trim()) {
             return Err(Error::parse(
                 path,
                 0,
-                format!("x3p point data MD5 {got} does not match MD5ChecksumPointData {want}: corrupted"),
+                format!("x3p {what} MD5 {got} does not match main.xml's {want}: corrupted"),
             ));
         }
     }
+    Ok(())
+}
+
+/// Read an x3p file: a complete height map, or one with missing points.
+pub fn read_topography(path: &Path) -> Result<Topography> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut zip = zip::ZipArchive::new(file)
+        .map_err(|e| Error::parse(path, 0, format!("not a valid x3p (zip) archive: {e}")))?;
+    let xml = read_entry(
+        path,
+        &mut zip,
+        "main.xml",
+        "description",
+        None,
+        crate::limits::MAX_XML_BYTES,
+    )?;
+    let xml = String::from_utf8(xml)
+        .map_err(|e| Error::parse(path, 0, format!("main.xml is not UTF-8: {e}")))?;
+    let d = describe(path, &xml_texts(path, &xml)?)?;
+    crate::limits::check_grid(
+        &path.display().to_string(),
+        d.nx,
+        d.ny,
+        crate::limits::STATS_BYTES_PER_POINT,
+    )?;
+    let n = d.nx * d.ny;
     let w = bytes_per_value(d.data_type);
+    let expected = (n * w) as u64;
+    let bin = read_entry(
+        path,
+        &mut zip,
+        &d.link,
+        "point data",
+        Some(expected),
+        expected,
+    )?;
+    check_md5(path, &bin, d.md5.as_ref(), "point data")?;
+    let valid: Option<Vec<u8>> = match &d.valid_link {
+        None => None,
+        Some(link) => {
+            let bytes = n.div_ceil(8) as u64;
+            let v = read_entry(path, &mut zip, link, "validity mask", Some(bytes), bytes)?;
+            check_md5(path, &v, d.valid_md5.as_ref(), "validity mask")?;
+            Some(v)
+        }
+    };
     let mut heights = Array2::<f64>::zeros((d.nx, d.ny));
     for (k, chunk) in bin.chunks_exact(w).enumerate() {
         let (i, j) = (k % d.nx, k / d.nx);
-        heights[[i, j]] = d.z_offset + d.z_scale * decode(d.data_type, chunk);
+        let is_valid = valid.as_ref().is_none_or(|v| v[k / 8] >> (k % 8) & 1 == 1);
+        heights[[i, j]] = if is_valid {
+            d.z_offset + d.z_scale * decode(d.data_type, chunk)
+        } else {
+            f64::NAN
+        };
     }
-    if let Some(((i, j), v)) = heights.indexed_iter().find(|(_, v)| !v.is_finite()) {
+    if let Some(((i, j), v)) = heights.indexed_iter().find(|(_, v)| v.is_infinite()) {
         return Err(Error::parse(
             path,
             0,
-            format!(
-                "x3p height at point ({i}, {j}) is {v} (missing data); fill missing points first"
-            ),
+            format!("x3p height at point ({i}, {j}) is {v}"),
         ));
     }
-    Grid2::new(heights, d.dx, d.dy, d.periodic).map_err(|e| Error::parse(path, 0, e.to_string()))
+    Topography::from_heights(heights, d.dx, d.dy, d.periodic)
+        .map_err(|e| Error::parse(path, 0, e.to_string()))
+}
+
+/// Read a complete x3p height map (an error when points are missing).
+pub fn read(path: &Path) -> Result<Grid2> {
+    read_topography(path)?.into_area(&path.display().to_string())
 }
 
 /// ISO 8601 UTC timestamp of now (for `Record2/Date`), without a date-time crate:
@@ -298,9 +377,21 @@ fn utc_now_iso8601() -> String {
     )
 }
 
-/// The `main.xml` of a grid written with f64 (`D`) heights.
-fn main_xml(grid: &Grid2, md5_data: &str) -> String {
-    let comment = if grid.periodic { PERIODIC_MARK } else { "" };
+/// The `main.xml` of a grid written with f64 (`D`) heights (and a validity mask when
+/// `md5_valid` is given).
+fn main_xml(
+    (nx, ny, dx, dy, periodic): (usize, usize, f64, f64, bool),
+    md5_data: &str,
+    md5_valid: Option<&str>,
+) -> String {
+    let comment = if periodic { PERIODIC_MARK } else { "" };
+    let valid = md5_valid
+        .map(|m| {
+            format!(
+                "<ValidPointsLink>bindata/valid.bin</ValidPointsLink><MD5ChecksumValidPoints>{m}</MD5ChecksumValidPoints>"
+            )
+        })
+        .unwrap_or_default();
     let date = utc_now_iso8601();
     format!(
         r#"<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
@@ -328,30 +419,45 @@ fn main_xml(grid: &Grid2, md5_data: &str) -> String {
   </Record2>
   <Record3>
     <MatrixDimension><SizeX>{nx}</SizeX><SizeY>{ny}</SizeY><SizeZ>1</SizeZ></MatrixDimension>
-    <DataLink><PointDataLink>bindata/data.bin</PointDataLink><MD5ChecksumPointData>{md5_data}</MD5ChecksumPointData></DataLink>
+    <DataLink><PointDataLink>bindata/data.bin</PointDataLink><MD5ChecksumPointData>{md5_data}</MD5ChecksumPointData>{valid}</DataLink>
   </Record3>
   <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>
 </p:ISO5436_2>
 "#,
-        dx = grid.dx,
-        dy = grid.dy,
-        nx = grid.nx(),
-        ny = grid.ny(),
         version = env!("CARGO_PKG_VERSION"),
     )
 }
 
 /// Write `grid` as an x3p archive (f64 heights in m), atomically.
 pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
-    let (nx, ny) = (grid.nx(), grid.ny());
+    write_heights(path, &grid.heights, grid.dx, grid.dy, grid.periodic)
+}
+
+/// Write a map with missing points: NaN heights and the validity mask `bindata/valid.bin`.
+pub fn write_masked(path: &Path, grid: &MaskedGrid) -> Result<()> {
+    write_heights(path, &grid.heights, grid.dx, grid.dy, grid.periodic)
+}
+
+fn write_heights(path: &Path, h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> Result<()> {
+    let (nx, ny) = h.dim();
     let mut bin = Vec::with_capacity(nx * ny * 8);
+    let mut valid = vec![0u8; (nx * ny).div_ceil(8)];
+    let mut any_missing = false;
     for j in 0..ny {
         for i in 0..nx {
-            bin.extend_from_slice(&grid.heights[[i, j]].to_le_bytes());
+            let v = h[[i, j]];
+            bin.extend_from_slice(&v.to_le_bytes());
+            let k = j * nx + i;
+            if v.is_nan() {
+                any_missing = true;
+            } else {
+                valid[k / 8] |= 1 << (k % 8);
+            }
         }
     }
     let md5_data = format!("{:X}", Md5::digest(&bin));
-    let xml = main_xml(grid, &md5_data);
+    let md5_valid = any_missing.then(|| format!("{:X}", Md5::digest(&valid)));
+    let xml = main_xml((nx, ny, dx, dy, periodic), &md5_data, md5_valid.as_deref());
     let md5_xml = format!("{:x} *main.xml\n", Md5::digest(xml.as_bytes()));
     write_atomic_via_path(path, |tmp| {
         let zerr = |e: zip::result::ZipError| Error::parse(path, 0, format!("writing x3p: {e}"));
@@ -364,6 +470,10 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
         z.write_all(xml.as_bytes()).map_err(ioerr)?;
         z.start_file("bindata/data.bin", opts).map_err(zerr)?;
         z.write_all(&bin).map_err(ioerr)?;
+        if any_missing {
+            z.start_file("bindata/valid.bin", opts).map_err(zerr)?;
+            z.write_all(&valid).map_err(ioerr)?;
+        }
         z.start_file("md5checksum.hex", opts).map_err(zerr)?;
         z.write_all(md5_xml.as_bytes()).map_err(ioerr)?;
         z.finish().map_err(zerr)?;

@@ -1,0 +1,244 @@
+//! Physical sanity of inputs (before a solve) and of results (after it).
+//!
+//! A solver given an input outside the range its model covers does not fail: it returns a
+//! number (a flat surface gives kn = −∞, a tolerance of 1 stops at iteration 0, a pressure of
+//! 1e-300 Pa leaves the gap unchanged to round-off). These checks turn every such case into an
+//! error naming the flag, key or file, with the bound and why it holds.
+//!
+//! | check | bound | why |
+//! |---|---|---|
+//! | [`tolerance`] | `0 < tol < 1` | a relative residual of 1 or more is met by the initial guess |
+//! | [`contact_surface`] | spacing in [[`MIN_SPACING_M`], [`MAX_SPACING_M`]], `max |h|` ≤ [`MAX_HEIGHT_M`], not flat | outside these the heights are in the wrong unit or the products overflow; a flat surface is in full contact at any load |
+//! | [`contact_pressures`] | `p ≤ MAX_STRAIN · E*` and `p·L/E* ≥ RESOLVABLE_FRACTION · (h_max − h_min)` | small-strain linear elasticity; an elastic displacement below the round-off of the heights cannot be resolved |
+//! | [`finite_result`] / [`positive_result`] | finite (and > 0) | a non-finite or non-positive stiffness, gap or error is never reported as a result |
+//! | [`magnitudes`] | `|v| ≤ max` | measured values beyond any instrument's range are a unit or format error |
+//!
+//! New commands adopt them with one call per input (`sanity::tolerance("--tolerance", t)?`,
+//! `sanity::contact_surface(&grid, &source)?`, `sanity::contact_pressures("--pressures-pa",
+//! &p, e_star, &grid)?`) and one per reported number (`sanity::finite_result(what, v)?`).
+
+use crate::error::{num, Error, Result};
+use crate::grid::Grid2;
+
+/// Smallest grid spacing of a contact surface (1 pm: below atomic distances).
+pub const MIN_SPACING_M: f64 = 1e-12;
+/// Largest grid spacing of a contact surface (1 m).
+pub const MAX_SPACING_M: f64 = 1.0;
+/// Largest |height| of a contact surface (1 m): roughness heights are µm; metres mean a unit error.
+pub const MAX_HEIGHT_M: f64 = 1.0;
+/// Largest nominal strain `p/E*` of the linear-elastic half-space model (1 %).
+pub const MAX_STRAIN: f64 = 1e-2;
+/// Smallest elastic displacement scale `p·L/E*` relative to the height range that double
+/// precision resolves in the gap `h0 − δ + u` (10⁻¹² ≫ the 2.2 × 10⁻¹⁶ round-off).
+pub const RESOLVABLE_FRACTION: f64 = 1e-12;
+
+/// A relative solver tolerance: `0 < value < 1`.
+pub fn tolerance(name: &str, value: f64) -> Result<f64> {
+    if value.is_finite() && value > 0.0 && value < 1.0 {
+        Ok(value)
+    } else {
+        Err(Error::param(
+            name,
+            format!(
+                "a relative tolerance must satisfy 0 < tolerance < 1, got {} (a residual \
+                 tolerance of 1 or more is met by the initial guess)",
+                num(value)
+            ),
+        ))
+    }
+}
+
+/// A result that must be finite; the error names what it is.
+pub fn finite_result(what: &str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::Data(format!(
+            "{what} is {} (not a finite number): the input is outside the range the model \
+             covers; nothing is written",
+            num(value)
+        )))
+    }
+}
+
+/// A result that must be finite and strictly positive (a stiffness, a contact area).
+pub fn positive_result(what: &str, value: f64) -> Result<f64> {
+    finite_result(what, value)?;
+    if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::Data(format!(
+            "{what} is {} (must be > 0): the input is outside the range the model covers; \
+             nothing is written",
+            num(value)
+        )))
+    }
+}
+
+/// Every value of a measured column within `|v| ≤ max` (`unit` names the unit of `max`).
+/// Returns the index of the first offending value in the error message.
+pub fn magnitudes(name: &str, values: &[f64], max: f64, unit: &str) -> Result<()> {
+    if let Some((i, v)) = values.iter().enumerate().find(|(_, v)| v.abs() > max) {
+        return Err(Error::Data(format!(
+            "{name}: value {} at sample {i} exceeds {} {unit} in magnitude: a unit or format \
+             error",
+            num(*v),
+            num(max)
+        )));
+    }
+    Ok(())
+}
+
+/// Height range `(min, max)` of a grid.
+fn height_range(g: &Grid2) -> (f64, f64) {
+    g.heights
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
+            (a.min(h), b.max(h))
+        })
+}
+
+/// A surface that a contact solver can use: spacings in [[`MIN_SPACING_M`],
+/// [`MAX_SPACING_M`]], heights within ±[`MAX_HEIGHT_M`], and not flat (a flat surface touches
+/// everywhere at the first load: the contact is complete and kn undefined). `source` names the
+/// file or the generated surface.
+pub fn contact_surface(g: &Grid2, source: &str) -> Result<()> {
+    for (axis, d) in [("x", g.dx), ("y", g.dy)] {
+        if !(MIN_SPACING_M..=MAX_SPACING_M).contains(&d) {
+            return Err(Error::Data(format!(
+                "{source}: grid spacing along {axis} is {} m, outside [{}, {}] m that a rough \
+                 contact patch can have (wrong unit?)",
+                num(d),
+                num(MIN_SPACING_M),
+                num(MAX_SPACING_M)
+            )));
+        }
+    }
+    let (lo, hi) = height_range(g);
+    let big = lo.abs().max(hi.abs());
+    if big > MAX_HEIGHT_M {
+        return Err(Error::Data(format!(
+            "{source}: heights reach {} m, beyond the ±{} m a rough surface can have (wrong \
+             unit?)",
+            num(if hi.abs() >= lo.abs() { hi } else { lo }),
+            num(MAX_HEIGHT_M)
+        )));
+    }
+    if hi - lo <= 64.0 * f64::EPSILON * big {
+        return Err(Error::Data(format!(
+            "{source}: the surface is flat (all heights {} m): it is in full contact at any \
+             load, so there is no rough contact to solve and kn is undefined",
+            num(hi)
+        )));
+    }
+    Ok(())
+}
+
+/// Nominal pressures that the half-space model can resolve on `surface` with composite
+/// modulus `e_star_pa`: `p ≤ MAX_STRAIN · E*` (small strain) and `p·L/E* ≥ RESOLVABLE_FRACTION
+/// × (h_max − h_min)` with `L` the larger side of the patch (the elastic displacement must be
+/// visible above the round-off of the heights). `name` is the flag or key.
+pub fn contact_pressures(
+    name: &str,
+    pressures_pa: &[f64],
+    e_star_pa: f64,
+    surface: &Grid2,
+) -> Result<()> {
+    let (lo, hi) = height_range(surface);
+    contact_pressures_for(
+        name,
+        pressures_pa,
+        e_star_pa,
+        surface.lx().max(surface.ly()),
+        hi - lo,
+    )
+}
+
+/// [`contact_pressures`] for a surface known by its size `size_m` (larger side) and height
+/// range `height_range_m` (for a generated Gaussian surface, about 8 Rq), before it exists.
+pub fn contact_pressures_for(
+    name: &str,
+    pressures_pa: &[f64],
+    e_star_pa: f64,
+    size_m: f64,
+    height_range_m: f64,
+) -> Result<()> {
+    let (lo, hi, size) = (0.0, height_range_m, size_m);
+    for &p in pressures_pa {
+        if p > MAX_STRAIN * e_star_pa {
+            return Err(Error::param(
+                name,
+                format!(
+                    "{} Pa exceeds {} × E* = {} Pa: nominal strains above 1 % are outside \
+                     the linear-elastic half-space model",
+                    num(p),
+                    num(MAX_STRAIN),
+                    num(MAX_STRAIN * e_star_pa)
+                ),
+            ));
+        }
+        let u = p * size / e_star_pa;
+        if u < RESOLVABLE_FRACTION * (hi - lo) {
+            return Err(Error::param(
+                name,
+                format!(
+                    "{} Pa is too small to resolve: its elastic displacement p·L/E* ≈ {} m is \
+                     below the round-off of the surface heights (range {} m)",
+                    num(p),
+                    num(u),
+                    num(hi - lo)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    fn rough(scale: f64, dx: f64) -> Grid2 {
+        let h = Array2::from_shape_fn((8, 8), |(i, j)| scale * ((i * 7 + j * 3) % 5) as f64);
+        Grid2::new(h, dx, dx, true).unwrap()
+    }
+
+    #[test]
+    fn tolerance_must_lie_in_the_unit_interval() {
+        assert!(tolerance("--tolerance", 1e-8).is_ok());
+        for t in [0.0, 1.0, 5.0, -1e-3, f64::NAN] {
+            let e = tolerance("--tolerance", t).unwrap_err().to_string();
+            assert!(e.contains("--tolerance"), "{e}");
+        }
+    }
+
+    #[test]
+    fn unusable_surfaces_and_pressures_are_named() {
+        let g = rough(1e-7, 1e-6);
+        assert!(contact_surface(&g, "s").is_ok());
+        let flat = Grid2::new(Array2::from_elem((8, 8), 3e-6), 1e-6, 1e-6, true).unwrap();
+        assert!(contact_surface(&flat, "flat.npy")
+            .unwrap_err()
+            .to_string()
+            .contains("flat.npy: the surface is flat"));
+        assert!(contact_surface(&rough(1e292, 1e-6), "big")
+            .unwrap_err()
+            .to_string()
+            .contains("wrong unit"));
+        assert!(contact_surface(&rough(1e-7, 1e-300), "tiny").is_err());
+        assert!(contact_surface(&rough(1e-7, 1e300), "huge").is_err());
+        assert!(contact_pressures("--p", &[1e6], 1.15e11, &g).is_ok());
+        let e = contact_pressures("--p", &[1e-300], 1.15e11, &g)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--p") && e.contains("too small"), "{e}");
+        assert!(contact_pressures("--p", &[1e10], 1.15e11, &g).is_err());
+        assert!(finite_result("kn", f64::NEG_INFINITY).is_err());
+        assert!(positive_result("kn", -1.0).is_err());
+        assert!(magnitudes("force", &[1.0, 1e304], 1e12, "N")
+            .unwrap_err()
+            .to_string()
+            .contains("sample 1"));
+    }
+}
