@@ -25,6 +25,7 @@ pub mod error;
 pub mod film;
 pub mod grid;
 pub mod halfspace;
+pub mod identify;
 pub mod input;
 pub mod limits;
 pub mod output;

@@ -33,6 +33,11 @@ enum Command {
     Response(cli::response::ResponseArgs),
     /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
     Merge(cli::merge::MergeArgs),
+    /// Identify a jointed structure's nonlinear mode from measured frequency responses at
+    /// several levels; find the missing effect; predict the levels not used.
+    Identify(Box<cli::identify::IdentifyArgs>),
+    /// Score an identified model on measured files (force- or response-controlled).
+    Predict(cli::identify::PredictArgs),
 }
 
 fn main() {
@@ -48,6 +53,8 @@ fn main() {
         Command::Diagnose(a) => cli::diagnose::run(a),
         Command::Response(a) => cli::response::run(a),
         Command::Merge(a) => cli::merge::run(a),
+        Command::Identify(a) => cli::identify::run_identify(*a),
+        Command::Predict(a) => cli::identify::run_predict(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");

@@ -207,8 +207,13 @@ where
     Ok(())
 }
 
-/// Draw a line plot of several series into a PNG (atomically).
-pub fn line_plot(path: &Path, layout: &LinePlot<'_>, series: &[Series]) -> Result<()> {
+/// Draw one chart of several series into a drawing area.
+fn draw_panel<DB: DrawingBackend>(
+    path: &Path,
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    layout: &LinePlot<'_>,
+    series: &[Series],
+) -> Result<()> {
     let xr = range(
         series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         layout.x_scale,
@@ -217,47 +222,71 @@ pub fn line_plot(path: &Path, layout: &LinePlot<'_>, series: &[Series]) -> Resul
         series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
         layout.y_scale,
     );
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(layout.title, ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
+    // Linear axes: labels without "-0.0" and with the decimals the ticks need.
+    let (xs, ys) = (xr.1 - xr.0, yr.1 - yr.0);
+    let x_fmt = |v: &f64| tick_label(*v, xs);
+    let y_fmt = |v: &f64| tick_label(*v, ys);
+    macro_rules! finish {
+        ($chart:expr) => {{
+            let mut chart = $chart.map_err(|e| plot_err(path, e))?;
+            let mut mesh = chart.configure_mesh();
+            mesh.x_desc(layout.x_label).y_desc(layout.y_label);
+            if layout.x_scale == Scale::Linear {
+                mesh.x_label_formatter(&x_fmt);
+            }
+            if layout.y_scale == Scale::Linear {
+                mesh.y_label_formatter(&y_fmt);
+            }
+            mesh.draw().map_err(|e| plot_err(path, e))?;
+            draw_series(&mut chart, series).map_err(|e| plot_err(path, e))?;
+        }};
+    }
+    match (layout.x_scale, layout.y_scale) {
+        (Scale::Linear, Scale::Linear) => {
+            finish!(builder.build_cartesian_2d(xr.0..xr.1, yr.0..yr.1))
+        }
+        (Scale::Log, Scale::Linear) => {
+            finish!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), yr.0..yr.1))
+        }
+        (Scale::Linear, Scale::Log) => {
+            finish!(builder.build_cartesian_2d(xr.0..xr.1, (yr.0..yr.1).log_scale()))
+        }
+        (Scale::Log, Scale::Log) => {
+            finish!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale()))
+        }
+    }
+    Ok(())
+}
+
+/// Draw a line plot of several series into a PNG (atomically).
+pub fn line_plot(path: &Path, layout: &LinePlot<'_>, series: &[Series]) -> Result<()> {
     write_atomic_via_path(path, |tmp| {
         let root = BitMapBackend::new(tmp, (900, 650)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
-        let mut builder = ChartBuilder::on(&root);
-        builder
-            .caption(layout.title, ("sans-serif", 22))
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80);
-        // Linear axes: labels without "-0.0" and with the decimals the ticks need.
-        let (xs, ys) = (xr.1 - xr.0, yr.1 - yr.0);
-        let x_fmt = |v: &f64| tick_label(*v, xs);
-        let y_fmt = |v: &f64| tick_label(*v, ys);
-        macro_rules! finish {
-            ($chart:expr) => {{
-                let mut chart = $chart.map_err(|e| plot_err(path, e))?;
-                let mut mesh = chart.configure_mesh();
-                mesh.x_desc(layout.x_label).y_desc(layout.y_label);
-                if layout.x_scale == Scale::Linear {
-                    mesh.x_label_formatter(&x_fmt);
-                }
-                if layout.y_scale == Scale::Linear {
-                    mesh.y_label_formatter(&y_fmt);
-                }
-                mesh.draw().map_err(|e| plot_err(path, e))?;
-                draw_series(&mut chart, series).map_err(|e| plot_err(path, e))?;
-            }};
-        }
-        match (layout.x_scale, layout.y_scale) {
-            (Scale::Linear, Scale::Linear) => {
-                finish!(builder.build_cartesian_2d(xr.0..xr.1, yr.0..yr.1))
-            }
-            (Scale::Log, Scale::Linear) => {
-                finish!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), yr.0..yr.1))
-            }
-            (Scale::Linear, Scale::Log) => {
-                finish!(builder.build_cartesian_2d(xr.0..xr.1, (yr.0..yr.1).log_scale()))
-            }
-            (Scale::Log, Scale::Log) => finish!(
-                builder.build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale())
-            ),
+        draw_panel(path, &root, layout, series)?;
+        root.present().map_err(|e| plot_err(path, e))?;
+        Ok(())
+    })
+}
+
+/// Several line plots stacked vertically in one PNG (atomically), e.g. the amplitude and the
+/// phase of a frequency response.
+pub fn stacked_line_plots(path: &Path, panels: &[(LinePlot<'_>, Vec<Series>)]) -> Result<()> {
+    if panels.is_empty() {
+        return Err(Error::param("panels", "at least one panel"));
+    }
+    write_atomic_via_path(path, |tmp| {
+        let root = BitMapBackend::new(tmp, (900, 480 * panels.len() as u32)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let areas = root.split_evenly((panels.len(), 1));
+        for (area, (layout, series)) in areas.iter().zip(panels) {
+            draw_panel(path, area, layout, series)?;
         }
         root.present().map_err(|e| plot_err(path, e))?;
         Ok(())

@@ -19,7 +19,8 @@ GIL.
 The data flow, in the order of the modules: ``Surface`` (generate, read, stats) →
 ``NormalSolver`` / ``normal_sweep`` → ``TangentialSolver`` (hysteresis loops) →
 ``ValanisParams`` / ``valanis_integrate`` / ``fit_valanis`` → ``CalibrationTable`` (read,
-interpolate) → ``FilmMap`` / ``film_preloads`` → ``join_elements`` → ``diagnose``.
+interpolate; or ``calibrate``, the whole chain) → ``FilmMap`` / ``film_preloads`` →
+``join_elements`` → ``ResponseModel`` (forced response, harmonic balance) → ``diagnose``.
 """
 
 from . import errors
@@ -28,6 +29,7 @@ from ._native import (
     FilmMap,
     NormalSolution,
     NormalSolver,
+    ResponseModel,
     PolyFit,
     Profile,
     Region,
@@ -36,6 +38,7 @@ from ._native import (
     ValanisFit,
     ValanisParams,
     __version__,
+    calibrate,
     composite_modulus,
     diagnose,
     dissipated_energy,
@@ -90,6 +93,7 @@ __all__ = [
     "fit_valanis_loops",
     "student_t_975",
     "CalibrationTable",
+    "calibrate",
     "join_elements",
     "read_preloads",
     "write_preloads",
@@ -99,6 +103,7 @@ __all__ = [
     "read_nodes",
     "film_preloads",
     "reduce_preloads",
+    "ResponseModel",
     "read_record",
     "diagnose",
 ]

@@ -378,6 +378,26 @@ class CalibrationTable:
         +1 above."""
     def __len__(self) -> int: ...
 
+def calibrate(
+    config: Optional[Path] = None,
+    *,
+    grid: Optional[int] = None,
+    realisations: Optional[int] = None,
+    surface: Optional[Surface] = None,
+    out_dir: Optional[Path] = None,
+) -> Dict[str, Any]:
+    """The chain of ``asperity calibrate`` (surfaces → normal sweep → tangential loops at several
+    amplitudes → Valanis fits → table with 95 % intervals, grid and patch checks) on the TOML
+    ``config`` (None: the built-in reference case), ``grid``/``realisations`` overriding it, or
+    on one given ``surface`` (heights in m). With ``out_dir`` the CLI's files, identical to its
+    own on the same inputs (``calibration_timings.csv`` excepted).
+
+    Returns ``table`` (CalibrationTable: means per pressure in Pa; kn, E0, Et in N/m³),
+    ``realisations`` (columns per realisation × pressure: realisation, seed (−1: given surface),
+    pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m (m),
+    E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points), ``convergence``
+    (as in calibration.json), ``warnings``, ``written`` (paths), ``times`` (stage times, s)."""
+
 def join_elements(
     preloads: Columns, table: CalibrationTable, out: Optional[Path] = None
 ) -> Tuple[Columns, Dict[str, Any]]:
@@ -476,6 +496,94 @@ def film_preloads(
 
 def reduce_preloads(preloads: Columns, mesh_size_m: float) -> Columns:
     """Keep one node per triangle of an h-mesh (m) with summed area and load."""
+
+# ---------------------------------------------------------------- forced response
+
+class ResponseModel:
+    """Linear structure with contact elements, excitation and observed responses, for the
+    multi-harmonic-balance forced response of ``asperity response`` (AFT, pseudo-arclength
+    continuation). SI units: kg, N·s/m, N/m, N, m, Hz."""
+
+    @staticmethod
+    def read(path: Path) -> "ResponseModel":
+        """The model file (TOML) of ``asperity response``, read as the CLI reads it."""
+    @staticmethod
+    def lumped(
+        labels: Sequence[str],
+        mass: F64Array,
+        damping: F64Array,
+        stiffness: F64Array,
+        force: F64Array,
+        *,
+        harmonic: int = 1,
+        responses: Optional[Dict[str, F64Array]] = None,
+    ) -> "ResponseModel":
+        """Lumped model: (n, n) symmetric M (kg, positive definite), C (N·s/m, positive
+        semi-definite), K (N/m, positive definite); ``force`` (n,) N per unit level, applied as
+        level·force·cos(harmonic·ωt); ``responses``: label → observation row (n,) (default:
+        every coordinate)."""
+    @staticmethod
+    def modal(
+        frequencies_hz: Sequence[float],
+        damping_ratios: Sequence[float],
+        force: F64Array,
+        *,
+        harmonic: int = 1,
+        responses: Optional[Dict[str, F64Array]] = None,
+    ) -> "ResponseModel":
+        """Mass-normalised modal model; ``force`` the modal force Φᵀf per unit level."""
+    def attach_jenkins(self, label: str, kt_n_per_m: float, slip_force_n: float, map: F64Array) -> None:
+        """1-D Jenkins element; ``map`` (1, n): its displacement per coordinate."""
+    def attach_cubic_spring(self, label: str, k3_n_per_m3: float, map: F64Array) -> None:
+        """f = k3·u³; ``map`` (1, n)."""
+    def attach_valanis_contact(
+        self, label: str, params: ValanisParams, kn_n_per_m: float, n0_n: float, map: F64Array
+    ) -> None:
+        """3-D Valanis microslip contact (E0, Et in N/m, kn in N/m, preload N0 in N) of the
+        element table; ``map`` (3, n): local (t1, t2, n) displacements per coordinate."""
+    def attach_jenkins_contact(
+        self, label: str, kt_n_per_m: float, mu: float, kn_n_per_m: float, n0_n: float, map: F64Array
+    ) -> None:
+        """3-D Jenkins contact with a unilateral normal spring; ``map`` (3, n)."""
+    @property
+    def labels(self) -> List[str]: ...
+    @property
+    def coordinates(self) -> str:
+        """``"physical"`` or ``"modal"``."""
+    @property
+    def matrices(self) -> Dict[str, F64Array]:
+        """mass (kg), damping (N·s/m), stiffness (N/m), (n, n) copies."""
+    @property
+    def force(self) -> F64Array: ...
+    @property
+    def response_labels(self) -> List[str]: ...
+    @property
+    def elements(self) -> List[Tuple[str, str, int]]:
+        """(label, law, dofs) of each element."""
+    @property
+    def levels_n(self) -> Optional[List[float]]:
+        """Excitation levels (N) of the model file; None for a model built from arrays."""
+    def sweep(
+        self,
+        level_n: float,
+        frequency_start_hz: Optional[float] = None,
+        frequency_end_hz: Optional[float] = None,
+        *,
+        harmonics: Optional[int] = None,
+        odd_only: Optional[bool] = None,
+        time_samples: Optional[int] = None,
+        points: Optional[int] = None,
+        formulation: Optional[str] = None,
+    ) -> Dict[str, Any]:
+        """Force-controlled frequency sweep at ``level_n`` (N) over [start, end] Hz (unset
+        values: the model file's [sweep]; for array models harmonics 5, points 200, formulation
+        "auto"). Returns ``columns`` (the columns of response_level_<i>.csv: frequency_Hz,
+        <dof>_h<k>_amplitude_m (m), <dof>_h<k>_phase_rad, dissipated_energy_J (J per cycle),
+        stick/slip/separation fractions, newton_iterations, relative_residual),
+        ``coordinate_harmonics`` (points, n, coefficients; m), ``harmonic_orders``, ``peak``
+        (index), ``peak_elements`` (columns per element at the peak), ``level_N``,
+        ``formulation``, ``unknowns``, ``rejected_steps``, ``turning_points``, ``jacobians``,
+        ``wall_time_s``."""
 
 # ---------------------------------------------------------------- diagnose
 

@@ -271,3 +271,161 @@ pub fn write_preloads(path: PathBuf, preloads: &Bound<'_, PyDict>, comment: &str
     let rows = preloads_from_columns(preloads)?;
     asperity::film::nodes::write_preloads_csv(&path, &rows, comment).py()
 }
+
+/// The calibration chain of `asperity calibrate` (surfaces → normal sweep → tangential loops at
+/// several amplitudes → Valanis fits → table with 95 % intervals, grid and patch checks).
+///
+/// `config`: a calibration TOML file (None: the built-in reference case); `grid` and
+/// `realisations` override it as the CLI's `--grid`/`--realisations` do; `surface`: a
+/// `Surface` (heights in m) to calibrate on instead of generated ones (one realisation, no
+/// checks). With `out_dir`, writes the files of `asperity calibrate --out-dir` (identical to
+/// the CLI's on the same inputs, `calibration_timings.csv` excepted).
+///
+/// Returns a dict: `"table"` (CalibrationTable of the means), `"realisations"` (columns per
+/// realisation × pressure: realisation, seed (−1 for a given surface), pressure_Pa,
+/// contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m, E0_N_per_m3, k,
+/// Et_N_per_m3, fit_R2, contact_spots, median_spot_points), `"convergence"` (per pressure, as
+/// in calibration.json), `"warnings"`, `"written"` (paths) and `"times"` (stage times, s).
+#[pyfunction]
+#[pyo3(signature = (config=None, *, grid=None, realisations=None, surface=None, out_dir=None))]
+pub fn calibrate<'py>(
+    py: Python<'py>,
+    config: Option<PathBuf>,
+    grid: Option<usize>,
+    realisations: Option<usize>,
+    surface: Option<&crate::surface::Surface>,
+    out_dir: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use asperity::calibrate::config::CalibrationConfig;
+    use asperity::calibrate::output::{self, ConfigSource};
+    use asperity::calibrate::pipeline::{self, SurfaceSource};
+    let (mut cfg, source) = match &config {
+        Some(path) => {
+            let bytes = std::fs::read(path)
+                .map_err(|e| asperity::Error::io(path, e))
+                .py()?;
+            (
+                CalibrationConfig::read(path).py()?,
+                ConfigSource::file(path, &bytes),
+            )
+        }
+        None => (CalibrationConfig::reference(), ConfigSource::BuiltIn),
+    };
+    let rename = |e: asperity::Error, name: &str| match e {
+        asperity::Error::InvalidParameter { message, .. } => asperity::Error::param(name, message),
+        other => other,
+    };
+    if let Some(n) = grid {
+        if surface.is_some() {
+            return Err(crate::errors::parameter(
+                py,
+                "grid",
+                "applies to the generated surfaces, not to a given surface".into(),
+            ));
+        }
+        cfg.surface.nx = n;
+        cfg.surface.ny = n;
+        cfg.validate().map_err(|e| rename(e, "grid")).py()?;
+    }
+    if let Some(n) = realisations {
+        if surface.is_some() && n != 1 {
+            return Err(crate::errors::parameter(
+                py,
+                "realisations",
+                "a given surface is one realisation".into(),
+            ));
+        }
+        cfg.realisations.count = n;
+        cfg.validate().map_err(|e| rename(e, "realisations")).py()?;
+    }
+    let surfaces = match surface {
+        None => SurfaceSource::Generated,
+        Some(s) => {
+            cfg.realisations.count = 1;
+            SurfaceSource::Given {
+                surface: s.grid().clone(),
+                description: "a Surface given from Python".to_string(),
+            }
+        }
+    };
+    let (run, written) = py
+        .detach(|| {
+            let run = pipeline::run(&cfg, &surfaces, &indicatif::ProgressBar::hidden())?;
+            let written = match &out_dir {
+                Some(dir) => output::write_outputs(&run, &source, dir)?.0,
+                None => Vec::new(),
+            };
+            Ok::<_, asperity::Error>((run, written))
+        })
+        .py()?;
+    let out = PyDict::new(py);
+    out.set_item(
+        "table",
+        Bound::new(
+            py,
+            CalibrationTable {
+                inner: run.table.clone(),
+            },
+        )?,
+    )?;
+    let rows: Vec<(
+        usize,
+        &pipeline::Realisation,
+        &pipeline::PressureCalibration,
+    )> = run
+        .realisations
+        .iter()
+        .enumerate()
+        .flat_map(|(i, r)| r.pressures.iter().map(move |pc| (i + 1, r, pc)))
+        .collect();
+    let cols = PyDict::new(py);
+    cols.set_item(
+        "realisation",
+        PyArray1::from_vec(py, rows.iter().map(|r| r.0 as i64).collect::<Vec<_>>()),
+    )?;
+    cols.set_item(
+        "seed",
+        PyArray1::from_vec(
+            py,
+            rows.iter()
+                .map(|r| r.1.seed.map_or(-1, |s| s as i64))
+                .collect::<Vec<_>>(),
+        ),
+    )?;
+    type Get = fn(&pipeline::PressureCalibration) -> f64;
+    let fields: [(&str, Get); 11] = [
+        ("pressure_Pa", |pc| pc.sweep.pressure_pa),
+        ("contact_area_ratio", |pc| pc.sweep.contact_area_ratio),
+        ("kn_N_per_m3", |pc| pc.sweep.kn_n_per_m3),
+        ("mean_gap_m", |pc| pc.sweep.mean_gap_m),
+        ("gross_slip_displacement_m", |pc| {
+            pc.amplitudes.gross_slip_displacement_m
+        }),
+        ("E0_N_per_m3", |pc| pc.fit.params.e0),
+        ("k", |pc| pc.fit.params.k),
+        ("Et_N_per_m3", |pc| pc.fit.params.et),
+        ("fit_R2", |pc| pc.fit.r2),
+        ("contact_spots", |pc| pc.sweep.contact_spots as f64),
+        ("median_spot_points", |pc| {
+            pc.sweep.median_spot_points as f64
+        }),
+    ];
+    for (name, f) in fields {
+        cols.set_item(
+            name,
+            PyArray1::from_vec(py, rows.iter().map(|r| f(r.2)).collect::<Vec<_>>()),
+        )?;
+    }
+    out.set_item("realisations", cols)?;
+    out.set_item("convergence", to_python(py, &run.convergence)?)?;
+    out.set_item("warnings", run.warnings.clone())?;
+    out.set_item(
+        "written",
+        written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>(),
+    )?;
+    out.set_item("times", to_python(py, &run.times)?)?;
+    Ok(out)
+}

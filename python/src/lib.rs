@@ -10,6 +10,7 @@ mod arrays;
 mod calibrate;
 mod contact;
 mod diagnose;
+mod dynamics;
 mod element;
 mod errors;
 mod film;
@@ -40,6 +41,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(element::student_t_975, m)?)?;
     m.add_class::<calibrate::CalibrationTable>()?;
     m.add_function(wrap_pyfunction!(calibrate::join_elements, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    m.add_class::<dynamics::ResponseModel>()?;
     m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::write_preloads, m)?)?;
     m.add_class::<film::FilmMap>()?;

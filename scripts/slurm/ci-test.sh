@@ -3,9 +3,11 @@
 #   1. install Debian's slurm-wlm and munge when sbatch/slurmctld/munged are absent (needs root);
 #   2. start munged (unless one already answers), slurmctld and slurmd on 127.0.0.1 with a
 #      throwaway configuration, state and logs in a temporary directory;
-#   3. submit a small sharded normal-contact sweep with submit-sweep.sh (4 array tasks, one
-#      thread each, and the dependent merge job), wait for it with a bounded timeout;
-#   4. compare the merged outputs with a single-process run (two threads): byte-identical;
+#   3. submit a small sharded normal-contact sweep (4 array tasks) and a small sharded
+#      calibration (2 array tasks) with submit-sweep.sh, one thread per task, each with its
+#      dependent merge job; wait for both with a bounded timeout;
+#   4. compare the merged outputs with single-process runs (two threads): byte-identical
+#      (every file but the wall-time ones);
 #   5. stop the daemons it started (by their pids) and remove the temporary directory.
 # Usage: scripts/slurm/ci-test.sh [ASPERITY_BINARY]   (default target/release/asperity)
 # Called by .ci/run. Exit status non-zero on any failure, with the daemon and job logs printed.
@@ -120,34 +122,62 @@ done
 [ "$state" = idle ] || { echo "slurm test: node not idle after 30 s (state '$state')" >&2; exit 1; }
 echo "slurm test: cluster up on 127.0.0.1 (ports $ctld_port/$slurmd_port, $(nproc) CPUs) in $(( $(date +%s) - started )) s"
 
-# 3. The sweep: 6 surfaces (128², two pressures) in 4 shards, and the single-process run.
+# 3. Two sweeps: 6 surfaces (128², two pressures) of the normal sweep in 4 shards, and a small
+#    calibration (3 realisations of the reference statistics on 128² over 128 µm with their grid
+#    and patch checks, 2 pressures, 2 amplitudes) in 2 shards; each also as a single process.
 sweep=(contact normal --seeds 1-6 --grid 128 --pressures-pa 1e6,5e6)
+sed -e 's/^lx_m = .*/lx_m = 1.28e-4/' -e 's/^ly_m = .*/ly_m = 1.28e-4/' \
+    -e 's/^nx = .*/nx = 128/' -e 's/^ny = .*/ny = 128/' -e 's/^count = .*/count = 3/' \
+    -e 's/^pressures_pa = .*/pressures_pa = [1e6, 5e6]/' \
+    -e 's/^amplitude_factors = .*/amplitude_factors = [0.5, 1.0]/' \
+    -e 's/^steps_per_cycle = .*/steps_per_cycle = 20/' \
+    "$repo/calib/reference.toml" >"$work/calibration.toml"
+calibration=(calibrate "$work/calibration.toml")
 RAYON_NUM_THREADS=2 "$bin" "${sweep[@]}" --out-dir "$work/single" >/dev/null
-submitted=$("$repo/scripts/slurm/submit-sweep.sh" -n 4 -c 1 -o "$work/cluster" -b "$bin" -- "${sweep[@]}")
-echo "slurm test: $submitted"
-merge_id=$(echo "$submitted" | sed -n 's/.*merge job \([0-9]*\).*/\1/p')
+RAYON_NUM_THREADS=2 "$bin" "${calibration[@]}" --out-dir "$work/single-calib" >/dev/null 2>&1
+submit() { # submit OUT_DIR SHARDS ARGS... → prints the merge job id
+    local out=$1 n=$2 submitted
+    shift 2
+    submitted=$("$repo/scripts/slurm/submit-sweep.sh" -n "$n" -c 1 -o "$out" -b "$bin" -- "$@")
+    echo "slurm test: $submitted" >&2
+    echo "$submitted" | sed -n 's/.*merge job \([0-9]*\).*/\1/p'
+}
+merge_ids=("$(submit "$work/cluster" 4 "${sweep[@]}")" "$(submit "$work/cluster-calib" 2 "${calibration[@]}")")
 deadline=$(( $(date +%s) + timeout_s ))
-while :; do
-    job_state=$(scontrol show job "$merge_id" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')
-    case "$job_state" in
-        COMPLETED) break ;;
-        FAILED|CANCELLED|TIMEOUT|NODE_FAIL|OUT_OF_MEMORY|PREEMPTED|BOOT_FAIL|DEADLINE)
-            echo "slurm test: merge job $merge_id ended $job_state" >&2; exit 1 ;;
-    esac
-    if [ "$(date +%s)" -gt "$deadline" ]; then
-        echo "slurm test: timeout after ${timeout_s} s (merge job state '$job_state')" >&2
-        squeue >&2 || true
-        exit 1
-    fi
-    sleep 0.5
+for merge_id in "${merge_ids[@]}"; do
+    [ -n "$merge_id" ] || { echo "slurm test: a submission failed" >&2; exit 1; }
+    while :; do
+        job_state=$(scontrol show job "$merge_id" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')
+        case "$job_state" in
+            COMPLETED) break ;;
+            FAILED|CANCELLED|TIMEOUT|NODE_FAIL|OUT_OF_MEMORY|PREEMPTED|BOOT_FAIL|DEADLINE)
+                echo "slurm test: merge job $merge_id ended $job_state" >&2; exit 1 ;;
+        esac
+        if [ "$(date +%s)" -gt "$deadline" ]; then
+            echo "slurm test: timeout after ${timeout_s} s (merge job $merge_id state '$job_state')" >&2
+            squeue >&2 || true
+            exit 1
+        fi
+        sleep 0.5
+    done
 done
 
-# 4. Byte-identical to the single run (wall times excepted).
+# 4. Byte-identical to the single runs (wall-time files excepted).
 for f in normal_sweep.csv normal_sweep_statistics.csv area_ratio.png mean_gap.png kn.png; do
     cmp "$work/single/$f" "$work/cluster/$f"
 done
 n_shards=$(ls "$work/cluster/shards"/contact-normal.shard-*-of-4.json | wc -l)
 [ "$n_shards" = 4 ] || { echo "slurm test: expected 4 shard files, found $n_shards" >&2; exit 1; }
 grep -q "^seed-6,5e6," "$work/cluster/normal_sweep.csv"
+n_calib=0
+for f in "$work/single-calib"/*; do
+    name=$(basename "$f")
+    [ "$name" = calibration_timings.csv ] && continue
+    cmp "$f" "$work/cluster-calib/$name"
+    n_calib=$((n_calib + 1))
+done
+[ "$n_calib" -ge 14 ] || { echo "slurm test: only $n_calib calibration files compared" >&2; exit 1; }
+n_shards=$(ls "$work/cluster-calib/shards"/calibrate.shard-*-of-2.json | wc -l)
+[ "$n_shards" = 2 ] || { echo "slurm test: expected 2 calibration shard files, found $n_shards" >&2; exit 1; }
 ok=1
-echo "slurm test: passed: 4 array tasks + dependent merge = single run, byte for byte (normal_sweep.csv, statistics, 3 plots) in $(( $(date +%s) - started )) s"
+echo "slurm test: passed: array tasks + dependent merge = single run, byte for byte: normal sweep (4 tasks; normal_sweep.csv, statistics, 3 plots) and calibration (2 tasks; $n_calib files: tables, sidecar, plots) in $(( $(date +%s) - started )) s"

@@ -7,6 +7,10 @@
 #                                 [-p PARTITION] -- SWEEP ARGUMENTS...
 # Example (64 realisations of the reference surface, 8 array tasks of 2 cores):
 #   scripts/slurm/submit-sweep.sh -n 8 -c 2 -o runs/kn-64 -- contact normal --seeds 1-64
+# or a calibration (32 realisations of calib/reference.toml with their convergence checks,
+# one realisation per task of 4 cores):
+#   scripts/slurm/submit-sweep.sh -n 32 -c 4 -o runs/calib-32 -- \
+#       calibrate "$PWD/calib/reference.toml" --realisations 32
 #
 # The shards write OUT_DIR/shards/<kind>.shard-<i>-of-<N>.json (logs in OUT_DIR/logs/); the
 # merge job writes into OUT_DIR exactly the files a single run of the sweep writes, after

@@ -47,7 +47,7 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 /// The steady loop at one amplitude.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct AmplitudeLoop {
     /// Amplitude as a multiple of the gross-slip displacement (-).
     pub amplitude_factor: f64,
@@ -70,7 +70,7 @@ pub struct AmplitudeLoop {
 }
 
 /// Everything computed at one pressure.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct AmplitudeSweep {
     /// Gross-slip displacement of monotonic loading `δ_gs` (m), the unit of the amplitudes.
     pub gross_slip_displacement_m: f64,

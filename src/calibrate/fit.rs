@@ -129,7 +129,7 @@ impl Default for FitOptions {
 }
 
 /// Quality of the fitted element on one loop.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct LoopFit {
     /// Coefficient of determination on the steady cycle.
     pub r2: f64,
@@ -146,7 +146,7 @@ pub struct LoopFit {
 }
 
 /// Result of [`fit_valanis`] / [`fit_valanis_loops`].
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct FitResult {
     /// Best parameters (μ as given).
     pub params: ValanisParams,

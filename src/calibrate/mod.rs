@@ -8,6 +8,7 @@ pub mod fit;
 pub mod output;
 pub mod pipeline;
 pub mod statistics;
+pub mod sweep;
 pub mod table;
 
 pub use config::CalibrationConfig;

@@ -9,12 +9,13 @@
 //! | `energy_vs_amplitude.csv` | per pressure × amplitude: BEM and element energy per cycle, means and 95 % intervals |
 //! | `calibration_convergence.csv` | per pressure: spots per patch, points per spot, grid and patch checks with verdicts |
 //! | `calibration_loops.csv` | long format: every steady loop (BEM and fitted element) |
+//! | `calibration_timings.csv` | wall and CPU times of every chain per stage and per pressure (the only file that differs between two runs) |
 //! | `kn_vs_pressure.png`, `e0_vs_pressure.png`, `k_vs_pressure.png` | means with 95 % bands, each realisation, the table's interpolant |
 //! | `energy_vs_amplitude.png` | energy per cycle versus amplitude: BEM (mean ± interval) and fitted element |
 //! | `k_vs_amplitude.png` | k of the element fitted to each amplitude alone, per pressure (the spread) |
 //! | `loop_fit_<p>Pa.png` | first realisation: loops at every amplitude with the fitted element |
 //! | `loops_normalised.png` | first realisation, largest amplitude: loop shape versus pressure |
-//! | `calibration.json` | configuration, crate version, input hashes, verdicts, warnings, times |
+//! | `calibration.json` | configuration, crate version, input hashes, verdicts, warnings |
 
 use crate::calibrate::config::CalibrationConfig;
 use crate::calibrate::pipeline::{sha256_hex, CalibrationRun, KBound, Realisation};
@@ -28,12 +29,22 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Where the configuration came from (recorded in the sidecar).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ConfigSource {
     /// The built-in reference case.
     BuiltIn,
-    /// A TOML file and its bytes.
-    File { path: PathBuf, bytes: Vec<u8> },
+    /// A TOML file as given on the command line, and the SHA-256 of its bytes.
+    File { path: PathBuf, sha256: String },
+}
+
+impl ConfigSource {
+    /// A configuration file and its content.
+    pub fn file(path: &Path, bytes: &[u8]) -> Self {
+        ConfigSource::File {
+            path: path.to_path_buf(),
+            sha256: sha256_hex(bytes),
+        }
+    }
 }
 
 /// File names written by [`write_outputs`] into the output directory.
@@ -44,6 +55,7 @@ pub mod files {
     pub const ENERGY: &str = "energy_vs_amplitude.csv";
     pub const CONVERGENCE: &str = "calibration_convergence.csv";
     pub const LOOPS: &str = "calibration_loops.csv";
+    pub const TIMINGS: &str = "calibration_timings.csv";
     pub const SIDECAR: &str = "calibration.json";
     pub const KN_PLOT: &str = "kn_vs_pressure.png";
     pub const E0_PLOT: &str = "e0_vs_pressure.png";
@@ -128,7 +140,7 @@ fn seed_text(r: &Realisation) -> String {
 /// `calibration_realisations.csv`.
 fn realisations_csv(run: &CalibrationRun) -> String {
     let mut s = String::from(
-        "realisation,seed,pressure_Pa,contact_area_ratio,contact_spots,smallest_spot_points,median_spot_points,kn_N_per_m3,mean_gap_m,gross_slip_displacement_m,E0_N_per_m3,k,Et_N_per_m3,k_bound,fit_R2,fit_worst_abs_energy_rel_error,fit_iterations,fit_converged,normal_iterations,tangential_contact_points,tangential_steps,tangential_max_step_iterations,max_loop_closure_error,normal_wall_time_s,tangential_wall_time_s,fit_wall_time_s\n",
+        "realisation,seed,pressure_Pa,contact_area_ratio,contact_spots,smallest_spot_points,median_spot_points,kn_N_per_m3,mean_gap_m,gross_slip_displacement_m,E0_N_per_m3,k,Et_N_per_m3,k_bound,fit_R2,fit_worst_abs_energy_rel_error,fit_iterations,fit_converged,normal_iterations,tangential_contact_points,tangential_steps,tangential_max_step_iterations,max_loop_closure_error\n",
     );
     for (r_i, r) in run.realisations.iter().enumerate() {
         for pc in &r.pressures {
@@ -146,7 +158,7 @@ fn realisations_csv(run: &CalibrationRun) -> String {
             };
             let _ = writeln!(
                 s,
-                "{},{},{},{:e},{},{},{},{:e},{:e},{:e},{:e},{},{:e},{bound},{},{:e},{},{},{},{},{},{},{:e},{:.3},{:.3},{:.3}",
+                "{},{},{},{:e},{},{},{},{:e},{:e},{:e},{:e},{},{:e},{bound},{},{:e},{},{},{},{},{},{},{:e}",
                 r_i + 1,
                 seed_text(r),
                 sw.pressure_pa,
@@ -168,12 +180,58 @@ fn realisations_csv(run: &CalibrationRun) -> String {
                 a.contact_points,
                 a.steps,
                 a.max_step_iterations,
-                closure,
-                sw.wall_time_s,
-                a.wall_time_s + pc.tangential_setup_s,
-                f.wall_time.as_secs_f64()
-                    + pc.per_amplitude.iter().map(|p| p.wall_time.as_secs_f64()).sum::<f64>()
+                closure
             );
+        }
+    }
+    s
+}
+
+/// `calibration_timings.csv`: wall and thread-CPU times of every chain (main realisations and
+/// checks), per stage and per pressure point. Not reproducible, so kept out of every other file:
+/// a sharded run merged (`asperity merge`) writes the other files byte for byte as a single
+/// run does, and here the times the shards measured.
+fn timings_csv(run: &CalibrationRun) -> String {
+    let mut s = String::from(
+        "# asperity calibrate: wall and CPU times (s) of each chain; stage rows have an empty pressure, point rows an empty CPU time; not reproducible\n\
+         chain,realisation,seed,stage,pressure_Pa,wall_time_s,cpu_time_s\n",
+    );
+    for (chain, realisations) in [
+        ("main", &run.realisations),
+        ("grid-check", &run.grid_check),
+        ("patch-check", &run.patch_check),
+    ] {
+        for (r_i, r) in realisations.iter().enumerate() {
+            let t = &r.times;
+            let seed = seed_text(r);
+            let mut row = |stage: &str, p: String, wall: f64, cpu: String| {
+                let _ = writeln!(s, "{chain},{},{seed},{stage},{p},{wall:.3},{cpu}", r_i + 1);
+            };
+            for (stage, wall, cpu) in [
+                ("surface", t.surface_s, t.surface_cpu_s),
+                ("normal", t.normal_s, t.normal_cpu_s),
+                ("tangential", t.tangential_s, t.tangential_cpu_s),
+                ("fit", t.fit_s, t.fit_cpu_s),
+            ] {
+                row(stage, String::new(), wall, format!("{cpu:.3}"));
+            }
+            row("chain", String::new(), t.total_s, String::new());
+            for pc in &r.pressures {
+                let p = pc.sweep.pressure_pa.to_string();
+                row("normal", p.clone(), pc.sweep.wall_time_s, String::new());
+                row(
+                    "tangential",
+                    p.clone(),
+                    pc.amplitudes.wall_time_s + pc.tangential_setup_s,
+                    String::new(),
+                );
+                let fit = pc.fit.wall_time.as_secs_f64()
+                    + pc.per_amplitude
+                        .iter()
+                        .map(|f| f.wall_time.as_secs_f64())
+                        .sum::<f64>();
+                row("fit", p, fit, String::new());
+            }
         }
     }
     s
@@ -670,12 +728,11 @@ fn sidecar(
     source: &ConfigSource,
     table_sha: &str,
     written: &[PathBuf],
-    output_s: f64,
 ) -> Result<String> {
     let config_toml = run.config.to_toml_string()?;
     let (source_desc, file_hash) = match source {
         ConfigSource::BuiltIn => ("built-in reference case".to_string(), None),
-        ConfigSource::File { path, bytes } => (path.display().to_string(), Some(sha256_hex(bytes))),
+        ConfigSource::File { path, sha256 } => (path.display().to_string(), Some(sha256.clone())),
     };
     let pressures: Vec<f64> = run.table.rows.iter().map(|r| r.pressure_pa).collect();
     let ks: Vec<f64> = run.table.rows.iter().map(|r| r.k).collect();
@@ -690,7 +747,6 @@ fn sidecar(
                 "grid": r.grid,
                 "patch_m": r.patch_m,
                 "surface_heights_sha256": r.surface_sha256,
-                "times_s": r.times,
             })
         })
         .collect();
@@ -729,10 +785,7 @@ fn sidecar(
         },
         "convergence": run.convergence,
         "warnings": run.warnings,
-        "wall_time_s": {
-            "stages_summed_over_chains": run.times,
-            "output_s": output_s,
-        },
+        "times": crate::calibrate::output::files::TIMINGS,
     });
     serde_json::to_string_pretty(&json)
         .map(|t| t + "\n")
@@ -757,6 +810,7 @@ pub fn write_outputs(
         (files::ENERGY, energy_csv(run)),
         (files::CONVERGENCE, convergence_csv(run)),
         (files::LOOPS, loops_csv(run)),
+        (files::TIMINGS, timings_csv(run)),
     ] {
         let path = out_dir.join(name);
         write_string_atomic(&path, &text)?;
@@ -769,13 +823,7 @@ pub fn write_outputs(
     let path = out_dir.join(files::SIDECAR);
     let mut all = written.clone();
     all.push(path.clone());
-    let text = sidecar(
-        run,
-        source,
-        &table_sha,
-        &all,
-        started.elapsed().as_secs_f64(),
-    )?;
+    let text = sidecar(run, source, &table_sha, &all)?;
     write_string_atomic(&path, &text)?;
     written.push(path);
     Ok((written, started.elapsed().as_secs_f64()))

@@ -108,7 +108,7 @@ pub fn k_bound_reading(bound: KBound) -> &'static str {
 }
 
 /// Everything computed at one pressure of one realisation.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct PressureCalibration {
     /// Normal contact.
     pub sweep: SweepPoint,
@@ -126,7 +126,7 @@ pub struct PressureCalibration {
 /// chain (single-threaded when chains run concurrently, so that the CPU time is the stage's
 /// whole cost, unaffected by other processes on the machine); for a run, summed over all chains,
 /// with the run's wall time in `total_s`.
-#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct StageTimes {
     pub surface_s: f64,
     pub normal_s: f64,
@@ -182,7 +182,7 @@ impl Lap {
 }
 
 /// One surface through the chain.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Realisation {
     /// Seed of a generated surface (`None` for a given surface).
     pub seed: Option<u64>,
@@ -346,16 +346,17 @@ fn check_specs(
     (grid, patch, notes)
 }
 
+/// Number of realisations: `realisations.count` generated surfaces, or one given surface.
+pub fn realisation_count(config: &CalibrationConfig, source: &SurfaceSource) -> usize {
+    match source {
+        SurfaceSource::Given { .. } => 1,
+        SurfaceSource::Generated => config.realisations.count,
+    }
+}
+
 /// Number of progress units [`run`] reports for `config` and `source`.
 pub fn progress_units(config: &CalibrationConfig, source: &SurfaceSource) -> u64 {
-    let chains = match source {
-        SurfaceSource::Given { .. } => 1,
-        SurfaceSource::Generated => {
-            let (g, p, _) = check_specs(config);
-            config.realisations.count * (1 + usize::from(g.is_some()) + usize::from(p.is_some()))
-        }
-    };
-    chains as u64 * chain_units(config)
+    progress_units_of(config, source, realisation_count(config, source))
 }
 
 /// The fit data of one amplitude: the element's own virgin quarter cycle to `+a` (the BEM's
@@ -570,27 +571,82 @@ pub fn run_with(
 ) -> Result<CalibrationRun> {
     config.validate()?;
     let started = Instant::now();
-    let count = config.realisations.count;
-    let (grid_spec, patch_spec, mut notes) = match source {
+    let count = realisation_count(config, source);
+    let units = run_realisations(config, source, 0..count, bar, parallelism)?;
+    assemble(config, source, units, started.elapsed().as_secs_f64())
+}
+
+/// The chains of realisation `r`: the main surface (seed `surface.seed + r`, or the given
+/// surface) and, where the checks run, the same seed on the grid with half the points per side
+/// and the independent surface `r` of the half-size patch. The unit of a sharded calibration
+/// ([`crate::calibrate::sweep::CalibrationSweep`]): nothing in it depends on another
+/// realisation.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct RealisationChains {
+    /// The main realisation.
+    pub main: Realisation,
+    /// Its grid check (None when that check does not run).
+    pub grid_check: Option<Realisation>,
+    /// Its patch check (None when that check does not run).
+    pub patch_check: Option<Realisation>,
+}
+
+/// The grid and patch check specs of `source` and the notes on checks that do not run.
+fn checks_of(
+    config: &CalibrationConfig,
+    source: &SurfaceSource,
+) -> (
+    Option<GaussianSurfaceSpec>,
+    Option<GaussianSurfaceSpec>,
+    Vec<String>,
+) {
+    match source {
         SurfaceSource::Generated => check_specs(config),
         SurfaceSource::Given { .. } => (
             None,
             None,
             vec!["grid and patch checks not run: a given surface has no other resolution or size of the same realisation".to_string()],
         ),
-    };
-    let mut jobs: Vec<Job> = Vec::new();
-    match source {
-        SurfaceSource::Given { .. } => jobs.push(Job::Main(0)),
-        SurfaceSource::Generated => {
-            jobs.extend((0..count).map(Job::Main));
-            if grid_spec.is_some() {
-                jobs.extend((0..count).map(Job::Grid));
-            }
-            if patch_spec.is_some() {
-                jobs.extend((0..count).map(Job::Patch));
-            }
-        }
+    }
+}
+
+/// Progress units of [`run_realisations`] over `realisations` realisations.
+pub fn progress_units_of(
+    config: &CalibrationConfig,
+    source: &SurfaceSource,
+    realisations: usize,
+) -> u64 {
+    let (g, p, _) = checks_of(config, source);
+    (realisations * (1 + usize::from(g.is_some()) + usize::from(p.is_some()))) as u64
+        * chain_units(config)
+}
+
+/// Run the chains of the realisations `realisations` (0-based; `0..1` for a given surface),
+/// concurrently or one at a time (see [`Parallelism`]). `bar` receives
+/// [`progress_units_of`] increments. The result of a realisation does not depend on which
+/// others run with it.
+pub fn run_realisations(
+    config: &CalibrationConfig,
+    source: &SurfaceSource,
+    realisations: std::ops::Range<usize>,
+    bar: &ProgressBar,
+    parallelism: Parallelism,
+) -> Result<Vec<RealisationChains>> {
+    config.validate()?;
+    let count = realisation_count(config, source);
+    if realisations.end > count {
+        return Err(Error::param(
+            "realisations",
+            format!("realisations {realisations:?} requested, the configuration has {count}"),
+        ));
+    }
+    let (grid_spec, patch_spec, _) = checks_of(config, source);
+    let mut jobs: Vec<Job> = realisations.clone().map(Job::Main).collect();
+    if grid_spec.is_some() {
+        jobs.extend(realisations.clone().map(Job::Grid));
+    }
+    if patch_spec.is_some() {
+        jobs.extend(realisations.clone().map(Job::Patch));
     }
     let spec_of = |job: Job| -> GaussianSurfaceSpec {
         let s = config.surface;
@@ -640,17 +696,59 @@ pub fn run_with(
         Parallelism::OneChainAtATime => jobs.iter().map(|&j| run_job(j)).collect(),
         Parallelism::ChainsConcurrently => run_concurrently(&jobs, run_job)?,
     };
-    let mut main = Vec::new();
+    let mut units: Vec<RealisationChains> = Vec::with_capacity(realisations.len());
+    for (job, r) in jobs.iter().zip(results) {
+        let r = r?;
+        match *job {
+            Job::Main(_) => units.push(RealisationChains {
+                main: r,
+                grid_check: None,
+                patch_check: None,
+            }),
+            Job::Grid(i) => units[i - realisations.start].grid_check = Some(r),
+            Job::Patch(i) => units[i - realisations.start].patch_check = Some(r),
+        }
+    }
+    Ok(units)
+}
+
+/// The run from the chains of every realisation, in order (as [`run_realisations`] returns them
+/// for `0..count`, or merged from the shards of a sharded calibration): the table, the
+/// convergence verdicts and the warnings. `total_s` is the run's wall time.
+pub fn assemble(
+    config: &CalibrationConfig,
+    source: &SurfaceSource,
+    units: Vec<RealisationChains>,
+    total_s: f64,
+) -> Result<CalibrationRun> {
+    config.validate()?;
+    let count = realisation_count(config, source);
+    let (grid_spec, patch_spec, notes) = checks_of(config, source);
+    if units.len() != count
+        || units.iter().any(|u| {
+            u.grid_check.is_some() != grid_spec.is_some()
+                || u.patch_check.is_some() != patch_spec.is_some()
+        })
+    {
+        return Err(Error::Data(format!(
+            "a calibration of {count} realisation(s) needs the chains of each, got {} realisation(s) (or chains of checks the configuration does not run)",
+            units.len()
+        )));
+    }
+    let mut main = Vec::with_capacity(count);
     let mut grid_check = Vec::new();
     let mut patch_check = Vec::new();
     let mut times = StageTimes::default();
-    for (job, r) in jobs.iter().zip(results) {
-        let r = r?;
-        times.add(&r.times);
-        match job {
-            Job::Main(_) => main.push(r),
-            Job::Grid(_) => grid_check.push(r),
-            Job::Patch(_) => patch_check.push(r),
+    for u in units {
+        times.add(&u.main.times);
+        main.push(u.main);
+        if let Some(g) = u.grid_check {
+            times.add(&g.times);
+            grid_check.push(g);
+        }
+        if let Some(p) = u.patch_check {
+            times.add(&p.times);
+            patch_check.push(p);
         }
     }
     let table = table_of(config, &main)?;
@@ -667,15 +765,14 @@ pub fn run_with(
             )
         }
     };
-    let mut convergence = ConvergenceStudy {
+    let convergence = ConvergenceStudy {
         grid_spec,
         patch_spec,
-        notes: Vec::new(),
+        notes,
         pressures,
     };
-    convergence.notes.append(&mut notes);
     let warnings = warnings_of(config, &main, &convergence);
-    times.total_s = started.elapsed().as_secs_f64();
+    times.total_s = total_s;
     Ok(CalibrationRun {
         config: config.clone(),
         surface_description,

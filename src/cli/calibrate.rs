@@ -8,7 +8,10 @@
 use asperity::calibrate::config::CalibrationConfig;
 use asperity::calibrate::convergence::Verdict;
 use asperity::calibrate::output::{self, describe_shape, ConfigSource};
-use asperity::calibrate::pipeline::{self, SurfaceSource};
+use asperity::calibrate::pipeline::{self, CalibrationRun, RealisationChains, SurfaceSource};
+use asperity::calibrate::sweep::CalibrationSweep;
+use asperity::output::OutputSet;
+use asperity::shard::{self, Shard, ShardedSweep, UnitRecord};
 use asperity::{Error, Result};
 use std::path::PathBuf;
 
@@ -35,20 +38,23 @@ pub struct CalibrateArgs {
     /// Output directory.
     #[arg(long, default_value = "calib")]
     out_dir: PathBuf,
+    /// Run only shard i of n (1-based, e.g. `3/8`): the realisations are split into n
+    /// contiguous blocks, each realisation with its grid- and patch-check chains, and the
+    /// results go to `<out-dir>/calibrate.shard-i-of-n.json`; `asperity merge` writes from all n
+    /// the files of a single run. Generated surfaces only.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
 }
 
 pub fn run(args: CalibrateArgs) -> Result<()> {
     // Refused now, before the computation: an --out-dir that is a file or not writable.
-    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let (mut config, source) = match &args.config {
         Some(path) => {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
             (
                 CalibrationConfig::read(path)?,
-                ConfigSource::File {
-                    path: path.clone(),
-                    bytes,
-                },
+                ConfigSource::file(path, &bytes),
             )
         }
         None => (CalibrationConfig::reference(), ConfigSource::BuiltIn),
@@ -79,6 +85,17 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
             .validate()
             .map_err(|e| super::rename_param(e, "--realisations"))?;
     }
+    let shard = match &args.shard {
+        Some(_) if !args.surface.is_empty() => return Err(Error::param(
+            "--shard",
+            "splits the realisations of generated surfaces; a --surface file is one realisation",
+        )),
+        Some(text) => Some(
+            text.parse::<Shard>()
+                .map_err(|e| super::rename_param(e, "--shard"))?,
+        ),
+        None => None,
+    };
     let surfaces = if args.surface.is_empty() {
         SurfaceSource::Generated
     } else {
@@ -107,12 +124,74 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
         ),
     }
     eprintln!("calibrate: {}", output::describe_config(&config));
+    if let Some(shard) = shard {
+        return run_shard(CalibrationSweep { config, source }, shard, out);
+    }
     let bar = super::progress_bar("calibrate", pipeline::progress_units(&config, &surfaces));
     let result = pipeline::run(&config, &surfaces, &bar);
     bar.finish_and_clear();
-    let result = result?;
+    write_and_report(&result?, &source, out)
+}
+
+/// `--shard i/n`: the chains of the shard's realisations → `calibrate.shard-i-of-n.json`.
+fn run_shard(sweep: CalibrationSweep, shard: Shard, mut out: OutputSet) -> Result<()> {
+    let labels = sweep.unit_labels();
+    shard::check_labels(&labels)?;
+    let block = shard.units(labels.len());
+    eprintln!(
+        "calibrate: shard {shard}: realisations {}..{} ({} of {})",
+        block.start + 1,
+        block.end,
+        block.len(),
+        labels.len()
+    );
+    let source = SurfaceSource::Generated;
+    let bar = super::progress_bar(
+        "calibrate",
+        pipeline::progress_units_of(&sweep.config, &source, block.len()),
+    );
+    let chains = pipeline::run_realisations(
+        &sweep.config,
+        &source,
+        block.clone(),
+        &bar,
+        pipeline::Parallelism::ChainsConcurrently,
+    );
+    bar.finish_and_clear();
+    let units: Vec<UnitRecord<RealisationChains>> = block
+        .zip(chains?)
+        .map(|(id, c)| UnitRecord {
+            id,
+            label: labels[id].clone(),
+            wall_time_s: [Some(&c.main), c.grid_check.as_ref(), c.patch_check.as_ref()]
+                .into_iter()
+                .flatten()
+                .map(|r| r.times.total_s)
+                .sum(),
+            result: c,
+        })
+        .collect();
+    let staged = out.staging_dir()?;
+    let path = out.final_path(&shard::write_shard(&staged, &sweep, shard, &units)?);
+    out.commit()?;
+    println!(
+        "wrote {} (shard {shard}: {} of {} realisations); merge all {} shards with `asperity merge`",
+        path.display(),
+        units.len(),
+        labels.len(),
+        shard.count
+    );
+    Ok(())
+}
+
+/// Write the files of a calibration run (single or merged) into `out` and print its summary.
+pub fn write_and_report(
+    result: &CalibrationRun,
+    source: &ConfigSource,
+    mut out: OutputSet,
+) -> Result<()> {
     // Every file is staged and appears at once (or not at all, on an error or an interrupt).
-    let (_, output_s) = output::write_outputs(&result, &source, &out.staging_dir()?)?;
+    let (_, output_s) = output::write_outputs(result, source, &out.staging_dir()?)?;
     let written = out.commit()?;
 
     let n = result.realisations.len();

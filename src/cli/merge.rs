@@ -2,6 +2,7 @@
 //! run writes, byte for byte. Every shard must be present once and all must come from the same
 //! configuration (see [`asperity::shard`]); nothing is written otherwise.
 
+use asperity::calibrate::sweep::CalibrationSweep;
 use asperity::contact::surface_sweep::SurfaceSweep;
 use asperity::shard::{self, ShardedSweep};
 use asperity::{Error, Result};
@@ -33,12 +34,29 @@ pub fn run(args: MergeArgs) -> Result<()> {
             );
             Ok(())
         }
+        CalibrationSweep::KIND => {
+            let merged = shard::merge::<CalibrationSweep>(&args.shards)?;
+            // The run's wall time: the realisations' chains summed (they ran in other jobs).
+            let chains_s = merged.units.iter().map(|u| u.wall_time_s).sum();
+            let run = merged.config.assemble(&merged.units, chains_s)?;
+            let out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+            super::calibrate::write_and_report(&run, &merged.config.source, out)?;
+            println!(
+                "merged {} shards ({} realisations, configuration {}) into {}",
+                merged.shards,
+                merged.units.len(),
+                &merged.config_sha256[..12],
+                args.out_dir.display()
+            );
+            Ok(())
+        }
         other => Err(Error::parse(
             &args.shards[0],
             0,
             format!(
-                "shards of an unknown sweep kind `{other}` (known: {})",
-                SurfaceSweep::KIND
+                "shards of an unknown sweep kind `{other}` (known: {}, {})",
+                SurfaceSweep::KIND,
+                CalibrationSweep::KIND
             ),
         )),
     }

@@ -8,6 +8,7 @@ pub mod contact_tangential;
 pub mod diagnose;
 pub mod elements;
 pub mod film;
+pub mod identify;
 pub mod merge;
 pub mod progress;
 pub mod response;

@@ -19,6 +19,7 @@ pub mod condensation;
 pub mod contact;
 pub mod continuation;
 pub mod hbm;
+pub mod iwan;
 pub mod model;
 pub mod model_file;
 pub mod nonlinear;

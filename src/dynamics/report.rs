@@ -82,8 +82,74 @@ pub fn summarise(
     }
 }
 
-/// CSV of one level: frequency, amplitude and phase per response DOF and harmonic, energy and
-/// contact-state fractions, Newton iterations and residual.
+/// The columns of one level, named as in its CSV: `frequency_Hz`; per response DOF and retained
+/// harmonic `k` the amplitude `<dof>_h<k>_amplitude_m` (m) and phase `<dof>_h<k>_phase_rad` of
+/// `a − i·b` (or `<dof>_h0_mean_m`); then `dissipated_energy_J` (J per cycle, summed over the
+/// elements), the element-averaged `stick_fraction`, `slip_fraction`, `separation_fraction`,
+/// `newton_iterations` and `relative_residual`. One value per branch point.
+pub fn level_columns(
+    system: &HbmSystem<'_>,
+    responses: &[(String, DVector<f64>)],
+    result: &LevelResult,
+) -> Vec<(String, Vec<f64>)> {
+    let points = &result.branch.points;
+    let mut cols = vec![(
+        "frequency_Hz".to_string(),
+        points
+            .iter()
+            .map(|p| p.omega / TWO_PI)
+            .collect::<Vec<f64>>(),
+    )];
+    let coordinates: Vec<DVector<f64>> = points.iter().map(|p| system.coordinates(p)).collect();
+    for (label, row) in responses {
+        for &k in system.harmonics.orders() {
+            let h: Vec<(f64, f64)> = coordinates
+                .iter()
+                .map(|x| harmonic_of(system, x, row, k))
+                .collect();
+            if k == 0 {
+                cols.push((
+                    format!("{label}_h0_mean_m"),
+                    h.iter().map(|v| v.0).collect(),
+                ));
+            } else {
+                cols.push((
+                    format!("{label}_h{k}_amplitude_m"),
+                    h.iter().map(|v| v.0).collect(),
+                ));
+                cols.push((
+                    format!("{label}_h{k}_phase_rad"),
+                    h.iter().map(|v| v.1).collect(),
+                ));
+            }
+        }
+    }
+    for (j, name) in [
+        "dissipated_energy_J",
+        "stick_fraction",
+        "slip_fraction",
+        "separation_fraction",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        cols.push((
+            name.to_string(),
+            result.totals.iter().map(|t| t[j]).collect(),
+        ));
+    }
+    cols.push((
+        "newton_iterations".to_string(),
+        points.iter().map(|p| p.iterations as f64).collect(),
+    ));
+    cols.push((
+        "relative_residual".to_string(),
+        points.iter().map(|p| p.residual).collect(),
+    ));
+    cols
+}
+
+/// CSV of one level: the [`level_columns`], amplitudes to 10 significant digits.
 pub fn write_level_csv(
     path: &Path,
     system: &HbmSystem<'_>,
@@ -91,6 +157,7 @@ pub fn write_level_csv(
     result: &LevelResult,
     header: &str,
 ) -> Result<()> {
+    let cols = level_columns(system, responses, result);
     crate::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         for l in header.lines() {
@@ -104,45 +171,26 @@ pub fn write_level_csv(
         .map_err(io)?;
         writeln!(w, "# units: frequency_Hz in Hz; amplitudes in m (h0: mean displacement); phase_rad = arg(a − i·b) of x = a·cos(kωt) + b·sin(kωt), relative to the force cos(ωt);").map_err(io)?;
         writeln!(w, "#   dissipated_energy_J: sum over elements of ∮f·du per cycle; stick/slip/separation: element-averaged fractions of the period").map_err(io)?;
-        let mut cols = vec!["frequency_Hz".to_string()];
-        for (label, _) in responses {
-            for &k in system.harmonics.orders() {
-                if k == 0 {
-                    cols.push(format!("{label}_h0_mean_m"));
-                } else {
-                    cols.push(format!("{label}_h{k}_amplitude_m"));
-                    cols.push(format!("{label}_h{k}_phase_rad"));
-                }
-            }
-        }
-        for c in [
-            "dissipated_energy_J",
-            "stick_fraction",
-            "slip_fraction",
-            "separation_fraction",
-            "newton_iterations",
-            "relative_residual",
-        ] {
-            cols.push(c.to_string());
-        }
-        writeln!(w, "{}", cols.join(",")).map_err(io)?;
-        for (p, t) in result.branch.points.iter().zip(&result.totals) {
-            let x = system.coordinates(p);
-            let mut v = vec![format!("{:.9e}", p.omega / TWO_PI)];
-            for (_, row) in responses {
-                for &k in system.harmonics.orders() {
-                    let (a, ph) = harmonic_of(system, &x, row, k);
-                    v.push(format!("{a:.9e}"));
-                    if k != 0 {
-                        v.push(format!("{ph:.6}"));
+        let names: Vec<&str> = cols.iter().map(|(n, _)| n.as_str()).collect();
+        writeln!(w, "{}", names.join(",")).map_err(io)?;
+        for i in 0..result.branch.points.len() {
+            let v: Vec<String> = cols
+                .iter()
+                .map(|(name, values)| {
+                    let x = values[i];
+                    if name.ends_with("_phase_rad") {
+                        format!("{x:.6}")
+                    } else if name == "newton_iterations" {
+                        format!("{}", x as usize)
+                    } else if name == "relative_residual" {
+                        format!("{x:.3e}")
+                    } else if name.ends_with("_fraction") || name == "dissipated_energy_J" {
+                        format!("{x:.6e}")
+                    } else {
+                        format!("{x:.9e}")
                     }
-                }
-            }
-            for x in t {
-                v.push(format!("{x:.6e}"));
-            }
-            v.push(p.iterations.to_string());
-            v.push(format!("{:.3e}", p.residual));
+                })
+                .collect();
             writeln!(w, "{}", v.join(",")).map_err(io)?;
         }
         Ok(())

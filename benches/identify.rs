@@ -1,0 +1,107 @@
+//! Benchmark: cost of one model evaluation in identification (the harmonic balance at every
+//! measured row of the Brake–Reuss beam's levels 1 and 4, 82 rows, warm-started along each
+//! sweep), per joint family and effect, as single-thread CPU time (robust to other processes
+//! sharing the machine) with the ratio to the Jenkins baseline; and, with
+//! `ASPERITY_BENCH_FULL=1`, the wall time of the whole identification with the CLI's defaults.
+//!
+//! Run: `ASPERITY_DATA_DIR=../shared/data cargo bench --bench identify`.
+
+use asperity::identify::effects::Effect;
+use asperity::identify::fit::{LevelData, Objective};
+use asperity::identify::measured::{PhaseConvention, Sweep};
+use asperity::identify::model::{Family, Model, ModelSpec, Scales};
+use asperity::identify::{identify, Options};
+use std::time::Instant;
+
+/// CPU time of the calling thread (s), from /proc/thread-self/schedstat (ns on CPU).
+fn thread_cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-9)
+}
+
+fn main() {
+    let dir = asperity::testdata::data_dir().join("frf");
+    let read = |i: usize| {
+        Sweep::read_csv(&dir.join(format!("brb-force-control-level{i}.csv"))).unwrap_or_else(|e| {
+            eprintln!("{e} (set ASPERITY_DATA_DIR)");
+            std::process::exit(1)
+        })
+    };
+    let sweeps = vec![read(1), read(4)];
+    let conv = PhaseConvention::detect(&sweeps).unwrap();
+    let levels: Vec<LevelData> = sweeps.iter().map(|s| LevelData::new(s, &conv)).collect();
+    let masks: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
+    let scales = Scales {
+        frequency_hz: 80.3,
+        modal_mass_kg: 2.0,
+        amplitude_max_m: 2.7e-4,
+        amplitude_min_m: 7.8e-5,
+        force_n: 1.46,
+    };
+    let base = |f| ModelSpec::baseline(f, scales);
+    let cases = [
+        ("jenkins", base(Family::Jenkins)),
+        (
+            "jenkins + amplitude_stiffness",
+            base(Family::Jenkins).with(Effect::AmplitudeStiffness),
+        ),
+        (
+            "jenkins + quadratic_damping",
+            base(Family::Jenkins).with(Effect::QuadraticDamping),
+        ),
+        (
+            "jenkins + higher_harmonics",
+            base(Family::Jenkins).with(Effect::HigherHarmonics),
+        ),
+        ("valanis", base(Family::Valanis)),
+        ("iwan (16 sliders)", base(Family::Iwan)),
+    ];
+    println!(
+        "load average: {}",
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
+    println!(
+        "{:<32} {:>14} {:>10}",
+        "model", "CPU ms / eval", "× jenkins"
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut reference = f64::NAN;
+    for (name, spec) in cases {
+        let mut m = Model::neutral(spec.clone());
+        // A joint slipping over part of the measured range: κ = 5 %, δ = 100 µm.
+        m.values[3] = 0.05;
+        m.values[4] = 1e-4;
+        let obj = Objective::new(spec, &levels, &masks, None);
+        let per = pool.install(|| {
+            obj.cost_of(&m);
+            let (t0, n) = (thread_cpu_s(), 5);
+            for _ in 0..n {
+                obj.cost_of(&m);
+            }
+            (thread_cpu_s() - t0) / n as f64
+        });
+        if reference.is_nan() {
+            reference = per;
+        }
+        println!("{name:<32} {:>14.2} {:>10.1}", per * 1e3, per / reference);
+    }
+    if std::env::var("ASPERITY_BENCH_FULL").is_ok_and(|v| v == "1") {
+        let all: Vec<Sweep> = (1..=4).map(read).collect();
+        let t = Instant::now();
+        let id = identify(all, &Options::new(Family::Jenkins), None).unwrap();
+        println!(
+            "full identification (CLI defaults, levels 1-4, fit 1 and 4): {:.1} s wall, {} \
+             baseline evaluations, final effects {:?}",
+            t.elapsed().as_secs_f64(),
+            id.selection.baseline_train_fit.evaluations,
+            id.after.model.spec.effects
+        );
+    }
+}

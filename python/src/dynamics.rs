@@ -1,0 +1,476 @@
+//! Forced response of a structure with contact elements (multi-harmonic balance with AFT and
+//! pseudo-arclength continuation, `asperity::dynamics`): a model read from the model file of
+//! `asperity response` or built from numpy arrays, and a force-controlled frequency sweep
+//! returning numpy columns. Units: SI (kg, N·s/m, N/m, N, m, Hz).
+
+use crate::arrays::{borrow_f64, finite_slice, require_finite};
+use crate::element::ValanisParams;
+use crate::errors::{parameter, IntoPy};
+use asperity::dynamics::aft::Harmonics;
+use asperity::dynamics::continuation::{sweep, ContinuationSettings};
+use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
+use asperity::dynamics::model::{CoordinateKind, Structure};
+use asperity::dynamics::model_file::{self, ModelFile};
+use asperity::dynamics::nonlinear::{
+    CubicSpring, HystereticElement, Jenkins, JenkinsContact, MicroslipContact,
+};
+use asperity::dynamics::report;
+use nalgebra::{DMatrix, DVector};
+use ndarray::{Array3, Ix1, Ix2};
+use numpy::{PyArray1, PyArray2, PyArray3};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// A 2-D float64 array (finite) as a matrix.
+fn matrix(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<DMatrix<f64>> {
+    let a = borrow_f64::<Ix2>(obj, name, what)?;
+    let (r, c) = a.as_array().dim();
+    let s = a.as_slice().expect("checked C-contiguous");
+    require_finite(obj.py(), name, s)?;
+    Ok(DMatrix::from_row_slice(r, c, s))
+}
+
+/// A 1-D float64 array (finite) as a vector.
+fn vector(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<DVector<f64>> {
+    let a = borrow_f64::<Ix1>(obj, name, what)?;
+    Ok(DVector::from_column_slice(finite_slice(
+        obj.py(),
+        &a,
+        name,
+    )?))
+}
+
+/// The linear structure with its elements, the excitation (force per unit level on the
+/// coordinates) and the observed responses; from a model file (`ResponseModel.read`) or from
+/// arrays (`ResponseModel.lumped`, `ResponseModel.modal`).
+#[pyclass(module = "asperity")]
+pub struct ResponseModel {
+    structure: Structure,
+    force: DVector<f64>,
+    harmonic: usize,
+    responses: Vec<(String, DVector<f64>)>,
+    /// The model file and its path, when read from one (sweep defaults and levels).
+    file: Option<(PathBuf, ModelFile)>,
+}
+
+fn formulation(name: &str) -> PyResult<FormulationChoice> {
+    match name {
+        "auto" => Ok(FormulationChoice::Auto),
+        "coordinates" => Ok(FormulationChoice::Coordinates),
+        "receptance" => Ok(FormulationChoice::Receptance),
+        other => Err(Python::attach(|py| {
+            parameter(
+                py,
+                "formulation",
+                format!("`{other}`: expected auto, coordinates or receptance"),
+            )
+        })),
+    }
+}
+
+impl ResponseModel {
+    /// A model from arrays: the excitation force (n,) and the response rows (label → (n,)).
+    fn from_arrays(
+        py: Python<'_>,
+        structure: Structure,
+        force: &Bound<'_, PyAny>,
+        harmonic: usize,
+        responses: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let n = structure.n();
+        let force = vector(
+            force,
+            "force",
+            "N per unit level on each coordinate, shape (n,)",
+        )?;
+        if force.len() != n {
+            return Err(parameter(
+                py,
+                "force",
+                format!("{} entries for {n} coordinates", force.len()),
+            ));
+        }
+        let responses = match responses {
+            None => (0..n)
+                .map(|r| {
+                    let mut row = DVector::zeros(n);
+                    row[r] = 1.0;
+                    (structure.labels[r].clone(), row)
+                })
+                .collect(),
+            Some(d) => {
+                let mut out = Vec::new();
+                for (k, v) in d.iter() {
+                    let label: String = k.extract()?;
+                    let row = vector(&v, "responses", "observation row, shape (n,)")?;
+                    if row.len() != n {
+                        return Err(parameter(
+                            py,
+                            "responses",
+                            format!("`{label}`: {} entries for {n} coordinates", row.len()),
+                        ));
+                    }
+                    out.push((label, row));
+                }
+                if out.is_empty() {
+                    return Err(parameter(py, "responses", "no response given".into()));
+                }
+                out
+            }
+        };
+        Ok(Self {
+            structure,
+            force,
+            harmonic,
+            responses,
+            file: None,
+        })
+    }
+
+    fn attach(
+        &mut self,
+        label: String,
+        element: Arc<dyn HystereticElement>,
+        map: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let map = matrix(
+            map,
+            "map",
+            "element displacements per coordinate, shape (element dofs, n)",
+        )?;
+        self.structure.attach(label, element, map).py()
+    }
+}
+
+#[pymethods]
+impl ResponseModel {
+    /// Read a model file (TOML) exactly as `asperity response` does.
+    #[staticmethod]
+    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let m = py.detach(|| model_file::load(&path)).py()?;
+        Ok(Self {
+            structure: m.structure,
+            force: m.force,
+            harmonic: m.file.excitation.harmonic,
+            responses: m.responses,
+            file: Some((m.path, m.file)),
+        })
+    }
+
+    /// Lumped model: labels of the n coordinates, symmetric positive definite `mass` (kg) and
+    /// `stiffness` (N/m), symmetric positive semi-definite `damping` (N·s/m), each (n, n);
+    /// `force` (n,) the excitation per unit level (N); `responses` maps a label to an
+    /// observation row (n,) (default: every coordinate).
+    #[staticmethod]
+    #[pyo3(signature = (labels, mass, damping, stiffness, force, *, harmonic=1, responses=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn lumped(
+        py: Python<'_>,
+        labels: Vec<String>,
+        mass: &Bound<'_, PyAny>,
+        damping: &Bound<'_, PyAny>,
+        stiffness: &Bound<'_, PyAny>,
+        force: &Bound<'_, PyAny>,
+        harmonic: usize,
+        responses: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let structure = Structure::lumped(
+            labels,
+            matrix(mass, "mass", "kg, shape (n, n)")?,
+            matrix(damping, "damping", "N·s/m, shape (n, n)")?,
+            matrix(stiffness, "stiffness", "N/m, shape (n, n)")?,
+        )
+        .py()?;
+        Self::from_arrays(py, structure, force, harmonic, responses)
+    }
+
+    /// Reduced modal model: natural frequencies (Hz) and modal damping ratios of mass-normalised
+    /// modes; `force` (n_modes,) the modal force per unit level `Φᵀf`.
+    #[staticmethod]
+    #[pyo3(signature = (frequencies_hz, damping_ratios, force, *, harmonic=1, responses=None))]
+    fn modal(
+        py: Python<'_>,
+        frequencies_hz: Vec<f64>,
+        damping_ratios: Vec<f64>,
+        force: &Bound<'_, PyAny>,
+        harmonic: usize,
+        responses: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let structure = Structure::modal(&frequencies_hz, &damping_ratios).py()?;
+        Self::from_arrays(py, structure, force, harmonic, responses)
+    }
+
+    /// Attach a 1-D Jenkins element (stiffness `kt_n_per_m`, slip force `slip_force_n`);
+    /// `map` (1, n): its displacement per coordinate.
+    fn attach_jenkins(
+        &mut self,
+        label: String,
+        kt_n_per_m: f64,
+        slip_force_n: f64,
+        map: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let e = Jenkins::new(kt_n_per_m, slip_force_n).py()?;
+        self.attach(label, Arc::new(e), map)
+    }
+
+    /// Attach a cubic spring `f = k3·u³` (k3 in N/m³); `map` (1, n).
+    fn attach_cubic_spring(
+        &mut self,
+        label: String,
+        k3_n_per_m3: f64,
+        map: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        if !k3_n_per_m3.is_finite() {
+            return Err(parameter(
+                map.py(),
+                "k3_n_per_m3",
+                format!("{k3_n_per_m3} is not finite"),
+            ));
+        }
+        self.attach(label, Arc::new(CubicSpring { k3: k3_n_per_m3 }), map)
+    }
+
+    /// Attach the 3-D Valanis microslip contact of the element table (`law = "valanis"`):
+    /// `params` per element (E0, Et in N/m), normal stiffness `kn_n_per_m`, preload `n0_n` (N);
+    /// `map` (3, n): local displacements (t1, t2, n) per coordinate.
+    fn attach_valanis_contact(
+        &mut self,
+        label: String,
+        params: &ValanisParams,
+        kn_n_per_m: f64,
+        n0_n: f64,
+        map: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let e = MicroslipContact::new(params.inner, kn_n_per_m, n0_n).py()?;
+        self.attach(label, Arc::new(e), map)
+    }
+
+    /// Attach the 3-D Jenkins contact (`law = "jenkins"`): tangential stiffness `kt_n_per_m`,
+    /// friction coefficient `mu`, normal stiffness `kn_n_per_m`, preload `n0_n`; `map` (3, n).
+    #[allow(clippy::too_many_arguments)]
+    fn attach_jenkins_contact(
+        &mut self,
+        label: String,
+        kt_n_per_m: f64,
+        mu: f64,
+        kn_n_per_m: f64,
+        n0_n: f64,
+        map: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let e = JenkinsContact::new(kt_n_per_m, mu, kn_n_per_m, n0_n).py()?;
+        self.attach(label, Arc::new(e), map)
+    }
+
+    /// Coordinate labels (`node.x` or `mode r`).
+    #[getter]
+    fn labels(&self) -> Vec<String> {
+        self.structure.labels.clone()
+    }
+
+    /// `"physical"` or `"modal"`.
+    #[getter]
+    fn coordinates(&self) -> &'static str {
+        match self.structure.kind {
+            CoordinateKind::Physical => "physical",
+            CoordinateKind::Modal => "modal",
+        }
+    }
+
+    /// Mass (kg), damping (N·s/m) and stiffness (N/m) matrices, (n, n) copies.
+    #[getter]
+    fn matrices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, m) in [
+            ("mass", &self.structure.mass),
+            ("damping", &self.structure.damping),
+            ("stiffness", &self.structure.stiffness),
+        ] {
+            let rows: Vec<Vec<f64>> = m.row_iter().map(|r| r.iter().copied().collect()).collect();
+            d.set_item(name, PyArray2::from_vec2(py, &rows)?)?;
+        }
+        Ok(d)
+    }
+
+    /// Excitation force per unit level on the coordinates (N), (n,).
+    #[getter]
+    fn force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.force.as_slice())
+    }
+
+    /// Labels of the observed responses (the CSV column prefixes).
+    #[getter]
+    fn response_labels(&self) -> Vec<String> {
+        self.responses.iter().map(|r| r.0.clone()).collect()
+    }
+
+    /// `(label, law, dofs)` of every attached element.
+    #[getter]
+    fn elements(&self) -> Vec<(String, &'static str, usize)> {
+        self.structure
+            .elements
+            .iter()
+            .map(|e| (e.label.clone(), e.element.name(), e.element.dofs()))
+            .collect()
+    }
+
+    /// Excitation levels (N) of the model file (None for a model built from arrays).
+    #[getter]
+    fn levels_n(&self) -> Option<Vec<f64>> {
+        self.file
+            .as_ref()
+            .map(|(_, f)| f.excitation.levels_n.clone())
+    }
+
+    /// Force-controlled frequency sweep at excitation `level_n` (N) from `frequency_start_hz`
+    /// to `frequency_end_hz` (Hz; downwards when end < start) by pseudo-arclength
+    /// continuation, `harmonics` retained (odd only with `odd_only`), `time_samples` per period
+    /// for AFT, at least `points` points over the span. Unset values come from the model
+    /// file's `[sweep]` (required for a model built from arrays, except the defaults
+    /// harmonics = 5, points = 200, formulation = "auto").
+    ///
+    /// Returns a dict: the columns of `response_level_<i>.csv` as float64 arrays
+    /// (`frequency_Hz`, `<dof>_h<k>_amplitude_m`, `<dof>_h<k>_phase_rad`, `<dof>_h0_mean_m`,
+    /// `dissipated_energy_J`, `stick_fraction`, `slip_fraction`, `separation_fraction`,
+    /// `newton_iterations`, `relative_residual`) under `"columns"`; `"coordinate_harmonics"`
+    /// (points, n, coefficients, m: `x_r(t) = Σ a·cos(kωt) + b·sin(kωt)` with, for each order
+    /// `k` of `"harmonic_orders"` in turn, one coefficient for k = 0 (the mean) or a, b); the
+    /// `"harmonic_orders"`; `"peak"` (index of the largest first-harmonic amplitude of the
+    /// first response); `"peak_elements"` (label, law, dissipated_energy_J,
+    /// stick/slip/separation fractions at the peak); `"level_N"`, `"formulation"`,
+    /// `"unknowns"`, `"rejected_steps"`, `"turning_points"`, `"jacobians"`, `"wall_time_s"`.
+    #[pyo3(signature = (level_n, frequency_start_hz=None, frequency_end_hz=None, *, harmonics=None, odd_only=None, time_samples=None, points=None, formulation=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn sweep<'py>(
+        &self,
+        py: Python<'py>,
+        level_n: f64,
+        frequency_start_hz: Option<f64>,
+        frequency_end_hz: Option<f64>,
+        harmonics: Option<usize>,
+        odd_only: Option<bool>,
+        time_samples: Option<usize>,
+        points: Option<usize>,
+        formulation: Option<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.file.as_ref().map(|(_, f)| &f.sweep);
+        let need = |v: Option<f64>, file: Option<f64>, name: &str| {
+            v.or(file).ok_or_else(|| {
+                parameter(
+                    py,
+                    name,
+                    "required for a model built from arrays (no model file [sweep])".into(),
+                )
+            })
+        };
+        let start = need(
+            frequency_start_hz,
+            s.map(|s| s.frequency_start_hz),
+            "frequency_start_hz",
+        )?;
+        let end = need(
+            frequency_end_hz,
+            s.map(|s| s.frequency_end_hz),
+            "frequency_end_hz",
+        )?;
+        let h = Harmonics::new(
+            harmonics.or(s.map(|s| s.harmonics)).unwrap_or(5),
+            odd_only.or(s.map(|s| s.odd_only)).unwrap_or(false),
+            time_samples.or(s.and_then(|s| s.time_samples)),
+        )
+        .py()?;
+        let choice = match &formulation {
+            Some(f) => self::formulation(f)?,
+            None => s.map_or(FormulationChoice::Auto, |s| s.formulation),
+        };
+        let mut settings = ContinuationSettings::new(start, end);
+        settings.points = points.or(s.map(|s| s.points)).unwrap_or(200);
+        let (system, result) = py
+            .detach(|| {
+                let system = HbmSystem::new(
+                    &self.structure,
+                    h,
+                    Excitation {
+                        force: self.force.clone(),
+                        harmonic: self.harmonic,
+                    },
+                    choice,
+                )?;
+                let branch = sweep(&system, level_n, &settings, &mut |_| {})?;
+                let r = report::summarise(&system, level_n, branch, &self.responses[0].1);
+                Ok::<_, asperity::Error>((system, r))
+            })
+            .py()?;
+        let out = PyDict::new(py);
+        let cols = PyDict::new(py);
+        for (name, values) in report::level_columns(&system, &self.responses, &result) {
+            cols.set_item(name, PyArray1::from_vec(py, values))?;
+        }
+        out.set_item("columns", cols)?;
+        let (n, len) = (self.structure.n(), system.harmonics.len());
+        let mut x = Array3::<f64>::zeros((result.branch.points.len(), n, len));
+        for (i, p) in result.branch.points.iter().enumerate() {
+            let c = system.coordinates(p);
+            for r in 0..n {
+                for j in 0..len {
+                    x[(i, r, j)] = c[r * len + j];
+                }
+            }
+        }
+        out.set_item("coordinate_harmonics", PyArray3::from_owned_array(py, x))?;
+        out.set_item("harmonic_orders", system.harmonics.orders().to_vec())?;
+        out.set_item("peak", result.peak)?;
+        let pe = PyDict::new(py);
+        let el = &self.structure.elements;
+        let c = &result.peak_elements;
+        pe.set_item(
+            "element",
+            el.iter().map(|e| e.label.clone()).collect::<Vec<_>>(),
+        )?;
+        pe.set_item(
+            "law",
+            el.iter().map(|e| e.element.name()).collect::<Vec<_>>(),
+        )?;
+        for (name, f) in [
+            (
+                "dissipated_energy_J",
+                (|c: &asperity::dynamics::aft::ElementCycle| c.dissipated_energy_j)
+                    as fn(&asperity::dynamics::aft::ElementCycle) -> f64,
+            ),
+            ("stick_fraction", |c| c.stick_fraction),
+            ("slip_fraction", |c| c.slip_fraction),
+            ("separation_fraction", |c| c.separation_fraction),
+        ] {
+            pe.set_item(name, PyArray1::from_vec(py, c.iter().map(f).collect()))?;
+        }
+        out.set_item("peak_elements", pe)?;
+        out.set_item("level_N", level_n)?;
+        out.set_item(
+            "formulation",
+            match system.formulation() {
+                asperity::dynamics::hbm::Formulation::Coordinates => "coordinates",
+                asperity::dynamics::hbm::Formulation::Receptance => "receptance",
+            },
+        )?;
+        out.set_item("unknowns", system.unknowns())?;
+        out.set_item("rejected_steps", result.branch.rejected_steps)?;
+        out.set_item("turning_points", result.branch.turning_points)?;
+        out.set_item("jacobians", result.branch.jacobians)?;
+        out.set_item("wall_time_s", result.branch.wall_time_s)?;
+        Ok(out)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "ResponseModel({} {} coordinates, {} elements, responses {:?}{})",
+            self.structure.n(),
+            self.coordinates(),
+            self.structure.elements.len(),
+            self.response_labels(),
+            self.file
+                .as_ref()
+                .map_or(String::new(), |(p, _)| format!(", file {}", p.display()))
+        )
+    }
+}

@@ -1,0 +1,167 @@
+//! `asperity identify` and `asperity predict`: measured frequency responses → identified
+//! single-nonlinear-mode model → errors on the levels and tests not used.
+use asperity::identify::effects::Effect;
+use asperity::identify::model::Family;
+use asperity::identify::{identify, predict, read_sweeps, Control, Options};
+use asperity::{Error, Result};
+use std::path::PathBuf;
+
+/// Joint element family of the baseline.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum FamilyArg {
+    Jenkins,
+    Valanis,
+    Iwan,
+}
+
+/// Identify a jointed structure's nonlinear mode from stepped-sine sweeps at several excitation
+/// levels (one CSV per level: frequency_Hz, force_amplitude_N, <quantity>_amplitude_<unit>,
+/// phase_rad|phase_deg); fit on some levels, find the missing effect on held-out rows, predict
+/// the others.
+#[derive(clap::Args)]
+pub struct IdentifyArgs {
+    /// Measured sweeps, one file per level (levels are numbered by increasing mean force).
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Levels to fit on (1-based, by increasing mean force), e.g. 1,4; default: lowest and highest.
+    #[arg(long, value_delimiter = ',')]
+    pub fit_levels: Option<Vec<usize>>,
+    /// Joint element of the baseline model.
+    #[arg(long, value_enum, default_value = "jenkins")]
+    pub family: FamilyArg,
+    /// Candidate effects to test (comma-separated ids; default: all). Ids: valanis_joint,
+    /// iwan_joint, amplitude_stiffness, quadratic_damping, preload_loss, higher_harmonics,
+    /// out_of_band_modes, shaker_interaction.
+    #[arg(long, value_delimiter = ',')]
+    pub candidates: Option<Vec<String>>,
+    /// Maximum number of effects added (each needs strong held-out evidence).
+    #[arg(long, default_value_t = 2)]
+    pub max_effects: usize,
+    /// Particle-swarm starts of the baseline fit (each followed by Nelder–Mead).
+    #[arg(long, default_value_t = 3)]
+    pub starts: usize,
+    /// Particles of the swarm.
+    #[arg(long, default_value_t = 32)]
+    pub particles: usize,
+    /// Swarm iterations per start.
+    #[arg(long, default_value_t = 40)]
+    pub swarm_iterations: u64,
+    /// Nelder–Mead iteration cap per run (each fit runs Nelder–Mead twice; a fit whose restart
+    /// hits the cap has not converged, which is an error for the final models).
+    #[arg(long, default_value_t = 600)]
+    pub local_iterations: u64,
+    /// Seed of the first start (start k uses seed + k).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Response amplitudes at which the identified model's response-controlled FRF is reported,
+    /// in the unit of the lowest level's quantity (e.g. m/s² for accelerometers); default: the
+    /// measured peak responses.
+    #[arg(long, value_delimiter = ',')]
+    pub response_amplitude: Option<Vec<f64>>,
+    /// Output directory: identify.{txt,json}, model.json, identify-rows.csv,
+    /// identify-backbone.{csv,png}, identify-response-controlled.csv, identify-level<N>.png.
+    #[arg(long, default_value = "identify-out")]
+    pub out_dir: PathBuf,
+}
+
+pub fn run_identify(args: IdentifyArgs) -> Result<()> {
+    let family = match args.family {
+        FamilyArg::Jenkins => Family::Jenkins,
+        FamilyArg::Valanis => Family::Valanis,
+        FamilyArg::Iwan => Family::Iwan,
+    };
+    let mut opts = Options::new(family);
+    opts.fit_levels = args.fit_levels.clone();
+    if let Some(c) = &args.candidates {
+        opts.select.candidates = c
+            .iter()
+            .map(|id| {
+                Effect::from_id(id.trim()).ok_or_else(|| {
+                    Error::param(
+                        "--candidates",
+                        format!(
+                            "unknown effect {id:?}; known: {}",
+                            Effect::ALL.map(|e| e.id()).join(", ")
+                        ),
+                    )
+                })
+            })
+            .collect::<Result<_>>()?;
+    }
+    if args.starts == 0 || args.particles < 2 {
+        return Err(Error::param(
+            "--starts/--particles",
+            "at least one start and two particles",
+        ));
+    }
+    opts.select.max_effects = args.max_effects;
+    opts.select.baseline_fit.starts = args.starts;
+    for f in [
+        &mut opts.select.baseline_fit,
+        &mut opts.select.candidate_fit,
+        &mut opts.final_fit,
+    ] {
+        f.local_iterations = args.local_iterations;
+        f.particles = args.particles;
+        f.swarm_iterations = args.swarm_iterations;
+        f.seed = args.seed;
+    }
+    opts.response_amplitudes = args.response_amplitude.clone();
+    let sweeps = read_sweeps(&args.files)?;
+    let bar = super::progress_bar("identify", opts.estimated_evaluations());
+    bar.set_message("model evaluations");
+    let result = identify(sweeps, &opts, Some(&bar));
+    bar.finish_and_clear();
+    let id = result?;
+    let written = id.write(&args.out_dir)?;
+    print!("{}", id.text());
+    println!("\nwrote:");
+    for p in written {
+        println!("  {}", p.display());
+    }
+    Ok(())
+}
+
+/// Score an identified model (model.json from `asperity identify`) on measured files:
+/// force-controlled (each row's force applied) or response-controlled (each row's response
+/// amplitude held, the force solved for).
+#[derive(clap::Args)]
+pub struct PredictArgs {
+    /// Identified model file (model.json written by `asperity identify`).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Measured files to predict.
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// How the measured test was controlled.
+    #[arg(long, value_enum, default_value = "force")]
+    pub control: ControlArg,
+    /// Output directory: predict.{txt,json}, predict-rows.csv, predict-<N>.png.
+    #[arg(long, default_value = "predict-out")]
+    pub out_dir: PathBuf,
+}
+
+/// Test control of the measured files.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ControlArg {
+    /// Force amplitude of each row applied.
+    Force,
+    /// Response amplitude of each row held.
+    Response,
+}
+
+pub fn run_predict(args: PredictArgs) -> Result<()> {
+    let control = match args.control {
+        ControlArg::Force => Control::Force,
+        ControlArg::Response => Control::Response,
+    };
+    let sweeps = read_sweeps(&args.files)?;
+    let p = predict(&args.model, sweeps, control)?;
+    let written = p.write(&args.out_dir)?;
+    print!("{}", p.text());
+    println!("\nwrote:");
+    for w in written {
+        println!("  {}", w.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,432 @@
+//! Fitting a model to measured sweeps: bounded physical parameters, a global search by particle
+//! swarm followed by Nelder–Mead refinement, from several seeded starts (both optimisers from
+//! `argmin`).
+//!
+//! # Objective
+//!
+//! The complex response of the measured quantity per unit force (amplitude and phase), compared
+//! row by row at the measured frequency with the measured force of the row applied:
+//!
+//! ```text
+//! r_i = (Y_model,i − Y_meas,i) / max_j |Y_meas,j|          (j over the rows of the level)
+//! J   = (1/L)·Σ_levels (1/n_l)·Σ_{i in level l} |r_i|²
+//! ```
+//!
+//! Dividing by each level's peak and by its row count makes every level weigh alike, whatever
+//! its response amplitude (the peak accelerance of the Brake–Reuss beam falls threefold between
+//! its lowest and highest level) and its number of rows. A row where the harmonic balance fails
+//! counts as `|r| = 2` (worse than a zero response), so the search moves away from it.
+//!
+//! # Search
+//!
+//! Every parameter is mapped onto `[0, 1]` (logarithmically for positive parameters spanning
+//! decades, see [`super::model::ParamSpec`]); the bounds are physical and stated with the
+//! parameters. Each start runs `argmin`'s particle swarm (SPSO-2011 coefficients, seeded
+//! xoshiro256++ generator, seed `seed + start`) over the box, then Nelder–Mead from the swarm's
+//! best point (initial simplex 5 % of the box, outside the box the cost of the clamped point
+//! plus a quadratic penalty), restarted once from its optimum with a fresh simplex. A fit has
+//! converged when the restarted Nelder–Mead stops on its simplex tolerance (standard deviation of
+//! the simplex costs below `1e-7` of the cost) rather than on its iteration cap. The best start
+//! is kept; the spread of the starts' final costs is reported.
+
+use super::measured::{PhaseConvention, Quantity, Sweep};
+use super::model::{Drive, Model, ModelSpec, ParamSpec};
+use crate::error::{Error, Result};
+use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
+use argmin::solver::neldermead::NelderMead;
+use argmin::solver::particleswarm::ParticleSwarm;
+use rand_xoshiro::rand_core::SeedableRng;
+use rayon::prelude::*;
+use realfft::num_complex::Complex64;
+use serde::Serialize;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// One measured level prepared for fitting.
+#[derive(Debug, Clone)]
+pub struct LevelData {
+    /// File name.
+    pub name: String,
+    pub quantity: Quantity,
+    /// Frequency and measured force of every row, in sweep order.
+    pub drives: Vec<Drive>,
+    /// Measured response per unit force (the file's quantity, the crate's phase convention).
+    pub measured: Vec<Complex64>,
+    /// 1-based lines of the rows in the file.
+    pub lines: Vec<usize>,
+    pub mean_force_n: f64,
+    /// Largest `|Y_meas|` of the level.
+    pub peak: f64,
+}
+
+impl LevelData {
+    /// From a sweep in a given phase convention.
+    pub fn new(s: &Sweep, conv: &PhaseConvention) -> Self {
+        let measured = s.frf(conv);
+        let peak = measured.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        Self {
+            name: s.name(),
+            quantity: s.quantity,
+            drives: s
+                .rows
+                .iter()
+                .map(|r| Drive {
+                    omega: r.omega(),
+                    force_n: r.force_n,
+                })
+                .collect(),
+            measured,
+            lines: s.rows.iter().map(|r| r.line).collect(),
+            mean_force_n: s.mean_force_n(),
+            peak,
+        }
+    }
+
+    /// Model response per unit force in the level's quantity; failed rows are NaN.
+    pub fn model_frf(&self, model: &Model) -> Result<(Vec<Complex64>, usize)> {
+        let (x, failures) = model.receptance_tolerant(&self.drives, self.mean_force_n, true)?;
+        let y = self
+            .drives
+            .iter()
+            .zip(&x)
+            .map(|(d, xi)| xi * self.quantity.from_displacement(d.omega))
+            .collect();
+        Ok((y, failures.len()))
+    }
+
+    /// Normalised residuals `r_i` of a model response (failed rows: `2`).
+    pub fn residuals(&self, y: &[Complex64]) -> Vec<Complex64> {
+        y.iter()
+            .zip(&self.measured)
+            .map(|(m, d)| {
+                if m.re.is_finite() && m.im.is_finite() {
+                    (m - d) / self.peak
+                } else {
+                    Complex64::new(2.0, 0.0)
+                }
+            })
+            .collect()
+    }
+}
+
+/// Settings of a fit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FitOptions {
+    /// Particles of the swarm.
+    pub particles: usize,
+    /// Swarm iterations per start.
+    pub swarm_iterations: u64,
+    /// Independent starts (swarm + local refinement each).
+    pub starts: usize,
+    /// Seed of the first start.
+    pub seed: u64,
+    /// Nelder–Mead iteration cap per run (two runs per start).
+    pub local_iterations: u64,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            particles: 32,
+            swarm_iterations: 40,
+            starts: 3,
+            seed: 1,
+            local_iterations: 600,
+        }
+    }
+}
+
+/// Outcome of one start.
+#[derive(Debug, Clone, Serialize)]
+pub struct StartOutcome {
+    pub seed: Option<u64>,
+    /// Cost after the global search (None for a local-only start).
+    pub swarm_cost: Option<f64>,
+    pub final_cost: f64,
+    pub local_iterations: u64,
+    pub converged: bool,
+}
+
+/// Result of a fit.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitResult {
+    pub model: Model,
+    /// Objective `J` at the optimum.
+    pub cost: f64,
+    pub converged: bool,
+    pub starts: Vec<StartOutcome>,
+    /// Model evaluations (all levels at all rows) spent.
+    pub evaluations: u64,
+    /// Rows where the harmonic balance failed at the optimum.
+    pub failed_rows: usize,
+    /// Parameters within 0.5 % of the box width of a bound.
+    pub at_bounds: Vec<String>,
+    pub wall_time_s: f64,
+}
+
+/// The objective over the unit box.
+pub struct Objective<'a> {
+    spec: ModelSpec,
+    params: Vec<ParamSpec>,
+    levels: &'a [LevelData],
+    /// Rows that count, per level.
+    masks: &'a [Vec<bool>],
+    evaluations: AtomicU64,
+    progress: Option<&'a indicatif::ProgressBar>,
+}
+
+impl<'a> Objective<'a> {
+    pub fn new(
+        spec: ModelSpec,
+        levels: &'a [LevelData],
+        masks: &'a [Vec<bool>],
+        progress: Option<&'a indicatif::ProgressBar>,
+    ) -> Self {
+        let params = spec.params();
+        Self {
+            spec,
+            params,
+            levels,
+            masks,
+            evaluations: AtomicU64::new(0),
+            progress,
+        }
+    }
+
+    /// Physical values of a box point.
+    pub fn values(&self, z: &[f64]) -> Vec<f64> {
+        self.params
+            .iter()
+            .zip(z)
+            .map(|(p, &v)| p.value(v))
+            .collect()
+    }
+
+    /// Box point of physical values.
+    pub fn coordinates(&self, v: &[f64]) -> Vec<f64> {
+        self.params
+            .iter()
+            .zip(v)
+            .map(|(p, &x)| p.coordinate(x))
+            .collect()
+    }
+
+    /// Add the evaluations made by an optimiser's own copy of the objective.
+    fn add_evaluations_of(&self, run: Option<&Objective<'_>>) {
+        let n = run.map_or(0, |p| p.evaluations.load(Ordering::Relaxed));
+        self.evaluations.fetch_add(n, Ordering::Relaxed);
+    }
+
+    /// `J` of a model and the number of failed rows.
+    pub fn cost_of(&self, model: &Model) -> (f64, usize) {
+        self.evaluations.fetch_add(1, Ordering::Relaxed);
+        if let Some(b) = self.progress {
+            b.inc(1);
+        }
+        let per: Vec<(f64, usize)> = self
+            .levels
+            .par_iter()
+            .zip(self.masks.par_iter())
+            .map(|(l, mask)| match l.model_frf(model) {
+                Ok((y, failed)) => {
+                    let r = l.residuals(&y);
+                    let (mut s, mut n) = (0.0, 0usize);
+                    for (ri, &m) in r.iter().zip(mask) {
+                        if m {
+                            s += ri.norm_sqr();
+                            n += 1;
+                        }
+                    }
+                    (s / n.max(1) as f64, failed)
+                }
+                Err(_) => (4.0, l.drives.len()),
+            })
+            .collect();
+        let cost = per.iter().map(|p| p.0).sum::<f64>() / per.len() as f64;
+        (cost, per.iter().map(|p| p.1).sum())
+    }
+
+    fn model(&self, z: &[f64]) -> Model {
+        Model {
+            spec: self.spec.clone(),
+            values: self.values(z),
+        }
+    }
+}
+
+impl CostFunction for Objective<'_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+
+    fn cost(&self, z: &Self::Param) -> std::result::Result<f64, argmin::core::Error> {
+        let penalty: f64 = z
+            .iter()
+            .map(|&v| {
+                let d = if v < 0.0 {
+                    -v
+                } else if v > 1.0 {
+                    v - 1.0
+                } else {
+                    0.0
+                };
+                d * d
+            })
+            .sum();
+        Ok(self.cost_of(&self.model(z)).0 + penalty)
+    }
+}
+
+fn argmin_err(e: argmin::core::Error) -> Error {
+    Error::Data(format!("optimiser: {e}"))
+}
+
+/// Nelder–Mead from `z0`, twice (restart from the first optimum). Returns the best point, its
+/// cost, the iterations and whether the restart stopped on its tolerance.
+fn nelder_mead(
+    obj: &Objective<'_>,
+    z0: &[f64],
+    max_iter: u64,
+) -> Result<(Vec<f64>, f64, u64, bool)> {
+    let mut z = z0.to_vec();
+    let mut cost = obj.cost(&z).map_err(argmin_err)?;
+    let mut iterations = 0;
+    let mut converged = false;
+    for run in 0..2 {
+        let step = if run == 0 { 0.05 } else { 0.02 };
+        let mut simplex = vec![z.clone()];
+        for i in 0..z.len() {
+            let mut v = z.clone();
+            v[i] = if v[i] + step <= 1.0 {
+                v[i] + step
+            } else {
+                v[i] - step
+            };
+            simplex.push(v);
+        }
+        let solver = NelderMead::new(simplex)
+            .with_sd_tolerance(1e-7 * cost.max(1e-12))
+            .map_err(argmin_err)?;
+        let res = Executor::new(
+            Objective::new(obj.spec.clone(), obj.levels, obj.masks, obj.progress),
+            solver,
+        )
+        .configure(|s| s.max_iters(max_iter))
+        .run()
+        .map_err(argmin_err)?;
+        let st = res.state();
+        iterations += st.get_iter();
+        obj.add_evaluations_of(res.problem.problem.as_ref());
+        if st.get_best_cost() <= cost {
+            cost = st.get_best_cost();
+            if let Some(p) = st.get_best_param() {
+                z = p.iter().map(|v| v.clamp(0.0, 1.0)).collect();
+            }
+        }
+        converged = matches!(
+            st.get_termination_status(),
+            TerminationStatus::Terminated(TerminationReason::SolverConverged)
+        );
+    }
+    Ok((z, cost, iterations, converged))
+}
+
+fn finish(
+    obj: &Objective<'_>,
+    best: (Vec<f64>, f64, bool),
+    starts: Vec<StartOutcome>,
+    t0: Instant,
+) -> FitResult {
+    let model = obj.model(&best.0);
+    let (cost, failed) = obj.cost_of(&model);
+    let at_bounds = obj
+        .params
+        .iter()
+        .zip(&model.values)
+        .filter(|(p, &v)| p.at_bound(v))
+        .map(|(p, _)| p.name.to_string())
+        .collect();
+    FitResult {
+        model,
+        cost,
+        converged: best.2,
+        starts,
+        evaluations: obj.evaluations.load(Ordering::Relaxed),
+        failed_rows: failed,
+        at_bounds,
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// Global fit: for each start, particle swarm over the box then Nelder–Mead; the best start.
+pub fn fit_global(
+    spec: &ModelSpec,
+    levels: &[LevelData],
+    masks: &[Vec<bool>],
+    opts: &FitOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<FitResult> {
+    let t0 = Instant::now();
+    let obj = Objective::new(spec.clone(), levels, masks, progress);
+    let dim = obj.params.len();
+    let mut starts = Vec::new();
+    let mut best: Option<(Vec<f64>, f64, bool)> = None;
+    for k in 0..opts.starts.max(1) {
+        let seed = opts.seed + k as u64;
+        let pso = ParticleSwarm::new((vec![0.0; dim], vec![1.0; dim]), opts.particles)
+            .with_rng_generator(rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed));
+        let res = Executor::new(Objective::new(spec.clone(), levels, masks, progress), pso)
+            .configure(|s| s.max_iters(opts.swarm_iterations))
+            .run()
+            .map_err(argmin_err)?;
+        obj.add_evaluations_of(res.problem.problem.as_ref());
+        let st = res.state();
+        let swarm_cost = st.get_best_cost();
+        let z0 = st
+            .get_best_param()
+            .map(|p| p.position.clone())
+            .ok_or_else(|| Error::Data("particle swarm returned no point".into()))?;
+        let (z, cost, it, conv) = nelder_mead(&obj, &z0, opts.local_iterations)?;
+        starts.push(StartOutcome {
+            seed: Some(seed),
+            swarm_cost: Some(swarm_cost),
+            final_cost: cost,
+            local_iterations: it,
+            converged: conv,
+        });
+        if best.as_ref().is_none_or(|b| cost < b.1) {
+            best = Some((z, cost, conv));
+        }
+    }
+    Ok(finish(&obj, best.expect("one start"), starts, t0))
+}
+
+/// Local fit: Nelder–Mead from each given start (physical values); the best.
+pub fn fit_local(
+    spec: &ModelSpec,
+    levels: &[LevelData],
+    masks: &[Vec<bool>],
+    starts_physical: &[Vec<f64>],
+    opts: &FitOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<FitResult> {
+    let t0 = Instant::now();
+    let obj = Objective::new(spec.clone(), levels, masks, progress);
+    let mut starts = Vec::new();
+    let mut best: Option<(Vec<f64>, f64, bool)> = None;
+    for v in starts_physical {
+        let z0 = obj.coordinates(v);
+        let (z, cost, it, conv) = nelder_mead(&obj, &z0, opts.local_iterations)?;
+        starts.push(StartOutcome {
+            seed: None,
+            swarm_cost: None,
+            final_cost: cost,
+            local_iterations: it,
+            converged: conv,
+        });
+        if best.as_ref().is_none_or(|b| cost < b.1) {
+            best = Some((z, cost, conv));
+        }
+    }
+    let best = best.ok_or_else(|| Error::param("starts", "at least one start"))?;
+    Ok(finish(&obj, best, starts, t0))
+}

@@ -1,0 +1,651 @@
+//! Measured stepped-sine frequency responses: one CSV file per excitation level.
+//!
+//! # File format
+//!
+//! A CSV file with a header row (lines starting with `#` are comments), one row per frequency
+//! step, the fundamental-harmonic amplitudes of the excitation force and of the response:
+//!
+//! | column | meaning |
+//! |---|---|
+//! | `frequency_Hz` | excitation frequency (Hz), strictly monotonic (the sweep order: up or down) |
+//! | `force_amplitude_N` | measured force amplitude of this row (N), > 0 |
+//! | one of `acceleration_amplitude_m_per_s2`, `velocity_amplitude_m_per_s`, `displacement_amplitude_m` | response amplitude, its quantity and unit named by the column, > 0 |
+//! | `phase_rad` or `phase_deg` | phase of the response relative to the force |
+//!
+//! The force of every row is used as measured (force controllers hold the level only
+//! approximately, and the force drops at resonance when the shaker and the structure interact).
+//!
+//! # Phase convention
+//!
+//! Acquisition systems differ in two conventions: the sign of the time dependence (`e^{iωt}`,
+//! where the phase of a receptance falls from 0 to −π through a resonance, or `e^{−iωt}`,
+//! where it rises) and the sign of the response channel (sensor orientation, a channel
+//! reported as `−a`). [`PhaseConvention::detect`] finds both from the data: the direction in which
+//! the phase turns through the resonance, and the phase at the response peak (for a
+//! single dominant mode in the `e^{iωt}` convention: −π/2 for displacement, 0 for velocity,
+//! +π/2 for acceleration; a value π away means the response channel is inverted). The detected
+//! convention is reported, never silently assumed. Inside the crate every response is a complex
+//! amplitude per unit force in the `e^{iωt}` convention with the model's sign.
+//!
+//! # Errors
+//!
+//! Missing columns, non-numeric or non-finite values, a missing or non-positive force or
+//! response, duplicate or non-monotonic frequencies, and phases outside `[−2π, 2π]` in a column
+//! declared in radians (values in degrees) are errors naming the file and the line.
+
+use crate::error::{Error, Result};
+use crate::input::{csv_reader, csv_record};
+use realfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::path::{Path, PathBuf};
+
+/// Which response quantity a file holds (named by its column).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Quantity {
+    Displacement,
+    Velocity,
+    Acceleration,
+}
+
+impl Quantity {
+    /// The CSV column of this quantity's amplitude, with its unit.
+    pub fn column(self) -> &'static str {
+        match self {
+            Quantity::Displacement => "displacement_amplitude_m",
+            Quantity::Velocity => "velocity_amplitude_m_per_s",
+            Quantity::Acceleration => "acceleration_amplitude_m_per_s2",
+        }
+    }
+
+    /// Unit of the amplitude.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Quantity::Displacement => "m",
+            Quantity::Velocity => "m/s",
+            Quantity::Acceleration => "m/s²",
+        }
+    }
+
+    /// Name of the response-per-force ratio (receptance, mobility, accelerance).
+    pub fn frf_name(self) -> &'static str {
+        match self {
+            Quantity::Displacement => "receptance",
+            Quantity::Velocity => "mobility",
+            Quantity::Acceleration => "accelerance",
+        }
+    }
+
+    /// Complex factor `(iω)^p` from displacement to this quantity in the `e^{iωt}` convention.
+    pub fn from_displacement(self, omega: f64) -> Complex64 {
+        match self {
+            Quantity::Displacement => Complex64::new(1.0, 0.0),
+            Quantity::Velocity => Complex64::new(0.0, omega),
+            Quantity::Acceleration => Complex64::new(-omega * omega, 0.0),
+        }
+    }
+
+    /// Phase of this quantity at a phase resonance (displacement in quadrature, −π/2).
+    pub fn resonance_phase(self) -> f64 {
+        match self {
+            Quantity::Displacement => -FRAC_PI_2,
+            Quantity::Velocity => 0.0,
+            Quantity::Acceleration => FRAC_PI_2,
+        }
+    }
+
+    const ALL: [Quantity; 3] = [
+        Quantity::Displacement,
+        Quantity::Velocity,
+        Quantity::Acceleration,
+    ];
+}
+
+/// One row of a measured sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Row {
+    /// 1-based line in the file.
+    pub line: usize,
+    pub frequency_hz: f64,
+    /// Fundamental-harmonic force amplitude (N).
+    pub force_n: f64,
+    /// Fundamental-harmonic response amplitude (unit of the file's quantity).
+    pub response: f64,
+    /// Phase of the response relative to the force, as in the file, in radians.
+    pub phase_rad: f64,
+}
+
+impl Row {
+    /// Angular frequency (rad/s).
+    pub fn omega(&self) -> f64 {
+        TAU * self.frequency_hz
+    }
+}
+
+/// One measured sweep (one excitation level).
+#[derive(Debug, Clone, Serialize)]
+pub struct Sweep {
+    pub path: PathBuf,
+    /// SHA-256 of the file's bytes.
+    pub sha256: String,
+    pub quantity: Quantity,
+    /// Rows in file order (the sweep direction).
+    pub rows: Vec<Row>,
+    /// Line of the header row.
+    pub header_line: usize,
+}
+
+/// Hex SHA-256 of some bytes.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn find_column(
+    path: &Path,
+    header: &csv::StringRecord,
+    header_line: usize,
+    names: &[&str],
+) -> Result<Option<(usize, usize)>> {
+    let hits: Vec<(usize, usize)> = names
+        .iter()
+        .enumerate()
+        .filter_map(|(k, n)| header.iter().position(|h| h == *n).map(|c| (c, k)))
+        .collect();
+    match hits.len() {
+        0 => Ok(None),
+        1 => Ok(Some(hits[0])),
+        _ => Err(Error::parse(
+            path,
+            header_line,
+            format!(
+                "several alternative columns present ({}); keep one",
+                hits.iter()
+                    .map(|&(_, k)| names[k])
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        )),
+    }
+}
+
+fn field(path: &Path, rec: &csv::StringRecord, line: usize, col: usize, name: &str) -> Result<f64> {
+    let s = rec.get(col).unwrap_or("").trim();
+    if s.is_empty() {
+        return Err(Error::parse(
+            path,
+            line,
+            format!("missing value of `{name}`"),
+        ));
+    }
+    let v: f64 = s
+        .parse()
+        .map_err(|_| Error::parse(path, line, format!("`{name}` = {s:?} is not a number")))?;
+    if !v.is_finite() {
+        return Err(Error::parse(
+            path,
+            line,
+            format!("`{name}` = {s} is not finite"),
+        ));
+    }
+    Ok(v)
+}
+
+/// Minimum number of rows of a sweep.
+pub const MIN_ROWS: usize = 5;
+
+impl Sweep {
+    /// Read and validate a measured sweep (see the module documentation).
+    pub fn read_csv(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let sha256 = sha256_hex(&bytes);
+        let mut rdr = csv_reader(path)?;
+        let header = rdr
+            .headers()
+            .map_err(|e| crate::input::csv_error(path, e))?
+            .clone();
+        let header_line = header.position().map(|p| p.line() as usize).unwrap_or(1);
+        let need = |names: &[&str], what: &str| -> Result<(usize, usize)> {
+            find_column(path, &header, header_line, names)?.ok_or_else(|| {
+                Error::parse(
+                    path,
+                    header_line,
+                    format!(
+                        "no {what} column (expected {}); header: {}",
+                        names.join(" or "),
+                        header.iter().collect::<Vec<_>>().join(",")
+                    ),
+                )
+            })
+        };
+        let (c_f, _) = need(&["frequency_Hz"], "frequency")?;
+        let (c_force, _) = need(&["force_amplitude_N"], "force")?;
+        let qnames: Vec<&str> = Quantity::ALL.iter().map(|q| q.column()).collect();
+        let (c_resp, qk) = need(&qnames, "response amplitude")?;
+        let quantity = Quantity::ALL[qk];
+        let (c_phase, pk) = need(&["phase_rad", "phase_deg"], "phase")?;
+        let degrees = pk == 1;
+        let mut rows: Vec<Row> = Vec::new();
+        for rec in rdr.records() {
+            let (rec, line) = csv_record(path, rec)?;
+            if rec.len() < header.len() {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("expected {} fields, found {}", header.len(), rec.len()),
+                ));
+            }
+            let frequency_hz = field(path, &rec, line, c_f, "frequency_Hz")?;
+            let force_n = field(path, &rec, line, c_force, "force_amplitude_N")?;
+            let response = field(path, &rec, line, c_resp, quantity.column())?;
+            let phase = field(path, &rec, line, c_phase, header.get(c_phase).unwrap_or(""))?;
+            if frequency_hz <= 0.0 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("frequency {frequency_hz} Hz must be > 0"),
+                ));
+            }
+            if force_n <= 0.0 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("force amplitude {force_n} N must be > 0"),
+                ));
+            }
+            if response <= 0.0 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "response amplitude {response} {} must be > 0",
+                        quantity.unit()
+                    ),
+                ));
+            }
+            let phase_rad = if degrees {
+                phase.to_radians()
+            } else {
+                if phase.abs() > TAU * (1.0 + 1e-9) {
+                    return Err(Error::parse(
+                        path,
+                        line,
+                        format!(
+                            "phase {phase} is outside [−2π, 2π] in a column declared in radians \
+                             (phase_rad): the values look like degrees; convert them or name the \
+                             column phase_deg"
+                        ),
+                    ));
+                }
+                phase
+            };
+            rows.push(Row {
+                line,
+                frequency_hz,
+                force_n,
+                response,
+                phase_rad,
+            });
+        }
+        if rows.len() < MIN_ROWS {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "{} data rows; a sweep needs at least {MIN_ROWS}",
+                    rows.len()
+                ),
+            ));
+        }
+        check_monotonic(path, &rows)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            sha256,
+            quantity,
+            rows,
+            header_line,
+        })
+    }
+
+    /// Mean measured force amplitude (N): the level's nominal value for ordering and reports.
+    pub fn mean_force_n(&self) -> f64 {
+        self.rows.iter().map(|r| r.force_n).sum::<f64>() / self.rows.len() as f64
+    }
+
+    /// Row of the largest response per unit force.
+    pub fn peak_row(&self) -> usize {
+        (0..self.rows.len())
+            .max_by(|&a, &b| {
+                let fa = self.rows[a].response / self.rows[a].force_n;
+                let fb = self.rows[b].response / self.rows[b].force_n;
+                fa.total_cmp(&fb)
+            })
+            .expect("at least MIN_ROWS rows")
+    }
+
+    /// Complex response per unit force of every row in the crate's convention.
+    pub fn frf(&self, conv: &PhaseConvention) -> Vec<Complex64> {
+        self.rows
+            .iter()
+            .map(|r| conv.to_model(r.response / r.force_n, r.phase_rad))
+            .collect()
+    }
+
+    /// File name for reports.
+    pub fn name(&self) -> String {
+        self.path
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| self.path.display().to_string())
+    }
+}
+
+/// Frequencies strictly increasing or strictly decreasing over the whole file.
+fn check_monotonic(path: &Path, rows: &[Row]) -> Result<()> {
+    let up = rows[1].frequency_hz > rows[0].frequency_hz;
+    for w in rows.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        if b.frequency_hz == a.frequency_hz {
+            return Err(Error::parse(
+                path,
+                b.line,
+                format!(
+                    "duplicate frequency {} Hz (also on line {})",
+                    b.frequency_hz, a.line
+                ),
+            ));
+        }
+        if (b.frequency_hz > a.frequency_hz) != up {
+            return Err(Error::parse(
+                path,
+                b.line,
+                format!(
+                    "frequencies are not monotonic: {} Hz after {} Hz on line {} (the sweep runs {} \
+                     before)",
+                    b.frequency_hz,
+                    a.frequency_hz,
+                    a.line,
+                    if up { "upwards" } else { "downwards" }
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Wrap an angle into `(−π, π]`.
+pub fn wrap(a: f64) -> f64 {
+    let r = a.rem_euclid(TAU);
+    if r > PI {
+        r - TAU
+    } else {
+        r
+    }
+}
+
+/// How the phases of a file map onto the crate's convention (`e^{iωt}`, model sign):
+/// `phase_model = time_sign·phase_file + (π if inverted)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PhaseConvention {
+    /// +1: the file uses `e^{iωt}` (phase falls through a resonance); −1: `e^{−iωt}`.
+    pub time_sign: f64,
+    /// The response channel is inverted (phase π away from the model's).
+    pub inverted: bool,
+}
+
+impl PhaseConvention {
+    /// The crate's own convention.
+    pub const MODEL: PhaseConvention = PhaseConvention {
+        time_sign: 1.0,
+        inverted: false,
+    };
+
+    /// Complex response per unit force from an amplitude ratio and the file's phase.
+    pub fn to_model(&self, ratio: f64, phase_file: f64) -> Complex64 {
+        let s = if self.inverted { -1.0 } else { 1.0 };
+        Complex64::from_polar(s * ratio, self.time_sign * phase_file)
+    }
+
+    /// Phase in the file's convention of a model response (inverse of [`Self::to_model`]).
+    pub fn to_file_phase(&self, z: Complex64) -> f64 {
+        let z = if self.inverted { -z } else { z };
+        self.time_sign * z.arg()
+    }
+
+    /// Detect the convention from the sweeps (see the module documentation): the direction of
+    /// the phase change through the resonance (unwrapped phase from the lowest to the highest
+    /// frequency, summed over the sweeps) and the circular mean, over the sweeps, of the phase at
+    /// the response peak relative to the quantity's resonance phase. An ambiguous result is an
+    /// error naming the files.
+    pub fn detect(sweeps: &[Sweep]) -> Result<Self> {
+        let names = || {
+            sweeps
+                .iter()
+                .map(|s| s.path.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let mut turn = 0.0;
+        for s in sweeps {
+            let mut rows = s.rows.clone();
+            rows.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+            for w in rows.windows(2) {
+                turn += wrap(w[1].phase_rad - w[0].phase_rad);
+            }
+        }
+        if turn.abs() < PI / 4.0 * sweeps.len() as f64 {
+            return Err(Error::Data(format!(
+                "{}: the phase turns by only {:.2} rad per sweep across the band; the sweeps must \
+                 pass through the resonance to identify a mode (and to tell the phase convention)",
+                names(),
+                turn / sweeps.len() as f64
+            )));
+        }
+        let time_sign = if turn < 0.0 { 1.0 } else { -1.0 };
+        let (mut c, mut s) = (0.0, 0.0);
+        for sw in sweeps {
+            let r = &sw.rows[sw.peak_row()];
+            let d = time_sign * r.phase_rad - sw.quantity.resonance_phase();
+            c += d.cos();
+            s += d.sin();
+        }
+        let d = wrap(s.atan2(c));
+        let inverted = if d.abs() <= PI / 3.0 {
+            false
+        } else if d.abs() >= 2.0 * PI / 3.0 {
+            true
+        } else {
+            return Err(Error::Data(format!(
+                "{}: cannot tell the phase convention: at the response peaks the phase is {:.2} \
+                 rad away from the resonance phase of the measured quantity, neither ≈ 0 nor ≈ π",
+                names(),
+                d
+            )));
+        };
+        Ok(Self {
+            time_sign,
+            inverted,
+        })
+    }
+
+    /// One-line description for reports.
+    pub fn describe(&self) -> String {
+        format!(
+            "{}{}",
+            if self.time_sign > 0.0 {
+                "e^{iωt} (phase falls through the resonance)"
+            } else {
+                "e^{−iωt} (phase rises through the resonance; conjugated)"
+            },
+            if self.inverted {
+                "; response channel inverted (phase π from the model's: sensor sign or a channel \
+                 reported as −response)"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    const HEAD: &str =
+        "# test\nfrequency_Hz,force_amplitude_N,acceleration_amplitude_m_per_s2,phase_rad\n";
+
+    fn rows(lines: &[&str]) -> String {
+        format!("{HEAD}{}\n", lines.join("\n"))
+    }
+
+    #[test]
+    fn reads_a_valid_sweep() {
+        let d = tempfile::tempdir().unwrap();
+        let p = write(
+            d.path(),
+            "a.csv",
+            &rows(&[
+                "10,1,1,-0.1",
+                "11,1,2,-0.5",
+                "12,1.1,5,-1.6",
+                "13,1,2,-2.6",
+                "14,1,1,-3.0",
+            ]),
+        );
+        let s = Sweep::read_csv(&p).unwrap();
+        assert_eq!(s.quantity, Quantity::Acceleration);
+        assert_eq!(s.rows.len(), 5);
+        assert_eq!(s.rows[0].line, 3);
+        assert_eq!(s.peak_row(), 2);
+        assert_eq!(s.sha256.len(), 64);
+    }
+
+    #[test]
+    fn bad_rows_name_file_and_line() {
+        let d = tempfile::tempdir().unwrap();
+        let cases: &[(&[&str], &str, &str)] = &[
+            (
+                &["10,1,1,0", "11,1,1,0", "11,1,1,0", "12,1,1,0", "13,1,1,0"],
+                ":5:",
+                "duplicate frequency",
+            ),
+            (
+                &["10,1,1,0", "12,1,1,0", "11,1,1,0", "13,1,1,0", "14,1,1,0"],
+                ":5:",
+                "not monotonic",
+            ),
+            (
+                &["10,1,1,0", "11,,1,0", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
+                ":4:",
+                "missing value of `force_amplitude_N`",
+            ),
+            (
+                &[
+                    "10,1,1,0",
+                    "11,1,1,0",
+                    "12,-0.2,1,0",
+                    "13,1,1,0",
+                    "14,1,1,0",
+                ],
+                ":5:",
+                "force amplitude -0.2 N must be > 0",
+            ),
+            (
+                &[
+                    "10,1,1,-5",
+                    "11,1,1,-20",
+                    "12,1,1,-90",
+                    "13,1,1,-160",
+                    "14,1,1,-175",
+                ],
+                ":4:",
+                "look like degrees",
+            ),
+            (
+                &["10,1,1,0", "11,1,nan,0", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
+                ":4:",
+                "not finite",
+            ),
+            (&["10,1,1,0", "11,1,1,0"], "b.csv", "at least 5"),
+        ];
+        for (lines, at, msg) in cases {
+            let p = write(d.path(), "b.csv", &rows(lines));
+            let e = Sweep::read_csv(&p).unwrap_err().to_string();
+            assert!(
+                e.contains("b.csv") && e.contains(at) && e.contains(msg),
+                "{e}"
+            );
+        }
+        let p = write(
+            d.path(),
+            "c.csv",
+            "frequency_Hz,force_amplitude_N,phase_rad\n1,1,0\n",
+        );
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("c.csv:1:") && e.contains("no response amplitude column"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn degrees_column_and_downward_sweep_are_accepted() {
+        let d = tempfile::tempdir().unwrap();
+        let p = write(
+            d.path(),
+            "deg.csv",
+            "frequency_Hz,force_amplitude_N,displacement_amplitude_m,phase_deg\n\
+             14,1,1,-175\n13,1,2,-160\n12,1,5,-90\n11,1,2,-20\n10,1,1,-5\n",
+        );
+        let s = Sweep::read_csv(&p).unwrap();
+        assert_eq!(s.quantity, Quantity::Displacement);
+        assert!((s.rows[2].phase_rad + FRAC_PI_2).abs() < 1e-12);
+    }
+
+    /// Synthetic single-mode FRFs in all four conventions are recognised.
+    #[test]
+    fn detects_the_phase_convention() {
+        let d = tempfile::tempdir().unwrap();
+        let (wn, z) = (TAU * 80.0, 0.01);
+        for q in Quantity::ALL {
+            for time_sign in [1.0, -1.0] {
+                for inverted in [false, true] {
+                    let conv = PhaseConvention {
+                        time_sign,
+                        inverted,
+                    };
+                    let mut text =
+                        format!("frequency_Hz,force_amplitude_N,{},phase_rad\n", q.column());
+                    for i in 0..21 {
+                        let f = 76.0 + 0.4 * i as f64;
+                        let w = TAU * f;
+                        let h = q.from_displacement(w)
+                            / Complex64::new(wn * wn - w * w, 2.0 * z * wn * w);
+                        text += &format!("{f},1,{},{}\n", h.norm(), conv.to_file_phase(h));
+                    }
+                    let p = write(d.path(), "s.csv", &text);
+                    let s = Sweep::read_csv(&p).unwrap();
+                    let got = PhaseConvention::detect(std::slice::from_ref(&s)).unwrap();
+                    assert_eq!(got, conv, "{q:?}");
+                    // Round trip to the model's complex response.
+                    let h0 = q.from_displacement(TAU * 76.0)
+                        / Complex64::new(
+                            wn * wn - (TAU * 76.0f64).powi(2),
+                            2.0 * z * wn * TAU * 76.0,
+                        );
+                    assert!((s.frf(&got)[0] - h0).norm() < 1e-9 * h0.norm());
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,874 @@
+//! `asperity identify` as a library call: read levels, fit on some, select effects on held-out
+//! rows, refit, score every level, estimate backbones, state the accelerance at given response
+//! amplitudes, and write the files.
+//!
+//! Levels are numbered by increasing mean measured force (1 = lowest). By default the model is
+//! fitted on the lowest and the highest level and scored on the others (which it predicts).
+
+use super::backbone::{self, BackbonePoint, LevelBackbone};
+use super::fit::{FitOptions, FitResult, LevelData};
+use super::measured::{PhaseConvention, Quantity, Sweep};
+use super::model::{Family, Model, ModelSpec, Scales};
+use super::report::{
+    errors_table, fine_curve, plot_backbone, plot_level, write_json, write_rows_csv, CurveRow,
+    InputFile, LevelErrors,
+};
+use super::select::{self, refit_all_rows, SelectOptions, Selection, Verdict};
+use crate::error::{Error, Result};
+use crate::output::{write_atomic, write_string_atomic};
+use realfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+use std::path::{Path, PathBuf};
+
+/// Options of an identification.
+#[derive(Debug, Clone, Serialize)]
+pub struct Options {
+    pub family: Family,
+    /// 1-based level numbers (by increasing mean force) to fit on; `None`: lowest and highest.
+    pub fit_levels: Option<Vec<usize>>,
+    pub select: SelectOptions,
+    /// Nelder–Mead settings of the final refits on all rows of the fit levels.
+    pub final_fit: FitOptions,
+    /// Response amplitudes (unit of the lowest level's quantity) at which the identified
+    /// model's response-controlled FRF is reported; `None`: the measured peak responses.
+    pub response_amplitudes: Option<Vec<f64>>,
+}
+
+impl Options {
+    /// Default options for a family: all candidates, up to two effects, three swarm starts for
+    /// the baseline, one for each candidate.
+    pub fn new(family: Family) -> Self {
+        Self {
+            family,
+            fit_levels: None,
+            select: SelectOptions {
+                candidates: super::effects::Effect::ALL.to_vec(),
+                max_effects: 2,
+                baseline_fit: FitOptions::default(),
+                candidate_fit: FitOptions {
+                    starts: 1,
+                    ..FitOptions::default()
+                },
+            },
+            final_fit: FitOptions::default(),
+            response_amplitudes: None,
+        }
+    }
+
+    /// Model evaluations the whole run is expected to take (progress-bar length).
+    pub fn estimated_evaluations(&self) -> u64 {
+        let swarm =
+            |o: &FitOptions| o.starts as u64 * o.particles as u64 * (o.swarm_iterations + 1);
+        let local = |o: &FitOptions| o.local_iterations;
+        let b = &self.select.baseline_fit;
+        let c = &self.select.candidate_fit;
+        let n = self.select.candidates.len() as u64;
+        swarm(b)
+            + b.starts as u64 * local(b)
+            + (self.select.max_effects as u64).max(1) * n * (swarm(c) + 2 * local(c))
+            + 2 * local(&self.final_fit)
+    }
+}
+
+/// The response-controlled FRF of the identified model at one response amplitude.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResponseControlled {
+    pub amplitude: f64,
+    pub quantity: Quantity,
+    pub frequency_hz: Vec<f64>,
+    pub force_n: Vec<f64>,
+    /// Response per unit force (the quantity's FRF, e.g. accelerance).
+    #[serde(skip)]
+    pub frf: Vec<Complex64>,
+    pub frf_amplitude: Vec<f64>,
+    pub peak_frequency_hz: f64,
+    pub peak_frf: f64,
+}
+
+/// Everything an identification found.
+#[derive(Debug, Clone)]
+pub struct Identification {
+    /// Sweeps by increasing mean force.
+    pub sweeps: Vec<Sweep>,
+    pub convention: PhaseConvention,
+    /// 0-based indices into `sweeps`.
+    pub fit_levels: Vec<usize>,
+    pub scales: Scales,
+    pub data_backbone: Vec<LevelBackbone>,
+    pub selection: Selection,
+    /// Baseline and final models refitted on all rows of the fit levels.
+    pub before: FitResult,
+    pub after: FitResult,
+    /// Per level (all levels): errors of the baseline and of the final model.
+    pub errors_before: Vec<LevelErrors>,
+    pub errors_after: Vec<LevelErrors>,
+    pub backbone_before: Vec<BackbonePoint>,
+    pub backbone_after: Vec<BackbonePoint>,
+    pub response_controlled: Vec<ResponseControlled>,
+    pub options: Options,
+    pub wall_time_s: f64,
+}
+
+/// Read sweeps and order them by mean force; a file that cannot be read is an error naming it.
+pub fn read_sweeps(paths: &[PathBuf]) -> Result<Vec<Sweep>> {
+    let mut sweeps = paths
+        .iter()
+        .map(|p| Sweep::read_csv(p))
+        .collect::<Result<Vec<_>>>()?;
+    sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
+    Ok(sweeps)
+}
+
+fn names(sweeps: &[Sweep]) -> String {
+    sweeps
+        .iter()
+        .map(|s| s.path.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The fit levels (0-based) from the options, checked.
+fn choose_fit_levels(sweeps: &[Sweep], opts: &Options) -> Result<Vec<usize>> {
+    if sweeps.len() < 2 {
+        return Err(Error::Data(format!(
+            "{}: a single level; identification needs at least two excitation levels (the \
+             joint's amplitude dependence separates it from the linear damping)",
+            names(sweeps)
+        )));
+    }
+    let levels = match &opts.fit_levels {
+        None => vec![0, sweeps.len() - 1],
+        Some(v) => {
+            let mut out = Vec::new();
+            for &l in v {
+                if l == 0 || l > sweeps.len() {
+                    return Err(Error::param(
+                        "--fit-levels",
+                        format!("level {l} does not exist (levels 1..{})", sweeps.len()),
+                    ));
+                }
+                if !out.contains(&(l - 1)) {
+                    out.push(l - 1);
+                }
+            }
+            out.sort_unstable();
+            out
+        }
+    };
+    if levels.len() < 2 {
+        return Err(Error::param(
+            "--fit-levels",
+            format!(
+                "a single level ({}) where at least two are needed to separate the joint from \
+                 the linear damping",
+                sweeps[levels[0]].path.display()
+            ),
+        ));
+    }
+    Ok(levels)
+}
+
+/// Drive-point displacement amplitude of the largest response per force of each sweep.
+fn scales_from(sweeps: &[Sweep], fit: &[usize], bb: &[LevelBackbone]) -> Scales {
+    let mut fres: Vec<f64> = fit.iter().map(|&i| bb[i].linear.frequency_hz).collect();
+    fres.sort_by(|a, b| a.total_cmp(b));
+    let amps: Vec<f64> = fit.iter().map(|&i| bb[i].peak_amplitude_m).collect();
+    Scales {
+        frequency_hz: fres[fres.len() / 2],
+        modal_mass_kg: bb[fit[0]].linear.modal_mass_kg,
+        amplitude_max_m: amps.iter().cloned().fold(0.0, f64::max),
+        amplitude_min_m: amps.iter().cloned().fold(f64::INFINITY, f64::min),
+        force_n: fit
+            .iter()
+            .map(|&i| sweeps[i].mean_force_n())
+            .fold(0.0, f64::max),
+    }
+}
+
+/// Check that a final fit converged and that the model solves every row of every level.
+fn require_converged(fit: &FitResult, what: &str, levels: &[LevelData]) -> Result<()> {
+    if !fit.converged {
+        return Err(Error::NonConvergence {
+            solver: format!(
+                "identification fit ({what}, Nelder–Mead restarted from its optimum, {} \
+                 iterations per run)",
+                fit.starts.first().map_or(0, |s| s.local_iterations)
+            ),
+            iterations: fit
+                .starts
+                .first()
+                .map_or(0, |s| s.local_iterations as usize),
+            residual: fit.cost,
+            tolerance: 1e-7 * fit.cost,
+        });
+    }
+    for l in levels {
+        if let Err(e) = fit.model.receptance(&l.drives, l.mean_force_n) {
+            // Name the line of the first failing row.
+            let (_, fails) = fit
+                .model
+                .receptance_tolerant(&l.drives, l.mean_force_n, true)?;
+            let line = fails.first().map_or(0, |f| l.lines[f.index]);
+            return Err(Error::Data(format!(
+                "{}:{line}: the {what} model has no harmonic-balance solution at this row: {e}",
+                l.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Mean force at a drive-point amplitude, interpolated between the levels' (peak amplitude,
+/// mean force) pairs (for the preload-loss effect on backbones).
+fn force_at_amplitude(bb: &[LevelBackbone], a: f64) -> f64 {
+    let mut pts: Vec<(f64, f64)> = bb
+        .iter()
+        .map(|b| (b.peak_amplitude_m, b.mean_force_n))
+        .collect();
+    pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+    if a <= pts[0].0 {
+        return pts[0].1;
+    }
+    for w in pts.windows(2) {
+        if a <= w[1].0 {
+            let t = (a - w[0].0) / (w[1].0 - w[0].0).max(f64::MIN_POSITIVE);
+            return w[0].1 + t * (w[1].1 - w[0].1);
+        }
+    }
+    pts[pts.len() - 1].1
+}
+
+/// Model backbone over the measured amplitude range (40 points, log-spaced from half the
+/// smallest to 1.5 × the largest level peak amplitude).
+pub fn model_backbone(model: &Model, bb: &[LevelBackbone]) -> Result<Vec<BackbonePoint>> {
+    let lo = bb
+        .iter()
+        .map(|b| b.peak_amplitude_m)
+        .fold(f64::INFINITY, f64::min)
+        * 0.5;
+    let hi = bb.iter().map(|b| b.peak_amplitude_m).fold(0.0, f64::max) * 1.5;
+    (0..40)
+        .map(|i| {
+            let a = lo * (hi / lo).powf(i as f64 / 39.0);
+            let (f, z) = model.backbone_point(a, force_at_amplitude(bb, a))?;
+            Ok(BackbonePoint {
+                amplitude_m: a,
+                frequency_hz: f,
+                damping_ratio: z,
+            })
+        })
+        .collect()
+}
+
+/// The model's response-controlled FRF at response amplitude `amplitude` of `quantity`, on 81
+/// frequencies over `[f_lo, f_hi]`.
+pub fn response_controlled(
+    model: &Model,
+    quantity: Quantity,
+    amplitude: f64,
+    band_hz: (f64, f64),
+    mean_force_n: f64,
+) -> Result<ResponseControlled> {
+    let n = 81;
+    let f: Vec<f64> = (0..n)
+        .map(|i| band_hz.0 + (band_hz.1 - band_hz.0) * i as f64 / (n - 1) as f64)
+        .collect();
+    let om: Vec<f64> = f.iter().map(|x| TAU * x).collect();
+    let targets: Vec<f64> = om
+        .iter()
+        .map(|&w| amplitude / quantity.from_displacement(w).norm())
+        .collect();
+    let (forces, x) = model.response_controlled(&om, &targets, mean_force_n)?;
+    let frf: Vec<Complex64> = x
+        .iter()
+        .zip(&om)
+        .map(|(xi, &w)| xi * quantity.from_displacement(w))
+        .collect();
+    let amp: Vec<f64> = frf.iter().map(|v| v.norm()).collect();
+    let (pf, pa) = backbone::resonance(&f, &amp);
+    Ok(ResponseControlled {
+        amplitude,
+        quantity,
+        frequency_hz: f,
+        force_n: forces,
+        frf,
+        frf_amplitude: amp,
+        peak_frequency_hz: pf,
+        peak_frf: pa,
+    })
+}
+
+/// Errors of a model at every level.
+fn level_errors(model: &Model, levels: &[LevelData], fit: &[usize]) -> Result<Vec<LevelErrors>> {
+    levels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let (y, failed) = l.model_frf(model)?;
+            let role = if fit.contains(&i) { "fit" } else { "predicted" };
+            Ok(LevelErrors::new(l, &y, role, failed))
+        })
+        .collect()
+}
+
+/// Run an identification on measured sweeps (any order; they are sorted by mean force).
+pub fn identify(
+    sweeps: Vec<Sweep>,
+    opts: &Options,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Identification> {
+    let t0 = std::time::Instant::now();
+    let mut sweeps = sweeps;
+    sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
+    let fit_levels = choose_fit_levels(&sweeps, opts)?;
+    let convention = PhaseConvention::detect(&sweeps)?;
+    let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
+    let data_backbone = backbone::from_data(&sweeps, &frfs)?;
+    let scales = scales_from(&sweeps, &fit_levels, &data_backbone);
+    let levels: Vec<LevelData> = sweeps
+        .iter()
+        .map(|s| LevelData::new(s, &convention))
+        .collect();
+    let fit_data: Vec<LevelData> = fit_levels.iter().map(|&i| levels[i].clone()).collect();
+    let baseline = ModelSpec::baseline(opts.family, scales);
+    let selection = select::select(&baseline, &fit_data, &opts.select, progress)?;
+    let before = refit_all_rows(
+        &selection.baseline_train_fit,
+        &fit_data,
+        &opts.final_fit,
+        progress,
+    )?;
+    require_converged(&before, "baseline", &levels)?;
+    let after = if selection.final_spec == baseline {
+        before.clone()
+    } else {
+        let a = refit_all_rows(
+            &selection.final_train_fit,
+            &fit_data,
+            &opts.final_fit,
+            progress,
+        )?;
+        require_converged(&a, "final", &levels)?;
+        a
+    };
+    let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
+    let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
+    let backbone_before = model_backbone(&before.model, &data_backbone)?;
+    let backbone_after = model_backbone(&after.model, &data_backbone)?;
+    let quantity = sweeps[0].quantity;
+    let amplitudes = match &opts.response_amplitudes {
+        Some(a) => a.clone(),
+        None => sweeps
+            .iter()
+            .map(|s| {
+                let r = &s.rows[s.peak_row()];
+                r.response
+            })
+            .collect(),
+    };
+    let (flo, fhi) = sweeps
+        .iter()
+        .flat_map(|s| &s.rows)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), r| {
+            (a.min(r.frequency_hz), b.max(r.frequency_hz))
+        });
+    let response_controlled = amplitudes
+        .iter()
+        .map(|&a| {
+            crate::error::require_positive("--response-amplitude", a)?;
+            response_controlled(&after.model, quantity, a, (flo, fhi), scales.force_n)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Identification {
+        sweeps,
+        convention,
+        fit_levels,
+        scales,
+        data_backbone,
+        selection,
+        before,
+        after,
+        errors_before,
+        errors_after,
+        backbone_before,
+        backbone_after,
+        response_controlled,
+        options: opts.clone(),
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The saved model file (`model.json`): everything `asperity predict` needs.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SavedModel {
+    pub format: String,
+    pub version: u32,
+    pub model: Model,
+    /// Phase convention of the measurements it was identified from (used by `predict` when a
+    /// file's own convention cannot be detected).
+    pub phase_convention: PhaseConvention,
+    /// Parameters with names, units and bounds (for reading; `model` is authoritative).
+    pub parameters: Vec<serde_json::Value>,
+    pub identified_from: Vec<serde_json::Value>,
+}
+
+/// Format tag of [`SavedModel`].
+pub const MODEL_FORMAT: &str = "asperity-identified-model";
+
+impl SavedModel {
+    pub fn new(id: &Identification) -> Self {
+        let m = &id.after.model;
+        Self {
+            format: MODEL_FORMAT.into(),
+            version: 1,
+            model: m.clone(),
+            phase_convention: id.convention,
+            parameters: parameter_table(m),
+            identified_from: id
+                .fit_levels
+                .iter()
+                .map(|&i| {
+                    let s = &id.sweeps[i];
+                    serde_json::json!({"path": s.path, "sha256": s.sha256})
+                })
+                .collect(),
+        }
+    }
+
+    /// Read and validate a saved model (format, version, parameter count and bounds).
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let s: SavedModel = serde_json::from_str(&text).map_err(|e| {
+            Error::parse(path, e.line(), format!("not an identified model file: {e}"))
+        })?;
+        if s.format != MODEL_FORMAT || s.version != 1 {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "format {:?} version {} (expected {MODEL_FORMAT:?} version 1)",
+                    s.format, s.version
+                ),
+            ));
+        }
+        Model::new(s.model.spec.clone(), s.model.values.clone())
+            .map_err(|e| Error::parse(path, 0, e.to_string()))?;
+        Ok(s)
+    }
+}
+
+/// Parameters with units and bounds, for JSON.
+pub fn parameter_table(m: &Model) -> Vec<serde_json::Value> {
+    m.spec
+        .params()
+        .iter()
+        .zip(&m.values)
+        .map(|(p, v)| {
+            serde_json::json!({"name": p.name, "unit": p.unit, "value": v, "lower_bound": p.lo,
+                "upper_bound": p.hi, "at_bound": p.at_bound(*v)})
+        })
+        .collect()
+}
+
+fn params_text(m: &Model) -> String {
+    let ph = m.physical();
+    let mut s = String::new();
+    for (p, v) in m.spec.params().iter().zip(&m.values) {
+        s += &format!(
+            "    {:<42} {:>12.5e} {:<3} [{:.3e}, {:.3e}]{}\n",
+            p.name,
+            v,
+            p.unit,
+            p.lo,
+            p.hi,
+            if p.at_bound(*v) { "  (at a bound)" } else { "" }
+        );
+    }
+    s += &format!(
+        "    → joint stick stiffness k_t = {:.4e} N/m, slip force F_s = {:.4e} N, linear stiffness \
+         k = {:.4e} N/m, c = {:.4e} N·s/m (drive point)\n",
+        ph.k_joint, ph.slip_force_n, ph.k_linear, ph.c_linear
+    );
+    s
+}
+
+/// Text of the verdict.
+pub fn verdict_text(v: &Verdict) -> String {
+    match v {
+        Verdict::EffectsFound {
+            effects,
+            at_scatter,
+        } => format!(
+            "effect(s) accepted on held-out evidence: {}{}",
+            effects
+                .iter()
+                .map(|e| format!("{} ({})", e.id(), e.meaning()))
+                .collect::<Vec<_>>()
+                .join("; "),
+            if *at_scatter {
+                "; the final held-out residual is within the measurement scatter"
+            } else {
+                "; the final held-out residual is still above the measurement scatter: part of \
+                 the misfit is not explained by any candidate"
+            }
+        ),
+        Verdict::NoEffectNeeded => {
+            "no effect needed: the baseline's held-out residual is within the measurement scatter"
+                .into()
+        }
+        Verdict::Unexplained {
+            held_out_cost,
+            scatter_floor,
+        } => format!(
+            "the residual stays above the measurement scatter (held-out RMS {:.3} vs scatter \
+             {:.3}, relative to the peaks) and no candidate effect explains it on held-out \
+             evidence: none is forced",
+            held_out_cost.sqrt(),
+            scatter_floor.sqrt()
+        ),
+    }
+}
+
+impl Identification {
+    /// Human-readable report.
+    pub fn text(&self) -> String {
+        let mut s = String::from(
+            "asperity identify — single-nonlinear-mode model from measured frequency responses\n\n",
+        );
+        s += "levels (by increasing mean force):\n";
+        for (i, sw) in self.sweeps.iter().enumerate() {
+            s += &format!(
+                "  {} {} ({} rows, {}, mean force {:.4} N, sha256 {}) — {}\n",
+                i + 1,
+                sw.path.display(),
+                sw.rows.len(),
+                sw.quantity.column(),
+                sw.mean_force_n(),
+                &sw.sha256[..16],
+                if self.fit_levels.contains(&i) {
+                    "fit"
+                } else {
+                    "predicted"
+                }
+            );
+        }
+        s += &format!(
+            "phase convention detected: {}\n",
+            self.convention.describe()
+        );
+        s += &format!(
+            "objective: complex response per unit force, residual / each level's peak, levels \
+             weighted alike; training rows = even rows of the fit levels, held-out = odd rows\n\
+             measurement scatter (third differences, relative to the peak): {}\n\n",
+            self.selection
+                .relative_scatter_per_level
+                .iter()
+                .map(|v| format!("{:.4}", v))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let b = &self.selection.baseline_train_fit;
+        s += &format!(
+            "baseline ({:?} joint) on training rows: J = {:.4e}, {} starts (final costs {}), {} \
+             evaluations, {:.1} s\n",
+            self.options.family,
+            b.cost,
+            b.starts.len(),
+            b.starts
+                .iter()
+                .map(|x| format!("{:.4e}", x.final_cost))
+                .collect::<Vec<_>>()
+                .join(", "),
+            b.evaluations,
+            b.wall_time_s
+        );
+        for (k, r) in self.selection.rounds.iter().enumerate() {
+            s +=
+                &format!(
+                "\nround {}: base effects [{}], held-out J = {:.4e}, lag-1 autocorrelation {:.2}, \
+                 n_eff = {:.1}\n",
+                k + 1,
+                r.base_effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", "),
+                r.base_held_out.cost,
+                r.lag1_autocorrelation,
+                r.effective_samples
+            );
+            s += &format!(
+                "  {:<22} {:>3} {:>12} {:>12} {:>10} {:>11}\n",
+                "candidate", "Δp", "train J", "held-out J", "ΔBIC", "all levels"
+            );
+            for c in &r.candidates {
+                s += &format!(
+                    "  {:<22} {:>3} {:>12.4e} {:>12.4e} {:>10.1} {:>11}{}\n",
+                    c.effect.id(),
+                    c.added_parameters,
+                    c.train_cost,
+                    c.held_out.cost,
+                    c.delta_bic,
+                    if c.improves_every_level {
+                        "better"
+                    } else {
+                        "not all"
+                    },
+                    if r.accepted == Some(c.effect) {
+                        "  ← accepted"
+                    } else {
+                        ""
+                    }
+                );
+            }
+        }
+        s += &format!("\nverdict: {}\n", verdict_text(&self.selection.verdict));
+        s += &format!(
+            "\nbaseline refitted on all rows of the fit levels (J = {:.4e}):\n{}",
+            self.before.cost,
+            params_text(&self.before.model)
+        );
+        s += &format!(
+            "final model [{}] refitted on all rows (J = {:.4e}):\n{}\n",
+            self.after
+                .model
+                .spec
+                .effects
+                .iter()
+                .map(|e| e.id())
+                .collect::<Vec<_>>()
+                .join(", "),
+            self.after.cost,
+            params_text(&self.after.model)
+        );
+        let rows: Vec<_> = self
+            .errors_before
+            .iter()
+            .zip(&self.errors_after)
+            .map(|(b, a)| (b, Some(a)))
+            .collect();
+        s += &errors_table(
+            "errors per level, baseline → final model (resonance and peak of the response per unit force):",
+            &rows,
+        );
+        s += "\nfinal model, residual per region (RMS complex / mean amplitude error / mean phase error):\n";
+        for e in &self.errors_after {
+            s += &format!("  {}:", e.file);
+            for r in &e.regions {
+                s += &format!(
+                    "  {} ({} rows) {:.3} / {:+.1}% / {:+.3} rad;",
+                    r.region,
+                    r.rows,
+                    r.rms_complex,
+                    100.0 * r.mean_amplitude_error,
+                    r.mean_phase_error_rad
+                );
+            }
+            s += "\n";
+        }
+        s += "\nbackbone: data (equivalent linear mode per level) beside the final model at the \
+              same amplitude:\n";
+        for b in &self.data_backbone {
+            let fm = force_at_amplitude(&self.data_backbone, b.peak_amplitude_m);
+            let (f, z) = self
+                .after
+                .model
+                .backbone_point(b.peak_amplitude_m, fm)
+                .unwrap_or((f64::NAN, f64::NAN));
+            s += &format!(
+                "  {}: amplitude {:.3e} m: data {:.3} Hz, ζ = {:.5} | model {:.3} Hz, ζ = {:.5}\n",
+                b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio, f, z
+            );
+        }
+        s += "\nidentified model under response control (response amplitude held, force solved \
+              for):\n";
+        for r in &self.response_controlled {
+            s += &format!(
+                "  response amplitude {:.4} {}: peak {} {:.3} ({}/N) at {:.3} Hz\n",
+                r.amplitude,
+                r.quantity.unit(),
+                r.quantity.frf_name(),
+                r.peak_frf,
+                r.quantity.unit(),
+                r.peak_frequency_hz
+            );
+        }
+        s += &format!("\nwall time {:.1} s\n", self.wall_time_s);
+        s
+    }
+
+    /// Write every output into `dir`; returns the paths written.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        let levels: Vec<LevelData> = self
+            .sweeps
+            .iter()
+            .map(|s| LevelData::new(s, &self.convention))
+            .collect();
+        // Per-row CSV.
+        let mut rows = Vec::new();
+        for (i, (l, sw)) in levels.iter().zip(&self.sweeps).enumerate() {
+            let (yb, _) = l.model_frf(&self.before.model)?;
+            let (ya, _) = l.model_frf(&self.after.model)?;
+            let role = if self.fit_levels.contains(&i) {
+                "fit"
+            } else {
+                "predicted"
+            };
+            for (k, r) in sw.rows.iter().enumerate() {
+                rows.push(CurveRow {
+                    file: l.name.clone(),
+                    role: role.into(),
+                    line: r.line,
+                    frequency_hz: r.frequency_hz,
+                    force_n: r.force_n,
+                    measured: l.measured[k],
+                    models: vec![yb[k], ya[k]],
+                });
+            }
+        }
+        let p = dir.join("identify-rows.csv");
+        let conv = self.convention;
+        write_rows_csv(
+            &p,
+            "response per unit force in the unit of each file's quantity per N; phases in the files' convention; baseline and final model at the measured rows and forces",
+            &["baseline", "final"],
+            &rows,
+            &|_| conv,
+        )?;
+        written.push(p);
+        // Figures per level.
+        for (i, l) in levels.iter().enumerate() {
+            let role = if self.fit_levels.contains(&i) {
+                "fitted"
+            } else {
+                "predicted"
+            };
+            let curves = vec![
+                (
+                    format!("baseline ({role})"),
+                    fine_curve(&self.before.model, l, 4),
+                ),
+                (
+                    format!("final ({role})"),
+                    fine_curve(&self.after.model, l, 4),
+                ),
+            ];
+            let p = dir.join(format!("identify-level{}.png", i + 1));
+            let title = format!("level {} ({}), {role}", i + 1, l.name);
+            plot_level(&p, l, &self.convention, &curves, &title)?;
+            written.push(p);
+        }
+        // Backbones.
+        let p = dir.join("identify-backbone.png");
+        plot_backbone(
+            &p,
+            &self.data_backbone,
+            &[
+                ("baseline model".into(), self.backbone_before.clone()),
+                ("final model".into(), self.backbone_after.clone()),
+            ],
+        )?;
+        written.push(p);
+        let p = dir.join("identify-backbone.csv");
+        write_atomic(&p, |w| {
+            let io = |e| Error::io(&p, e);
+            writeln!(w, "# backbone: drive-point displacement amplitude (m), natural frequency (Hz), damping ratio (-)").map_err(io)?;
+            writeln!(w, "source,amplitude_m,frequency_Hz,damping_ratio").map_err(io)?;
+            for b in &self.data_backbone {
+                writeln!(
+                    w,
+                    "data-level-{},{:.6e},{:.6},{:.6e}",
+                    b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio
+                )
+                .map_err(io)?;
+                for q in &b.points {
+                    writeln!(
+                        w,
+                        "data-pointwise-{},{:.6e},{:.6},{:.6e}",
+                        b.file, q.amplitude_m, q.frequency_hz, q.damping_ratio
+                    )
+                    .map_err(io)?;
+                }
+            }
+            for (name, bb) in [
+                ("baseline-model", &self.backbone_before),
+                ("final-model", &self.backbone_after),
+            ] {
+                for q in bb.iter() {
+                    writeln!(
+                        w,
+                        "{name},{:.6e},{:.6},{:.6e}",
+                        q.amplitude_m, q.frequency_hz, q.damping_ratio
+                    )
+                    .map_err(io)?;
+                }
+            }
+            Ok(())
+        })?;
+        written.push(p);
+        // Response-controlled FRFs.
+        let p = dir.join("identify-response-controlled.csv");
+        write_atomic(&p, |w| {
+            let io = |e| Error::io(&p, e);
+            writeln!(w, "# identified (final) model under response control: the response amplitude is held, the force solved for; FRF = response per unit force in the model's phase convention (e^(i omega t))").map_err(io)?;
+            writeln!(w, "response_amplitude,unit,frequency_Hz,force_amplitude_N,frf_amplitude,frf_phase_rad").map_err(io)?;
+            for r in &self.response_controlled {
+                for k in 0..r.frequency_hz.len() {
+                    writeln!(
+                        w,
+                        "{},{},{},{:.6e},{:.6e},{:.6e}",
+                        r.amplitude,
+                        r.quantity.unit(),
+                        r.frequency_hz[k],
+                        r.force_n[k],
+                        r.frf_amplitude[k],
+                        r.frf[k].arg()
+                    )
+                    .map_err(io)?;
+                }
+            }
+            Ok(())
+        })?;
+        written.push(p);
+        // Model file.
+        let p = dir.join("model.json");
+        write_json(&p, &SavedModel::new(self))?;
+        written.push(p);
+        // JSON report.
+        let p = dir.join("identify.json");
+        let json = serde_json::json!({
+            "tool": "asperity identify",
+            "crate_version": env!("CARGO_PKG_VERSION"),
+            "units": "SI: frequencies Hz, forces N, displacements m; FRFs in the unit of each file's quantity per N; errors relative to each level's measured peak",
+            "inputs": self.sweeps.iter().map(|s| InputFile {
+                path: s.path.clone(), sha256: s.sha256.clone(), quantity: s.quantity, rows: s.rows.len(), mean_force_n: s.mean_force_n()
+            }).collect::<Vec<_>>(),
+            "levels_fit": self.fit_levels.iter().map(|i| i + 1).collect::<Vec<_>>(),
+            "phase_convention": {"value": self.convention, "description": self.convention.describe()},
+            "scales": self.scales,
+            "options": self.options,
+            "method": {
+                "model": "single mass-normalised mode + joint element on the modal coordinate (drive-point form m u'' + c u' + k u + f_joint(u) + effects = F cos wt), harmonic balance with odd harmonics 1,3 (1..9 with higher_harmonics), warm starts along each sweep",
+                "objective": "mean over levels of mean over rows of |Y_model - Y_meas|^2 / max|Y_meas|^2 (complex response per unit force)",
+                "search": "argmin particle swarm (seeded xoshiro256++) then Nelder-Mead restarted once, several starts; bounds in 'parameters'",
+                "selection": "training = even rows, held-out = odd rows of the fit levels; held-out dBIC with AR(1) effective sample size < -10 and every fit level better",
+                "scatter": "median |third difference| / (1.1774 sqrt(20)) per level"
+            },
+            "data_backbone": self.data_backbone,
+            "selection": self.selection,
+            "verdict_text": verdict_text(&self.selection.verdict),
+            "baseline": {"fit": self.before, "parameters": parameter_table(&self.before.model), "backbone": self.backbone_before},
+            "final": {"fit": self.after, "parameters": parameter_table(&self.after.model), "backbone": self.backbone_after},
+            "errors_before": self.errors_before,
+            "errors_after": self.errors_after,
+            "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
+                "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz
+            })).collect::<Vec<_>>(),
+            "wall_time_s": self.wall_time_s,
+        });
+        write_json(&p, &json)?;
+        written.push(p);
+        let p = dir.join("identify.txt");
+        write_string_atomic(&p, &self.text())?;
+        written.push(p);
+        Ok(written)
+    }
+}

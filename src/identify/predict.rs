@@ -1,0 +1,252 @@
+//! Scoring an identified model on any measured file: a level that was not used, or another test
+//! type on the same structure.
+//!
+//! * **Force control**: the measured force of each row is applied and the response computed
+//!   (as in the fit).
+//! * **Response control**: the measured response amplitude of each row is held and the force
+//!   that produces it is solved for ([`crate::dynamics::hbm::HbmSystem::solve_response_controlled`]);
+//!   the model's response per unit force is then `measured response / model force`, with the
+//!   model's phase.
+//!
+//! Both report the errors of [`super::report`]. The phase convention of the files is detected
+//! from them; where they do not pass through a resonance (detection fails) the convention saved
+//! with the model is used, and the report says so.
+
+use super::fit::LevelData;
+use super::measured::{PhaseConvention, Sweep};
+use super::model::Model;
+use super::pipeline::SavedModel;
+use super::report::{
+    errors_table, fine_curve, plot_level, write_json, write_rows_csv, CurveRow, InputFile,
+    LevelErrors,
+};
+use crate::error::{Error, Result};
+use crate::output::write_string_atomic;
+use realfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// How the measured test was controlled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Control {
+    /// The force amplitude of each row is the input.
+    Force,
+    /// The response amplitude of each row is held; the force is the outcome.
+    Response,
+}
+
+/// Prediction of one file.
+#[derive(Debug, Clone, Serialize)]
+pub struct FilePrediction {
+    pub input: InputFile,
+    pub errors: LevelErrors,
+    /// Response control: RMS of `F_model/F_meas − 1` over the rows.
+    pub force_rms_error: Option<f64>,
+    #[serde(skip)]
+    pub model_frf: Vec<Complex64>,
+    /// Response control: the model's force per row (N).
+    pub model_force_n: Option<Vec<f64>>,
+}
+
+/// A prediction.
+#[derive(Debug, Clone, Serialize)]
+pub struct Prediction {
+    pub model_file: PathBuf,
+    pub control: Control,
+    pub convention: PhaseConvention,
+    pub convention_source: String,
+    pub files: Vec<FilePrediction>,
+    #[serde(skip)]
+    pub sweeps: Vec<Sweep>,
+    #[serde(skip)]
+    pub model: Model,
+}
+
+/// Predict measured files with a saved model.
+pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Result<Prediction> {
+    let saved = SavedModel::read(model_file)?;
+    if sweeps.is_empty() {
+        return Err(Error::param("files", "at least one measured file"));
+    }
+    let (convention, source) = match PhaseConvention::detect(&sweeps) {
+        Ok(c) => (c, "detected from the files".to_string()),
+        Err(e) => (
+            saved.phase_convention,
+            format!("saved with the model ({e})"),
+        ),
+    };
+    let model = saved.model;
+    let mut files = Vec::new();
+    for s in &sweeps {
+        let level = LevelData::new(s, &convention);
+        let named = |e: Error| match e {
+            Error::NonConvergence { .. } | Error::Data(_) => {
+                Error::Data(format!("{}: {e}", s.path.display()))
+            }
+            e => e,
+        };
+        let (y, failed, forces) = match control {
+            Control::Force => {
+                let (y, failed) = level.model_frf(&model).map_err(named)?;
+                (y, failed, None)
+            }
+            Control::Response => {
+                let om: Vec<f64> = level.drives.iter().map(|d| d.omega).collect();
+                let targets: Vec<f64> = s
+                    .rows
+                    .iter()
+                    .zip(&om)
+                    .map(|(r, &w)| r.response / s.quantity.from_displacement(w).norm())
+                    .collect();
+                let (f, x) = model
+                    .response_controlled(&om, &targets, level.mean_force_n)
+                    .map_err(named)?;
+                let y: Vec<Complex64> = x
+                    .iter()
+                    .zip(&om)
+                    .map(|(xi, &w)| xi * s.quantity.from_displacement(w))
+                    .collect();
+                (y, 0, Some(f))
+            }
+        };
+        let force_rms_error = forces.as_ref().map(|f| {
+            (f.iter()
+                .zip(&s.rows)
+                .map(|(m, r)| (m / r.force_n - 1.0).powi(2))
+                .sum::<f64>()
+                / f.len() as f64)
+                .sqrt()
+        });
+        files.push(FilePrediction {
+            input: InputFile {
+                path: s.path.clone(),
+                sha256: s.sha256.clone(),
+                quantity: s.quantity,
+                rows: s.rows.len(),
+                mean_force_n: s.mean_force_n(),
+            },
+            errors: LevelErrors::new(&level, &y, "predicted", failed),
+            force_rms_error,
+            model_frf: y,
+            model_force_n: forces,
+        });
+    }
+    Ok(Prediction {
+        model_file: model_file.to_path_buf(),
+        control,
+        convention,
+        convention_source: source,
+        files,
+        sweeps,
+        model,
+    })
+}
+
+impl Prediction {
+    /// Human-readable report.
+    pub fn text(&self) -> String {
+        let mut s = format!(
+            "asperity predict — identified model {} on measured files ({} control)\n\
+             phase convention: {} ({})\n\n",
+            self.model_file.display(),
+            match self.control {
+                Control::Force => "force: the measured force of each row applied",
+                Control::Response =>
+                    "response: the measured response of each row held, force solved for",
+            },
+            self.convention.describe(),
+            self.convention_source
+        );
+        let rows: Vec<_> = self.files.iter().map(|f| (&f.errors, None)).collect();
+        s += &errors_table("errors per file (model − measured):", &rows);
+        for f in &self.files {
+            if let Some(e) = f.force_rms_error {
+                s += &format!(
+                    "  {}: RMS relative error of the force needed: {:.1}%\n",
+                    f.errors.file,
+                    100.0 * e
+                );
+            }
+            for r in &f.errors.regions {
+                s += &format!(
+                    "  {} {} ({} rows): RMS {:.3}, amplitude {:+.1}%, phase {:+.3} rad\n",
+                    f.errors.file,
+                    r.region,
+                    r.rows,
+                    r.rms_complex,
+                    100.0 * r.mean_amplitude_error,
+                    r.mean_phase_error_rad
+                );
+            }
+        }
+        s
+    }
+
+    /// Write `predict.{txt,json}`, `predict-rows.csv` and one PNG per file into `dir`.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        let mut rows = Vec::new();
+        for (f, s) in self.files.iter().zip(&self.sweeps) {
+            let level = LevelData::new(s, &self.convention);
+            for (k, r) in s.rows.iter().enumerate() {
+                rows.push(CurveRow {
+                    file: f.errors.file.clone(),
+                    role: "predicted".into(),
+                    line: r.line,
+                    frequency_hz: r.frequency_hz,
+                    force_n: r.force_n,
+                    measured: level.measured[k],
+                    models: vec![f.model_frf[k]],
+                });
+            }
+        }
+        let p = dir.join("predict-rows.csv");
+        let conv = self.convention;
+        write_rows_csv(
+            &p,
+            "response per unit force in the unit of each file's quantity per N; phases in the files' convention",
+            &["model"],
+            &rows,
+            &|_| conv,
+        )?;
+        written.push(p);
+        for (i, (f, s)) in self.files.iter().zip(&self.sweeps).enumerate() {
+            let level = LevelData::new(s, &self.convention);
+            let curve = match self.control {
+                Control::Force => fine_curve(&self.model, &level, 4),
+                Control::Response => level
+                    .drives
+                    .iter()
+                    .zip(&f.model_frf)
+                    .map(|(d, y)| (d.omega / std::f64::consts::TAU, *y))
+                    .collect(),
+            };
+            let p = dir.join(format!("predict-{}.png", i + 1));
+            plot_level(
+                &p,
+                &level,
+                &self.convention,
+                &[("model (predicted)".into(), curve)],
+                &format!("{} predicted", f.errors.file),
+            )?;
+            written.push(p);
+        }
+        let p = dir.join("predict.json");
+        write_json(
+            &p,
+            &serde_json::json!({
+                "tool": "asperity predict",
+                "crate_version": env!("CARGO_PKG_VERSION"),
+                "model_file_sha256": super::measured::sha256_hex(
+                    &std::fs::read(&self.model_file).map_err(|e| Error::io(&self.model_file, e))?),
+                "prediction": self,
+            }),
+        )?;
+        written.push(p);
+        let p = dir.join("predict.txt");
+        write_string_atomic(&p, &self.text())?;
+        written.push(p);
+        Ok(written)
+    }
+}

@@ -1,0 +1,410 @@
+//! Error measures of a model against a measured level, and the files of an identification or
+//! a prediction: text, JSON (inputs with SHA-256), CSV, the saved model, PNG figures. Every file
+//! is written atomically ([`crate::output`]).
+//!
+//! # Error measures (per level)
+//!
+//! With `Y` the response of the level's quantity per unit force (accelerance for an
+//! accelerometer), measured and modelled at the measured rows (the model driven by the measured
+//! force of each row):
+//!
+//! * **resonance frequency error** (Hz): model minus measured frequency of the largest `|Y|`,
+//!   each refined by the vertex of the parabola through the largest row and its neighbours
+//!   ([`super::backbone::resonance`]);
+//! * **peak error**: model peak `|Y|` over measured peak, minus 1 (same refinement);
+//! * **RMS complex error**: `√(mean |Y_model − Y_meas|²) / max |Y_meas|` (amplitude and phase);
+//! * the same RMS and the mean amplitude and phase errors per **region**: below the
+//!   measured half-power band, inside it ("at resonance"), above it.
+
+use super::backbone::{half_power_rows, resonance, BackbonePoint, LevelBackbone};
+use super::fit::LevelData;
+use super::measured::PhaseConvention;
+use super::model::Model;
+use crate::error::{Error, Result};
+use crate::output::{write_atomic, write_string_atomic};
+use crate::plot::{stacked_line_plots, LinePlot, Scale, Series};
+use realfft::num_complex::Complex64;
+use serde::Serialize;
+use std::f64::consts::TAU;
+use std::path::{Path, PathBuf};
+
+/// Errors of one region of a sweep.
+#[derive(Debug, Clone, Serialize)]
+pub struct RegionErrors {
+    pub region: &'static str,
+    pub rows: usize,
+    pub rms_complex: f64,
+    /// Mean of `|Y_model|/|Y_meas| − 1`.
+    pub mean_amplitude_error: f64,
+    /// Mean of `arg(Y_model/Y_meas)` (rad).
+    pub mean_phase_error_rad: f64,
+}
+
+/// Errors of a model against one level.
+#[derive(Debug, Clone, Serialize)]
+pub struct LevelErrors {
+    pub file: String,
+    /// "fit" (used in the fit) or "predicted".
+    pub role: String,
+    pub mean_force_n: f64,
+    pub resonance_measured_hz: f64,
+    pub resonance_model_hz: f64,
+    pub resonance_error_hz: f64,
+    pub peak_measured: f64,
+    pub peak_model: f64,
+    pub peak_error: f64,
+    pub rms_complex: f64,
+    pub regions: Vec<RegionErrors>,
+    /// Rows where the harmonic balance failed.
+    pub failed_rows: usize,
+}
+
+impl LevelErrors {
+    /// Compare a model response `y` (per unit force, the level's quantity) with the level.
+    pub fn new(level: &LevelData, y: &[Complex64], role: &str, failed_rows: usize) -> Self {
+        let f: Vec<f64> = level.drives.iter().map(|d| d.omega / TAU).collect();
+        let am: Vec<f64> = level.measured.iter().map(|v| v.norm()).collect();
+        let ay: Vec<f64> = y.iter().map(|v| v.norm()).collect();
+        let (fm, pm) = resonance(&f, &am);
+        let (fy, py) = if ay.iter().any(|v| v.is_finite()) {
+            resonance(&f, &ay)
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        let r = level.residuals(y);
+        let rms = |idx: &[usize]| {
+            (idx.iter().map(|&i| r[i].norm_sqr()).sum::<f64>() / idx.len().max(1) as f64).sqrt()
+        };
+        let (lo, hi) = half_power_rows(&am);
+        let (flo, fhi) = (f[lo].min(f[hi]), f[lo].max(f[hi]));
+        let mut regions = Vec::new();
+        for (name, keep) in [
+            (
+                "below resonance",
+                Box::new(|x: f64| x < flo) as Box<dyn Fn(f64) -> bool>,
+            ),
+            ("at resonance", Box::new(|x: f64| x >= flo && x <= fhi)),
+            ("above resonance", Box::new(|x: f64| x > fhi)),
+        ] {
+            let idx: Vec<usize> = (0..f.len()).filter(|&i| keep(f[i])).collect();
+            let valid: Vec<usize> = idx.iter().copied().filter(|&i| ay[i].is_finite()).collect();
+            regions.push(RegionErrors {
+                region: name,
+                rows: idx.len(),
+                rms_complex: rms(&idx),
+                mean_amplitude_error: valid.iter().map(|&i| ay[i] / am[i] - 1.0).sum::<f64>()
+                    / valid.len().max(1) as f64,
+                mean_phase_error_rad: valid
+                    .iter()
+                    .map(|&i| (y[i] / level.measured[i]).arg())
+                    .sum::<f64>()
+                    / valid.len().max(1) as f64,
+            });
+        }
+        let all: Vec<usize> = (0..f.len()).collect();
+        Self {
+            file: level.name.clone(),
+            role: role.to_string(),
+            mean_force_n: level.mean_force_n,
+            resonance_measured_hz: fm,
+            resonance_model_hz: fy,
+            resonance_error_hz: fy - fm,
+            peak_measured: pm,
+            peak_model: py,
+            peak_error: py / pm - 1.0,
+            rms_complex: rms(&all),
+            regions,
+            failed_rows,
+        }
+    }
+}
+
+/// A model's response curve on a fine frequency grid for plots: the measured force
+/// interpolated linearly between rows (sweep order kept).
+pub fn fine_curve(model: &Model, level: &LevelData, per_interval: usize) -> Vec<(f64, Complex64)> {
+    let mut drives = Vec::new();
+    for w in level.drives.windows(2) {
+        for k in 0..per_interval {
+            let t = k as f64 / per_interval as f64;
+            drives.push(super::model::Drive {
+                omega: w[0].omega + t * (w[1].omega - w[0].omega),
+                force_n: w[0].force_n + t * (w[1].force_n - w[0].force_n),
+            });
+        }
+    }
+    drives.push(*level.drives.last().expect("rows"));
+    let (x, _) = model
+        .receptance_tolerant(&drives, level.mean_force_n, true)
+        .unwrap_or_else(|_| {
+            (
+                vec![Complex64::new(f64::NAN, f64::NAN); drives.len()],
+                vec![],
+            )
+        });
+    drives
+        .iter()
+        .zip(x)
+        .map(|(d, xi)| {
+            (
+                d.omega / TAU,
+                xi * level.quantity.from_displacement(d.omega),
+            )
+        })
+        .collect()
+}
+
+/// Amplitude and phase panels of one level: measured rows and model curves.
+pub fn plot_level(
+    path: &Path,
+    level: &LevelData,
+    conv: &PhaseConvention,
+    curves: &[(String, Vec<(f64, Complex64)>)],
+    title: &str,
+) -> Result<()> {
+    let meas_f: Vec<f64> = level.drives.iter().map(|d| d.omega / TAU).collect();
+    let q = level.quantity;
+    let amp_label = format!("{} ({}/N)", q.frf_name(), q.unit());
+    let mut amp = vec![Series::markers(
+        "measured",
+        meas_f
+            .iter()
+            .zip(&level.measured)
+            .map(|(&f, y)| (f, y.norm()))
+            .collect(),
+    )];
+    let mut phase = vec![Series::markers(
+        "measured",
+        meas_f
+            .iter()
+            .zip(&level.measured)
+            .map(|(&f, y)| (f, conv.to_file_phase(*y)))
+            .collect(),
+    )];
+    for (label, c) in curves {
+        amp.push(Series::line(
+            label.clone(),
+            c.iter().map(|(f, y)| (*f, y.norm())).collect(),
+        ));
+        phase.push(Series::line(
+            label.clone(),
+            c.iter()
+                .map(|(f, y)| (*f, conv.to_file_phase(*y)))
+                .collect(),
+        ));
+    }
+    let t2 = format!("{title}: phase (the file's convention)");
+    stacked_line_plots(
+        path,
+        &[
+            (
+                LinePlot {
+                    title,
+                    x_label: "frequency (Hz)",
+                    y_label: &amp_label,
+                    x_scale: Scale::Linear,
+                    y_scale: Scale::Linear,
+                },
+                amp,
+            ),
+            (
+                LinePlot {
+                    title: &t2,
+                    x_label: "frequency (Hz)",
+                    y_label: "phase (rad)",
+                    x_scale: Scale::Linear,
+                    y_scale: Scale::Linear,
+                },
+                phase,
+            ),
+        ],
+    )
+}
+
+/// Backbone figure: natural frequency and damping ratio versus drive-point amplitude, from the
+/// data (per-level equivalent modes and pointwise inversion) and from models.
+pub fn plot_backbone(
+    path: &Path,
+    data: &[LevelBackbone],
+    models: &[(String, Vec<BackbonePoint>)],
+) -> Result<()> {
+    let mut fr = Vec::new();
+    let mut zr = Vec::new();
+    let pts: Vec<&BackbonePoint> = data.iter().flat_map(|b| &b.points).collect();
+    fr.push(Series::markers(
+        "data, pointwise (half-power rows)",
+        pts.iter()
+            .map(|p| (p.amplitude_m * 1e6, p.frequency_hz))
+            .collect(),
+    ));
+    zr.push(Series::markers(
+        "data, pointwise (half-power rows)",
+        pts.iter()
+            .map(|p| (p.amplitude_m * 1e6, p.damping_ratio * 100.0))
+            .collect(),
+    ));
+    fr.push(Series::markers(
+        "data, equivalent linear mode per level",
+        data.iter()
+            .map(|b| (b.peak_amplitude_m * 1e6, b.linear.frequency_hz))
+            .collect(),
+    ));
+    zr.push(Series::markers(
+        "data, equivalent linear mode per level",
+        data.iter()
+            .map(|b| (b.peak_amplitude_m * 1e6, b.linear.damping_ratio * 100.0))
+            .collect(),
+    ));
+    for (label, m) in models {
+        fr.push(Series::line(
+            label.clone(),
+            m.iter()
+                .map(|p| (p.amplitude_m * 1e6, p.frequency_hz))
+                .collect(),
+        ));
+        zr.push(Series::line(
+            label.clone(),
+            m.iter()
+                .map(|p| (p.amplitude_m * 1e6, p.damping_ratio * 100.0))
+                .collect(),
+        ));
+    }
+    stacked_line_plots(
+        path,
+        &[
+            (
+                LinePlot {
+                    title: "Backbone: natural frequency versus amplitude",
+                    x_label: "drive-point displacement amplitude (µm)",
+                    y_label: "natural frequency (Hz)",
+                    x_scale: Scale::Log,
+                    y_scale: Scale::Linear,
+                },
+                fr,
+            ),
+            (
+                LinePlot {
+                    title: "Backbone: damping ratio versus amplitude",
+                    x_label: "drive-point displacement amplitude (µm)",
+                    y_label: "damping ratio (%)",
+                    x_scale: Scale::Log,
+                    y_scale: Scale::Linear,
+                },
+                zr,
+            ),
+        ],
+    )
+}
+
+/// Rows of the per-row CSV: one per measured row and model.
+#[derive(Debug, Clone)]
+pub struct CurveRow {
+    pub file: String,
+    pub role: String,
+    pub line: usize,
+    pub frequency_hz: f64,
+    pub force_n: f64,
+    pub measured: Complex64,
+    /// Named model responses at this row.
+    pub models: Vec<Complex64>,
+}
+
+/// Write the per-row CSV (`frequency_Hz`, measured force, measured and model amplitude and phase
+/// in the file's convention, per model).
+pub fn write_rows_csv(
+    path: &Path,
+    unit_note: &str,
+    model_names: &[&str],
+    rows: &[CurveRow],
+    conv_of: &dyn Fn(&str) -> PhaseConvention,
+) -> Result<()> {
+    write_atomic(path, |w| {
+        let io = |e| Error::io(path, e);
+        writeln!(w, "# {unit_note}").map_err(io)?;
+        write!(
+            w,
+            "file,role,line,frequency_Hz,force_amplitude_N,measured_per_force,measured_phase_rad"
+        )
+        .map_err(io)?;
+        for m in model_names {
+            write!(w, ",{m}_per_force,{m}_phase_rad").map_err(io)?;
+        }
+        writeln!(w).map_err(io)?;
+        for r in rows {
+            let c = conv_of(&r.file);
+            write!(
+                w,
+                "{},{},{},{},{:.9e},{:.9e},{:.9e}",
+                r.file,
+                r.role,
+                r.line,
+                r.frequency_hz,
+                r.force_n,
+                r.measured.norm(),
+                c.to_file_phase(r.measured)
+            )
+            .map_err(io)?;
+            for y in &r.models {
+                write!(w, ",{:.9e},{:.9e}", y.norm(), c.to_file_phase(*y)).map_err(io)?;
+            }
+            writeln!(w).map_err(io)?;
+        }
+        Ok(())
+    })
+}
+
+/// Serialise to pretty JSON and write atomically.
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", path.display())))?;
+    write_string_atomic(path, &(text + "\n"))
+}
+
+/// Input file description for JSON sidecars.
+#[derive(Debug, Clone, Serialize)]
+pub struct InputFile {
+    pub path: PathBuf,
+    pub sha256: String,
+    pub quantity: super::measured::Quantity,
+    pub rows: usize,
+    pub mean_force_n: f64,
+}
+
+/// Text table of level errors (before/after).
+pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) -> String {
+    let mut s = format!("{title}\n");
+    s += &format!(
+        "{:<34} {:>9} {:>8} {:>10} {:>21} {:>19} {:>17}\n",
+        "level",
+        "role",
+        "F (N)",
+        "f_res (Hz)",
+        "Δf_res (Hz) bef→aft",
+        "peak err bef→aft",
+        "RMS cplx bef→aft"
+    );
+    for (b, a) in rows {
+        let pair = |x: f64, y: Option<f64>, scale: f64, prec: usize| match y {
+            Some(y) => format!("{:+.p$} → {:+.p$}", x * scale, y * scale, p = prec),
+            None => format!("{:+.p$}", x * scale, p = prec),
+        };
+        s += &format!(
+            "{:<34} {:>9} {:>8.3} {:>10.3} {:>21} {:>18}% {:>17}\n",
+            b.file,
+            b.role,
+            b.mean_force_n,
+            b.resonance_measured_hz,
+            pair(
+                b.resonance_error_hz,
+                a.map(|a| a.resonance_error_hz),
+                1.0,
+                3
+            ),
+            pair(b.peak_error, a.map(|a| a.peak_error), 100.0, 1),
+            match a {
+                Some(a) => format!("{:.3} → {:.3}", b.rms_complex, a.rms_complex),
+                None => format!("{:.3}", b.rms_complex),
+            }
+        );
+    }
+    s
+}

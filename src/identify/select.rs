@@ -1,0 +1,423 @@
+//! Which effect does the model lack? Candidate effects accepted only on strong held-out
+//! evidence, against the measurement scatter estimated from the data.
+//!
+//! The approach is that of `crate::diagnose::select` (held-out data, ΔBIC with an effective
+//! sample size, a "very strong" threshold), adapted to frequency responses:
+//!
+//! 1. **Split.** The rows of every fit level are split alternately into training rows (even
+//!    positions in the sweep) and held-out rows (odd positions). Models are always evaluated
+//!    along the whole sweep (warm starts follow the test), and fitted on training rows only.
+//! 2. **Candidates.** Each admissible effect ([`super::model::ModelSpec::admits`]) is added and
+//!    the model refitted: a particle swarm over the whole box (one start) and Nelder–Mead from
+//!    the current model's optimum with the effect's parameters at their neutral values; the
+//!    better of the two is kept. An effect with a neutral value (zero stiffness change, zero
+//!    delay, ...) therefore never fits worse than the current model; a joint family has none
+//!    (its joint replaces the Jenkins slider), so its fit rests on the swarm.
+//! 3. **Evidence.** On the held-out rows, `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)`
+//!    (Schwarz 1978), `J` the objective of [`super::fit`] on held-out rows, `n = 2·rows`
+//!    (real and imaginary parts), `n_eff = n·(1 − ρ)/(1 + ρ)` with `ρ` the lag-1
+//!    autocorrelation of the current model's held-out residuals along each sweep (neighbouring
+//!    rows of a smooth frequency response do not carry independent evidence). The best candidate
+//!    is accepted when `ΔBIC < −10` ("very strong", Kass & Raftery 1995) **and** it lowers the
+//!    held-out residual of every fit level (an effect that helps one level at another's expense
+//!    is not structure-level). Up to `max_effects` effects are added, one per round.
+//! 4. **Scatter.** The measurement scatter of each level is estimated from the smoothness of its
+//!    sweep: for white noise of standard deviation `s` per component, the third difference of
+//!    consecutive rows `Δ³Y_i = Y_{i+2} − 3Y_{i+1} + 3Y_i − Y_{i−1}` has variance `20·s²` per
+//!    component, and `|Δ³Y|` of a complex Gaussian has median `1.1774·√20·s`; the median over
+//!    the sweep is robust to the few rows at the resonance where the signal itself has large
+//!    third differences. The scatter floor of the objective is `J_noise = mean over levels of
+//!    2·(s_l/peak_l)²`. A residual is "at the scatter" when `J ≤ 4·J_noise` (RMS within twice
+//!    the scatter).
+//!
+//! Verdicts: effects accepted; no effect needed (baseline at the scatter); or the residual stays
+//! above the scatter and no candidate explains it — reported as such, nothing forced.
+
+use super::effects::Effect;
+use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Objective};
+use super::model::{Model, ModelSpec};
+use crate::error::Result;
+use realfft::num_complex::Complex64;
+use serde::Serialize;
+
+/// Evidence threshold on the held-out ΔBIC.
+pub const BIC_THRESHOLD: f64 = -10.0;
+/// A residual is at the scatter when its objective is within this factor of the scatter floor
+/// (RMS within twice the scatter).
+pub const SCATTER_FACTOR: f64 = 4.0;
+
+/// Measurement scatter of one level per component, relative to its peak (see the module
+/// documentation).
+pub fn relative_scatter(level: &LevelData) -> f64 {
+    let y = &level.measured;
+    if y.len() < 4 {
+        return f64::NAN;
+    }
+    let mut d3: Vec<f64> = (1..y.len() - 2)
+        .map(|i| (y[i + 2] - 3.0 * y[i + 1] + 3.0 * y[i] - y[i - 1]).norm())
+        .collect();
+    d3.sort_by(|a, b| a.total_cmp(b));
+    let med = d3[d3.len() / 2];
+    med / (1.1774 * 20f64.sqrt()) / level.peak
+}
+
+/// Scatter floor of the objective over some levels: mean of `2·s_l²`.
+pub fn scatter_floor(levels: &[LevelData]) -> f64 {
+    levels
+        .iter()
+        .map(|l| 2.0 * relative_scatter(l).powi(2))
+        .sum::<f64>()
+        / levels.len() as f64
+}
+
+/// Training (even positions) and held-out (odd) masks of each level.
+pub fn split(levels: &[LevelData]) -> (Vec<Vec<bool>>, Vec<Vec<bool>>) {
+    let train = levels
+        .iter()
+        .map(|l| (0..l.drives.len()).map(|i| i % 2 == 0).collect())
+        .collect();
+    let held = levels
+        .iter()
+        .map(|l| (0..l.drives.len()).map(|i| i % 2 == 1).collect())
+        .collect();
+    (train, held)
+}
+
+/// Held-out score of a model: objective over the held-out rows, per level and pooled, and the
+/// residuals of the held-out rows (per level, in sweep order).
+#[derive(Debug, Clone, Serialize)]
+pub struct HeldOut {
+    pub cost: f64,
+    pub per_level: Vec<f64>,
+    #[serde(skip)]
+    pub residuals: Vec<Vec<Complex64>>,
+}
+
+/// Score a model on masked rows.
+pub fn score(model: &Model, levels: &[LevelData], masks: &[Vec<bool>]) -> Result<HeldOut> {
+    let mut per_level = Vec::new();
+    let mut residuals = Vec::new();
+    for (l, m) in levels.iter().zip(masks) {
+        let (y, _) = l.model_frf(model)?;
+        let r: Vec<Complex64> = l
+            .residuals(&y)
+            .into_iter()
+            .zip(m)
+            .filter(|(_, &k)| k)
+            .map(|(r, _)| r)
+            .collect();
+        per_level.push(r.iter().map(|v| v.norm_sqr()).sum::<f64>() / r.len().max(1) as f64);
+        residuals.push(r);
+    }
+    Ok(HeldOut {
+        cost: per_level.iter().sum::<f64>() / per_level.len() as f64,
+        per_level,
+        residuals,
+    })
+}
+
+/// Lag-1 autocorrelation of the residual components along each sweep (pooled), in `[0, 0.95]`.
+pub fn lag1_autocorrelation(residuals: &[Vec<Complex64>]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for r in residuals {
+        for part in [|z: &Complex64| z.re, |z: &Complex64| z.im] {
+            let v: Vec<f64> = r.iter().map(part).collect();
+            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+            for w in v.windows(2) {
+                num += (w[0] - mean) * (w[1] - mean);
+            }
+            den += v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>();
+        }
+    }
+    if den > 0.0 {
+        (num / den).clamp(0.0, 0.95)
+    } else {
+        0.0
+    }
+}
+
+/// One candidate of a round.
+#[derive(Debug, Clone, Serialize)]
+pub struct Candidate {
+    pub effect: Effect,
+    pub meaning: &'static str,
+    pub added_parameters: usize,
+    pub train_cost: f64,
+    pub held_out: HeldOut,
+    pub delta_bic: f64,
+    /// Every fit level's held-out residual fell.
+    pub improves_every_level: bool,
+    pub converged: bool,
+    #[serde(skip)]
+    pub fit: FitResult,
+}
+
+/// One round of the search.
+#[derive(Debug, Clone, Serialize)]
+pub struct Round {
+    /// Spec the candidates were added to.
+    pub base_effects: Vec<Effect>,
+    pub base_held_out: HeldOut,
+    pub lag1_autocorrelation: f64,
+    pub effective_samples: f64,
+    pub candidates: Vec<Candidate>,
+    pub accepted: Option<Effect>,
+}
+
+/// The outcome of the search.
+#[derive(Debug, Clone, Serialize)]
+pub enum Verdict {
+    /// Effects accepted on held-out evidence; `at_scatter`: the final residual is within the
+    /// scatter.
+    EffectsFound {
+        effects: Vec<Effect>,
+        at_scatter: bool,
+    },
+    /// The baseline's residual is already at the scatter.
+    NoEffectNeeded,
+    /// The residual stays above the scatter and no candidate explains it.
+    Unexplained {
+        held_out_cost: f64,
+        scatter_floor: f64,
+    },
+}
+
+/// Result of the effect search.
+#[derive(Debug, Clone, Serialize)]
+pub struct Selection {
+    pub baseline_train_fit: FitResult,
+    pub rounds: Vec<Round>,
+    pub final_spec: ModelSpec,
+    /// Training fit of the final spec.
+    #[serde(skip)]
+    pub final_train_fit: FitResult,
+    pub scatter_floor: f64,
+    pub relative_scatter_per_level: Vec<f64>,
+    pub verdict: Verdict,
+}
+
+/// Options of the search.
+#[derive(Debug, Clone, Serialize)]
+pub struct SelectOptions {
+    pub candidates: Vec<Effect>,
+    pub max_effects: usize,
+    /// Fit of the baseline (several starts).
+    pub baseline_fit: FitOptions,
+    /// Global part of each candidate's fit (usually one start).
+    pub candidate_fit: FitOptions,
+}
+
+/// Fit a candidate spec: one swarm over the box and a local start from `from` extended by the
+/// effect's neutral values; the better.
+fn fit_candidate(
+    spec: &ModelSpec,
+    from: &Model,
+    levels: &[LevelData],
+    train: &[Vec<bool>],
+    opts: &SelectOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<FitResult> {
+    let mut start = from.values.clone();
+    let params = spec.params();
+    start.extend(params[from.values.len()..].iter().map(|p| p.neutral));
+    let local = fit_local(spec, levels, train, &[start], &opts.candidate_fit, progress)?;
+    if opts.candidate_fit.starts == 0 {
+        return Ok(local);
+    }
+    let global = fit_global(spec, levels, train, &opts.candidate_fit, progress)?;
+    Ok(if global.cost < local.cost {
+        global
+    } else {
+        local
+    })
+}
+
+/// Fit the baseline: the swarm starts of [`fit_global`] and one Nelder–Mead start from the
+/// data's own scales ([`Model::neutral`]: the resonance frequency and modal mass of the fit
+/// levels' equivalent linear modes, ζ0 = 0.1 %, a 1 % joint stiffness share slipping at the
+/// lowest fit level's peak amplitude), the better. A small swarm can settle in the basin of a heavily damped linear mode
+/// between the levels' resonances; the data start does not, and costs one local fit.
+fn fit_baseline(
+    baseline: &ModelSpec,
+    levels: &[LevelData],
+    train: &[Vec<bool>],
+    opts: &FitOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<FitResult> {
+    let global = fit_global(baseline, levels, train, opts, progress)?;
+    let start = Model::neutral(baseline.clone()).values;
+    let local = fit_local(baseline, levels, train, &[start], opts, progress)?;
+    Ok(if local.cost < global.cost {
+        let mut best = local;
+        best.starts.extend(global.starts);
+        best.evaluations += global.evaluations;
+        best
+    } else {
+        let mut best = global;
+        best.starts.extend(local.starts);
+        best.evaluations += local.evaluations;
+        best
+    })
+}
+
+/// Run the search on the fit levels.
+pub fn select(
+    baseline: &ModelSpec,
+    levels: &[LevelData],
+    opts: &SelectOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Selection> {
+    let (train, held) = split(levels);
+    let base_fit = fit_baseline(baseline, levels, &train, &opts.baseline_fit, progress)?;
+    let floor = scatter_floor(levels);
+    let mut current = base_fit.clone();
+    let mut rounds = Vec::new();
+    let mut accepted_effects = Vec::new();
+    for _ in 0..opts.max_effects {
+        let spec = current.model.spec.clone();
+        let base_held = score(&current.model, levels, &held)?;
+        let rho = lag1_autocorrelation(&base_held.residuals);
+        let n: usize = base_held.residuals.iter().map(|r| 2 * r.len()).sum();
+        let n_eff = (n as f64 * (1.0 - rho) / (1.0 + rho)).max(2.0);
+        let mut candidates = Vec::new();
+        for &e in opts.candidates.iter().filter(|&&e| spec.admits(e)) {
+            let cspec = spec.with(e);
+            let fit = fit_candidate(&cspec, &current.model, levels, &train, opts, progress)?;
+            let h = score(&fit.model, levels, &held)?;
+            let dp = (cspec.params().len() - spec.params().len()) as f64;
+            let delta_bic = n_eff * (h.cost / base_held.cost).ln() + dp * n_eff.ln();
+            let improves = h
+                .per_level
+                .iter()
+                .zip(&base_held.per_level)
+                .all(|(a, b)| a < b);
+            candidates.push(Candidate {
+                effect: e,
+                meaning: e.meaning(),
+                added_parameters: dp as usize,
+                train_cost: fit.cost,
+                held_out: h,
+                delta_bic,
+                improves_every_level: improves,
+                converged: fit.converged,
+                fit,
+            });
+        }
+        let best = candidates
+            .iter()
+            .filter(|c| c.delta_bic < BIC_THRESHOLD && c.improves_every_level)
+            .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
+            .map(|c| (c.effect, c.fit.clone()));
+        rounds.push(Round {
+            base_effects: spec.effects.clone(),
+            base_held_out: base_held,
+            lag1_autocorrelation: rho,
+            effective_samples: n_eff,
+            candidates,
+            accepted: best.as_ref().map(|b| b.0),
+        });
+        match best {
+            Some((e, fit)) => {
+                accepted_effects.push(e);
+                current = fit;
+            }
+            None => break,
+        }
+    }
+    let final_held = score(&current.model, levels, &held)?;
+    let base_held = score(&base_fit.model, levels, &held)?;
+    let verdict = if !accepted_effects.is_empty() {
+        Verdict::EffectsFound {
+            effects: accepted_effects,
+            at_scatter: final_held.cost <= SCATTER_FACTOR * floor,
+        }
+    } else if base_held.cost <= SCATTER_FACTOR * floor {
+        Verdict::NoEffectNeeded
+    } else {
+        Verdict::Unexplained {
+            held_out_cost: base_held.cost,
+            scatter_floor: floor,
+        }
+    };
+    Ok(Selection {
+        baseline_train_fit: base_fit,
+        final_spec: current.model.spec.clone(),
+        final_train_fit: current,
+        rounds,
+        scatter_floor: floor,
+        relative_scatter_per_level: levels.iter().map(relative_scatter).collect(),
+        verdict,
+    })
+}
+
+/// Refit a model on all rows of the fit levels (local, from its training optimum).
+pub fn refit_all_rows(
+    from: &FitResult,
+    levels: &[LevelData],
+    opts: &FitOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<FitResult> {
+    let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
+    fit_local(
+        &from.model.spec,
+        levels,
+        &all,
+        std::slice::from_ref(&from.model.values),
+        opts,
+        progress,
+    )
+}
+
+/// The objective of a model over all rows of some levels.
+pub fn cost_all_rows(model: &Model, levels: &[LevelData]) -> f64 {
+    let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
+    Objective::new(model.spec.clone(), levels, &all, None)
+        .cost_of(model)
+        .0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::measured::Quantity;
+    use crate::identify::model::Drive;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// The third-difference estimate recovers the scatter of white noise on a smooth
+    /// resonance within 15 % (41 rows, 20 realisations averaged).
+    #[test]
+    fn scatter_of_white_noise_on_a_resonance() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let s = 0.01;
+        let noise = Normal::new(0.0, s).unwrap();
+        let mut est = 0.0;
+        for _ in 0..20 {
+            let drives: Vec<Drive> = (0..41)
+                .map(|i| Drive {
+                    omega: std::f64::consts::TAU * (79.2 + 0.05 * i as f64),
+                    force_n: 1.0,
+                })
+                .collect();
+            let w0 = std::f64::consts::TAU * 80.2;
+            let measured: Vec<Complex64> = drives
+                .iter()
+                .map(|d| {
+                    let h = 1.0 / Complex64::new(w0 * w0 - d.omega * d.omega, 0.006 * w0 * d.omega);
+                    h * 3.9e3 + Complex64::new(noise.sample(&mut rng), noise.sample(&mut rng))
+                })
+                .collect();
+            let l = LevelData {
+                name: "x".into(),
+                quantity: Quantity::Displacement,
+                drives,
+                lines: vec![0; 41],
+                mean_force_n: 1.0,
+                peak: 1.0,
+                measured,
+            };
+            est += relative_scatter(&l) / 20.0;
+        }
+        assert!((est / s - 1.0).abs() < 0.15, "{est} vs {s}");
+    }
+}
