@@ -1,28 +1,59 @@
-//! Benchmark of the normal contact solver (Polonsky–Keer) against tamaas 2.9.
+//! Benchmark of the normal contact solver against tamaas 2.9, in the same run.
 //!
-//!     benches/peers/setup.sh                      # throwaway venv with tamaas (once)
-//!     cargo bench --bench normal                  # comparison + timings, markdown tables
-//!     cargo bench --bench normal -- --size 4096   # one 4096² solve (run under /usr/bin/time -v)
-//!     cargo bench --bench normal -- --reference   # reference sweep and kn ∝ p^β fit
+//!     benches/peers/setup.sh                        # throwaway venv with tamaas (once)
+//!     cargo bench --bench normal                    # sections A–C below (about 1 h, 2 idle cores)
+//!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
+//!     cargo bench --bench normal -- --resolution    # D: grid-refinement study of the resolution
+//!     cargo bench --bench normal -- --size 4096     # one 4096² solve (run under /usr/bin/time -v)
+//!     cargo bench --bench normal -- --reference     # reference sweep (1024²) and kn ∝ p^β
 //!
-//! Surfaces: the reference Gaussian surface (Rq 0.177 µm, cl 6.6 µm, 250 µm) generated at the
-//! grid size of each case (same seed), exported to .npy for tamaas. Steel on steel
-//! (E = 210 GPa, ν = 0.3 both bodies). Times are per cold solve (uniform initial pressure),
-//! best of `REPEATS`, excluding the one-off FFT planning and kernel transform of both codes.
-//! Threads: asperity runs in rayon pools of 1 and 2 threads; tamaas with OMP_NUM_THREADS=1, 2.
+//! A. Self-affine surfaces (H = 0.8, rms gradient 0.1, periodic, roll-off L/4, cut-off 16 grid
+//!    spacings; `SelfAffineSpec::benchmark`, seed 1) on 512², 1024², 2048² at p̄/(E*h'rms) =
+//!    0.005, 0.05, 0.21, 0.53 (about 1, 10, 40 and 76 % contact), E* = 1e11 Pa on 1 mm.
+//! B. The reference Gaussian surface (Rq 0.177 µm, cl 6.6 µm, 250 µm, seed 1, mean removed),
+//!    steel on steel, the reference sweep 0.1–10 MPa, on 512² and 1024².
+//! C. Warm-started sweeps and kn: the six reference pressures and the four self-affine loads on
+//!    1024², cold solves against a warm-started sweep; kn from the tangent problem against two
+//!    warm-started solves of a central difference.
+//!
+//! Every asperity solve of A and B is cold (uniform pressure, or the nested coarse-to-fine start
+//! of the preconditioned method) with the default method choice (`auto`), timed on rayon pools
+//! of 1 and 2 threads; Polonsky–Keer (the former method) runs on 1 thread for reference. tamaas
+//! runs its PolonskyKeerRey solver with OMP_NUM_THREADS=1 (and =2 on 512² to show that its wheel
+//! does not use the second thread). Same surface (.npy), E*, grid and tolerance (1e-10) in both
+//! codes. Single-thread ratios use CPU time (asperity: its rayon worker thread from
+//! /proc/thread-self/schedstat; tamaas: time.process_time), two-thread ratios wall time. Time per
+//! iteration is given in units of one convolution (one forward and one inverse real transform
+//! of the grid: `FftPlan::convolve_into`, 1 thread, CPU time) and includes the coarse levels.
 //! Units: SI.
 
-use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
-use asperity::contact::sweep;
+use asperity::contact::normal::{
+    NormalMethod, NormalOptions, NormalProblem, NormalSolution, NormalSolver,
+};
+use asperity::contact::resolution::ContactResolution;
+use asperity::contact::sweep::{self, stiffness_central_difference};
+use asperity::halfspace::influence::boussinesq_spectrum;
+use asperity::halfspace::{Boundary, FftPlan};
 use asperity::surface::combine::{composite_modulus, Material};
 use asperity::surface::generate::{generate, GaussianSurfaceSpec};
+use asperity::surface::self_affine::{generate_self_affine, SelfAffineSpec};
 use asperity::Grid2;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-const REPEATS: usize = 3;
 const TOLERANCE: f64 = NormalOptions::DEFAULT_TOLERANCE;
-const COMPARE_PRESSURES_PA: [f64; 3] = [0.2e6, 2e6, 10e6];
+/// p̄ / (E* h'rms) of the self-affine cases (about 1, 10, 40, 76 % contact).
+const SELF_AFFINE_LOADS: [f64; 4] = [0.005, 0.05, 0.21, 0.53];
+const SELF_AFFINE_E_STAR: f64 = 1e11;
+const SELF_AFFINE_SIDE_M: f64 = 1e-3;
+
+fn repeats(n: usize) -> usize {
+    match n {
+        0..=512 => 3,
+        513..=1024 => 2,
+        _ => 1,
+    }
+}
 
 fn venv_python() -> Option<PathBuf> {
     let dir = std::env::var("ASPERITY_PEERS_VENV").unwrap_or("/tmp/asperity-peers-venv".into());
@@ -30,28 +61,10 @@ fn venv_python() -> Option<PathBuf> {
     py.exists().then_some(py)
 }
 
-fn surface(n: usize) -> Grid2 {
-    let spec = GaussianSurfaceSpec {
-        nx: n,
-        ny: n,
-        ..GaussianSurfaceSpec::reference()
-    };
-    let mut g = generate(&spec).expect("reference surface");
-    let mean = g.heights.mean().unwrap();
-    g.heights.mapv_inplace(|h| h - mean);
-    g
-}
-
-fn e_star() -> f64 {
-    composite_modulus(Material::STEEL, Material::STEEL).unwrap()
-}
-
-struct Ours {
-    area: f64,
-    mean_gap: f64,
-    iterations: usize,
-    time_s: f64,
-    cpu_s: f64,
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "?".into())
 }
 
 /// CPU time of the calling thread (s), from /proc/thread-self/schedstat (ns on CPU). With a
@@ -64,30 +77,110 @@ fn thread_cpu_s() -> f64 {
         .map_or(f64::NAN, |ns| ns * 1e-9)
 }
 
-fn run_ours(s: &Grid2, pressures: &[f64], threads: usize) -> Vec<Ours> {
-    let pool = rayon::ThreadPoolBuilder::new()
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .unwrap();
-    pool.install(|| {
-        let mut solver = NormalSolver::new(
-            &NormalProblem {
-                surface: s,
-                e_star_pa: e_star(),
-            },
-            NormalOptions {
-                tolerance: TOLERANCE,
-                ..NormalOptions::default()
-            },
-        )
-        .unwrap();
+        .unwrap()
+}
+
+fn gaussian_reference(n: usize) -> Grid2 {
+    let spec = GaussianSurfaceSpec {
+        nx: n,
+        ny: n,
+        ..GaussianSurfaceSpec::reference()
+    };
+    let mut g = generate(&spec).expect("reference surface");
+    let mean = g.heights.mean().unwrap();
+    g.heights.mapv_inplace(|h| h - mean);
+    g
+}
+
+fn steel() -> f64 {
+    composite_modulus(Material::STEEL, Material::STEEL).unwrap()
+}
+
+fn self_affine(n: usize) -> Grid2 {
+    generate_self_affine(&SelfAffineSpec::benchmark(n, SELF_AFFINE_SIDE_M, 1)).unwrap()
+}
+
+/// CPU time of one periodic convolution of the grid on one thread (s): best of 5 batches.
+fn convolution_cpu_s(s: &Grid2, e_star: f64) -> f64 {
+    pool(1).install(|| {
+        let (nx, ny) = s.heights.dim();
+        let plan = FftPlan::new(nx, ny, Boundary::Periodic);
+        let kernel = boussinesq_spectrum(&plan, s.dx, s.dy, e_star);
+        let mut ws = plan.workspace();
+        let mut out = ndarray::Array2::zeros((nx, ny));
+        let batch = (4_194_304 / (nx * ny)).clamp(2, 50);
+        let mut best = f64::INFINITY;
+        for _ in 0..5 {
+            let c0 = thread_cpu_s();
+            for _ in 0..batch {
+                plan.convolve_into(&kernel, &s.heights, &mut out, &mut ws);
+            }
+            best = best.min((thread_cpu_s() - c0) / batch as f64);
+        }
+        best
+    })
+}
+
+#[derive(Clone)]
+struct Ours {
+    area: f64,
+    mean_gap: f64,
+    method: NormalMethod,
+    iterations: usize,
+    coarse_iterations: usize,
+    transforms: usize,
+    time_s: f64,
+    cpu_s: f64,
+}
+
+fn solver(s: &Grid2, e_star: f64, method: NormalMethod) -> NormalSolver {
+    NormalSolver::new(
+        &NormalProblem {
+            surface: s,
+            e_star_pa: e_star,
+        },
+        NormalOptions {
+            tolerance: TOLERANCE,
+            method,
+            ..NormalOptions::default()
+        },
+    )
+    .unwrap()
+}
+
+fn ours_of(sol: &NormalSolution, time_s: f64, cpu_s: f64) -> Ours {
+    Ours {
+        area: sol.contact_area_ratio,
+        mean_gap: sol.mean_gap_m,
+        method: sol.method,
+        iterations: sol.iterations,
+        coarse_iterations: sol.coarse_iterations,
+        transforms: sol.convolutions + sol.preconditioner_applications,
+        time_s,
+        cpu_s,
+    }
+}
+
+/// Cold solves at each pressure, best of `repeats(n)`, on a pool of `threads`.
+fn run_ours(
+    s: &Grid2,
+    e_star: f64,
+    pressures: &[f64],
+    threads: usize,
+    method: NormalMethod,
+    reps: usize,
+) -> Vec<Ours> {
+    pool(threads).install(|| {
+        let mut solver = solver(s, e_star, method);
         pressures
             .iter()
             .map(|&p| {
-                let mut best = f64::INFINITY;
-                let mut best_cpu = f64::INFINITY;
-                let mut last = None;
-                for _ in 0..REPEATS {
+                let (mut best, mut best_cpu, mut last) = (f64::INFINITY, f64::INFINITY, None);
+                for _ in 0..reps {
                     let c0 = thread_cpu_s();
                     let t0 = Instant::now();
                     let sol = solver.solve_load(p, None).unwrap();
@@ -95,14 +188,7 @@ fn run_ours(s: &Grid2, pressures: &[f64], threads: usize) -> Vec<Ours> {
                     best_cpu = best_cpu.min(thread_cpu_s() - c0);
                     last = Some(sol);
                 }
-                let sol = last.unwrap();
-                Ours {
-                    area: sol.contact_area_ratio,
-                    mean_gap: sol.mean_gap_m,
-                    iterations: sol.iterations,
-                    time_s: best,
-                    cpu_s: best_cpu,
-                }
+                ours_of(&last.unwrap(), best, best_cpu)
             })
             .collect()
     })
@@ -111,6 +197,7 @@ fn run_ours(s: &Grid2, pressures: &[f64], threads: usize) -> Vec<Ours> {
 struct Peer {
     area: f64,
     mean_gap: f64,
+    iterations: Option<u64>,
     time_s: f64,
     cpu_s: f64,
 }
@@ -118,11 +205,17 @@ struct Peer {
 fn run_tamaas(
     py: &Path,
     s: &Grid2,
+    e_star: f64,
     pressures: &[f64],
     threads: usize,
+    reps: usize,
     dir: &Path,
 ) -> Option<Vec<Peer>> {
-    let npy = dir.join(format!("surface_{}.npy", s.nx()));
+    let npy = dir.join(format!(
+        "surface_{}_{:x}.npy",
+        s.nx(),
+        s.heights.sum().to_bits()
+    ));
     if !npy.exists() {
         ndarray_npy::write_npy(&npy, &s.heights).unwrap();
     }
@@ -130,10 +223,10 @@ fn run_tamaas(
         "surface_npy": npy,
         "lx_m": s.lx(),
         "ly_m": s.ly(),
-        "e_star_pa": e_star(),
+        "e_star_pa": e_star,
         "tolerance": TOLERANCE,
         "pressures_pa": pressures,
-        "repeats": REPEATS,
+        "repeats": reps,
     });
     let case_path = dir.join("case.json");
     let out_path = dir.join("tamaas.json");
@@ -159,6 +252,7 @@ fn run_tamaas(
             .map(|r| Peer {
                 area: r["contact_area_ratio"].as_f64().unwrap(),
                 mean_gap: r["mean_gap_m"].as_f64().unwrap(),
+                iterations: r["iterations"].as_u64(),
                 time_s: r["time_s"].as_f64().unwrap(),
                 cpu_s: r["cpu_s"].as_f64().unwrap(),
             })
@@ -166,109 +260,259 @@ fn run_tamaas(
     )
 }
 
-fn compare(sizes: &[usize]) {
+fn method_tag(o: &Ours) -> &'static str {
+    match o.method {
+        NormalMethod::Preconditioned => "P",
+        NormalMethod::PolonskyKeer => "PK",
+        NormalMethod::Auto => "?",
+    }
+}
+
+/// One surface against tamaas at `pressures`; prints the accuracy/iteration table and the time
+/// table (markdown). `label(p)` names the load in the first column.
+fn compare(
+    name: &str,
+    s: &Grid2,
+    e_star: f64,
+    pressures: &[f64],
+    label: &dyn Fn(f64) -> String,
+    tamaas_two_threads: bool,
+    dir: &Path,
+) {
+    let n = s.nx();
+    let reps = repeats(n);
     let py = venv_python();
-    if py.is_none() {
-        eprintln!("tamaas venv not found: run benches/peers/setup.sh (timings of asperity only)");
-    }
-    let dir = tempfile::tempdir().unwrap();
-    println!(
-        "E* = {:.6e} Pa (steel/steel), tolerance {TOLERANCE:e}, best of {REPEATS} cold solves\n",
-        e_star()
+    let conv = convolution_cpu_s(s, e_star);
+    eprintln!(
+        "{name} {n}²: convolution {:.2} ms CPU; load {}",
+        conv * 1e3,
+        load_average()
     );
-    println!("| grid | p̄ (MPa) | area ratio asperity | area ratio tamaas | Δ area | mean gap asperity (µm) | mean gap tamaas (µm) | Δ gap | iterations |");
-    println!("|---|---|---|---|---|---|---|---|---|");
-    let mut timing_rows = Vec::new();
-    for &n in sizes {
-        let s = surface(n);
-        let mut per_thread = Vec::new();
-        for threads in [1, 2] {
-            let ours = run_ours(&s, &COMPARE_PRESSURES_PA, threads);
-            let peer = py
-                .as_ref()
-                .and_then(|py| run_tamaas(py, &s, &COMPARE_PRESSURES_PA, threads, dir.path()));
-            per_thread.push((threads, ours, peer));
-        }
-        let (_, ours, peer) = &per_thread[0];
-        for (k, p) in COMPARE_PRESSURES_PA.iter().enumerate() {
-            let o = &ours[k];
-            let (ta, tg, da, dg) = match peer {
-                Some(t) => (
-                    format!("{:.6e}", t[k].area),
-                    format!("{:.6}", t[k].mean_gap * 1e6),
-                    format!("{:+.3}%", 100.0 * (o.area / t[k].area - 1.0)),
-                    format!("{:+.3}%", 100.0 * (o.mean_gap / t[k].mean_gap - 1.0)),
-                ),
-                None => ("-".into(), "-".into(), "-".into(), "-".into()),
-            };
-            println!(
-                "| {n}² | {} | {:.6e} | {ta} | {da} | {:.6} | {tg} | {dg} | {} |",
-                p / 1e6,
-                o.area,
-                o.mean_gap * 1e6,
-                o.iterations
-            );
-        }
-        for (threads, ours, peer) in per_thread {
-            for (k, p) in COMPARE_PRESSURES_PA.iter().enumerate() {
-                timing_rows.push((
-                    n,
-                    threads,
-                    *p,
-                    (ours[k].time_s, ours[k].cpu_s),
-                    peer.as_ref().map(|t| (t[k].time_s, t[k].cpu_s)),
-                ));
+    let one = run_ours(s, e_star, pressures, 1, NormalMethod::Auto, reps);
+    let two = run_ours(s, e_star, pressures, 2, NormalMethod::Auto, reps);
+    let pk = run_ours(s, e_star, pressures, 1, NormalMethod::PolonskyKeer, 1);
+    let peer = py
+        .as_ref()
+        .and_then(|py| run_tamaas(py, s, e_star, pressures, 1, reps.min(2), dir));
+    let peer2 = if tamaas_two_threads {
+        py.as_ref()
+            .and_then(|py| run_tamaas(py, s, e_star, pressures, 2, 1, dir))
+    } else {
+        None
+    };
+    println!(
+        "\n#### {name}, {n}² (one convolution = {:.2} ms CPU; load average {})\n",
+        conv * 1e3,
+        load_average()
+    );
+    println!("| load | contact | Δ area vs tamaas | Δ mean gap vs tamaas | iterations asperity (method, +coarse) | Polonsky–Keer | tamaas | transforms / iteration | time / iteration (convolutions) | asperity CPU 1 thr (s) | Polonsky–Keer CPU 1 thr (s) | tamaas CPU (s) | ratio 1 thread (CPU) | asperity wall 2 thr (s) | tamaas wall (s) | ratio 2 cores (wall) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for (k, &p) in pressures.iter().enumerate() {
+        let (o, o2, r) = (&one[k], &two[k], &pk[k]);
+        let (da, dg, tit, tcpu, twall, r1, r2) = match &peer {
+            Some(t) => {
+                let t = &t[k];
+                (
+                    format!("{:+.1e}", o.area / t.area - 1.0),
+                    format!("{:+.1e}", o.mean_gap / t.mean_gap - 1.0),
+                    t.iterations.map_or("-".into(), |i| i.to_string()),
+                    format!("{:.3}", t.cpu_s),
+                    format!("{:.3}", t.time_s),
+                    format!("{:.1}×", t.cpu_s / o.cpu_s),
+                    format!("{:.1}×", t.time_s / o2.time_s),
+                )
             }
-        }
-    }
-    println!("\nWall time (s) and, single-threaded, CPU time (s) per cold solve; speed-up = tamaas/asperity");
-    println!("(CPU time for 1 thread, wall time for 2 threads).\n");
-    println!("| grid | threads | p̄ (MPa) | asperity wall | asperity CPU | tamaas wall | tamaas CPU | speed-up |");
-    println!("|---|---|---|---|---|---|---|---|");
-    for (n, th, p, ours, peer) in timing_rows {
-        let (tw, tc, r) = match peer {
-            Some((w, c)) => (
-                format!("{w:.3}"),
-                format!("{c:.3}"),
-                if th == 1 {
-                    format!("{:.2}×", c / ours.1)
-                } else {
-                    format!("{:.2}×", w / ours.0)
-                },
-            ),
-            None => ("-".into(), "-".into(), "-".into()),
-        };
-        let oc = if th == 1 {
-            format!("{:.3}", ours.1)
-        } else {
-            "-".into()
+            None => Default::default(),
         };
         println!(
-            "| {n}² | {th} | {} | {:.3} | {oc} | {tw} | {tc} | {r} |",
-            p / 1e6,
-            ours.0
+            "| {} | {:.4} | {da} | {dg} | {} ({}, +{}) | {} | {tit} | {:.2} | {:.2} | {:.3} | {:.3} | {tcpu} | {r1} | {:.3} | {twall} | {r2} |",
+            label(p),
+            o.area,
+            o.iterations,
+            method_tag(o),
+            o.coarse_iterations,
+            r.iterations,
+            o.transforms as f64 / o.iterations.max(1) as f64,
+            o.cpu_s / conv / o.iterations.max(1) as f64,
+            o.cpu_s,
+            r.cpu_s,
+            o2.time_s,
         );
+        // Same solution as Polonsky–Keer.
+        assert!(
+            (o.mean_gap / r.mean_gap - 1.0).abs() < 1e-9,
+            "{name} {n}² {}: mean gap {} vs Polonsky–Keer {}",
+            label(p),
+            o.mean_gap,
+            r.mean_gap
+        );
+    }
+    if let (Some(t1), Some(t2)) = (&peer, &peer2) {
+        let (c1, c2, w2): (f64, f64, f64) = t1.iter().zip(t2).fold((0.0, 0.0, 0.0), |a, (x, y)| {
+            (a.0 + x.cpu_s, a.1 + y.cpu_s, a.2 + y.time_s)
+        });
+        println!(
+            "\ntamaas with OMP_NUM_THREADS=2 on these loads: CPU {c2:.3} s, wall {w2:.3} s (OMP_NUM_THREADS=1: CPU {c1:.3} s): its solver runs on one thread."
+        );
+    }
+}
+
+/// C. Cold solves against a warm-started sweep, and kn: tangent problem against the central
+/// difference of two warm-started solves (1 thread, CPU time).
+fn warm_and_stiffness(name: &str, s: &Grid2, e_star: f64, pressures: &[f64]) {
+    pool(1).install(|| {
+        let mut solver = solver(s, e_star, NormalMethod::Auto);
+        let (mut cold_cpu, mut cold_it) = (0.0, 0usize);
+        for &p in pressures {
+            let c0 = thread_cpu_s();
+            let sol = solver.solve_load(p, None).unwrap();
+            cold_cpu += thread_cpu_s() - c0;
+            cold_it += sol.iterations;
+        }
+        let (mut warm_cpu, mut warm_it) = (0.0, 0usize);
+        let (mut kn_cpu, mut cd_cpu, mut max_dev) = (0.0, 0.0, 0.0f64);
+        let mut warm: Option<NormalSolution> = None;
+        for &p in pressures {
+            let c0 = thread_cpu_s();
+            let sol = solver.solve_load(p, warm.as_ref()).unwrap();
+            warm_cpu += thread_cpu_s() - c0;
+            warm_it += sol.iterations;
+            let c0 = thread_cpu_s();
+            let kn = solver.contact_stiffness(&sol).unwrap().kn_n_per_m3;
+            kn_cpu += thread_cpu_s() - c0;
+            let c0 = thread_cpu_s();
+            let eps = 0.02;
+            let lo = solver.solve_load(p * (1.0 - eps), Some(&sol)).unwrap();
+            let hi = solver.solve_load(p * (1.0 + eps), Some(&sol)).unwrap();
+            cd_cpu += thread_cpu_s() - c0;
+            let kd = stiffness_central_difference(p, eps, -lo.approach_m, -hi.approach_m);
+            max_dev = max_dev.max((kn / kd - 1.0).abs());
+            warm = Some(sol);
+        }
+        println!(
+            "| {name} | {} | {cold_it} | {cold_cpu:.2} | {warm_it} | {warm_cpu:.2} | {:.2}× | {kn_cpu:.2} | {cd_cpu:.2} | {:.1}× | {:.1e} |",
+            pressures.len(),
+            cold_cpu / warm_cpu,
+            cd_cpu / kn_cpu,
+            max_dev
+        );
+    });
+}
+
+fn run_all(sizes: &[usize]) {
+    let dir = tempfile::tempdir().unwrap();
+    if venv_python().is_none() {
+        eprintln!("tamaas venv not found: run benches/peers/setup.sh (asperity only)");
+    }
+    println!(
+        "load average at start: {}; rayon pools of 1 and 2 threads; tolerance {TOLERANCE:e}",
+        load_average()
+    );
+    println!("\n### A. Self-affine surfaces (H 0.8, rms gradient 0.1, periodic, seed 1)");
+    for &n in sizes {
+        let s = self_affine(n);
+        let pressures: Vec<f64> = SELF_AFFINE_LOADS
+            .iter()
+            .map(|l| l * SELF_AFFINE_E_STAR * 0.1)
+            .collect();
+        compare(
+            "self-affine",
+            &s,
+            SELF_AFFINE_E_STAR,
+            &pressures,
+            &|p| format!("p̄/E*h' = {}", p / (SELF_AFFINE_E_STAR * 0.1)),
+            n == 512,
+            dir.path(),
+        );
+    }
+    println!("\n### B. Reference Gaussian surface, reference sweep 0.1–10 MPa (steel/steel)");
+    for &n in sizes.iter().filter(|&&n| n <= 1024) {
+        compare(
+            "reference Gaussian",
+            &gaussian_reference(n),
+            steel(),
+            &sweep::REFERENCE_PRESSURES_PA,
+            &|p| format!("{} MPa", p / 1e6),
+            false,
+            dir.path(),
+        );
+    }
+    let n = *sizes.iter().filter(|&&n| n <= 1024).max().unwrap_or(&512);
+    println!("\n### C. Warm-started sweeps and kn ({n}², 1 thread, CPU time)\n");
+    println!("| surface | loads | iterations cold | CPU cold (s) | iterations warm | CPU warm (s) | warm speed-up | kn tangent CPU (s) | kn central difference CPU (s) | kn speed-up | max |kn/kn_cd − 1| |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    warm_and_stiffness(
+        "reference Gaussian",
+        &gaussian_reference(n),
+        steel(),
+        &sweep::REFERENCE_PRESSURES_PA,
+    );
+    let pressures: Vec<f64> = SELF_AFFINE_LOADS
+        .iter()
+        .map(|l| l * SELF_AFFINE_E_STAR * 0.1)
+        .collect();
+    warm_and_stiffness(
+        "self-affine",
+        &self_affine(n),
+        SELF_AFFINE_E_STAR,
+        &pressures,
+    );
+    println!("\nload average at end: {}", load_average());
+}
+
+/// D. Grid-refinement study of the resolution criterion: self-affine surfaces generated on 512²
+/// with the cut-off at L/32, sampled on 256² … 32²; area ratio, free area and kn against 512².
+fn resolution_study() {
+    let e_star = SELF_AFFINE_E_STAR;
+    println!("| seed | p̄/E*h' | grid | contact | points across contact | points across free | min | median spot | Δ contact area | Δ free area | Δ kn | resolved |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for seed in 1..=3 {
+        let spec = SelfAffineSpec {
+            cutoff_wavelength_m: SELF_AFFINE_SIDE_M / 32.0,
+            ..SelfAffineSpec::benchmark(512, SELF_AFFINE_SIDE_M, seed)
+        };
+        let fine = generate_self_affine(&spec).unwrap();
+        for load in [0.002, 0.005, 0.05, 0.25, 0.5, 0.8] {
+            let mut reference: Option<(f64, f64)> = None;
+            for k in [1, 2, 4, 8, 16] {
+                let n = 512 / k;
+                let h =
+                    ndarray::Array2::from_shape_fn((n, n), |(i, j)| fine.heights[[i * k, j * k]]);
+                let s = Grid2::new(h, fine.dx * k as f64, fine.dy * k as f64, true).unwrap();
+                let mut solver = solver(&s, e_star, NormalMethod::Auto);
+                let sol = solver.solve_load(load * e_star * 0.1, None).unwrap();
+                let kn = solver.contact_stiffness(&sol).unwrap().kn_n_per_m3;
+                let r: ContactResolution = sol.resolution;
+                let (a0, k0) = *reference.get_or_insert((sol.contact_area_ratio, kn));
+                println!(
+                    "| {seed} | {load} | {n}² | {:.4} | {:.2} | {:.2} | {:.2} | {} | {:+.1}% | {:+.1}% | {:+.1}% | {} |",
+                    sol.contact_area_ratio,
+                    r.points_across_contact(),
+                    r.points_across_free(),
+                    r.points_across(),
+                    sol.median_spot_points,
+                    100.0 * (sol.contact_area_ratio / a0 - 1.0),
+                    100.0 * ((1.0 - sol.contact_area_ratio) / (1.0 - a0) - 1.0),
+                    100.0 * (kn / k0 - 1.0),
+                    if r.resolved() { "yes" } else { "no" }
+                );
+            }
+        }
     }
 }
 
 /// One solve on an n² reference surface (memory measurement under /usr/bin/time -v).
 fn single(n: usize) {
     let t0 = Instant::now();
-    let s = surface(n);
-    let mut solver = NormalSolver::new(
-        &NormalProblem {
-            surface: &s,
-            e_star_pa: e_star(),
-        },
-        NormalOptions::default(),
-    )
-    .unwrap();
+    let s = gaussian_reference(n);
+    let mut solver = solver(&s, steel(), NormalMethod::Auto);
     let sol = solver.solve_load(2e6, None).unwrap();
     println!(
-        "{n}²: p̄ = 2 MPa, area ratio {:.5}, mean gap {:.5} µm, {} iterations, solve {:.2} s, total {:.2} s, {} threads",
+        "{n}²: p̄ = 2 MPa, area ratio {:.5}, mean gap {:.5} µm, {} iterations ({:?}), solve {:.2} s, total {:.2} s, {} threads",
         sol.contact_area_ratio,
         sol.mean_gap_m * 1e6,
         sol.iterations,
+        sol.method,
         sol.wall_time_s,
         t0.elapsed().as_secs_f64(),
         rayon::current_num_threads()
@@ -277,15 +521,8 @@ fn single(n: usize) {
 
 /// The reference sweep (1024²) and the power-law exponent of kn.
 fn reference() {
-    let s = surface(1024);
-    let mut solver = NormalSolver::new(
-        &NormalProblem {
-            surface: &s,
-            e_star_pa: e_star(),
-        },
-        NormalOptions::default(),
-    )
-    .unwrap();
+    let s = gaussian_reference(1024);
+    let mut solver = solver(&s, steel(), NormalMethod::Auto);
     let t0 = Instant::now();
     let sw = sweep::run(
         &mut solver,
@@ -294,18 +531,20 @@ fn reference() {
         |_| {},
     )
     .unwrap();
-    println!("| p̄ (MPa) | area ratio | mean gap (µm) | kn (N/m³) | spots | smallest spot (points) | median spot (points) |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| p̄ (MPa) | area ratio | mean gap (µm) | kn (N/m³) | spots | points across contact | points across free | method | iterations |");
+    println!("|---|---|---|---|---|---|---|---|---|");
     for p in &sw.points {
         println!(
-            "| {} | {:.5} | {:.5} | {:.4e} | {} | {} | {} |",
+            "| {} | {:.5} | {:.5} | {:.4e} | {} | {:.1} | {:.1} | {} | {} |",
             p.pressure_pa / 1e6,
             p.contact_area_ratio,
             p.mean_gap_m * 1e6,
             p.kn_n_per_m3,
             p.contact_spots,
-            p.smallest_spot_points,
-            p.median_spot_points
+            p.resolution.points_across_contact(),
+            p.resolution.points_across_free(),
+            p.method.name(),
+            p.iterations
         );
     }
     let (beta, c) = sweep::power_law_fit(&sw.points).unwrap();
@@ -323,9 +562,11 @@ fn main() {
         single(n);
     } else if args.iter().any(|a| a == "--reference") {
         reference();
+    } else if args.iter().any(|a| a == "--resolution") {
+        resolution_study();
     } else if args.iter().any(|a| a == "--quick") {
-        compare(&[256]);
+        run_all(&[512]);
     } else {
-        compare(&[512, 1024]);
+        run_all(&[512, 1024, 2048]);
     }
 }

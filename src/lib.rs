@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! surface  ──►  halfspace (Boussinesq, Cerruti, FFT convolution)
-//!          ──►  contact::normal (Polonsky–Keer) ──► contact::tangential (partial slip loops)
+//!          ──►  contact::normal (projected CG) ──► contact::tangential (partial slip loops)
 //!          ──►  element (Valanis, Jenkins) + calibrate (kn, E0, k vs pressure)
 //!          ──►  film (preload map) ──► elements (one row per contact element)
 //!          ◄──  diagnose (measured loops: residual, missing effect, error before/after)

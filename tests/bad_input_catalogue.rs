@@ -313,7 +313,7 @@ fn catalogue() -> Vec<Case> {
         case("generate config unknown key", "surface generate --config {d}/s.toml -o {d}/s.npy", &["s.toml:", "unknown field"]).file("s.toml", "rq_m = 1e-7\nfoo = 1\n"),
         // --- Flags
         case("--poisson-ratio 0.6", "contact normal --grid 128 --poisson-ratio 0.6 --out-dir {d}/out", &["--poisson-ratio"]),
-        case("--derivative-step 2", "contact normal --grid 128 --derivative-step 2 --out-dir {d}/out", &["--derivative-step"]),
+        case("--method bogus", "contact normal --grid 128 --method bogus --out-dir {d}/out", &["--method", "bogus"]),
         case("--grid 4", "contact normal --grid 4 --out-dir {d}/out", &["--grid"]),
         case("--fill without --surface", "contact normal --fill harmonic --out-dir {d}/out", &["--surface"]),
         case("--fill bogus", "surface stats --fill bogus {d}/p.csv", &["--fill"]).file("p.csv", "x_um,height_nm\n0,1\n1,2\n2,0\n"),

@@ -11,6 +11,15 @@ fn asperity(args: &[&str]) -> std::process::Output {
         .expect("run asperity")
 }
 
+/// The area written by a successful run.
+fn written_area(o: &std::process::Output, path: &Path) -> asperity::Grid2 {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    asperity::surface::io::read(path)
+        .unwrap()
+        .into_area("test")
+        .unwrap()
+}
+
 #[test]
 fn generate_writes_npy_with_requested_rq() {
     let dir = tempfile::tempdir().unwrap();
@@ -31,11 +40,7 @@ fn generate_writes_npy_with_requested_rq() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let g = asperity::surface::io::read(&out)
-        .unwrap()
-        .into_area("test")
-        .unwrap();
+    let g = written_area(&o, &out);
     assert_eq!((g.nx(), g.ny()), (128, 128));
     assert!(g.periodic);
     assert!((g.dx - 1e-4 / 128.0).abs() < 1e-18);
@@ -182,4 +187,59 @@ fn shipped_reference_config_is_the_reference_case() {
     let spec: asperity::surface::GaussianSurfaceSpec =
         toml::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
     assert_eq!(spec, asperity::surface::GaussianSurfaceSpec::reference());
+}
+
+/// `asperity surface self-affine` writes the library's self-affine patch (same seed, same
+/// heights) with the requested rms gradient, and names the flag of an impossible parameter.
+#[test]
+fn self_affine_writes_npy_and_rejects_bad_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fractal.npy");
+    let o = asperity(&[
+        "surface",
+        "self-affine",
+        "--hurst",
+        "0.7",
+        "--rms-gradient",
+        "0.2",
+        "--size-m",
+        "1e-4",
+        "--n",
+        "128",
+        "--seed",
+        "5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let g = written_area(&o, &out);
+    let lib = asperity::surface::generate_self_affine(&asperity::surface::SelfAffineSpec {
+        hurst: 0.7,
+        rms_gradient: 0.2,
+        ..asperity::surface::SelfAffineSpec::benchmark(128, 1e-4, 5)
+    })
+    .unwrap();
+    assert_eq!(lib.heights, g.heights);
+    assert!(g.periodic);
+    let st = asperity::surface::stats(
+        &asperity::surface::Topography::Area(g),
+        asperity::surface::Detrend::Mean,
+    )
+    .unwrap();
+    assert!((st.rms_gradient.unwrap() - 0.2).abs() < 1e-12);
+    for (args, flag) in [
+        (vec!["--hurst", "1.5"], "--hurst"),
+        (vec!["--n", "1"], "--n"),
+        (
+            vec!["--cutoff-wavelength-m", "1e-9"],
+            "--cutoff-wavelength-m",
+        ),
+    ] {
+        let bad = dir.path().join("bad.npy");
+        let mut full = vec!["surface", "self-affine", "--out", bad.to_str().unwrap()];
+        full.extend(args.iter());
+        let o = asperity(&full);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(flag), "{args:?}: {err}");
+        assert!(!bad.exists());
+    }
 }

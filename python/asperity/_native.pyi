@@ -157,7 +157,9 @@ class NormalSolution:
         """``iterations``, ``residual``, ``tolerance``, ``converged``, ``wall_time_s``."""
 
 class NormalSolver:
-    """Polonsky–Keer solver of one surface against an elastic half-space (E* in Pa).
+    """Normal contact solver of one surface against an elastic half-space (E* in Pa):
+    projected CG, preconditioned or Polonsky–Keer (``method`` "auto", "preconditioned",
+    "polonsky-keer").
 
     Plan and kernel are built once; solves release the GIL. Reaching ``max_iterations`` raises
     ``ConvergenceError``."""
@@ -169,6 +171,7 @@ class NormalSolver:
         e_star_pa: float,
         tolerance: float = 1e-10,
         max_iterations: int = 5000,
+        method: str = "auto",
     ) -> None: ...
     def solve_load(
         self, mean_pressure_pa: float, warm_start: Optional[NormalSolution] = None
@@ -196,13 +199,14 @@ def normal_sweep(
     e_star_pa: float,
     tolerance: float = 1e-10,
     max_iterations: int = 5000,
-    derivative_step: float = 0.02,
+    method: str = "auto",
 ) -> Columns:
-    """Warm-started pressure sweep with kn = −dp̄/d(mean gap) (N/m³) by central difference.
+    """Warm-started pressure sweep with kn = dp̄/dδ (N/m³) from the tangent problem.
 
-    Columns (numpy arrays), as in ``normal_sweep.csv``: pressure_Pa, contact_area_ratio,
-    mean_gap_m, kn_N_per_m3, approach_m, contact_spots, smallest_spot_points,
-    median_spot_points, iterations, residual, wall_time_s."""
+    Columns, as in ``normal_sweep.csv``: pressure_Pa, contact_area_ratio, mean_gap_m,
+    kn_N_per_m3, approach_m, contact_spots, smallest_spot_points, median_spot_points,
+    points_across_contact, points_across_free, method (list of str), iterations,
+    stiffness_iterations, residual, wall_time_s (numpy arrays)."""
 
 # ---------------------------------------------------------------- tangential contact
 

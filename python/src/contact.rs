@@ -1,4 +1,5 @@
-//! Normal contact (Polonsky–Keer) and tangential partial slip (Coulomb, with history).
+//! Normal contact (projected CG: preconditioned or Polonsky–Keer) and tangential partial slip
+//! (Coulomb, with history).
 //! Pressures and moduli in Pa, lengths and gaps in m, forces in N, energies in J.
 
 use crate::arrays::{borrow_f64, view};
@@ -118,7 +119,7 @@ impl NormalSolution {
         self.inner.elastic_energy_j
     }
 
-    /// Polonsky–Keer iterations.
+    /// Iterations of the solve (search directions).
     #[getter]
     fn iterations(&self) -> usize {
         self.inner.iterations
@@ -166,37 +167,41 @@ impl NormalSolution {
     }
 }
 
-/// Polonsky–Keer solver for one surface against an elastic half-space of composite modulus
-/// `e_star_pa` (Pa; see `composite_modulus`): FFT plan and kernel are built once and reused by
-/// every solve. Solves run without the GIL.
+/// Normal contact solver (projected CG) for one surface against an elastic half-space of
+/// composite modulus `e_star_pa` (Pa; see `composite_modulus`): FFT plan and kernel are built
+/// once and reused by every solve. Solves run without the GIL.
 #[pyclass(module = "asperity")]
 pub struct NormalSolver {
     inner: normal::NormalSolver,
     periodic: bool,
 }
 
-fn normal_options(tolerance: f64, max_iterations: usize) -> NormalOptions {
-    NormalOptions {
+fn normal_options(tolerance: f64, max_iterations: usize, method: &str) -> PyResult<NormalOptions> {
+    Ok(NormalOptions {
         tolerance,
         max_iterations,
+        method: method.parse().py()?,
         ..NormalOptions::default()
-    }
+    })
 }
 
 #[pymethods]
 impl NormalSolver {
     /// `tolerance`: relative gap error ε to reach; `max_iterations`: cap per solve (reaching
-    /// it raises `asperity.ConvergenceError`).
+    /// it raises `asperity.ConvergenceError`); `method`: "auto", "preconditioned" or
+    /// "polonsky-keer".
     #[new]
-    #[pyo3(signature = (surface, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000))]
+    #[pyo3(signature = (surface, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
     fn new(
         py: Python<'_>,
         surface: &Surface,
         e_star_pa: f64,
         tolerance: f64,
         max_iterations: usize,
+        method: &str,
     ) -> PyResult<Self> {
         let grid = surface.grid();
+        let options = normal_options(tolerance, max_iterations, method)?;
         let inner = py
             .detach(|| {
                 normal::NormalSolver::new(
@@ -204,7 +209,7 @@ impl NormalSolver {
                         surface: grid,
                         e_star_pa,
                     },
-                    normal_options(tolerance, max_iterations),
+                    options,
                 )
             })
             .py()?;
@@ -313,17 +318,30 @@ fn sweep_columns<'py>(
     d.set_item("contact_spots", u(|p| p.contact_spots))?;
     d.set_item("smallest_spot_points", u(|p| p.smallest_spot_points))?;
     d.set_item("median_spot_points", u(|p| p.median_spot_points))?;
+    d.set_item(
+        "points_across_contact",
+        f(|p| p.resolution.points_across_contact()),
+    )?;
+    d.set_item(
+        "points_across_free",
+        f(|p| p.resolution.points_across_free()),
+    )?;
+    d.set_item(
+        "method",
+        points.iter().map(|p| p.method.name()).collect::<Vec<_>>(),
+    )?;
     d.set_item("iterations", u(|p| p.iterations))?;
+    d.set_item("stiffness_iterations", u(|p| p.stiffness_iterations))?;
     d.set_item("residual", f(|p| p.residual))?;
     d.set_item("wall_time_s", f(|p| p.wall_time_s))?;
     Ok(d)
 }
 
 /// The pressure sweep of `asperity contact normal` on one surface: warm-started solves at the
-/// sorted `pressures_pa` (Pa) and `kn = −dp̄/d(mean gap)` (N/m³) by a central difference at
-/// `p̄(1 ± derivative_step)`. Returns a dict of numpy columns named as in `normal_sweep.csv`.
+/// sorted `pressures_pa` (Pa) and `kn = dp̄/dδ` (N/m³) from the tangent problem on each contact
+/// set. Returns a dict of columns named as in `normal_sweep.csv` (numpy arrays; `method` a list).
 #[pyfunction]
-#[pyo3(signature = (surface, pressures_pa, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, derivative_step=sweep::DEFAULT_DERIVATIVE_STEP))]
+#[pyo3(signature = (surface, pressures_pa, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
 pub fn normal_sweep<'py>(
     py: Python<'py>,
     surface: &Surface,
@@ -331,9 +349,10 @@ pub fn normal_sweep<'py>(
     e_star_pa: f64,
     tolerance: f64,
     max_iterations: usize,
-    derivative_step: f64,
+    method: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let grid = surface.grid();
+    let options = normal_options(tolerance, max_iterations, method)?;
     let result = py
         .detach(|| {
             let mut solver = normal::NormalSolver::new(
@@ -341,13 +360,12 @@ pub fn normal_sweep<'py>(
                     surface: grid,
                     e_star_pa,
                 },
-                normal_options(tolerance, max_iterations),
+                options,
             )?;
             sweep::run(
                 &mut solver,
                 &pressures_pa,
                 SweepOptions {
-                    derivative_step,
                     keep_solutions: false,
                 },
                 |_| {},

@@ -24,7 +24,7 @@
 //!
 //! [contact]
 //! mu = 0.6                  # friction coefficient: BEM slip limit, held fixed in the fit
-//! normal_tolerance = 1e-10  # Polonsky–Keer relative gap error
+//! normal_tolerance = 1e-10  # normal contact relative gap error
 //! tangential_tolerance = 1e-4
 //!
 //! [loading]

@@ -8,8 +8,8 @@
 //! `surface.seed + r`, or one given measured surface):
 //!
 //! 1. **Surface** ([`crate::surface::generate`]).
-//! 2. **Normal sweep** ([`crate::contact::sweep`]): Polonsky–Keer at each nominal pressure,
-//!    warm-started, `kn = −dp̄/dḡ` by a central difference (two extra solves at `p̄(1 ± 2%)`).
+//! 2. **Normal sweep** ([`crate::contact::sweep`]): the normal contact solver at each nominal
+//!    pressure, warm-started, with `kn = dp̄/dδ` from the tangent problem on the contact set.
 //! 3. **Tangential loops** ([`crate::calibrate::amplitudes`]): on each pressure field, one
 //!    history of increasing displacement amplitudes `factor × δ_gs(p̄)` along x (δ_gs the
 //!    gross-slip displacement of monotonic loading at that pressure), from microslip to gross
@@ -37,7 +37,8 @@ use crate::calibrate::fit::{fit_valanis, fit_valanis_loops, FitOptions, FitResul
 use crate::calibrate::statistics::{paired_difference, summarise, welch_difference, Summary};
 use crate::calibrate::table::{CalibrationRow, CalibrationTable, RowInterval};
 use crate::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
-use crate::contact::sweep::{self, SweepOptions, SweepPoint, RESOLVED_MEDIAN_SPOT_POINTS};
+use crate::contact::resolution::RESOLVED_POINTS_ACROSS;
+use crate::contact::sweep::{self, SweepOptions, SweepPoint};
 use crate::contact::tangential::{TangentialOptions, TangentialProblem, TangentialSolver};
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
@@ -222,6 +223,13 @@ pub struct PressureConvergence {
     pub median_spot_points: f64,
     /// Smallest median spot size of a realisation (grid points).
     pub min_median_spot_points: usize,
+    /// Realisations whose grid does not resolve the narrower of contact spots and free regions
+    /// (fewer than [`RESOLVED_POINTS_ACROSS`] points across, [`SweepPoint::under_resolved`]).
+    pub under_resolved_realisations: usize,
+    /// Smallest number of grid points across the narrower phase over the realisations.
+    pub min_points_across: f64,
+    /// Whether that narrowest phase is the contact spots (else the free regions).
+    pub narrowest_is_contact: bool,
     /// Grid checks of kn, E0, k (`n` against `n/2` points per side, same surfaces).
     pub grid: [Check; 3],
     /// Patch checks of kn, E0, k (`L` against `L/2`, independent surfaces).
@@ -409,7 +417,6 @@ pub fn calibrate_surface(
         &config.loading.pressures_pa,
         SweepOptions {
             keep_solutions: true,
-            ..SweepOptions::default()
         },
         |_| bar.inc(1),
     )?;
@@ -882,7 +889,18 @@ fn convergence_at(
     } else {
         0.5 * (medians[medians.len() / 2 - 1] + medians[medians.len() / 2]) as f64
     };
+    let narrowest = main
+        .iter()
+        .map(|r| r.pressures[i].sweep.resolution)
+        .min_by(|a, b| a.points_across().total_cmp(&b.points_across()))
+        .expect("at least one realisation");
     PressureConvergence {
+        under_resolved_realisations: main
+            .iter()
+            .filter(|r| r.pressures[i].sweep.under_resolved())
+            .count(),
+        min_points_across: narrowest.points_across(),
+        narrowest_is_contact: narrowest.points_across_contact() <= narrowest.points_across_free(),
         pressure_pa: config.loading.pressures_pa[i],
         contact_spots: summarise(&values(main, i, |pc| pc.sweep.contact_spots as f64)),
         median_spot_points: median,
@@ -911,10 +929,18 @@ fn warnings_of(
     let mpa = |p: f64| format!("{} MPa", p / 1e6);
     for (i, pc) in conv.pressures.iter().enumerate() {
         let p = mpa(pc.pressure_pa);
-        if pc.median_spot_points < RESOLVED_MEDIAN_SPOT_POINTS as f64 {
+        if pc.under_resolved_realisations > 0 {
             w.push(format!(
-                "{p}: under-resolved contact spots, median {} grid points per spot (fewer than {}): refine the grid",
-                pc.median_spot_points, RESOLVED_MEDIAN_SPOT_POINTS
+                "{p}: under-resolved {} in {} of {n} realisation(s): {:.1} grid points across (fewer than {}; median spot {} grid points): refine the grid",
+                if pc.narrowest_is_contact {
+                    "contact spots"
+                } else {
+                    "free regions"
+                },
+                pc.under_resolved_realisations,
+                pc.min_points_across,
+                RESOLVED_POINTS_ACROSS,
+                pc.median_spot_points
             ));
         }
         if pc.contact_spots.mean < FEW_SPOTS {

@@ -9,7 +9,7 @@
 //! `<out-dir>/contact-normal.shard-i-of-n.json`; `asperity merge` turns the n files into the
 //! same outputs a single run writes (see [`asperity::shard`]).
 
-use asperity::contact::normal::{NormalOptions, NormalSolution};
+use asperity::contact::normal::{NormalMethod, NormalOptions, NormalSolution};
 use asperity::contact::surface_sweep::{self, SurfaceResult, SurfaceSource, SurfaceSweep};
 use asperity::contact::sweep::{self, REFERENCE_PRESSURES_PA};
 use asperity::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
@@ -54,15 +54,16 @@ pub struct NormalArgs {
     /// Also write a pressure map PNG per load (and surface).
     #[arg(long)]
     pressure_maps: bool,
-    /// Tolerance on the relative gap error of the Polonsky–Keer solver.
+    /// Tolerance on the relative gap error of the contact solver.
     #[arg(long, default_value_t = NormalOptions::DEFAULT_TOLERANCE, allow_hyphen_values = true)]
     tolerance: f64,
     /// Iteration cap per solve (exceeding it is an error).
     #[arg(long, default_value_t = NormalOptions::default().max_iterations)]
     max_iterations: usize,
-    /// Relative pressure step ε of the central difference giving kn.
-    #[arg(long, default_value_t = sweep::DEFAULT_DERIVATIVE_STEP, allow_hyphen_values = true)]
-    derivative_step: f64,
+    /// Iteration: `auto` (by the expected contact fraction), `preconditioned` (projected CG
+    /// preconditioned by the inverse half-space compliance) or `polonsky-keer`.
+    #[arg(long, default_value = "auto")]
+    method: String,
     /// Solve only shard i of n (1-based, e.g. `3/8`; the surfaces are split into n contiguous
     /// blocks) and write `<out-dir>/contact-normal.shard-i-of-n.json` for `asperity merge`.
     #[arg(long)]
@@ -144,9 +145,14 @@ fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
             .unwrap_or(&REFERENCE_PRESSURES_PA),
     )
     .map_err(|e| super::rename_param(e, "--pressures-pa"))?;
+    let method: NormalMethod = args
+        .method
+        .parse()
+        .map_err(|e| super::rename_param(e, "--method"))?;
     let options = NormalOptions {
         tolerance: args.tolerance,
         max_iterations: args.max_iterations,
+        method,
         ..NormalOptions::default()
     };
     options.validate().map_err(|e| match e {
@@ -160,12 +166,8 @@ fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
         pressures_pa,
         material,
         options,
-        derivative_step: args.derivative_step,
     };
     sweep.validate().map_err(|e| match e {
-        Error::InvalidParameter { ref name, .. } if name == "derivative_step" => {
-            super::rename_param(e, "--derivative-step")
-        }
         Error::InvalidParameter { ref name, .. } if name == "units" => {
             super::rename_param(e, "--surface / --seeds")
         }
@@ -288,8 +290,9 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
     let mut csv = String::new();
     let _ = writeln!(
         csv,
-        "# asperity contact normal: Polonsky–Keer pressure sweep over {} surface(s)",
-        units.len()
+        "# asperity contact normal: pressure sweep over {} surface(s), method {}",
+        units.len(),
+        sweep.options.method.name()
     );
     for (source, u) in sweep.surfaces.iter().zip(units) {
         let g = &u.result.grid;
@@ -309,8 +312,9 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
     );
     let _ = writeln!(
         csv,
-        "# tolerance = {:e} (relative gap error), kn = -dp/d(mean gap) by central difference at p(1 +- {})",
-        sweep.options.tolerance, sweep.derivative_step
+        "# tolerance = {:e} (relative gap error); kn = dp/d(approach) from the tangent problem on the contact set; points_across_* = 4 x points / interface edges (resolved when the smaller is >= {})",
+        sweep.options.tolerance,
+        asperity::contact::resolution::RESOLVED_POINTS_ACROSS
     );
     let _ = writeln!(
         csv,
@@ -328,7 +332,11 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
         "contact_spots",
         "smallest_spot_points",
         "median_spot_points",
+        "points_across_contact",
+        "points_across_free",
+        "method",
         "iterations",
+        "stiffness_iterations",
         "residual",
     ]
     .map(String::from)
@@ -345,7 +353,11 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
                 p.contact_spots.to_string(),
                 p.smallest_spot_points.to_string(),
                 p.median_spot_points.to_string(),
+                format!("{:e}", p.resolution.points_across_contact()),
+                format!("{:e}", p.resolution.points_across_free()),
+                p.method.name().to_string(),
                 p.iterations.to_string(),
+                p.stiffness_iterations.to_string(),
                 format!("{:e}", p.residual),
             ]);
         }
@@ -510,25 +522,28 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
             "gap (µm)",
             "kn (N/m³)",
             "spots",
-            "min spot",
-            "med spot",
+            "across c",
+            "across f",
             "iter"
         );
         for p in &u.result.points {
+            let r = &p.resolution;
             println!(
-                "{:>12.4} {:>12.5} {:>12.5} {:>12.4e} {:>7} {:>9} {:>9} {:>6}{}",
+                "{:>12.4} {:>12.5} {:>12.5} {:>12.4e} {:>7} {:>9.1} {:>9.1} {:>6}{}",
                 p.pressure_pa / 1e6,
                 p.contact_area_ratio,
                 p.mean_gap_m * 1e6,
                 p.kn_n_per_m3,
                 p.contact_spots,
-                p.smallest_spot_points,
-                p.median_spot_points,
+                r.points_across_contact(),
+                r.points_across_free(),
                 p.iterations,
-                if p.under_resolved() {
-                    "  (spots under-resolved: refine the grid)"
-                } else {
+                if !p.under_resolved() {
                     ""
+                } else if r.points_across_contact() <= r.points_across_free() {
+                    "  (contact spots under-resolved: refine the grid)"
+                } else {
+                    "  (free islands under-resolved: refine the grid)"
                 }
             );
         }

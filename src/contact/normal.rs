@@ -1,5 +1,7 @@
-//! Frictionless normal contact of a rough surface with an elastic half-space: the projected
-//! conjugate-gradient method of Polonsky & Keer (Wear 231 (1999) 206–219).
+//! Frictionless normal contact of a rough surface with an elastic half-space: projected conjugate
+//! gradients, plain (Polonsky & Keer, Wear 231 (1999) 206–219) or preconditioned by the inverse
+//! of the half-space compliance (after Vollebregt, J. Comput. Phys. 257 (2014) 333–351), and the
+//! normal contact stiffness from the tangent problem ([`stiffness`]).
 //!
 //! Units: lengths and gaps in m, pressures and moduli in Pa, energy in J.
 //!
@@ -17,19 +19,33 @@
 //! imposed, `mean(p) = p̄` (load control). `δ` is the Lagrange multiplier of the load: it is the
 //! rigid approach measured from first contact of the highest grid point.
 //!
-//! # Algorithm (Polonsky & Keer 1999, §3, load control)
-//! Each iteration: `g = K⊛p + h0`, centred by its mean over the contact set `Ic = {p > 0}`
-//! (that mean is the current approach δ); conjugate direction `t = g + β t_old` on `Ic`
-//! (`β = G/G_old`, `G = Σ_Ic g²`, reset to steepest descent when points were added);
-//! `r = K⊛t` centred on `Ic`; step `τ = Σ_Ic g·t / Σ_Ic r·t`; `p ← max(p − τ t, 0)`;
-//! non-contact points that penetrate (`p = 0`, `g < 0`) enter with `p = −τ g`; finally `p` is
-//! scaled to the imposed mean pressure.
+//! # Algorithm (load control)
+//! Both methods minimise the elastic energy `½ p·K⊛p + p·h0` over `p ≥ 0`, `mean(p) = p̄` by
+//! conjugate gradients on the contact set `Ic = {p > 0}`, with the gap centred by its mean over
+//! `Ic` (the current δ), the direction kept at zero sum (the load is kept), points leaving the
+//! set by projection (`p ← max(p − τ t, 0)`) and penetrating points entering it; see
+//! `normal/projected_cg.rs` for the steps. They differ in the search direction:
 //!
-//! Only one convolution per iteration is needed in the common case: when no point was clipped
-//! or added, `K⊛p_new = s·(K⊛p − τ K⊛t)` exactly (linearity; `s` is the load scaling), so the
-//! displacement is updated instead of recomputed. It is recomputed from `p` whenever the active
-//! set changed, every [`REFRESH_INTERVAL`] iterations against round-off drift, and always before
-//! convergence is accepted.
+//! - [`NormalMethod::PolonskyKeer`]: the centred gap itself (Fletcher–Reeves). The condition
+//!   number of `K` on the contact set grows with the grid (its eigenvalues are those of
+//!   `2/(E*|q|)` from `q ~ 1/L` to `q ~ 1/dx`), and so does the iteration count: 64–1005 on
+//!   512²–2048² self-affine surfaces (BENCHMARKS.md). Cheapest per iteration (one transform pair).
+//! - [`NormalMethod::Preconditioned`]: the gap filtered by `E*|q|/2` (the exact inverse of the
+//!   periodic compliance) and restricted to `Ic`, the FFT preconditioner of Vollebregt (2014);
+//!   Polak–Ribière+ with a restart test; penetrating points join the line search. Two transform
+//!   pairs per iteration (one preconditioner, one `K⊛t`), but 20–50 iterations, nearly
+//!   independent of the grid and of the contact fraction; cold solves start from the solution
+//!   on the grid coarsened 2 × 2 (nested iteration down to [`COARSEST_GRID`]). For zero-padded
+//!   windows the preconditioner is the periodic `E*|q|/2` of the window (the iteration counts on
+//!   Hertz windows equal those of the padded `|q|` at a quarter of its cost).
+//! - [`NormalMethod::Auto`] (default): preconditioned when the expected contact fraction
+//!   ([`NormalSolver::predicted_contact_fraction`], or that of the warm start) is at least
+//!   [`AUTO_PRECONDITIONED_FRACTION`], Polonsky–Keer below, where its cheaper iterations win.
+//!
+//! Both give the same contact set and mean gap (to 1e-9 relative) with the same criterion
+//! (`tests/normal_contact.rs`). The displacement is updated by linearity when no point left or
+//! entered the contact set, recomputed from `p` otherwise, every [`REFRESH_INTERVAL`] iterations,
+//! and always before convergence is accepted.
 //!
 //! # Convergence criterion
 //! The residual is the pressure-weighted relative gap error
@@ -52,20 +68,36 @@
 //! warm-started load-controlled solve. This works identically for periodic patches (whose mean
 //! pressure is not set by the zero-mean periodic kernel) and zero-padded (finite) contacts.
 
+use crate::contact::resolution::ContactResolution;
 use crate::error::{require_positive, Error, Result};
 use crate::grid::Grid2;
 use crate::halfspace::convolution::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum};
 use crate::halfspace::influence::boussinesq_spectrum;
 use ndarray::Array2;
-use rayon::prelude::*;
 use std::time::Instant;
+
+mod projected_cg;
+pub mod stiffness;
+
+pub use stiffness::ContactStiffness;
 
 /// The displacement is recomputed by a full convolution at least this often (iterations).
 pub const REFRESH_INTERVAL: usize = 25;
 
-/// Elements per chunk of the parallel reductions. Partial sums are added in chunk order, so
-/// results do not depend on the number of threads.
-const CHUNK: usize = 8192;
+/// [`NormalMethod::Auto`] uses the preconditioned method when the expected contact fraction
+/// (see [`NormalSolver::predicted_contact_fraction`]) is at least this, Polonsky–Keer below
+/// (where its cheaper iterations win: BENCHMARKS.md).
+pub const AUTO_PRECONDITIONED_FRACTION: f64 = 0.005;
+
+/// The preconditioned method uses a warm start at a load within this factor of the warm
+/// start's, the nested coarse-to-fine start otherwise.
+pub const WARM_START_LOAD_RATIO: f64 = 2.0;
+
+/// Nested iteration stops coarsening below this many points a side.
+pub const COARSEST_GRID: usize = 64;
+
+/// Tolerance of the coarse solves of the nested iteration (they only provide a start).
+const COARSE_TOLERANCE: f64 = 1e-6;
 
 /// A normal contact problem: the equivalent rough surface against an elastic half-space.
 #[derive(Debug, Clone, Copy)]
@@ -86,6 +118,55 @@ pub struct NormalOptions {
     pub max_iterations: usize,
     /// Relative tolerance on the approach in displacement control.
     pub approach_tolerance: f64,
+    /// Iteration: preconditioned projected CG, Polonsky–Keer, or chosen automatically
+    /// (see [`NormalMethod`]).
+    #[serde(default)]
+    pub method: NormalMethod,
+}
+
+/// The iteration of the load-controlled solve. Both methods solve the same problem with the
+/// same convergence criterion and give the same contact set and mean gap (to the tolerance).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NormalMethod {
+    /// [`NormalMethod::Preconditioned`] when the expected contact fraction is at least
+    /// [`AUTO_PRECONDITIONED_FRACTION`], [`NormalMethod::PolonskyKeer`] below: whichever costs
+    /// less (BENCHMARKS.md).
+    #[default]
+    Auto,
+    /// Projected conjugate gradients of Polonsky & Keer (1999): the reference path.
+    PolonskyKeer,
+    /// Projected conjugate gradients preconditioned by the inverse of the half-space compliance,
+    /// `E*|q|/2` in Fourier space, restricted to the contact set (Vollebregt, J. Comput. Phys.
+    /// 257 (2014) 333–351): iteration counts nearly independent of the grid and of the contact
+    /// fraction, at two transform pairs per iteration.
+    Preconditioned,
+}
+
+impl NormalMethod {
+    /// The name used on the command line and in CSV files.
+    pub fn name(self) -> &'static str {
+        match self {
+            NormalMethod::Auto => "auto",
+            NormalMethod::PolonskyKeer => "polonsky-keer",
+            NormalMethod::Preconditioned => "preconditioned",
+        }
+    }
+}
+
+impl std::str::FromStr for NormalMethod {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(NormalMethod::Auto),
+            "polonsky-keer" => Ok(NormalMethod::PolonskyKeer),
+            "preconditioned" => Ok(NormalMethod::Preconditioned),
+            _ => Err(Error::param(
+                "method",
+                format!("must be `auto`, `polonsky-keer` or `preconditioned`, got `{s}`"),
+            )),
+        }
+    }
 }
 
 impl NormalOptions {
@@ -109,6 +190,7 @@ impl Default for NormalOptions {
             tolerance: Self::DEFAULT_TOLERANCE,
             max_iterations: 5000,
             approach_tolerance: 1e-7,
+            method: NormalMethod::Auto,
         }
     }
 }
@@ -136,19 +218,32 @@ pub struct NormalSolution {
     /// Number of contact spots (4-connected clusters of contact points; clusters touching across
     /// a periodic boundary count once).
     pub contact_spots: usize,
-    /// Grid points of the smallest contact spot (0 without contact). Spots of a few points are
-    /// not resolved by the grid: refine it when this is small at the loads of interest.
+    /// Grid points of the smallest contact spot (0 without contact).
     pub smallest_spot_points: usize,
     /// Median spot size in grid points.
     pub median_spot_points: usize,
+    /// Grid points across the contact spots and the free regions: whether the grid resolves
+    /// this contact (see [`crate::contact::resolution`]).
+    pub resolution: ContactResolution,
     /// Mean gap (mean separation of the mean planes for a periodic patch) (m).
     pub mean_gap_m: f64,
     /// Rigid approach δ from first contact of the highest grid point (m).
     pub approach_m: f64,
     /// Elastic energy ½ Σ p·u·dA (J); periodic patches: the energy of the zero-mean part.
     pub elastic_energy_j: f64,
-    /// Iterations of the last (or, in displacement control, all) Polonsky–Keer solves.
+    /// The iteration used ([`NormalMethod::Auto`] resolved).
+    pub method: NormalMethod,
+    /// Iterations (search directions) of the last (or, in displacement control, all) solves.
     pub iterations: usize,
+    /// Convolutions with the compliance `K⊛` (transform pairs of the kernel's grid) of the
+    /// last solve: one per iteration, plus one per recomputation of the displacement.
+    pub convolutions: usize,
+    /// Applications of the preconditioner (transform pairs of the periodic grid of the patch
+    /// or window) of the last solve.
+    pub preconditioner_applications: usize,
+    /// Iterations on the coarser grids of the nested iteration that gave the initial pressure
+    /// (each costs about 4⁻ˡ of an iteration on this grid at level l); 0 without.
+    pub coarse_iterations: usize,
     /// Final relative gap error ε.
     pub residual: f64,
     /// Always true for a returned solution (non-convergence is an error).
@@ -178,12 +273,49 @@ pub struct NormalSolver {
     self_compliance: f64,
     ws: ConvolutionWorkspace,
     options: NormalOptions,
-    // Work arrays, reused.
+    /// Preconditioner of the preconditioned method, built on first use.
+    precond: Option<Preconditioner>,
+    /// Solver of the 2 × 2-coarsened surface for nested iteration, built on first use.
+    coarse: Option<Box<NormalSolver>>,
+    /// RMS gradient of the surface (first differences), for the expected contact fraction.
+    rms_gradient: f64,
+    /// Diagonal of the preconditioner `M⁻¹` (Pa/m); 1 before it is built.
+    precond_diagonal: f64,
+    /// Convolutions `K⊛` and preconditioner applications of the last solve.
+    counts: (usize, usize),
+    // Work arrays, reused: pressure, centred gap, direction, its displacement, preconditioned
+    // residual (allocated with the preconditioner).
     p: Array2<f64>,
-    u: Array2<f64>,
     g: Array2<f64>,
     t: Array2<f64>,
     r: Array2<f64>,
+    z: Array2<f64>,
+}
+
+/// The preconditioner `M⁻¹ = F⁻¹ (E*|q|/2) F`: the inverse of the periodic Boussinesq compliance.
+/// Periodic patches use the solver's own plan; zero-padded windows use a periodic plan of the
+/// window (its |q| is the inverse of the free-space compliance up to the wrap-around coupling,
+/// which the projected iteration tolerates; half the cost of a padded transform pair).
+struct Preconditioner {
+    plan: FftPlan,
+    spectrum: KernelSpectrum,
+    ws: ConvolutionWorkspace,
+    /// Diagonal of the circulant `M⁻¹`, `mean_q(E*|q|/2)` (Pa/m).
+    diagonal: f64,
+}
+
+impl Preconditioner {
+    fn new(nx: usize, ny: usize, dx: f64, dy: f64, e_star: f64) -> Self {
+        let plan = FftPlan::new(nx, ny, Boundary::Periodic);
+        let (spectrum, diagonal) = projected_cg::precond_spectrum(&plan, dx, dy, e_star);
+        let ws = plan.workspace();
+        Self {
+            plan,
+            spectrum,
+            ws,
+            diagonal,
+        }
+    }
 }
 
 impl std::fmt::Debug for NormalSolver {
@@ -196,43 +328,6 @@ impl std::fmt::Debug for NormalSolver {
             .field("options", &self.options)
             .finish()
     }
-}
-
-/// Sum of per-chunk partial results in chunk order (thread-count independent).
-fn chunked_sum<const K: usize>(
-    n: usize,
-    f: impl Fn(std::ops::Range<usize>) -> [f64; K] + Sync,
-) -> [f64; K] {
-    let chunks = n.div_ceil(CHUNK);
-    let parts: Vec<[f64; K]> = (0..chunks)
-        .into_par_iter()
-        .map(|c| f(c * CHUNK..((c + 1) * CHUNK).min(n)))
-        .collect();
-    let mut total = [0.0; K];
-    for p in parts {
-        for k in 0..K {
-            total[k] += p[k];
-        }
-    }
-    total
-}
-
-/// Raw mutable pointer wrapper for disjoint parallel chunk writes.
-#[derive(Clone, Copy)]
-struct Ptr(*mut f64);
-unsafe impl Send for Ptr {}
-unsafe impl Sync for Ptr {}
-impl Ptr {
-    /// Mutable slice of `range`. Safety: callers give each chunk a disjoint range.
-    #[allow(clippy::mut_from_ref)]
-    unsafe fn slice(&self, range: std::ops::Range<usize>) -> &mut [f64] {
-        std::slice::from_raw_parts_mut(self.0.add(range.start), range.len())
-    }
-}
-
-fn slice_mut(a: &mut Array2<f64>) -> &mut [f64] {
-    a.as_slice_mut()
-        .expect("work arrays are in standard layout")
 }
 
 impl NormalSolver {
@@ -269,6 +364,11 @@ impl NormalSolver {
         } else {
             Boundary::ZeroPadded
         };
+        let rms_gradient = if nx > 1 && ny > 1 {
+            crate::surface::stats::rms_slopes_area(&s.heights, s.dx, s.dy, s.periodic).2
+        } else {
+            0.0
+        };
         let plan = FftPlan::new(nx, ny, boundary);
         let kernel = boussinesq_spectrum(&plan, s.dx, s.dy, e_star);
         let ws = plan.workspace();
@@ -290,11 +390,16 @@ impl NormalSolver {
             self_compliance,
             ws,
             options,
+            precond: None,
+            coarse: None,
+            rms_gradient,
+            precond_diagonal: 1.0,
+            counts: (0, 0),
             p: z.clone(),
-            u: z.clone(),
             g: z.clone(),
             t: z.clone(),
             r: z,
+            z: Array2::zeros((0, 0)),
         })
     }
 
@@ -364,7 +469,10 @@ impl NormalSolver {
 
     /// Load control: solve for the imposed mean pressure `mean_pressure_pa` (Pa, over the whole
     /// patch). `warm_start` (a previous solution on the same grid) gives the initial pressure
-    /// shape, scaled to the new load; otherwise the iteration starts from uniform pressure.
+    /// shape, scaled to the new load (the preconditioned method uses it only within a factor
+    /// [`WARM_START_LOAD_RATIO`] of its load); otherwise the iteration starts from uniform
+    /// pressure, or (preconditioned method) from the solution on the grid coarsened 2 × 2
+    /// (nested iteration, recursively down to [`COARSEST_GRID`] points a side).
     pub fn solve_load(
         &mut self,
         mean_pressure_pa: f64,
@@ -372,7 +480,9 @@ impl NormalSolver {
     ) -> Result<NormalSolution> {
         let start = Instant::now();
         let p_mean = require_positive("mean_pressure_pa", mean_pressure_pa)?;
-        match warm_start {
+        let n = (self.nx * self.ny) as f64;
+        let mut coarse_iterations = 0;
+        let warm = match warm_start {
             Some(w) => {
                 self.check_shape("warm_start", w.pressure.dim())?;
                 let s = w.pressure.sum();
@@ -383,13 +493,106 @@ impl NormalSolver {
                         "pressure must be finite, non-negative and not all zero",
                     ));
                 }
-                let scale = p_mean * (self.nx * self.ny) as f64 / s;
+                Some((w, s))
+            }
+            None => None,
+        };
+        // The contact fraction grows about in proportion to the load.
+        let method = self.method_for(match warm {
+            Some((w, _)) => w.contact_area_ratio * p_mean / w.mean_pressure_pa,
+            None => self.predicted_contact_fraction(p_mean),
+        });
+        // The preconditioned method converges in about as many iterations from the nested
+        // coarse-to-fine start as from a solution at half or twice the load (BENCHMARKS.md):
+        // a warm start is used within that range, the nested start beyond it.
+        let near = |w: &NormalSolution| {
+            let ratio = p_mean / w.mean_pressure_pa;
+            (1.0 / WARM_START_LOAD_RATIO..=WARM_START_LOAD_RATIO).contains(&ratio)
+        };
+        match warm {
+            Some((w, s)) if method != NormalMethod::Preconditioned || near(w) => {
+                let scale = p_mean * n / s;
                 self.p.zip_mut_with(&w.pressure, |p, w| *p = w * scale);
             }
-            None => self.p.fill(p_mean),
+            _ => match (method, self.coarse_start(p_mean)) {
+                (NormalMethod::Preconditioned, Some((p, its))) => {
+                    self.p.assign(&p);
+                    coarse_iterations = its;
+                }
+                _ => self.p.fill(p_mean),
+            },
         }
-        let (iterations, residual, approach) = self.iterate(p_mean)?;
-        Ok(self.solution(p_mean, approach, iterations, residual, start))
+        let (iterations, residual, approach) = self.iterate(p_mean, method)?;
+        let mut sol = self.solution(p_mean, approach, method, iterations, residual, start);
+        sol.coarse_iterations = coarse_iterations;
+        Ok(sol)
+    }
+
+    /// Contact fraction expected at the mean pressure `p_mean` before solving:
+    /// `A/A0 ≈ κ p̄ / (E* h'_rms)` with κ = 2, the proportionality of rough contact at light
+    /// loads (Persson, J. Chem. Phys. 115 (2001) 3840 gives κ = √(8/π) ≈ 1.6; boundary-element
+    /// results lie near 2, e.g. Hyun, Pei, Molinari & Robbins, Phys. Rev. E 70 (2004) 026117),
+    /// capped at 1. Only used to choose the method.
+    pub fn predicted_contact_fraction(&self, p_mean: f64) -> f64 {
+        (2.0 * p_mean / (self.e_star * self.rms_gradient)).min(1.0)
+    }
+
+    /// The method for a solve whose contact fraction is expected to be `fraction`.
+    fn method_for(&self, fraction: f64) -> NormalMethod {
+        match self.options.method {
+            NormalMethod::Auto if fraction >= AUTO_PRECONDITIONED_FRACTION => {
+                NormalMethod::Preconditioned
+            }
+            NormalMethod::Auto => NormalMethod::PolonskyKeer,
+            m => m,
+        }
+    }
+
+    /// Nested iteration (coarse-to-fine): the solution on the grid coarsened by 2 × 2 block
+    /// averages (itself started the same way), prolonged by copying each coarse value to its
+    /// 2 × 2 block, as the initial pressure. `None` when the grid cannot be halved (odd sizes,
+    /// or below [`COARSEST_GRID`] points a side) or the coarse solve fails. Returns the pressure
+    /// and the iterations of all coarser levels.
+    fn coarse_start(&mut self, p_mean: f64) -> Option<(Array2<f64>, usize)> {
+        let (nx, ny) = (self.nx, self.ny);
+        if nx % 2 != 0 || ny % 2 != 0 || nx / 2 < COARSEST_GRID || ny / 2 < COARSEST_GRID {
+            return None;
+        }
+        if self.coarse.is_none() {
+            let h0 = &self.separation;
+            let heights = Array2::from_shape_fn((nx / 2, ny / 2), |(i, j)| {
+                -0.25
+                    * (h0[[2 * i, 2 * j]]
+                        + h0[[2 * i + 1, 2 * j]]
+                        + h0[[2 * i, 2 * j + 1]]
+                        + h0[[2 * i + 1, 2 * j + 1]])
+            });
+            let surface = Grid2::new(
+                heights,
+                2.0 * self.dx,
+                2.0 * self.dy,
+                self.boundary == Boundary::Periodic,
+            )
+            .ok()?;
+            let options = NormalOptions {
+                tolerance: self.options.tolerance.max(COARSE_TOLERANCE),
+                method: NormalMethod::Preconditioned,
+                ..self.options
+            };
+            let solver = NormalSolver::new(
+                &NormalProblem {
+                    surface: &surface,
+                    e_star_pa: self.e_star,
+                },
+                options,
+            )
+            .ok()?;
+            self.coarse = Some(Box::new(solver));
+        }
+        let coarse = self.coarse.as_mut()?;
+        let sol = coarse.solve_load(p_mean, None).ok()?;
+        let p = Array2::from_shape_fn((nx, ny), |(i, j)| sol.pressure[[i / 2, j / 2]]);
+        Some((p, sol.iterations + sol.coarse_iterations))
     }
 
     /// Displacement control: solve for the imposed rigid approach `approach_m` (m, measured from
@@ -499,210 +702,22 @@ impl NormalSolver {
         })
     }
 
-    /// `u = K ⊛ p` into the work array.
-    fn convolve_pressure(&mut self) {
-        self.plan
-            .convolve_into(&self.kernel, &self.p, &mut self.u, &mut self.ws);
-    }
-
-    /// Polonsky–Keer iterations from the current `self.p` (already at mean `p_mean`).
-    /// Returns (iterations, residual, approach).
-    fn iterate(&mut self, p_mean: f64) -> Result<(usize, f64, f64)> {
-        let n = self.nx * self.ny;
-        let total_load = p_mean * n as f64;
-        let h_scale = self.height_scale;
-        let tol = self.options.tolerance;
-        let mut u_exact = false; // u = K⊛p computed by convolution (not updated) this iteration
-        let mut u_valid = false; // u corresponds to p (exactly or by linear update)
-        let mut since_refresh = 0usize;
-        let mut conjugate = false;
-        let mut g_norm_old = 1.0;
-        let mut last_residual = f64::INFINITY;
-        self.t.fill(0.0);
-        for it in 0..self.options.max_iterations {
-            if !u_valid || since_refresh >= REFRESH_INTERVAL {
-                self.convolve_pressure();
-                u_exact = true;
-                since_refresh = 0;
-            }
-            since_refresh += 1;
-            let p = self.p.as_slice().expect("layout");
-            let u = self.u.as_slice().expect("layout");
-            let h0 = self.separation.as_slice().expect("layout");
-            // Mean gap over the contact set: the current approach δ.
-            let [sum_g, n_c] = chunked_sum(n, |r| {
-                let mut s = [0.0; 2];
-                for i in r {
-                    if p[i] > 0.0 {
-                        s[0] += u[i] + h0[i];
-                        s[1] += 1.0;
-                    }
-                }
-                s
-            });
-            if n_c == 0.0 {
-                return Err(Error::Data(
-                    "normal contact: the pressure vanished everywhere (no contact set)".into(),
-                ));
-            }
-            let approach = sum_g / n_c;
-            // Centred gap, its squared norm on Ic, and the residual terms.
-            let gp = Ptr(slice_mut(&mut self.g).as_mut_ptr());
-            let [g_norm, compl, penetration] = chunked_sum(n, |r| {
-                // SAFETY: chunks are disjoint.
-                let g = unsafe { gp.slice(r.clone()) };
-                let mut s = [0.0; 3];
-                for (k, i) in r.enumerate() {
-                    let gi = u[i] + h0[i] - approach;
-                    g[k] = gi;
-                    if p[i] > 0.0 {
-                        s[0] += gi * gi;
-                        s[1] += p[i] * gi.abs();
-                    } else if gi < 0.0 {
-                        s[2] -= gi;
-                    }
-                }
-                s
-            });
-            let residual = (compl + p_mean * penetration) / (total_load * h_scale);
-            last_residual = residual;
-            if residual <= tol {
-                if u_exact {
-                    return Ok((it, residual, approach));
-                }
-                // Confirm on an exactly convolved displacement.
-                u_valid = false;
-                continue;
-            }
-            u_exact = false;
-            // Conjugate direction on Ic.
-            let beta = if conjugate { g_norm / g_norm_old } else { 0.0 };
-            g_norm_old = g_norm;
-            {
-                let g = self.g.as_slice().expect("layout");
-                let tp = Ptr(slice_mut(&mut self.t).as_mut_ptr());
-                chunked_sum::<0>(n, |r| {
-                    let t = unsafe { tp.slice(r.clone()) };
-                    for (k, i) in r.enumerate() {
-                        t[k] = if p[i] > 0.0 { g[i] + beta * t[k] } else { 0.0 };
-                    }
-                    []
-                });
-            }
-            // r = K⊛t, centred on Ic; step length τ.
-            self.plan
-                .convolve_into(&self.kernel, &self.t, &mut self.r, &mut self.ws);
-            let p = self.p.as_slice().expect("layout");
-            let g = self.g.as_slice().expect("layout");
-            let t = self.t.as_slice().expect("layout");
-            let rr = self.r.as_slice().expect("layout");
-            let [sum_r, sum_t, sum_rt, sum_gt] = chunked_sum(n, |r| {
-                let mut s = [0.0; 4];
-                for i in r {
-                    if p[i] > 0.0 {
-                        s[0] += rr[i];
-                        s[1] += t[i];
-                        s[2] += rr[i] * t[i];
-                        s[3] += g[i] * t[i];
-                    }
-                }
-                s
-            });
-            let r_mean = sum_r / n_c;
-            let denom = sum_rt - r_mean * sum_t;
-            let direction_vanished = g_norm == 0.0 && penetration > 0.0;
-            if direction_vanished && self.self_compliance > 0.0 {
-                // The contact set carries no gap gradient (e.g. a single point) while other
-                // points penetrate: no conjugate step exists, so let the penetrating points
-                // enter with the pressure that would close their own gap, p = −g / K(0).
-            } else if denom.is_nan() || denom <= 0.0 {
-                // K is positive definite on zero-mean fields: a non-positive curvature means
-                // the direction vanished (converged to round-off) or the data are broken.
-                return Err(Error::NonConvergence {
-                    solver: "normal contact (Polonsky–Keer)".into(),
-                    iterations: it,
-                    residual,
-                    tolerance: tol,
-                });
-            }
-            let tau = if direction_vanished && self.self_compliance > 0.0 {
-                1.0 / self.self_compliance
-            } else {
-                sum_gt / denom
-            };
-            // Pressure update, projection, and entry of penetrating points.
-            let pp = Ptr(slice_mut(&mut self.p).as_mut_ptr());
-            let [sum_p, changed_set, entered] = chunked_sum(n, |r| {
-                let p = unsafe { pp.slice(r.clone()) };
-                let mut s = [0.0; 3];
-                for (k, i) in r.enumerate() {
-                    let pi = p[k];
-                    let mut new = pi;
-                    if pi > 0.0 {
-                        new = pi - tau * t[i];
-                        if new <= 0.0 {
-                            new = 0.0;
-                            s[1] = 1.0;
-                        }
-                    }
-                    if new == 0.0 && g[i] < 0.0 {
-                        new = -tau * g[i];
-                        s[1] = 1.0;
-                        s[2] = 1.0;
-                    }
-                    p[k] = new;
-                    s[0] += new;
-                }
-                s
-            });
-            conjugate = entered == 0.0;
-            if !(sum_p > 0.0 && sum_p.is_finite()) {
-                return Err(Error::Data(format!(
-                    "normal contact: pressure became {sum_p} at iteration {it}"
-                )));
-            }
-            // Impose the load; update u by linearity when the active set did not change.
-            let scale = total_load / sum_p;
-            let linear = changed_set == 0.0;
-            let pp = Ptr(slice_mut(&mut self.p).as_mut_ptr());
-            let up = Ptr(slice_mut(&mut self.u).as_mut_ptr());
-            let rr = self.r.as_slice().expect("layout");
-            chunked_sum::<0>(n, |r| {
-                let p = unsafe { pp.slice(r.clone()) };
-                for v in p.iter_mut() {
-                    *v *= scale;
-                }
-                if linear {
-                    let u = unsafe { up.slice(r.clone()) };
-                    for (k, i) in r.enumerate() {
-                        u[k] = scale * (u[k] - tau * rr[i]);
-                    }
-                }
-                []
-            });
-            u_valid = linear;
-        }
-        Err(Error::NonConvergence {
-            solver: "normal contact (Polonsky–Keer)".into(),
-            iterations: self.options.max_iterations,
-            residual: last_residual,
-            tolerance: tol,
-        })
-    }
-
     /// Assemble the result from the converged work arrays.
     fn solution(
         &self,
         p_mean: f64,
         approach: f64,
+        method: NormalMethod,
         iterations: usize,
         residual: f64,
         start: Instant,
     ) -> NormalSolution {
         let n = (self.nx * self.ny) as f64;
         let pressure = self.p.clone();
-        let displacement = self.u.clone();
         let gap = self.g.clone();
+        // u = g − h0 + δ (the gap was computed from a fresh convolution at convergence).
+        let mut displacement = gap.clone();
+        displacement.zip_mut_with(&self.separation, |u, h0| *u += approach - h0);
         let contact = pressure.mapv(|v| v > 0.0);
         let contact_points = contact.iter().filter(|c| **c).count();
         let spots = spot_sizes(&contact, self.boundary == Boundary::Periodic);
@@ -729,9 +744,14 @@ impl NormalSolver {
             contact_spots: spots.len(),
             smallest_spot_points: sorted.first().copied().unwrap_or(0),
             median_spot_points: sorted.get(sorted.len() / 2).copied().unwrap_or(0),
+            resolution: ContactResolution::of(&contact, self.boundary == Boundary::Periodic),
             approach_m: approach,
             elastic_energy_j: energy,
+            method,
             iterations,
+            convolutions: self.counts.0,
+            preconditioner_applications: self.counts.1,
+            coarse_iterations: 0,
             residual,
             converged: true,
             wall_time_s: start.elapsed().as_secs_f64(),

@@ -106,10 +106,8 @@ pub struct SurfaceSweep {
     pub pressures_pa: Vec<f64>,
     /// Material of both bodies.
     pub material: Material,
-    /// Polonsky–Keer settings.
+    /// Contact solver settings.
     pub options: NormalOptions,
-    /// Relative pressure step ε of the kn central difference.
-    pub derivative_step: f64,
 }
 
 /// Grid of one surface of the sweep.
@@ -140,8 +138,8 @@ impl ShardedSweep for SurfaceSweep {
 }
 
 impl SurfaceSweep {
-    /// Check every setting before any work: pressures, material, solver options, derivative
-    /// step, at least one surface and unique labels.
+    /// Check every setting before any work: pressures, material, solver options, at least one
+    /// surface and unique labels.
     pub fn validate(&self) -> Result<()> {
         let sorted = checked_pressures(&self.pressures_pa)?;
         if sorted != self.pressures_pa {
@@ -152,7 +150,6 @@ impl SurfaceSweep {
         }
         self.e_star_pa()?;
         self.options.validate()?;
-        self.sweep_options(false).validate()?;
         for s in &self.surfaces {
             if let SurfaceSource::Generated { spec } = s {
                 spec.validate()?;
@@ -167,10 +164,7 @@ impl SurfaceSweep {
     }
 
     fn sweep_options(&self, keep_solutions: bool) -> SweepOptions {
-        SweepOptions {
-            derivative_step: self.derivative_step,
-            keep_solutions,
-        }
+        SweepOptions { keep_solutions }
     }
 
     /// Unit `k`: load surface `k` and run its warm-started pressure sweep. With
@@ -337,7 +331,6 @@ mod tests {
             pressures_pa: vec![1e6, 1e7],
             material: Material::STEEL,
             options: NormalOptions::default(),
-            derivative_step: sweep::DEFAULT_DERIVATIVE_STEP,
         }
     }
 

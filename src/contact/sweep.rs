@@ -1,67 +1,38 @@
 //! Pressure sweeps of the normal contact solver: real contact area, mean gap and the normal
-//! contact stiffness per unit nominal area `kn = −dp̄/dḡ` (N/m³) versus nominal pressure.
+//! contact stiffness per unit nominal area `kn = dp̄/dδ` (N/m³) versus nominal pressure.
 //!
 //! Units: pressures in Pa, gaps in m, kn in N/m³ (Pa/m).
 //!
 //! # How kn is obtained
-//! `kn(p̄) = −dp̄/dḡ` is the slope of the load–mean-gap curve (ḡ = mean gap, the mean separation
-//! of the surfaces). Differencing across the coarse sweep (0.1 … 10 MPa, ratios up to 5) would
-//! blur it badly, so each sweep pressure gets two extra warm-started solves at `p̄(1 ± ε)`
-//! (default `ε = 0.02`) and the central difference
-//!
-//! `kn ≈ −2ε p̄ / (ḡ(p̄(1+ε)) − ḡ(p̄(1−ε)))`
-//!
-//! whose truncation error is `O(ε²)` (≈ 10⁻⁴ relative for the smooth ḡ(p̄) of rough contacts);
-//! the solver tolerance (10⁻¹⁰ on the gap error) keeps the round-off of the difference far
-//! below that.
+//! `kn(p̄) = dp̄/dδ` is the slope of the load–approach curve (δ = rigid-body approach of the
+//! surfaces; for a periodic patch `dδ = −dḡ`, ḡ the mean gap, so kn = −dp̄/dḡ). Differencing
+//! across the coarse sweep (0.1 … 10 MPa, ratios up to 5) would blur it badly; each sweep point
+//! instead solves the tangent problem on its contact set
+//! ([`NormalSolver::contact_stiffness`], one linear solve: the exact derivative of the branch,
+//! equal to the stiffness of a rigid punch of the contact area, Barber 2003). Earlier versions
+//! used the central difference of two extra nonlinear solves at `p̄(1 ± 0.02)` on the mean gap,
+//! which for a finite (zero-padded) window also counted the elastic sinking of the unloaded
+//! surface inside the window ([`stiffness_central_difference`] remains for validation).
 //!
 //! # Resolution report
-//! Each point reports the size (grid points) of the smallest and the median contact spot. When
-//! the median spot spans only a few points, the grid does not resolve the contact spots at that
-//! load and the area ratio (and, less so, kn) is grid dependent: refine the grid.
+//! Each point reports how many grid points span the contact spots and the free regions
+//! ([`ContactResolution`]); when the narrower of the two spans fewer than
+//! [`crate::contact::resolution::RESOLVED_POINTS_ACROSS`] points, the grid does not resolve the
+//! contact at that load and the area ratio (and, less so, kn) is grid dependent: refine the grid.
+//! The smallest and median spot sizes are reported too.
 
-use super::normal::{NormalSolution, NormalSolver};
+use super::normal::{NormalMethod, NormalSolution, NormalSolver};
+use super::resolution::ContactResolution;
 use crate::error::{require_positive, Error, Result};
 
 /// The reference sweep of nominal pressures (Pa): 0.1, 0.2, 1, 2, 5, 10 MPa.
 pub const REFERENCE_PRESSURES_PA: [f64; 6] = [0.1e6, 0.2e6, 1e6, 2e6, 5e6, 10e6];
 
-/// Default relative pressure step ε of the kn central difference.
-pub const DEFAULT_DERIVATIVE_STEP: f64 = 0.02;
-
-/// Median spot size (grid points) below which a sweep point is flagged as under-resolved.
-pub const RESOLVED_MEDIAN_SPOT_POINTS: usize = 4;
-
 /// Sweep settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SweepOptions {
-    /// Relative pressure step ε of the kn central difference (0 < ε < 0.5).
-    pub derivative_step: f64,
     /// Keep every converged solution (pressure maps) in the result.
     pub keep_solutions: bool,
-}
-
-impl SweepOptions {
-    /// Check the settings: 0 < ε < 0.5.
-    pub fn validate(&self) -> Result<()> {
-        let eps = self.derivative_step;
-        if !(eps.is_finite() && eps > 0.0 && eps < 0.5) {
-            return Err(Error::param(
-                "derivative_step",
-                format!("must lie in (0, 0.5), got {eps}"),
-            ));
-        }
-        Ok(())
-    }
-}
-
-impl Default for SweepOptions {
-    fn default() -> Self {
-        Self {
-            derivative_step: DEFAULT_DERIVATIVE_STEP,
-            keep_solutions: false,
-        }
-    }
 }
 
 /// One nominal pressure of a sweep.
@@ -73,7 +44,7 @@ pub struct SweepPoint {
     pub contact_area_ratio: f64,
     /// Mean gap ḡ (m).
     pub mean_gap_m: f64,
-    /// Normal contact stiffness per unit nominal area kn = −dp̄/dḡ (N/m³).
+    /// Normal contact stiffness per unit nominal area kn = dp̄/dδ (N/m³).
     pub kn_n_per_m3: f64,
     /// Rigid approach from first contact (m).
     pub approach_m: f64,
@@ -83,18 +54,25 @@ pub struct SweepPoint {
     pub smallest_spot_points: usize,
     /// Grid points of the median contact spot.
     pub median_spot_points: usize,
-    /// Polonsky–Keer iterations of the solve at p̄ (without the two kn solves).
+    /// Grid points across the contact spots and across the free regions.
+    pub resolution: ContactResolution,
+    /// The iteration used at p̄.
+    pub method: NormalMethod,
+    /// Iterations of the contact solve at p̄.
     pub iterations: usize,
+    /// Iterations of the tangent solve for kn.
+    pub stiffness_iterations: usize,
     /// Final relative gap error of the solve at p̄.
     pub residual: f64,
-    /// Wall time of the three solves of this point (s).
+    /// Wall time of this point: contact solve and kn (s).
     pub wall_time_s: f64,
 }
 
 impl SweepPoint {
-    /// True when the median contact spot spans fewer than [`RESOLVED_MEDIAN_SPOT_POINTS`].
+    /// True when the grid does not resolve the narrower of contact spots and free regions
+    /// (see [`ContactResolution::resolved`]).
     pub fn under_resolved(&self) -> bool {
-        self.median_spot_points < RESOLVED_MEDIAN_SPOT_POINTS
+        !self.resolution.resolved()
     }
 }
 
@@ -134,27 +112,26 @@ pub fn run(
     mut progress: impl FnMut(usize),
 ) -> Result<Sweep> {
     let pressures = checked_pressures(pressures_pa)?;
-    options.validate()?;
-    let eps = options.derivative_step;
     let mut points = Vec::with_capacity(pressures.len());
     let mut solutions = Vec::new();
     let mut warm: Option<NormalSolution> = None;
     for (k, &p) in pressures.iter().enumerate() {
         let start = std::time::Instant::now();
         let sol = solver.solve_load(p, warm.as_ref())?;
-        let lo = solver.solve_load(p * (1.0 - eps), Some(&sol))?;
-        let hi = solver.solve_load(p * (1.0 + eps), Some(&sol))?;
-        let kn = stiffness_central_difference(p, eps, lo.mean_gap_m, hi.mean_gap_m);
+        let kn = solver.contact_stiffness(&sol)?;
         points.push(SweepPoint {
             pressure_pa: p,
             contact_area_ratio: sol.contact_area_ratio,
             mean_gap_m: sol.mean_gap_m,
-            kn_n_per_m3: kn,
+            kn_n_per_m3: kn.kn_n_per_m3,
             approach_m: sol.approach_m,
             contact_spots: sol.contact_spots,
             smallest_spot_points: sol.smallest_spot_points,
             median_spot_points: sol.median_spot_points,
+            resolution: sol.resolution,
+            method: sol.method,
             iterations: sol.iterations,
+            stiffness_iterations: kn.iterations,
             residual: sol.residual,
             wall_time_s: start.elapsed().as_secs_f64(),
         });
@@ -167,7 +144,9 @@ pub fn run(
     Ok(Sweep { points, solutions })
 }
 
-/// `kn = −dp̄/dḡ ≈ −2ε p̄ / (ḡ₊ − ḡ₋)` from the mean gaps at `p̄(1−ε)` and `p̄(1+ε)` (N/m³).
+/// `kn ≈ −2ε p̄ / (ḡ₊ − ḡ₋)` from the mean gaps (or, with the signs of the approaches,
+/// `2ε p̄ / (δ₊ − δ₋)`) at `p̄(1−ε)` and `p̄(1+ε)` (N/m³): the central difference that validates
+/// [`NormalSolver::contact_stiffness`].
 pub fn stiffness_central_difference(
     pressure_pa: f64,
     eps: f64,
@@ -231,7 +210,10 @@ mod tests {
                 contact_spots: 0,
                 smallest_spot_points: 0,
                 median_spot_points: 0,
+                resolution: ContactResolution::of(&Array2::from_elem((2, 2), true), true),
+                method: NormalMethod::Auto,
                 iterations: 0,
+                stiffness_iterations: 0,
                 residual: 0.0,
                 wall_time_s: 0.0,
             })

@@ -310,11 +310,9 @@ impl FftPlan {
         }
     }
 
-    /// `out = kernel ⊛ field` on the grid, like [`FftPlan::convolve`] but without allocating:
-    /// real row transforms → blocked transpose → per y-frequency: x-transform, kernel
-    /// multiplication and inverse x-transform fused in one pass → transpose back → inverse row
-    /// transforms of the `nx` rows that are kept. With zero padding, the padded rows are never
-    /// transformed (their spectrum is zero). `field` and `out` have the grid shape `(nx, ny)`.
+    /// `out = kernel ⊛ field` on the grid, like [`FftPlan::convolve`] but without allocating
+    /// (see [`FftPlan::convolve_fused`] for the steps). `field` and `out` have the grid shape
+    /// `(nx, ny)`.
     pub fn convolve_into(
         &self,
         kernel: &KernelSpectrum,
@@ -322,33 +320,88 @@ impl FftPlan {
         out: &mut Array2<f64>,
         ws: &mut ConvolutionWorkspace,
     ) {
-        let (nx, ny, nfx, nfy) = (self.nx, self.ny, self.nfx, self.nfy);
-        let nh = nfy / 2 + 1;
+        let (nx, ny) = (self.nx, self.ny);
         assert_eq!(field.dim(), (nx, ny), "convolve_into: field shape");
         assert_eq!(out.dim(), (nx, ny), "convolve_into: output shape");
+        let field = field.as_standard_layout();
+        let field = field.as_slice().expect("standard layout");
+        let out = RowWriter(
+            out.as_slice_mut()
+                .expect("output in standard layout")
+                .as_mut_ptr(),
+        );
+        self.convolve_fused::<0, 0, ()>(
+            kernel,
+            ws,
+            |i, buf| {
+                buf.copy_from_slice(&field[i * ny..(i + 1) * ny]);
+                []
+            },
+            |_| Some(()),
+            |_, _, i, result| {
+                // SAFETY: each output row is written by one call only, nothing reads it meanwhile.
+                unsafe { out.row(i, ny) }.copy_from_slice(result);
+                []
+            },
+        );
+    }
+
+    /// One convolution with the passes before and after it fused into the transforms, so that
+    /// an iterative solver touches each grid row once while it is in cache:
+    ///
+    /// 1. for every grid row `i` (in parallel): `load(i, row)` writes row `i` of the field `f`
+    ///    to be convolved into `row` (length `ny`) and may update the caller's own arrays for
+    ///    that row; it returns `A` partial sums; the row is transformed at once (real-to-complex
+    ///    along y);
+    /// 2. `mid(&sums)` sees the sums of step 1 (added in row order, so they do not depend on the
+    ///    thread count) and returns the context `M` of step 4, or `None` to stop here: the caller
+    ///    found that the convolution is not needed after all (e.g. converged);
+    /// 3. blocked transpose → per y-frequency: x-transform, kernel product, inverse x-transform
+    ///    → transpose back → inverse real transforms of the `nx` rows that are kept; step 3 also
+    ///    sums the energy `E = Σ_x f·(K⊛f) = (1/N_fft) Σ_q K̃(q)|f̂(q)|²` (Parseval; the kernel
+    ///    spectrum is taken as real, as for every even kernel);
+    /// 4. for every grid row `i`: `store(&context, E, i, result)` receives the scaled result row
+    ///    and returns `B` partial sums (added in row order).
+    ///
+    /// With zero padding, the padded rows are never transformed (their spectrum is zero).
+    /// Returns the sums of step 1, and `(E, sums of step 4)` unless `mid` stopped.
+    pub fn convolve_fused<const A: usize, const B: usize, M: Sync>(
+        &self,
+        kernel: &KernelSpectrum,
+        ws: &mut ConvolutionWorkspace,
+        load: impl Fn(usize, &mut [f64]) -> [f64; A] + Sync,
+        mid: impl FnOnce(&[f64; A]) -> Option<M>,
+        store: impl Fn(&M, f64, usize, &[f64]) -> [f64; B] + Sync,
+    ) -> ([f64; A], Option<(f64, [f64; B])>) {
+        let (nx, ny, nfx, nfy) = (self.nx, self.ny, self.nfx, self.nfy);
+        let nh = nfy / 2 + 1;
         assert_eq!(
             kernel.values.dim(),
             (nh, nfx),
-            "convolve_into: kernel shape"
+            "convolve_fused: kernel shape"
         );
-        assert_eq!(ws.rows.dim(), (nfx, nh), "convolve_into: workspace shape");
-        let field = field.as_standard_layout();
-        let field = field.as_slice().expect("standard layout");
-        // 1. Real transforms of the nx data rows (rows nx.. of `ws.rows` stay zero forever).
+        assert_eq!(ws.rows.dim(), (nfx, nh), "convolve_fused: workspace shape");
+        // 1. Load and real-transform the nx data rows (rows nx.. of `ws.rows` stay zero).
+        let mut load_parts = vec![[0.0; A]; nx];
         let rows = ws.rows.as_slice_mut().expect("standard layout");
         rows[..nx * nh]
             .par_chunks_mut(nh)
-            .zip(field.par_chunks(ny))
+            .zip(load_parts.par_iter_mut())
+            .enumerate()
             .for_each_init(
                 || (vec![0.0; nfy], self.r2c.make_scratch_vec()),
-                |(buf, scratch), (row_out, row_in)| {
-                    buf[..ny].copy_from_slice(row_in);
+                |(buf, scratch), (i, (row_out, part))| {
+                    *part = load(i, &mut buf[..ny]);
                     buf[ny..].fill(0.0);
                     self.r2c
                         .process_with_scratch(buf, row_out, scratch)
                         .expect("r2c sizes match the plan");
                 },
             );
+        let load_sums = sum_in_order(&load_parts);
+        let Some(context) = mid(&load_sums) else {
+            return (load_sums, None);
+        };
         // 2. Blocked transpose rows (nfx, nh) → spec (nh, nfx).
         let rows = ws.rows.as_slice().expect("standard layout");
         ws.spec
@@ -368,13 +421,18 @@ impl FftPlan {
                     }
                 }
             });
-        // 3. Per y-frequency: forward x-transform, kernel product, inverse x-transform.
+        // 3. Per y-frequency: forward x-transform, kernel product (and energy), inverse
+        // x-transform. The half spectrum holds y-frequencies 0..=nfy/2; all but 0 and (even
+        // nfy) nfy/2 stand for their mirror images too.
         let kern = kernel.values.as_slice().expect("standard layout");
+        let mut energy_parts = vec![[0.0; 1]; nh];
         ws.spec
             .as_slice_mut()
             .expect("standard layout")
             .par_chunks_mut(nfx)
             .zip(kern.par_chunks(nfx))
+            .zip(energy_parts.par_iter_mut())
+            .enumerate()
             .for_each_init(
                 || {
                     let n = self
@@ -383,25 +441,35 @@ impl FftPlan {
                         .max(self.inv.get_inplace_scratch_len());
                     vec![Complex64::default(); n]
                 },
-                |scratch, (row, krow)| {
+                |scratch, (m, ((row, krow), energy))| {
                     self.fwd.process_with_scratch(row, scratch);
+                    let mut e = 0.0;
                     for (s, k) in row.iter_mut().zip(krow) {
+                        e += s.norm_sqr() * k.re;
                         *s *= k;
                     }
+                    let weight = if m == 0 || (nfy % 2 == 0 && m == nfy / 2) {
+                        1.0
+                    } else {
+                        2.0
+                    };
+                    energy[0] = weight * e;
                     self.inv.process_with_scratch(row, scratch);
                 },
             );
-        // 4. Transpose back the nx rows that are kept, 5. inverse real transforms, scaled.
-        let spec = ws.spec.as_slice().expect("standard layout");
         let scale = 1.0 / (nfx * nfy) as f64;
-        let out = out.as_slice_mut().expect("output in standard layout");
+        let energy = sum_in_order(&energy_parts)[0] * scale;
+        // 4. Transpose back the nx rows that are kept, inverse real transforms, scale, store.
+        let spec = ws.spec.as_slice().expect("standard layout");
+        let mut store_parts = vec![[0.0; B]; nx];
+        let context = &context;
         ws.rows.as_slice_mut().expect("standard layout")[..nx * nh]
             .par_chunks_mut(TILE * nh)
-            .zip(out.par_chunks_mut(TILE * ny))
+            .zip(store_parts.par_chunks_mut(TILE))
             .enumerate()
             .for_each_init(
                 || (vec![0.0; nfy], self.c2r.make_scratch_vec()),
-                |(buf, scratch), (b, (block, out_block))| {
+                |(buf, scratch), (b, (block, parts))| {
                     let k0 = b * TILE;
                     let kb = block.len() / nh;
                     for m in 0..nh {
@@ -410,7 +478,8 @@ impl FftPlan {
                             block[dk * nh + m] = *v;
                         }
                     }
-                    for (row, orow) in block.chunks_mut(nh).zip(out_block.chunks_mut(ny)) {
+                    for (dk, (row, part)) in block.chunks_mut(nh).zip(parts.iter_mut()).enumerate()
+                    {
                         // Imaginary parts of the DC (and Nyquist) terms of a real signal are
                         // round-off; realfft insists they are zero.
                         row[0].im = 0.0;
@@ -420,13 +489,39 @@ impl FftPlan {
                         self.c2r
                             .process_with_scratch(row, buf, scratch)
                             .expect("c2r sizes match the plan");
-                        for (o, v) in orow.iter_mut().zip(&buf[..ny]) {
-                            *o = v * scale;
+                        for v in &mut buf[..ny] {
+                            *v *= scale;
                         }
+                        *part = store(context, energy, k0 + dk, &buf[..ny]);
                     }
                 },
             );
+        (load_sums, Some((energy, sum_in_order(&store_parts))))
     }
+}
+
+/// Raw row pointer of [`FftPlan::convolve_into`]'s output (rows written by disjoint calls).
+#[derive(Clone, Copy)]
+struct RowWriter(*mut f64);
+unsafe impl Send for RowWriter {}
+unsafe impl Sync for RowWriter {}
+impl RowWriter {
+    /// Row `i` of length `ny`. Safety: rows are disjoint and written by one caller at a time.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn row(&self, i: usize, ny: usize) -> &mut [f64] {
+        std::slice::from_raw_parts_mut(self.0.add(i * ny), ny)
+    }
+}
+
+/// Sum of per-row partial sums in row order (the result does not depend on the thread count).
+fn sum_in_order<const K: usize>(parts: &[[f64; K]]) -> [f64; K] {
+    let mut total = [0.0; K];
+    for p in parts {
+        for k in 0..K {
+            total[k] += p[k];
+        }
+    }
+    total
 }
 
 /// `spec *= kernel` element-wise (parallel).
@@ -552,6 +647,67 @@ mod tests {
                     assert!((g - w).abs() < 1e-11 * (1.0 + w.abs()), "{g} vs {w}");
                 }
             }
+        }
+    }
+
+    /// The fused convolution: load sums, the energy Σ f·(K⊛f) from the spectrum (Parseval),
+    /// the store sees the result rows, and `mid` can stop before the transforms.
+    #[test]
+    fn convolve_fused_energy_sums_and_stop() {
+        for (nx, ny, boundary) in [
+            (7, 8, Boundary::ZeroPadded),
+            (6, 5, Boundary::ZeroPadded),
+            (8, 6, Boundary::Periodic),
+            (9, 7, Boundary::Periodic),
+        ] {
+            let plan = FftPlan::new(nx, ny, boundary);
+            // An even kernel (real spectrum), as for every half-space kernel.
+            let ks = plan.kernel_spectrum(|di, dj| {
+                1.0 / (1.0 + (di as f64).powi(2) + 2.0 * (dj as f64).powi(2))
+            });
+            let f = test_field(nx, ny);
+            let want = plan.convolve(&ks, &f);
+            let want_energy: f64 = f.iter().zip(want.iter()).map(|(a, b)| a * b).sum();
+            let mut ws = plan.workspace();
+            let got = std::sync::Mutex::new(Array2::<f64>::zeros((nx, ny)));
+            let (load, rest) = plan.convolve_fused::<1, 1, f64>(
+                &ks,
+                &mut ws,
+                |i, buf| {
+                    buf.copy_from_slice(f.row(i).as_slice().unwrap());
+                    [buf.iter().sum()]
+                },
+                |s| Some(2.0 * s[0]),
+                |twice_sum, _, i, row| {
+                    got.lock()
+                        .unwrap()
+                        .row_mut(i)
+                        .assign(&ndarray::ArrayView1::from(row));
+                    [row.iter().sum::<f64>() + *twice_sum * 0.0]
+                },
+            );
+            assert!((load[0] - f.sum()).abs() < 1e-12);
+            let (energy, store) = rest.unwrap();
+            assert!(
+                (energy - want_energy).abs() < 1e-10 * want_energy.abs(),
+                "{energy} {want_energy}"
+            );
+            assert!((store[0] - want.sum()).abs() < 1e-10 * (1.0 + want.sum().abs()));
+            let got = got.into_inner().unwrap();
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert!((g - w).abs() < 1e-11 * (1.0 + w.abs()));
+            }
+            let (_, stopped) = plan.convolve_fused::<0, 0, ()>(
+                &ks,
+                &mut ws,
+                |_, buf| {
+                    buf.fill(1.0);
+                    []
+                },
+                |_| None,
+                |_, _, _, _| unreachable!("stopped before the transforms"),
+            );
+            assert!(stopped.is_none());
         }
     }
 }

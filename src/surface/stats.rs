@@ -310,7 +310,7 @@ fn rms_slope_uniform(h: &[f64], dx: f64, periodic: bool) -> f64 {
 
 /// RMS slopes along x and y and the rms gradient of an area (see the module documentation for
 /// the points used).
-fn rms_slopes_area(h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> (f64, f64, f64) {
+pub fn rms_slopes_area(h: &Array2<f64>, dx: f64, dy: f64, periodic: bool) -> (f64, f64, f64) {
     let (nx, ny) = h.dim();
     let (mx, my) = if periodic { (nx, ny) } else { (nx - 1, ny - 1) };
     let (mut sx, mut sy) = (0.0, 0.0);
