@@ -3,6 +3,7 @@
 //!     benches/peers/setup.sh                        # throwaway venv with tamaas (once)
 //!     cargo bench --bench normal                    # sections A–C below (about 1 h, 2 idle cores)
 //!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
+//!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²)
 //!     cargo bench --bench normal -- --resolution    # D: grid-refinement study of the resolution
 //!     cargo bench --bench normal -- --size 4096     # one 4096² solve (run under /usr/bin/time -v)
 //!     cargo bench --bench normal -- --reference     # reference sweep (1024²) and kn ∝ p^β
@@ -399,6 +400,22 @@ fn warm_and_stiffness(name: &str, s: &Grid2, e_star: f64, pressures: &[f64]) {
     });
 }
 
+/// Section B: the reference Gaussian surface's sweep on the sizes up to 1024².
+fn gaussian_section(sizes: &[usize], dir: &Path) {
+    println!("\n### B. Reference Gaussian surface, reference sweep 0.1–10 MPa (steel/steel)");
+    for &n in sizes.iter().filter(|&&n| n <= 1024) {
+        compare(
+            "reference Gaussian",
+            &gaussian_reference(n),
+            steel(),
+            &sweep::REFERENCE_PRESSURES_PA,
+            &|p| format!("{} MPa", p / 1e6),
+            false,
+            dir,
+        );
+    }
+}
+
 fn run_all(sizes: &[usize]) {
     let dir = tempfile::tempdir().unwrap();
     if venv_python().is_none() {
@@ -425,18 +442,7 @@ fn run_all(sizes: &[usize]) {
             dir.path(),
         );
     }
-    println!("\n### B. Reference Gaussian surface, reference sweep 0.1–10 MPa (steel/steel)");
-    for &n in sizes.iter().filter(|&&n| n <= 1024) {
-        compare(
-            "reference Gaussian",
-            &gaussian_reference(n),
-            steel(),
-            &sweep::REFERENCE_PRESSURES_PA,
-            &|p| format!("{} MPa", p / 1e6),
-            false,
-            dir.path(),
-        );
-    }
+    gaussian_section(sizes, dir.path());
     let n = *sizes.iter().filter(|&&n| n <= 1024).max().unwrap_or(&512);
     println!("\n### C. Warm-started sweeps and kn ({n}², 1 thread, CPU time)\n");
     println!("| surface | loads | iterations cold | CPU cold (s) | iterations warm | CPU warm (s) | warm speed-up | kn tangent CPU (s) | kn central difference CPU (s) | kn speed-up | max |kn/kn_cd − 1| |");
@@ -564,6 +570,14 @@ fn main() {
         reference();
     } else if args.iter().any(|a| a == "--resolution") {
         resolution_study();
+    } else if args.iter().any(|a| a == "--gaussian") {
+        let dir = tempfile::tempdir().unwrap();
+        println!(
+            "load average at start: {}; rayon pools of 1 and 2 threads; tolerance {TOLERANCE:e}",
+            load_average()
+        );
+        gaussian_section(&[512, 1024], dir.path());
+        println!("\nload average at end: {}", load_average());
     } else if args.iter().any(|a| a == "--quick") {
         run_all(&[512]);
     } else {
