@@ -4,6 +4,7 @@
 //!     cargo bench --bench normal                    # sections A–C below (about 1 h, 2 idle cores)
 //!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
 //!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²)
+//!     ASPERITY_BENCH_METHOD=preconditioned cargo bench --bench normal -- --gaussian   # method forced
 //!     cargo bench --bench normal -- --resolution    # D: grid-refinement study of the resolution
 //!     cargo bench --bench normal -- --size 4096     # one 4096² solve (run under /usr/bin/time -v)
 //!     cargo bench --bench normal -- --reference     # reference sweep (1024²) and kn ∝ p^β
@@ -136,6 +137,16 @@ struct Ours {
     transforms: usize,
     time_s: f64,
     cpu_s: f64,
+}
+
+/// The method of the compared asperity solves: `auto` unless `ASPERITY_BENCH_METHOD` is
+/// `preconditioned` or `polonsky-keer` (to measure the choice `auto` makes).
+fn method_choice() -> NormalMethod {
+    match std::env::var("ASPERITY_BENCH_METHOD").as_deref() {
+        Ok("preconditioned") => NormalMethod::Preconditioned,
+        Ok("polonsky-keer") => NormalMethod::PolonskyKeer,
+        _ => NormalMethod::Auto,
+    }
 }
 
 fn solver(s: &Grid2, e_star: f64, method: NormalMethod) -> NormalSolver {
@@ -289,8 +300,9 @@ fn compare(
         conv * 1e3,
         load_average()
     );
-    let one = run_ours(s, e_star, pressures, 1, NormalMethod::Auto, reps);
-    let two = run_ours(s, e_star, pressures, 2, NormalMethod::Auto, reps);
+    let method = method_choice();
+    let one = run_ours(s, e_star, pressures, 1, method, reps);
+    let two = run_ours(s, e_star, pressures, 2, method, reps);
     let pk = run_ours(s, e_star, pressures, 1, NormalMethod::PolonskyKeer, 1);
     let peer = py
         .as_ref()

@@ -181,6 +181,9 @@ class NormalSolver:
         self, approach_m: float, warm_start: Optional[NormalSolution] = None
     ) -> NormalSolution:
         """Displacement control at rigid approach δ (m) from first contact."""
+    def contact_stiffness(self, solution: NormalSolution) -> float:
+        """kn = dp̄/dδ (N/m³) of a converged solution of this solver, from the tangent problem
+        on its contact set (one linear solve; what ``normal_sweep`` and ``calibrate`` use)."""
     def displacement_of(self, pressure: F64Array) -> F64Array:
         """u = K ⊛ p (m) for a pressure field (Pa) on this grid."""
     @property

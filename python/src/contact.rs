@@ -236,6 +236,20 @@ impl NormalSolver {
         Ok(self.wrap(sol))
     }
 
+    /// Normal contact stiffness `kn = dp̄/dδ` (N/m³) of a converged solution of this solver,
+    /// from the tangent problem on its contact set (one linear solve; what `normal_sweep` and the
+    /// calibration use).
+    fn contact_stiffness(
+        &mut self,
+        py: Python<'_>,
+        solution: Bound<'_, NormalSolution>,
+    ) -> PyResult<f64> {
+        let sol = &solution.get().inner;
+        let inner = &mut self.inner;
+        let kn = py.detach(|| inner.contact_stiffness(sol)).py()?;
+        Ok(kn.kn_n_per_m3)
+    }
+
     /// Displacement control: the solution at rigid approach `approach_m` (m, from first contact).
     #[pyo3(signature = (approach_m, warm_start=None))]
     fn solve_approach(

