@@ -60,8 +60,8 @@ pub struct NormalArgs {
     /// Iteration cap per solve (exceeding it is an error).
     #[arg(long, default_value_t = NormalOptions::default().max_iterations)]
     max_iterations: usize,
-    /// Iteration: `auto` (by the expected contact fraction), `preconditioned` (projected CG
-    /// preconditioned by the inverse half-space compliance) or `polonsky-keer`.
+    /// Iteration: `auto` (= `preconditioned`: projected CG preconditioned by the inverse
+    /// half-space compliance) or `polonsky-keer` (the reference path).
     #[arg(long, default_value = "auto")]
     method: String,
     /// Solve only shard i of n (1-based, e.g. `3/8`; the surfaces are split into n contiguous
