@@ -10,7 +10,7 @@ use asperity::output::write_string_atomic;
 use asperity::{Error, Result};
 use rayon::prelude::*;
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Frequency response of a structure with contact elements: multi-harmonic balance with the
 /// alternating frequency–time method and pseudo-arclength continuation, one sweep per excitation
@@ -64,11 +64,8 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     // The levels are independent sweeps: they run concurrently (rayon tasks; the element loop
     // inside each evaluation is parallel too and rayon shares the cores between both), so the
     // slow gross-slip level overlaps the fast microslip ones. Progress: the sum of the levels'
-    // fractions of their span.
-    let progress: Vec<std::sync::atomic::AtomicU64> = levels
-        .iter()
-        .map(|_| std::sync::atomic::AtomicU64::new(0))
-        .collect();
+    // fractions of their span. Every error of `sweep` names its level and frequency.
+    let progress: Vec<AtomicU64> = levels.iter().map(|_| AtomicU64::new(0)).collect();
     let results: Vec<LevelResult> = levels
         .par_iter()
         .enumerate()
@@ -76,21 +73,6 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             let branch = sweep(&system, level, &settings, &mut |frac| {
                 progress[i].store((frac * 1000.0) as u64, Ordering::Relaxed);
                 bar.set_position(progress.iter().map(|p| p.load(Ordering::Relaxed)).sum());
-            })
-            .map_err(|e| match e {
-                Error::Data(m) => Error::Data(format!("excitation level {level} N: {m}")),
-                Error::NonConvergence {
-                    solver,
-                    iterations,
-                    residual,
-                    tolerance,
-                } => Error::NonConvergence {
-                    solver: format!("{solver} (excitation level {level} N)"),
-                    iterations,
-                    residual,
-                    tolerance,
-                },
-                other => other,
             })?;
             Ok(report::summarise(
                 &system,

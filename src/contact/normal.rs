@@ -28,12 +28,12 @@
 //!
 //! - [`NormalMethod::PolonskyKeer`]: the centred gap itself (Fletcher–Reeves). The condition
 //!   number of `K` on the contact set grows with the grid (its eigenvalues are those of
-//!   `2/(E*|q|)` from `q ~ 1/L` to `q ~ 1/dx`), and so does the iteration count: 64–1005 on
+//!   `2/(E*|q|)` from `q ~ 1/L` to `q ~ 1/dx`), and so does the iteration count: 77–2052 on
 //!   512²–2048² self-affine surfaces (BENCHMARKS.md). Cheapest per iteration (one transform pair).
 //! - [`NormalMethod::Preconditioned`]: the gap filtered by `E*|q|/2` (the exact inverse of the
 //!   periodic compliance) and restricted to `Ic`, the FFT preconditioner of Vollebregt (2014);
 //!   Polak–Ribière+ with a restart test; penetrating points join the line search. Two transform
-//!   pairs per iteration (one preconditioner, one `K⊛t`), but 20–50 iterations, nearly
+//!   pairs per iteration (one preconditioner, one `K⊛t`), but 10–50 iterations, nearly
 //!   independent of the grid and of the contact fraction; cold solves start from the solution
 //!   on the grid coarsened 2 × 2 (nested iteration down to [`COARSEST_GRID`]). For zero-padded
 //!   windows the preconditioner is the periodic `E*|q|/2` of the window (the iteration counts on

@@ -207,7 +207,7 @@ pub fn sweep(
     let n = system.unknowns();
     let singular = |omega: f64| {
         Error::Data(format!(
-            "singular bordered harmonic-balance Jacobian at {:.6} Hz",
+            "singular bordered harmonic-balance Jacobian at {:.6} Hz (level {level:.4e})",
             omega / TWO_PI
         ))
     };

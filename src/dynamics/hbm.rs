@@ -418,7 +418,13 @@ impl<'a> HbmSystem<'a> {
                 }
                 acc
             })
-            .reduce(|| DMatrix::zeros(wlen, n), |a, b| a + b);
+            .reduce(
+                || DMatrix::zeros(wlen, n),
+                |mut a, b| {
+                    a += &b;
+                    a
+                },
+            );
         // `prod`'s column-major data is J row-major, i.e. Jᵀ column-major.
         let nn = n * len;
         DMatrix::from_vec(nn, nn, prod.data.into()).transpose()
