@@ -30,8 +30,8 @@ pub struct IdentifyArgs {
     #[arg(long, value_enum, default_value = "jenkins")]
     pub family: FamilyArg,
     /// Candidate effects to test (comma-separated ids; default: all). Ids: valanis_joint,
-    /// iwan_joint, amplitude_stiffness, quadratic_damping, preload_loss, higher_harmonics,
-    /// out_of_band_modes, shaker_interaction.
+    /// iwan_joint, amplitude_stiffness, quadratic_damping, power_law_damping, preload_loss,
+    /// higher_harmonics, out_of_band_modes, shaker_interaction.
     #[arg(long, value_delimiter = ',')]
     pub candidates: Option<Vec<String>>,
     /// Maximum number of effects added (each needs strong held-out evidence).

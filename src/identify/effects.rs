@@ -7,6 +7,7 @@
 //! | Iwan joint (power-law microslip) | the joint is a four-parameter Iwan element (Segalman 2005, power-law slip-strength density, `crate::element::iwan`) instead of a Jenkins slider: dissipation `∝ A^{3+χ}` at small amplitude, `K_T = k_t`, `F_S = F_s` | exponent `χ ∈ [−0.9, 0]`, strength ratio `β ∈ [0, 4]` |
 //! | amplitude-dependent stiffness | cubic spring `k3·u³` on the drive-point coordinate (geometric or contact stiffening, or softening) | `ε = 3k3·A_ref²/(4k_s)`: relative change of `ω²` at the reference amplitude |
 //! | quadratic (amplitude-dependent viscous) damping | `c2·|u̇|·u̇` (air drag, acoustic radiation): a damping ratio growing `∝ A` with no loss of stiffness | `ζ_q`: equivalent damping ratio added at the reference amplitude, `c2 = 3π·m·ζ_q/(4·A_ref)` |
+//! | power-law damping | `c_p·|u̇|^p·u̇`: a damping ratio growing `∝ A^p` with no loss of stiffness (the empirical law of amplitude-dependent joint and material damping, `ζ = ζ0 + c·A^p`; nests the quadratic damper at `p = 1`) | `ζ_p` at the reference amplitude and `p ∈ [0.25, 3]`, `c_p = 2π·m·ζ_p/(A_ref^p·ω_s^{p−1}·I(p+2))`, `I(n) = ∫₀^{2π}|sin θ|ⁿdθ` |
 //! | joint preload loss | the joint's slip force and stiffness fall with the excitation level the joint has seen (bolt relaxation from test to test; levels run from low to high): `F_s, k_t × (1 − λ·F̄/F_ref)` | `λ` |
 //! | higher harmonics | harmonics 1, 3, …, 9 instead of 1, 3 in the balance | none |
 //! | out-of-band modes | a constant residual receptance `r = ρ/k_s` (m/N) added at the drive point (the other modes' flexibility, rigid-body mass line of a free structure) | `ρ` |
@@ -29,6 +30,7 @@ pub enum Effect {
     IwanJoint,
     AmplitudeStiffness,
     QuadraticDamping,
+    PowerLawDamping,
     PreloadLoss,
     HigherHarmonics,
     OutOfBandModes,
@@ -37,11 +39,12 @@ pub enum Effect {
 
 impl Effect {
     /// Every candidate, in the order they are tested.
-    pub const ALL: [Effect; 8] = [
+    pub const ALL: [Effect; 9] = [
         Effect::ValanisJoint,
         Effect::IwanJoint,
         Effect::AmplitudeStiffness,
         Effect::QuadraticDamping,
+        Effect::PowerLawDamping,
         Effect::PreloadLoss,
         Effect::HigherHarmonics,
         Effect::OutOfBandModes,
@@ -55,6 +58,7 @@ impl Effect {
             Effect::IwanJoint => "iwan_joint",
             Effect::AmplitudeStiffness => "amplitude_stiffness",
             Effect::QuadraticDamping => "quadratic_damping",
+            Effect::PowerLawDamping => "power_law_damping",
             Effect::PreloadLoss => "preload_loss",
             Effect::HigherHarmonics => "higher_harmonics",
             Effect::OutOfBandModes => "out_of_band_modes",
@@ -82,6 +86,9 @@ impl Effect {
             Effect::QuadraticDamping => {
                 "damping grows with velocity amplitude without stiffness loss (air drag, radiation)"
             }
+            Effect::PowerLawDamping => {
+                "damping grows as a power of the amplitude without stiffness loss (joint/material)"
+            }
             Effect::PreloadLoss => {
                 "joint slip force and stiffness fall with the excitation level seen (preload loss)"
             }
@@ -98,5 +105,30 @@ impl Effect {
     /// Whether the effect replaces the joint element (the two families exclude each other).
     pub fn is_family(self) -> bool {
         matches!(self, Effect::ValanisJoint | Effect::IwanJoint)
+    }
+
+    /// The candidate this effect contains as a special case, if any: a start from that
+    /// candidate's optimum (extended by [`Effect::nested_values`]) makes the larger fit at least
+    /// as good as the nested one. The power law is the quadratic damper at `p = 1`.
+    pub fn nests(self) -> Option<Effect> {
+        match self {
+            Effect::PowerLawDamping => Some(Effect::QuadraticDamping),
+            _ => None,
+        }
+    }
+
+    /// This effect's parameter values that reproduce the nested effect's: the nested effect's
+    /// values followed by the extra ones (`ζ_p = ζ_q`, `p = 1` for the power law).
+    pub fn nested_values(self) -> &'static [f64] {
+        match self {
+            Effect::PowerLawDamping => &[1.0],
+            _ => &[],
+        }
+    }
+
+    /// Whether the effect is an amplitude-dependent damping law (the quadratic damper is the
+    /// power law at `p = 1`: at most one of them in a model).
+    pub fn is_damping_law(self) -> bool {
+        matches!(self, Effect::QuadraticDamping | Effect::PowerLawDamping)
     }
 }

@@ -203,10 +203,12 @@ impl ModelSpec {
     }
 
     /// Whether `e` may be added: not already present, a family change only from Jenkins, and
-    /// no effect whose implementation is not available.
+    /// one amplitude-dependent damping law at most (they nest).
     pub fn admits(&self, e: Effect) -> bool {
         let family_change_allowed = !e.is_family() || self.joint_family() == Family::Jenkins;
-        !self.effects.contains(&e) && family_change_allowed
+        let damping_law_free =
+            !e.is_damping_law() || !self.effects.iter().any(|x| x.is_damping_law());
+        !self.effects.contains(&e) && family_change_allowed && damping_law_free
     }
 
     /// Parameters, in order: the mode, the family's shape, then each effect's.
@@ -279,6 +281,22 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
             0.05,
             1e-6,
         )],
+        Effect::PowerLawDamping => vec![
+            ParamSpec::log(
+                "power_law_damping_ratio_at_ref_amplitude",
+                "-",
+                1e-6,
+                0.05,
+                1e-6,
+            ),
+            ParamSpec::lin(
+                "power_law_damping_exponent",
+                "-",
+                POWER_LAW_EXPONENT_MIN,
+                POWER_LAW_EXPONENT_MAX,
+                1.0,
+            ),
+        ],
         Effect::PreloadLoss => vec![ParamSpec::lin(
             "preload_loss_per_ref_force",
             "-",
@@ -324,21 +342,45 @@ pub struct Physical {
     pub slip_force_n: f64,
 }
 
-/// A velocity-squared damper `f = c2·|u̇|·u̇` at a fixed excitation frequency, as a
-/// [`HystereticElement`]: the velocity is the backward difference of the displacement samples,
-/// `u̇ ≈ (u1 − u0)·ω·N/2π` (a lag of half a sample, `π/N` rad of the fundamental, e.g. 0.05 rad
-/// at `N = 64`, which turns 0.1 % of the damping force into stiffness).
+/// Range of the power-law damping exponent `p` (`p = 0` would be the linear `ζ0`, `p = 1` the
+/// quadratic damper; above 3 the damping would grow faster than any measured joint law).
+pub const POWER_LAW_EXPONENT_MIN: f64 = 0.25;
+pub const POWER_LAW_EXPONENT_MAX: f64 = 3.0;
+
+/// `I(n) = ∫₀^{2π} |sin θ|ⁿ dθ = 2√π·Γ((n+1)/2)/Γ(n/2+1)` (Gradshteyn & Ryzhik 3.621.5), the
+/// cycle integral of the power-law damper's dissipation: `W = c·(aω)^{p+2}·I(p+2)/ω` under
+/// `u = a·cos ωt`. `I(2) = π`, `I(3) = 8/3`.
+pub fn sine_power_cycle_integral(n: f64) -> f64 {
+    use statrs::function::gamma::gamma;
+    2.0 * PI.sqrt() * gamma(0.5 * (n + 1.0)) / gamma(0.5 * n + 1.0)
+}
+
+/// A power-law damper `f = c·|u̇|^p·u̇` at a fixed excitation frequency, as a
+/// [`HystereticElement`] (`p = 1`: the velocity-squared damper of air drag): the velocity is the
+/// backward difference of the displacement samples, `u̇ ≈ (u1 − u0)·ω·N/2π` (a lag of half a
+/// sample, `π/N` rad of the fundamental, e.g. 0.05 rad at `N = 64`, which turns 0.1 % of the
+/// damping force into stiffness).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct QuadraticDamper {
-    /// `c2` (N·s²/m²).
-    pub c2: f64,
+pub struct PowerLawDamper {
+    /// `c` (N·(s/m)^{p+1}).
+    pub c: f64,
+    /// `p` (–).
+    pub exponent: f64,
     /// `ω·N/2π`: samples per second.
     pub sample_rate: f64,
 }
 
-impl HystereticElement for QuadraticDamper {
+impl PowerLawDamper {
+    /// Equivalent viscous coefficient `c_eq = c·(aω)^p·I(p+2)/π` (N·s/m) under `u = a·cos ωt`:
+    /// the viscous damper dissipating the same energy per cycle, `π·c_eq·ω·a²`.
+    pub fn equivalent_viscous(c: f64, exponent: f64, a: f64, omega: f64) -> f64 {
+        c * (a * omega).powf(exponent) * sine_power_cycle_integral(exponent + 2.0) / PI
+    }
+}
+
+impl HystereticElement for PowerLawDamper {
     fn name(&self) -> &'static str {
-        "quadratic-damper"
+        "power-law-damper"
     }
     fn dofs(&self) -> usize {
         1
@@ -349,7 +391,7 @@ impl HystereticElement for QuadraticDamper {
     fn virgin_state(&self, _s: &mut [f64]) {}
     fn state_scales(&self, _scales: &mut [f64]) {}
     fn force_scale(&self) -> f64 {
-        self.c2.abs()
+        self.c.abs()
     }
     fn step(
         &self,
@@ -361,9 +403,10 @@ impl HystereticElement for QuadraticDamper {
         partials: Option<&mut StepPartials>,
     ) {
         let v = (u1[0] - u0[0]) * self.sample_rate;
-        f1[0] = self.c2 * v.abs() * v;
+        let vp = v.abs().powf(self.exponent);
+        f1[0] = self.c * vp * v;
         if let Some(p) = partials {
-            let d = 2.0 * self.c2 * v.abs() * self.sample_rate;
+            let d = (self.exponent + 1.0) * self.c * vp * self.sample_rate;
             p.df_du1[0] = d;
             p.df_du0[0] = -d;
         }
@@ -491,12 +534,22 @@ impl Model {
         })
     }
 
-    /// Quadratic damping coefficient `c2` (N·s²/m²).
-    pub fn quadratic_damping(&self) -> Option<f64> {
-        self.get("quadratic_damping_ratio_at_ref_amplitude")
-            .map(|z| {
-                3.0 * PI * self.physical().mass_kg * z / (4.0 * self.spec.scales.amplitude_max_m)
-            })
+    /// The amplitude-dependent damper `(c, p)` of `f = c·|u̇|^p·u̇`, if any: the quadratic
+    /// damper (`p = 1`, `c2 = 3π·m·ζ_q/(4·A_ref)`) or the power law, whose equivalent damping
+    /// ratio at the reference amplitude `A_ref` and the stuck-joint frequency `ω_s` is the
+    /// parameter: `c = 2π·m·ζ_p/(A_ref^p·ω_s^{p−1}·I(p+2))`.
+    pub fn damper(&self) -> Option<(f64, f64)> {
+        let m = self.physical().mass_kg;
+        let a_ref = self.spec.scales.amplitude_max_m;
+        if let Some(z) = self.get("quadratic_damping_ratio_at_ref_amplitude") {
+            return Some((3.0 * PI * m * z / (4.0 * a_ref), 1.0));
+        }
+        let z = self.get("power_law_damping_ratio_at_ref_amplitude")?;
+        let p = self.value("power_law_damping_exponent");
+        let ws = self.physical().omega_s;
+        let c = 2.0 * PI * m * z
+            / (a_ref.powf(p) * ws.powf(p - 1.0) * sine_power_cycle_integral(p + 2.0));
+        Some((c, p))
     }
 
     /// Residual receptance `r` (m/N) of the out-of-band modes.
@@ -526,11 +579,12 @@ impl Model {
                 s.attach("cubic spring", Arc::new(CubicSpring { k3 }), map.clone())?;
             }
         }
-        if let Some(c2) = self.quadratic_damping() {
+        if let Some((c, exponent)) = self.damper() {
             s.attach(
-                "quadratic damper",
-                Arc::new(QuadraticDamper {
-                    c2,
+                "power-law damper",
+                Arc::new(PowerLawDamper {
+                    c,
+                    exponent,
                     sample_rate: omega * n_time as f64 / TAU,
                 }),
                 map,
@@ -566,7 +620,7 @@ impl Model {
         let preload = self.preload_factor(mean_force_n);
         let rres = self.residual_receptance();
         let tau = self.force_delay();
-        let velocity_dependent = self.quadratic_damping().is_some();
+        let velocity_dependent = self.damper().is_some();
         let mut out = Vec::with_capacity(drives.len());
         let mut failures = Vec::new();
         let mut guess: Option<(DVector<f64>, f64)> = None;
@@ -670,10 +724,11 @@ impl Model {
     /// Backbone of the model by the single-harmonic describing function of the joint and the
     /// effects at drive-point displacement amplitude `a` (m): natural frequency (Hz) and damping
     /// ratio of the equivalent linear mode,
-    /// `ω_n² = (k + K_eq(a) + ¾k3·a²)/m`, `ζ = (c·ω_n + h(a) + (8/3π)·c2·ω_n²·a)/(2m·ω_n²)`, with
+    /// `ω_n² = (k + K_eq(a) + ¾k3·a²)/m`, `ζ = (c·ω_n + h(a) + c_eq(a, ω_n)·ω_n)/(2m·ω_n²)`, with
     /// `K_eq = a1/a` and `h = −b1/a` from the fundamental `a1·cos θ + b1·sin θ` of the joint force
     /// under `u = a·cos θ` (AFT, 1024 samples; `π·a²·h` is the energy the joint dissipates per
-    /// cycle).
+    /// cycle) and `c_eq` the damper's equivalent viscous coefficient
+    /// ([`PowerLawDamper::equivalent_viscous`]; `(8/3π)·c2·ω_n·a` for the quadratic damper).
     pub fn backbone_point(&self, a: f64, mean_force_n: f64) -> Result<(f64, f64)> {
         let ph = self.physical();
         let h = Harmonics::new(1, true, Some(1024))?;
@@ -694,9 +749,10 @@ impl Model {
             )));
         }
         let wn = wn2.sqrt();
-        let c2 = self.quadratic_damping().unwrap_or(0.0);
-        let zeta =
-            (ph.c_linear * wn + hl + 8.0 / (3.0 * PI) * c2 * wn2 * a) / (2.0 * ph.mass_kg * wn2);
+        let c_eq = self.damper().map_or(0.0, |(c, p)| {
+            PowerLawDamper::equivalent_viscous(c, p, a, wn)
+        });
+        let zeta = (ph.c_linear * wn + hl + c_eq * wn) / (2.0 * ph.mass_kg * wn2);
         Ok((wn / TAU, zeta))
     }
 }
@@ -825,14 +881,96 @@ mod tests {
     }
 
     #[test]
-    fn quadratic_damper_partials_match_finite_differences() {
-        let q = QuadraticDamper {
-            c2: 3.0,
-            sample_rate: 5000.0,
-        };
-        let w = crate::dynamics::nonlinear::check_partials(&q, &[], &[1e-4], &[1.3e-4], 1e-10, &[])
-            .unwrap();
-        assert!(w < 1e-6, "{w}");
+    fn power_law_damper_partials_match_finite_differences() {
+        for exponent in [POWER_LAW_EXPONENT_MIN, 1.0, 1.6, POWER_LAW_EXPONENT_MAX] {
+            let q = PowerLawDamper {
+                c: 3.0,
+                exponent,
+                sample_rate: 5000.0,
+            };
+            let w =
+                crate::dynamics::nonlinear::check_partials(&q, &[], &[1e-4], &[1.3e-4], 1e-10, &[])
+                    .unwrap();
+            assert!(w < 1e-6, "p = {exponent}: {w}");
+        }
+    }
+
+    /// `I(n)` against the closed forms `I(2) = π`, `I(3) = 8/3`, `I(4) = 3π/4`, `I(5) = 32/15`
+    /// (Wallis) and a midpoint quadrature at a non-integer order.
+    #[test]
+    fn sine_power_cycle_integral_matches_wallis() {
+        for (n, exact) in [
+            (2.0, PI),
+            (3.0, 8.0 / 3.0),
+            (4.0, 0.75 * PI),
+            (5.0, 32.0 / 15.0),
+        ] {
+            let i = sine_power_cycle_integral(n);
+            assert!(
+                (i - exact).abs() < 1e-12 * exact,
+                "I({n}) = {i}, not {exact}"
+            );
+        }
+        let m = 200_000;
+        let quad: f64 = (0..m)
+            .map(|k| (TAU * (k as f64 + 0.5) / m as f64).sin().abs().powf(3.6))
+            .sum::<f64>()
+            * TAU
+            / m as f64;
+        let i = sine_power_cycle_integral(3.6);
+        assert!((i - quad).abs() < 1e-9 * quad, "{i} vs {quad}");
+    }
+
+    /// The power-law damper's equivalent damping at the reference amplitude is its parameter:
+    /// the cycle energy of `c·|u̇|^p·u̇` under `u = A_ref·cos ω_s t`, by quadrature, equals
+    /// `2π·ζ_p·m·ω_s²·A_ref²` (the linear damper of ratio `ζ_p`), and `p = 1` is the quadratic
+    /// damper of the same ratio.
+    #[test]
+    fn power_law_damping_ratio_is_the_equivalent_ratio_at_the_reference_amplitude() {
+        let base = vec![80.0, 1e-3, 2.0, 0.01, 1e-4];
+        let sc = scales();
+        let zeta_p = 3e-3;
+        for p in [0.5, 1.0, 1.7, 2.5] {
+            let spec =
+                ModelSpec::baseline(Family::Jenkins, sc.clone()).with(Effect::PowerLawDamping);
+            let mut v = base.clone();
+            v.extend([zeta_p, p]);
+            let m = Model::new(spec, v).unwrap();
+            let (c, exponent) = m.damper().unwrap();
+            assert_eq!(exponent, p);
+            let ph = m.physical();
+            let (a, w) = (sc.amplitude_max_m, ph.omega_s);
+            let n = 100_000;
+            let energy: f64 = (0..n)
+                .map(|k| {
+                    let th = TAU * (k as f64 + 0.5) / n as f64;
+                    let v = -a * w * th.sin();
+                    c * v.abs().powf(p) * v * v / w
+                })
+                .sum::<f64>()
+                * TAU
+                / n as f64;
+            let linear = 2.0 * PI * zeta_p * ph.mass_kg * w * w * a * a;
+            assert!(
+                (energy - linear).abs() < 1e-6 * linear,
+                "p = {p}: {energy} vs {linear}"
+            );
+            if p == 1.0 {
+                let spec_q =
+                    ModelSpec::baseline(Family::Jenkins, sc.clone()).with(Effect::QuadraticDamping);
+                let mut vq = base.clone();
+                vq.push(zeta_p);
+                let q = Model::new(spec_q, vq).unwrap().damper().unwrap();
+                assert!((q.0 - c).abs() < 1e-12 * c && q.1 == 1.0, "{q:?} vs {c}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_damping_law_at_most() {
+        let spec = ModelSpec::baseline(Family::Jenkins, scales()).with(Effect::QuadraticDamping);
+        assert!(!spec.admits(Effect::PowerLawDamping));
+        assert!(spec.admits(Effect::AmplitudeStiffness));
     }
 
     #[test]

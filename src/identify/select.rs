@@ -208,10 +208,13 @@ pub struct SelectOptions {
 }
 
 /// Fit a candidate spec: one swarm over the box and a local start from `from` extended by the
-/// effect's neutral values; the better.
+/// effect's neutral values, plus a local start from the optimum of a nested candidate of the
+/// same round (`nested`: its fitted values, extended to this effect by
+/// [`Effect::nested_values`]); the best.
 fn fit_candidate(
     spec: &ModelSpec,
     from: &Model,
+    nested: Option<Vec<f64>>,
     levels: &[LevelData],
     train: &[Vec<bool>],
     opts: &SelectOptions,
@@ -220,7 +223,9 @@ fn fit_candidate(
     let mut start = from.values.clone();
     let params = spec.params();
     start.extend(params[from.values.len()..].iter().map(|p| p.neutral));
-    let local = fit_local(spec, levels, train, &[start], &opts.candidate_fit, progress)?;
+    let mut starts = vec![start];
+    starts.extend(nested);
+    let local = fit_local(spec, levels, train, &starts, &opts.candidate_fit, progress)?;
     if opts.candidate_fit.starts == 0 {
         return Ok(local);
     }
@@ -282,7 +287,21 @@ pub fn select(
         let mut candidates = Vec::new();
         for &e in opts.candidates.iter().filter(|&&e| spec.admits(e)) {
             let cspec = spec.with(e);
-            let fit = fit_candidate(&cspec, &current.model, levels, &train, opts, progress)?;
+            let nested = e.nests().and_then(|n| {
+                let c = candidates.iter().find(|c: &&Candidate| c.effect == n)?;
+                let mut v = c.fit.model.values.clone();
+                v.extend(e.nested_values());
+                Some(v)
+            });
+            let fit = fit_candidate(
+                &cspec,
+                &current.model,
+                nested,
+                levels,
+                &train,
+                opts,
+                progress,
+            )?;
             let h = score(&fit.model, levels, &held)?;
             let dp = (cspec.params().len() - spec.params().len()) as f64;
             let delta_bic = n_eff * (h.cost / base_held.cost).ln() + dp * n_eff.ln();
