@@ -11,12 +11,17 @@
 //! * **resonance frequency error** (Hz): model minus measured frequency of the largest `|Y|`,
 //!   each refined by the vertex of the parabola through the largest row and its neighbours
 //!   ([`super::backbone::resonance`]);
+//! * **phase-resonance frequency error** (Hz): model minus measured frequency where the
+//!   displacement is in quadrature with the force ([`super::backbone::phase_resonance`], the
+//!   sign change of the dynamic stiffness `Re(1/X)` nearest to the amplitude peak, `X` the
+//!   displacement receptance): the resonance of nonlinear modal
+//!   testing, which a dip of the shaker's force at the peak does not shift;
 //! * **peak error**: model peak `|Y|` over measured peak, minus 1 (same refinement);
 //! * **RMS complex error**: `√(mean |Y_model − Y_meas|²) / max |Y_meas|` (amplitude and phase);
 //! * the same RMS and the mean amplitude and phase errors per **region**: below the
 //!   measured half-power band, inside it ("at resonance"), above it.
 
-use super::backbone::{half_power_rows, resonance, BackbonePoint, LevelBackbone};
+use super::backbone::{half_power_rows, phase_resonance, resonance, BackbonePoint, LevelBackbone};
 use super::fit::LevelData;
 use super::measured::PhaseConvention;
 use super::model::Model;
@@ -50,6 +55,11 @@ pub struct LevelErrors {
     pub resonance_measured_hz: f64,
     pub resonance_model_hz: f64,
     pub resonance_error_hz: f64,
+    /// Phase resonance (quadrature) of the measured and modelled responses (Hz; NaN where the
+    /// phase does not pass quadrature in the band) and their difference.
+    pub phase_resonance_measured_hz: f64,
+    pub phase_resonance_model_hz: f64,
+    pub phase_resonance_error_hz: f64,
     pub peak_measured: f64,
     pub peak_model: f64,
     pub peak_error: f64,
@@ -71,6 +81,14 @@ impl LevelErrors {
         } else {
             (f64::NAN, f64::NAN)
         };
+        let displacement = |v: &[Complex64]| -> Vec<Complex64> {
+            v.iter()
+                .zip(&level.drives)
+                .map(|(v, d)| v / level.quantity.from_displacement(d.omega))
+                .collect()
+        };
+        let f90m = phase_resonance(&f, &displacement(&level.measured), fm).unwrap_or(f64::NAN);
+        let f90y = phase_resonance(&f, &displacement(y), fm).unwrap_or(f64::NAN);
         let r = level.residuals(y);
         let rms = |idx: &[usize]| {
             (idx.iter().map(|&i| r[i].norm_sqr()).sum::<f64>() / idx.len().max(1) as f64).sqrt()
@@ -109,6 +127,9 @@ impl LevelErrors {
             resonance_measured_hz: fm,
             resonance_model_hz: fy,
             resonance_error_hz: fy - fm,
+            phase_resonance_measured_hz: f90m,
+            phase_resonance_model_hz: f90y,
+            phase_resonance_error_hz: f90y - f90m,
             peak_measured: pm,
             peak_model: py,
             peak_error: py / pm - 1.0,
@@ -373,12 +394,14 @@ pub struct InputFile {
 pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) -> String {
     let mut s = format!("{title}\n");
     s += &format!(
-        "{:<34} {:>9} {:>8} {:>10} {:>21} {:>19} {:>17}\n",
+        "{:<34} {:>9} {:>8} {:>10} {:>21} {:>9} {:>21} {:>19} {:>17}\n",
         "level",
         "role",
         "F (N)",
         "f_res (Hz)",
         "Δf_res (Hz) bef→aft",
+        "f_90 (Hz)",
+        "Δf_90 (Hz) bef→aft",
         "peak err bef→aft",
         "RMS cplx bef→aft"
     );
@@ -388,7 +411,7 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
             None => format!("{:+.p$}", x * scale, p = prec),
         };
         s += &format!(
-            "{:<34} {:>9} {:>8.3} {:>10.3} {:>21} {:>18}% {:>17}\n",
+            "{:<34} {:>9} {:>8.3} {:>10.3} {:>21} {:>9.3} {:>21} {:>18}% {:>17}\n",
             b.file,
             b.role,
             b.mean_force_n,
@@ -396,6 +419,13 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
             pair(
                 b.resonance_error_hz,
                 a.map(|a| a.resonance_error_hz),
+                1.0,
+                3
+            ),
+            b.phase_resonance_measured_hz,
+            pair(
+                b.phase_resonance_error_hz,
+                a.map(|a| a.phase_resonance_error_hz),
                 1.0,
                 3
             ),
