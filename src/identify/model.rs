@@ -211,6 +211,37 @@ impl ModelSpec {
         !self.effects.contains(&e) && family_change_allowed && damping_law_free
     }
 
+    /// The spec with the accepted effect that `e` nests replaced by `e`, and `values` (a model
+    /// of this spec) mapped onto it so that it is the same model
+    /// ([`Effect::nested_values`] inserted after the nested effect's own values); `None` when
+    /// `e` nests no effect of this spec. This is how the search generalises an accepted effect
+    /// (the quadratic damper to the power law) on held-out evidence for the extra parameter.
+    pub fn generalised(&self, e: Effect, values: &[f64]) -> Option<(Self, Vec<f64>)> {
+        let nested = e.nests()?;
+        let at = self.effects.iter().position(|&x| x == nested)?;
+        let mut spec = self.clone();
+        spec.effects[at] = e;
+        let before = self.baseline_param_count()
+            + self.effects[..at]
+                .iter()
+                .map(|&x| effect_params(x, &self.scales).len())
+                .sum::<usize>();
+        let end = before + effect_params(nested, &self.scales).len();
+        let mut v = values[..end].to_vec();
+        v.extend(e.nested_values());
+        v.extend(&values[end..]);
+        Some((spec, v))
+    }
+
+    /// Number of parameters before the effects': the mode, the joint and the family's shape.
+    fn baseline_param_count(&self) -> usize {
+        5 + match self.family {
+            Family::Jenkins => 0,
+            Family::Valanis => 1,
+            Family::Iwan => 2,
+        }
+    }
+
     /// Parameters, in order: the mode, the family's shape, then each effect's.
     pub fn params(&self) -> Vec<ParamSpec> {
         let s = &self.scales;
@@ -964,6 +995,44 @@ mod tests {
                 assert!((q.0 - c).abs() < 1e-12 * c && q.1 == 1.0, "{q:?} vs {c}");
             }
         }
+    }
+
+    /// Generalising the quadratic damper of a two-effect model gives the power law at `p = 1`
+    /// in the same place, with every other value kept: the same receptance to round-off.
+    #[test]
+    fn generalised_quadratic_damper_is_the_same_model() {
+        let spec = ModelSpec::baseline(Family::Valanis, scales())
+            .with(Effect::QuadraticDamping)
+            .with(Effect::AmplitudeStiffness);
+        let values = vec![80.0, 1e-3, 2.0, 0.05, 1e-4, 0.4, 2e-3, 0.004];
+        let (g, gv) = spec.generalised(Effect::PowerLawDamping, &values).unwrap();
+        assert_eq!(
+            g.effects,
+            [Effect::PowerLawDamping, Effect::AmplitudeStiffness]
+        );
+        assert_eq!(gv, [80.0, 1e-3, 2.0, 0.05, 1e-4, 0.4, 2e-3, 1.0, 0.004]);
+        let (q, p) = (
+            Model::new(spec.clone(), values).unwrap(),
+            Model::new(g, gv).unwrap(),
+        );
+        let drives: Vec<Drive> = (0..5)
+            .map(|i| Drive {
+                omega: TAU * (79.5 + 0.25 * i as f64),
+                force_n: 0.5,
+            })
+            .collect();
+        let (xq, xp) = (
+            q.receptance(&drives, 0.5).unwrap(),
+            p.receptance(&drives, 0.5).unwrap(),
+        );
+        for (a, b) in xq.iter().zip(&xp) {
+            assert!((a - b).norm() < 1e-9 * a.norm(), "{a} vs {b}");
+        }
+        assert!(spec.generalised(Effect::IwanJoint, &[0.0; 8]).is_none());
+        let plain = ModelSpec::baseline(Family::Jenkins, scales());
+        assert!(plain
+            .generalised(Effect::PowerLawDamping, &[0.0; 5])
+            .is_none());
     }
 
     #[test]

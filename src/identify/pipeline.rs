@@ -611,10 +611,11 @@ impl Identification {
                     } else {
                         "not all"
                     },
-                    if r.accepted == Some(c.effect) {
-                        "  ← accepted"
-                    } else {
-                        ""
+                    match (r.accepted == Some(c.effect), c.generalises) {
+                        (true, Some(n)) => format!("  ← accepted, replaces {}", n.id()),
+                        (true, None) => "  ← accepted".to_string(),
+                        (false, Some(n)) => format!("  (generalises {})", n.id()),
+                        (false, None) => String::new(),
                     }
                 );
             }

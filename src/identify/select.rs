@@ -21,6 +21,12 @@
 //!    is accepted when `ΔBIC < −10` ("very strong", Kass & Raftery 1995) **and** it lowers the
 //!    held-out residual of every fit level (an effect that helps one level at another's expense
 //!    is not structure-level). Up to `max_effects` effects are added, one per round.
+//!    **Generalisation.** A candidate that nests an accepted effect (the power-law damper nests
+//!    the quadratic one at `p = 1`, [`Effect::nests`]) is offered in the next rounds as a
+//!    replacement of it: Nelder–Mead from the current optimum with the extra parameter at its
+//!    nesting value, judged by the same ΔBIC with `Δp` the extra parameters only. It does not
+//!    count as a new effect. Without it, an effect that wins round 1 by its lower parameter
+//!    count would shut out its better-fitting generalisation for good.
 //! 4. **Scatter.** The measurement scatter of each level is estimated from the smoothness of its
 //!    sweep: for white noise of standard deviation `s` per component, the third difference of
 //!    consecutive rows `Δ³Y_i = Y_{i+2} − 3Y_{i+1} + 3Y_i − Y_{i−1}` has variance `20·s²` per
@@ -140,6 +146,9 @@ pub fn lag1_autocorrelation(residuals: &[Vec<Complex64>]) -> f64 {
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate {
     pub effect: Effect,
+    /// The accepted effect this candidate generalises (replaces by the nesting law, with
+    /// the extra parameters only), if any.
+    pub generalises: Option<Effect>,
     pub meaning: &'static str,
     pub added_parameters: usize,
     pub train_cost: f64,
@@ -162,6 +171,8 @@ pub struct Round {
     pub effective_samples: f64,
     pub candidates: Vec<Candidate>,
     pub accepted: Option<Effect>,
+    /// The effect the accepted one replaced (a generalisation), if any.
+    pub replaced: Option<Effect>,
 }
 
 /// The outcome of the search.
@@ -278,30 +289,53 @@ pub fn select(
     let mut current = base_fit.clone();
     let mut rounds = Vec::new();
     let mut accepted_effects = Vec::new();
-    for _ in 0..opts.max_effects {
+    loop {
         let spec = current.model.spec.clone();
         let base_held = score(&current.model, levels, &held)?;
         let rho = lag1_autocorrelation(&base_held.residuals);
         let n: usize = base_held.residuals.iter().map(|r| 2 * r.len()).sum();
         let n_eff = (n as f64 * (1.0 - rho) / (1.0 + rho)).max(2.0);
+        // New effects while fewer than `max_effects` are in, and generalisations of accepted
+        // ones (one extra parameter each, not counted as a new effect) in every round.
+        let room = accepted_effects.len() < opts.max_effects;
         let mut candidates = Vec::new();
-        for &e in opts.candidates.iter().filter(|&&e| spec.admits(e)) {
-            let cspec = spec.with(e);
-            let nested = e.nests().and_then(|n| {
-                let c = candidates.iter().find(|c: &&Candidate| c.effect == n)?;
-                let mut v = c.fit.model.values.clone();
-                v.extend(e.nested_values());
-                Some(v)
-            });
-            let fit = fit_candidate(
-                &cspec,
-                &current.model,
-                nested,
-                levels,
-                &train,
-                opts,
-                progress,
-            )?;
+        for &e in &opts.candidates {
+            let generalisation = spec.generalised(e, &current.model.values);
+            if generalisation.is_none() && !(room && spec.admits(e)) {
+                continue;
+            }
+            let (cspec, fit) = match generalisation {
+                Some((cspec, start)) => {
+                    let fit = fit_local(
+                        &cspec,
+                        levels,
+                        &train,
+                        &[start],
+                        &opts.candidate_fit,
+                        progress,
+                    )?;
+                    (cspec, fit)
+                }
+                None => {
+                    let cspec = spec.with(e);
+                    let nested = e.nests().and_then(|n| {
+                        let c = candidates.iter().find(|c: &&Candidate| c.effect == n)?;
+                        let mut v = c.fit.model.values.clone();
+                        v.extend(e.nested_values());
+                        Some(v)
+                    });
+                    let fit = fit_candidate(
+                        &cspec,
+                        &current.model,
+                        nested,
+                        levels,
+                        &train,
+                        opts,
+                        progress,
+                    )?;
+                    (cspec, fit)
+                }
+            };
             let h = score(&fit.model, levels, &held)?;
             let dp = (cspec.params().len() - spec.params().len()) as f64;
             let delta_bic = n_eff * (h.cost / base_held.cost).ln() + dp * n_eff.ln();
@@ -312,6 +346,7 @@ pub fn select(
                 .all(|(a, b)| a < b);
             candidates.push(Candidate {
                 effect: e,
+                generalises: e.nests().filter(|n| spec.effects.contains(n)),
                 meaning: e.meaning(),
                 added_parameters: dp as usize,
                 train_cost: fit.cost,
@@ -326,7 +361,10 @@ pub fn select(
             .iter()
             .filter(|c| c.delta_bic < BIC_THRESHOLD && c.improves_every_level)
             .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
-            .map(|c| (c.effect, c.fit.clone()));
+            .map(|c| (c.effect, c.generalises, c.fit.clone()));
+        if candidates.is_empty() {
+            break;
+        }
         rounds.push(Round {
             base_effects: spec.effects.clone(),
             base_held_out: base_held,
@@ -334,10 +372,14 @@ pub fn select(
             effective_samples: n_eff,
             candidates,
             accepted: best.as_ref().map(|b| b.0),
+            replaced: best.as_ref().and_then(|b| b.1),
         });
         match best {
-            Some((e, fit)) => {
-                accepted_effects.push(e);
+            Some((e, replaced, fit)) => {
+                match replaced.and_then(|r| accepted_effects.iter().position(|&x| x == r)) {
+                    Some(i) => accepted_effects[i] = e,
+                    None => accepted_effects.push(e),
+                }
                 current = fit;
             }
             None => break,
