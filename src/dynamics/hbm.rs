@@ -671,13 +671,26 @@ impl<'a> HbmSystem<'a> {
         let mut iterations = 0;
         let mut rel = f64::INFINITY;
         let mut perr = 0.0;
+        // Merit of the bordered system: the balance residual and the amplitude condition, each
+        // relative (the convergence measure).
+        let merit = |ev: &Evaluation, z: &DVector<f64>| {
+            let g = amplitude(z, observation, len, ci, si) - target;
+            ev.relative_residual().max(g.abs() / target)
+        };
+        let mut ev = self.evaluate(&z, omega, level, true);
         while iterations <= self.newton.max_iterations {
-            let ev = self.evaluate(&z, omega, level, true);
             perr = ev.periodicity_error;
             let a = amplitude(&z, observation, len, ci, si);
             let g = a - target;
             rel = ev.relative_residual().max(g.abs() / target);
             if rel <= self.newton.tolerance {
+                // The amplitude condition does not fix the sign of the level: (z, −L) holds the
+                // same amplitude. Report the positive level, shifting the response in time by
+                // half an excitation period (which negates the excitation).
+                if level < 0.0 {
+                    z = self.shifted_by_half_excitation_period(&z);
+                    level = -level;
+                }
                 return Ok(HbmPoint {
                     omega,
                     level,
@@ -710,8 +723,29 @@ impl<'a> HbmSystem<'a> {
             rhs.rows_mut(0, nn).copy_from(&(-&ev.residual));
             rhs[nn] = -g;
             let step = solve_linear(&j, &rhs, omega)?;
-            z += step.rows(0, nn);
-            level += step[nn];
+            // Backtracking as in `line_search`: a non-smooth (stick–slip) residual can make the
+            // full Newton step of the bordered system cycle.
+            let warm = std::mem::take(&mut ev.element_states);
+            let trial = |lambda: f64, jac: bool| {
+                let zt = &z + step.rows(0, nn) * lambda;
+                let lt = level + step[nn] * lambda;
+                let et = self.evaluate_from(&zt, omega, lt, jac, Some(&warm));
+                let m = merit(&et, &zt);
+                (zt, lt, et, m)
+            };
+            let mut next = trial(1.0, true);
+            if next.3 >= rel {
+                let mut lambda = 0.5;
+                for _ in 0..8 {
+                    let t = trial(lambda, false);
+                    if t.3 < rel {
+                        next = trial(lambda, true);
+                        break;
+                    }
+                    lambda *= 0.5;
+                }
+            }
+            (z, level, ev) = (next.0, next.1, next.2);
         }
         Err(Error::NonConvergence {
             solver: format!(
@@ -722,6 +756,28 @@ impl<'a> HbmSystem<'a> {
             residual: rel,
             tolerance: self.newton.tolerance,
         })
+    }
+}
+
+impl HbmSystem<'_> {
+    /// The periodic solution delayed by `τ = T/(2e)`, `e` the excitation's harmonic: harmonic
+    /// `h` turns by `θ = hπ/e` (`(a, b) → (a cos θ + b sin θ, b cos θ − a sin θ)` for
+    /// `a cos hωt + b sin hωt`), the mean stays. It answers the excitation negated, since the
+    /// steady state of a time-invariant system commutes with a time shift.
+    fn shifted_by_half_excitation_period(&self, z: &DVector<f64>) -> DVector<f64> {
+        let len = self.harmonics.len();
+        let e = self.excitation.harmonic as f64;
+        let mut out = z.clone();
+        for &h in self.harmonics.orders().iter().filter(|&&h| h > 0) {
+            let (ci, si) = self.harmonics.index_of(h).expect("retained order");
+            let (sn, cs) = (h as f64 * std::f64::consts::PI / e).sin_cos();
+            for r in 0..self.structure.n() {
+                let (a, b) = (z[r * len + ci], z[r * len + si]);
+                out[r * len + ci] = a * cs + b * sn;
+                out[r * len + si] = b * cs - a * sn;
+            }
+        }
+        out
     }
 }
 
@@ -771,7 +827,63 @@ mod tests {
     use super::*;
     use crate::dynamics::nonlinear::MicroslipContact;
     use crate::element::ValanisParams;
+    use std::f64::consts::{PI, TAU};
     use std::sync::Arc;
+
+    /// Response control of a mode with a Jenkins joint, first harmonic only, from a cold start
+    /// at every frequency: the force that holds the amplitude `a` is Caughey's describing
+    /// function `F = a·|k − ω² + K_eq(a) + i(cω + h(a))|`, `K_eq = (k_t/π)(β − sin 2β/2)`,
+    /// `h = (4F_s/(πa))(1 − F_s/(k_t a))`, `cos β = 1 − 2F_s/(k_t a)` (Caughey 1960, *J. Appl.
+    /// Mech.* 27:640), within the AFT's sampling of the slip onset (0.5 % at 256 samples), at
+    /// amplitudes from stick to gross slip across the resonance.
+    #[test]
+    fn response_control_of_a_jenkins_mode_matches_caughey() {
+        let (f0, zeta) = (80.0, 2e-3);
+        let k = (TAU * f0).powi(2);
+        let c = 2.0 * zeta * TAU * f0;
+        let (kt, fs) = (0.3 * k, 0.3 * k * 1e-4);
+        let mut s = Structure::modal(&[f0], &[zeta]).unwrap();
+        let jenkins = crate::dynamics::nonlinear::Jenkins::new(kt, fs).unwrap();
+        s.attach("joint", Arc::new(jenkins), DMatrix::from_element(1, 1, 1.0))
+            .unwrap();
+        let sys = HbmSystem::new(
+            &s,
+            Harmonics::new(1, true, Some(256)).unwrap(),
+            Excitation {
+                force: DVector::from_element(1, 1.0),
+                harmonic: 1,
+            },
+            FormulationChoice::Coordinates,
+        )
+        .unwrap();
+        let obs = DVector::from_element(1, 1.0);
+        for a in [5e-5, 2e-4, 1e-3, 1e-2] {
+            for fr in [78.0, 80.0, 84.0, 88.0, 90.0] {
+                let w = TAU * fr;
+                let p = sys.solve_response_controlled(w, a, &obs, None).unwrap();
+                let (k_eq, h) = if kt * a <= fs {
+                    (kt, 0.0)
+                } else {
+                    let beta = (1.0 - 2.0 * fs / (kt * a)).acos();
+                    (
+                        kt / PI * (beta - (2.0 * beta).sin() / 2.0),
+                        4.0 * fs / (PI * a) * (1.0 - fs / (kt * a)),
+                    )
+                };
+                let r = sys.evaluate(&p.z, w, p.level, false).relative_residual();
+                assert!(
+                    r < 1e-6,
+                    "a = {a:e} m, {fr} Hz: residual {r:e} at the level returned"
+                );
+                let exact = a * (k - w * w + k_eq).hypot(c * w + h);
+                assert!(
+                    (p.level / exact - 1.0).abs() < 5e-3,
+                    "a = {a:e} m, {fr} Hz: force {} vs {exact}",
+                    p.level
+                );
+            }
+        }
+    }
 
     /// The blocked assembly of [`HbmSystem::element_jacobian`] equals the direct sum
     /// `Σ_e (P_e ⊗ I)ᵀ J_e (P_e ⊗ I)` formed entry by entry, for 19 microslip elements (two full
