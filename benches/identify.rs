@@ -52,6 +52,10 @@ fn main() {
             base(Family::Jenkins).with(Effect::QuadraticDamping),
         ),
         (
+            "jenkins + power_law_damping",
+            base(Family::Jenkins).with(Effect::PowerLawDamping),
+        ),
+        (
             "jenkins + higher_harmonics",
             base(Family::Jenkins).with(Effect::HigherHarmonics),
         ),
