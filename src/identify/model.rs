@@ -993,8 +993,7 @@ mod tests {
         let sc = scales();
         let zeta_p = 3e-3;
         for p in [0.5, 1.0, 1.7, 2.5] {
-            let spec =
-                ModelSpec::baseline(Family::Jenkins, sc.clone()).with(Effect::PowerLawDamping);
+            let spec = ModelSpec::baseline(Family::Jenkins, sc).with(Effect::PowerLawDamping);
             let mut v = base.clone();
             v.extend([zeta_p, p]);
             let m = Model::new(spec, v).unwrap();
@@ -1019,7 +1018,7 @@ mod tests {
             );
             if p == 1.0 {
                 let spec_q =
-                    ModelSpec::baseline(Family::Jenkins, sc.clone()).with(Effect::QuadraticDamping);
+                    ModelSpec::baseline(Family::Jenkins, sc).with(Effect::QuadraticDamping);
                 let mut vq = base.clone();
                 vq.push(zeta_p);
                 let q = Model::new(spec_q, vq).unwrap().damper().unwrap();
