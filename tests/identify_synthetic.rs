@@ -101,16 +101,37 @@ fn options(candidates: Vec<Effect>) -> Options {
 /// damping growing with it).
 const CANDIDATES: [Effect; 2] = [Effect::AmplitudeStiffness, Effect::QuadraticDamping];
 
+/// The truth with effect `e` added, its parameters `extra`.
+fn truth_with(e: Effect, extra: &[f64]) -> Model {
+    let mut v = TRUTH.to_vec();
+    v.extend(extra);
+    Model::new(ModelSpec::baseline(Family::Jenkins, SCALES).with(e), v).unwrap()
+}
+
+/// The three levels' sweeps of `truth`, noise seeds `seed + level index`.
+fn sweeps(truth: &Model, seed: u64) -> Vec<Sweep> {
+    LEVELS_N
+        .iter()
+        .enumerate()
+        .map(|(k, &f)| sweep(truth, f, seed + k as u64))
+        .collect()
+}
+
+/// The search accepted exactly `effect`.
+fn assert_chosen(verdict: &Verdict, effect: Effect, r: u64) {
+    match verdict {
+        Verdict::EffectsFound { effects, .. } => {
+            assert_eq!(effects, &vec![effect], "realisation {r}")
+        }
+        v => panic!("realisation {r} ({}): {v:?}", effect.id()),
+    }
+}
+
 #[test]
 fn parameters_come_back_and_no_effect_is_invented() {
     let truth = Model::new(ModelSpec::baseline(Family::Jenkins, SCALES), TRUTH.to_vec()).unwrap();
     for r in 0..10u64 {
-        let sweeps = LEVELS_N
-            .iter()
-            .enumerate()
-            .map(|(k, &f)| sweep(&truth, f, 100 * r + k as u64))
-            .collect();
-        let id = identify(sweeps, &options(CANDIDATES.to_vec()), None).unwrap();
+        let id = identify(sweeps(&truth, 100 * r), &options(CANDIDATES.to_vec()), None).unwrap();
         assert!(
             matches!(id.selection.verdict, Verdict::NoEffectNeeded),
             "realisation {r}: {:?}",
@@ -172,26 +193,16 @@ fn the_effect_put_in_is_chosen() {
         (Effect::AmplitudeStiffness, 0.005),
         (Effect::QuadraticDamping, 1e-3),
     ]
-    .map(|(e, value)| {
-        let mut v = TRUTH.to_vec();
-        v.push(value);
-        let spec = ModelSpec::baseline(Family::Jenkins, SCALES).with(e);
-        (e, Model::new(spec, v).unwrap())
-    });
+    .map(|(e, value)| (e, truth_with(e, &[value])));
     for r in 0..10u64 {
         let (effect, truth) = &truths[r as usize % 2];
-        let sweeps = LEVELS_N
-            .iter()
-            .enumerate()
-            .map(|(k, &f)| sweep(truth, f, 1000 + 100 * r + k as u64))
-            .collect();
-        let id = identify(sweeps, &options(CANDIDATES.to_vec()), None).unwrap();
-        match &id.selection.verdict {
-            Verdict::EffectsFound { effects, .. } => {
-                assert_eq!(effects, &vec![*effect], "realisation {r}")
-            }
-            v => panic!("realisation {r} ({}): {v:?}", effect.id()),
-        }
+        let id = identify(
+            sweeps(truth, 1000 + 100 * r),
+            &options(CANDIDATES.to_vec()),
+            None,
+        )
+        .unwrap();
+        assert_chosen(&id.selection.verdict, *effect, r);
         // The effect's strength comes back within 10 %.
         let (got, want) = match effect {
             Effect::AmplitudeStiffness => (
@@ -229,12 +240,7 @@ fn the_damping_law_put_in_is_chosen() {
         (Effect::PowerLawDamping, vec![1e-3, 2.0]),
         (Effect::QuadraticDamping, vec![1e-3]),
     ]
-    .map(|(e, extra)| {
-        let mut v = TRUTH.to_vec();
-        v.extend(extra);
-        let spec = ModelSpec::baseline(Family::Jenkins, SCALES).with(e);
-        (e, Model::new(spec, v).unwrap())
-    });
+    .map(|(e, extra)| (e, truth_with(e, &extra)));
     let candidates = vec![
         Effect::AmplitudeStiffness,
         Effect::QuadraticDamping,
@@ -248,20 +254,10 @@ fn the_damping_law_put_in_is_chosen() {
     };
     for r in 0..10u64 {
         let (effect, truth) = &truths[r as usize % 2];
-        let sweeps = LEVELS_N
-            .iter()
-            .enumerate()
-            .map(|(k, &f)| sweep(truth, f, 5000 + 100 * r + k as u64))
-            .collect();
         let mut o = options(candidates.clone());
         o.fit_levels = Some(vec![1, 2, 3]);
-        let id = identify(sweeps, &o, None).unwrap();
-        match &id.selection.verdict {
-            Verdict::EffectsFound { effects, .. } => {
-                assert_eq!(effects, &vec![*effect], "realisation {r}")
-            }
-            v => panic!("realisation {r} ({}): {v:?}", effect.id()),
-        }
+        let id = identify(sweeps(truth, 5000 + 100 * r), &o, None).unwrap();
+        assert_chosen(&id.selection.verdict, *effect, r);
         let (got, want) = (zeta_at(&id.after.model), zeta_at(truth));
         let p = id.after.model.damper().unwrap().1;
         eprintln!(

@@ -599,22 +599,12 @@ impl<'a> HbmSystem<'a> {
         ev: &Evaluation,
         eval: impl Fn(&DVector<f64>, bool) -> Evaluation,
     ) -> (DVector<f64>, Evaluation) {
-        let r0 = ev.residual.norm();
-        let full = z + step;
-        let evf = eval(&full, true);
-        if evf.residual.norm() < r0 {
-            return (full, evf);
-        }
-        let mut lambda = 0.5;
-        for _ in 0..8 {
+        backtrack(ev.residual.norm(), |lambda, jacobian| {
             let trial = z + step * lambda;
-            let evt = eval(&trial, false);
-            if evt.residual.norm() < r0 {
-                return (trial.clone(), eval(&trial, true));
-            }
-            lambda *= 0.5;
-        }
-        (full, evf)
+            let e = eval(&trial, jacobian);
+            let merit = e.residual.norm();
+            ((trial, e), merit)
+        })
     }
 
     /// Force level that holds the amplitude of the excitation harmonic of `observation·q` at
@@ -731,20 +721,9 @@ impl<'a> HbmSystem<'a> {
                 let lt = level + step[nn] * lambda;
                 let et = self.evaluate_from(&zt, omega, lt, jac, Some(&warm));
                 let m = merit(&et, &zt);
-                (zt, lt, et, m)
+                ((zt, lt, et), m)
             };
-            let mut next = trial(1.0, true);
-            if next.3 >= rel {
-                let mut lambda = 0.5;
-                for _ in 0..8 {
-                    let t = trial(lambda, false);
-                    if t.3 < rel {
-                        next = trial(lambda, true);
-                        break;
-                    }
-                    lambda *= 0.5;
-                }
-            }
+            let next = backtrack(rel, trial);
             (z, level, ev) = (next.0, next.1, next.2);
         }
         Err(Error::NonConvergence {
@@ -779,6 +758,25 @@ impl HbmSystem<'_> {
         }
         out
     }
+}
+
+/// Backtracking on a merit: `trial(λ, jacobian)` evaluates the point at step fraction `λ`
+/// (with its Jacobian when asked) and returns it with its merit. The full step is taken when
+/// its merit is below `merit0`, otherwise the first of `λ = 1/2, 1/4, …, 1/256` that is
+/// (re-evaluated with its Jacobian), and the full step when none is.
+fn backtrack<T>(merit0: f64, trial: impl Fn(f64, bool) -> (T, f64)) -> T {
+    let (full, m) = trial(1.0, true);
+    if m < merit0 {
+        return full;
+    }
+    let mut lambda = 0.5;
+    for _ in 0..8 {
+        if trial(lambda, false).1 < merit0 {
+            return trial(lambda, true).0;
+        }
+        lambda *= 0.5;
+    }
+    full
 }
 
 /// Amplitude `√(a² + b²)` of harmonic `(ci, si)` of `observation·q`.

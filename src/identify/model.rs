@@ -221,25 +221,17 @@ impl ModelSpec {
         let at = self.effects.iter().position(|&x| x == nested)?;
         let mut spec = self.clone();
         spec.effects[at] = e;
-        let before = self.baseline_param_count()
-            + self.effects[..at]
-                .iter()
-                .map(|&x| effect_params(x, &self.scales).len())
-                .sum::<usize>();
+        let before = ModelSpec {
+            effects: self.effects[..at].to_vec(),
+            ..self.clone()
+        }
+        .params()
+        .len();
         let end = before + effect_params(nested, &self.scales).len();
         let mut v = values[..end].to_vec();
         v.extend(e.nested_values());
         v.extend(&values[end..]);
         Some((spec, v))
-    }
-
-    /// Number of parameters before the effects': the mode, the joint and the family's shape.
-    fn baseline_param_count(&self) -> usize {
-        5 + match self.family {
-            Family::Jenkins => 0,
-            Family::Valanis => 1,
-            Family::Iwan => 2,
-        }
     }
 
     /// Parameters, in order: the mode, the family's shape, then each effect's.

@@ -171,8 +171,6 @@ pub struct Round {
     pub effective_samples: f64,
     pub candidates: Vec<Candidate>,
     pub accepted: Option<Effect>,
-    /// The effect the accepted one replaced (a generalisation), if any.
-    pub replaced: Option<Effect>,
 }
 
 /// The outcome of the search.
@@ -304,6 +302,7 @@ pub fn select(
             if generalisation.is_none() && !(room && spec.admits(e)) {
                 continue;
             }
+            let generalises = e.nests().filter(|_| generalisation.is_some());
             let (cspec, fit) = match generalisation {
                 Some((cspec, start)) => {
                     let fit = fit_local(
@@ -346,7 +345,7 @@ pub fn select(
                 .all(|(a, b)| a < b);
             candidates.push(Candidate {
                 effect: e,
-                generalises: e.nests().filter(|n| spec.effects.contains(n)),
+                generalises,
                 meaning: e.meaning(),
                 added_parameters: dp as usize,
                 train_cost: fit.cost,
@@ -372,7 +371,6 @@ pub fn select(
             effective_samples: n_eff,
             candidates,
             accepted: best.as_ref().map(|b| b.0),
-            replaced: best.as_ref().and_then(|b| b.1),
         });
         match best {
             Some((e, replaced, fit)) => {
