@@ -756,7 +756,7 @@ pub fn cycle_summary(
 mod tests {
     use super::*;
     use crate::dynamics::nonlinear::{
-        CubicSpring, GaulLenz, Jenkins, JenkinsContact, MicroslipContact,
+        CubicSpring, GaulLenz, Jenkins, JenkinsContact, MicroslipContact, QuadraticSpring,
     };
     use crate::element::ValanisParams;
 
@@ -844,6 +844,9 @@ mod tests {
         // Cubic spring.
         let w = check_jacobian(&CubicSpring { k3: 1e12 }, &h, &u, 1e-10);
         assert!(w < 1e-6, "cubic: {w}");
+        // Quadratic spring (softening).
+        let w = check_jacobian(&QuadraticSpring { k2: -1e9 }, &h, &u, 1e-10);
+        assert!(w < 1e-6, "quadratic spring: {w}");
         // Gaul–Lenz (Valanis, constant limit): microslip at small amplitude.
         let gl = GaulLenz::new(&crate::element::GaulLenzParams {
             e0: 1e5,

@@ -155,6 +155,48 @@ impl HystereticElement for CubicSpring {
     }
 }
 
+/// Quadratic spring `f = k2·|u|·u` on one displacement component (stiffness changing in
+/// proportion to the amplitude), no memory. Law: [`crate::element::quadratic_spring`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuadraticSpring {
+    /// Quadratic stiffness (N/m²).
+    pub k2: f64,
+}
+
+impl HystereticElement for QuadraticSpring {
+    fn name(&self) -> &'static str {
+        "quadratic-spring"
+    }
+    fn dofs(&self) -> usize {
+        1
+    }
+    fn state_len(&self) -> usize {
+        0
+    }
+    fn virgin_state(&self, _s: &mut [f64]) {}
+    fn state_scales(&self, _scales: &mut [f64]) {}
+    fn force_scale(&self) -> f64 {
+        self.k2.abs()
+    }
+    fn step(
+        &self,
+        _s0: &[f64],
+        _u0: &[f64],
+        u1: &[f64],
+        _s1: &mut [f64],
+        f1: &mut [f64],
+        partials: Option<&mut StepPartials>,
+    ) {
+        f1[0] = crate::element::quadratic_spring::force(self.k2, u1[0]);
+        if let Some(p) = partials {
+            p.df_du1[0] = crate::element::quadratic_spring::stiffness(self.k2, u1[0]);
+        }
+    }
+    fn status(&self, _s: &[f64], _u: &[f64], _f: &[f64]) -> ContactStatus {
+        ContactStatus::Stick
+    }
+}
+
 /// One-dimensional Jenkins element (spring `kt` in series with a Coulomb slider) at a constant
 /// normal load: slip force `μ·N`. State: the force. Uses [`jenkins::step`].
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,6 +1,6 @@
 //! Contact elements for nonlinear dynamic solvers: Valanis microslip, Gaul–Lenz, Jenkins (1-D and
-//! 2-D with a circular slip limit), Iwan (power-law slip-strength density), Bouc–Wen, and the
-//! cubic spring used to validate solvers.
+//! 2-D with a circular slip limit), Iwan (power-law slip-strength density), Bouc–Wen, the
+//! cubic spring used to validate solvers and the quadratic spring of amplitude-proportional stiffness.
 //!
 //! Each element is a parameters struct, a pure force update for one displacement increment and a
 //! loop integrator mapping a displacement history (and a normal-load history) to a force history.
@@ -12,6 +12,7 @@ pub mod cubic;
 pub mod gaul_lenz;
 pub mod iwan;
 pub mod jenkins;
+pub mod quadratic_spring;
 pub mod valanis;
 
 pub use bouc_wen::BoucWenParams;
