@@ -48,6 +48,10 @@ fn main() {
             base(Family::Jenkins).with(Effect::AmplitudeStiffness),
         ),
         (
+            "jenkins + quadratic_stiffness",
+            base(Family::Jenkins).with(Effect::QuadraticStiffness),
+        ),
+        (
             "jenkins + quadratic_damping",
             base(Family::Jenkins).with(Effect::QuadraticDamping),
         ),

@@ -30,12 +30,12 @@ pub struct IdentifyArgs {
     #[arg(long, value_enum, default_value = "jenkins")]
     pub family: FamilyArg,
     /// Candidate effects to test (comma-separated ids; default: all). Ids: valanis_joint,
-    /// iwan_joint, amplitude_stiffness, quadratic_damping, power_law_damping, preload_loss,
+    /// iwan_joint, amplitude_stiffness, quadratic_stiffness, quadratic_damping, power_law_damping, preload_loss,
     /// higher_harmonics, out_of_band_modes, shaker_interaction.
     #[arg(long, value_delimiter = ',')]
     pub candidates: Option<Vec<String>>,
     /// Maximum number of effects added (each needs strong held-out evidence).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 3)]
     pub max_effects: usize,
     /// Particle-swarm starts of the baseline fit (each followed by Nelder–Mead).
     #[arg(long, default_value_t = 3)]
@@ -46,8 +46,10 @@ pub struct IdentifyArgs {
     /// Swarm iterations per start.
     #[arg(long, default_value_t = 40)]
     pub swarm_iterations: u64,
-    /// Nelder–Mead iteration cap per run (each fit runs Nelder–Mead twice; a fit whose restart
-    /// hits the cap has not converged, which is an error for the final models).
+    /// Nelder–Mead iteration cap per run for up to five parameters, scaled in proportion to the
+    /// parameter count beyond (each fit runs Nelder–Mead and restarts it from its optimum, up to
+    /// three times, until a restart stops on its tolerance; one that never does has not
+    /// converged, which is an error for the final models).
     #[arg(long, default_value_t = 600)]
     pub local_iterations: u64,
     /// Seed of the first start (start k uses seed + k).

@@ -6,6 +6,7 @@
 //! | Valanis joint (microslip family) | the joint is a Valanis element (Gaul–Lenz form, `E0 = k_t`, `σ0 = F_s`, `Et = 0`) instead of a Jenkins slider: gradual microslip instead of an abrupt stick–slip transition | shape `k` |
 //! | Iwan joint (power-law microslip) | the joint is a four-parameter Iwan element (Segalman 2005, power-law slip-strength density, `crate::element::iwan`) instead of a Jenkins slider: dissipation `∝ A^{3+χ}` at small amplitude, `K_T = k_t`, `F_S = F_s` | exponent `χ ∈ [−0.9, 0]`, strength ratio `β ∈ [0, 4]` |
 //! | amplitude-dependent stiffness | cubic spring `k3·u³` on the drive-point coordinate (geometric or contact stiffening, or softening) | `ε = 3k3·A_ref²/(4k_s)`: relative change of `ω²` at the reference amplitude |
+//! | amplitude-proportional stiffness | quadratic spring `k2·|u|·u` on the drive-point coordinate: a stiffness that changes in proportion to the amplitude (`(8/3π)·k2·A`; softening for `k2 < 0`: the contact stiffness a joint loses to microslip, here without the dissipation a Masing element ties to it; hardening: a contact area growing with load). With the cubic spring it gives a backbone that first softens and then stiffens | `ε1 = 8k2·A_ref/(3π·k_s)`: relative change of `ω²` at the reference amplitude |
 //! | quadratic (amplitude-dependent viscous) damping | `c2·|u̇|·u̇` (air drag, acoustic radiation): a damping ratio growing `∝ A` with no loss of stiffness | `ζ_q`: equivalent damping ratio added at the reference amplitude, `c2 = 3π·m·ζ_q/(4·A_ref)` |
 //! | power-law damping | `c_p·|u̇|^p·u̇`: a damping ratio growing `∝ A^p` with no loss of stiffness (the empirical law of amplitude-dependent joint and material damping, `ζ = ζ0 + c·A^p`; nests the quadratic damper at `p = 1`) | `ζ_p` at the reference amplitude and `p ∈ [0.25, 3]`, `c_p = 2π·m·ζ_p/(A_ref^p·ω_s^{p−1}·I(p+2))`, `I(n) = ∫₀^{2π}|sin θ|ⁿdθ` |
 //! | joint preload loss | the joint's slip force and stiffness fall with the excitation level the joint has seen (bolt relaxation from test to test; levels run from low to high): `F_s, k_t × (1 − λ·F̄/F_ref)` | `λ` |
@@ -29,6 +30,7 @@ pub enum Effect {
     ValanisJoint,
     IwanJoint,
     AmplitudeStiffness,
+    QuadraticStiffness,
     QuadraticDamping,
     PowerLawDamping,
     PreloadLoss,
@@ -39,10 +41,11 @@ pub enum Effect {
 
 impl Effect {
     /// Every candidate, in the order they are tested.
-    pub const ALL: [Effect; 9] = [
+    pub const ALL: [Effect; 10] = [
         Effect::ValanisJoint,
         Effect::IwanJoint,
         Effect::AmplitudeStiffness,
+        Effect::QuadraticStiffness,
         Effect::QuadraticDamping,
         Effect::PowerLawDamping,
         Effect::PreloadLoss,
@@ -57,6 +60,7 @@ impl Effect {
             Effect::ValanisJoint => "valanis_joint",
             Effect::IwanJoint => "iwan_joint",
             Effect::AmplitudeStiffness => "amplitude_stiffness",
+            Effect::QuadraticStiffness => "quadratic_stiffness",
             Effect::QuadraticDamping => "quadratic_damping",
             Effect::PowerLawDamping => "power_law_damping",
             Effect::PreloadLoss => "preload_loss",
@@ -82,6 +86,9 @@ impl Effect {
             }
             Effect::AmplitudeStiffness => {
                 "stiffness changes with amplitude (cubic spring: geometric or contact stiffening)"
+            }
+            Effect::QuadraticStiffness => {
+                "stiffness changes in proportion to amplitude (quadratic spring: joint contact stiffness)"
             }
             Effect::QuadraticDamping => {
                 "damping grows with velocity amplitude without stiffness loss (air drag, radiation)"

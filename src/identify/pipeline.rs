@@ -36,7 +36,7 @@ pub struct Options {
 }
 
 impl Options {
-    /// Default options for a family: all candidates, up to two effects, three swarm starts for
+    /// Default options for a family: all candidates, up to three effects, three swarm starts for
     /// the baseline, one for each candidate.
     pub fn new(family: Family) -> Self {
         Self {
@@ -44,7 +44,7 @@ impl Options {
             fit_levels: None,
             select: SelectOptions {
                 candidates: super::effects::Effect::ALL.to_vec(),
-                max_effects: 2,
+                max_effects: 3,
                 baseline_fit: FitOptions::default(),
                 candidate_fit: FitOptions {
                     starts: 1,
@@ -191,8 +191,9 @@ fn require_converged(fit: &FitResult, what: &str, levels: &[LevelData]) -> Resul
     if !fit.converged {
         return Err(Error::NonConvergence {
             solver: format!(
-                "identification fit ({what}, Nelder–Mead restarted from its optimum, {} \
-                 iterations per run)",
+                "identification fit ({what}, Nelder–Mead restarted from its optimum up to {} \
+                 times, {} iterations in all)",
+                super::fit::LOCAL_RESTARTS,
                 fit.starts.first().map_or(0, |s| s.local_iterations)
             ),
             iterations: fit
@@ -349,7 +350,8 @@ pub fn identify(
             &opts.final_fit,
             progress,
         )?;
-        require_converged(&a, "final", &levels)?;
+        let ids: Vec<&str> = a.model.spec.effects.iter().map(|e| e.id()).collect();
+        require_converged(&a, &format!("final, effects {}", ids.join(" + ")), &levels)?;
         a
     };
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
