@@ -597,13 +597,16 @@ impl Identification {
                 r.effective_samples
             );
             s += &format!(
-                "  {:<22} {:>3} {:>12} {:>12} {:>10} {:>11}\n",
+                "  {:<41} {:>3} {:>12} {:>12} {:>10} {:>11}\n",
                 "candidate", "Δp", "train J", "held-out J", "ΔBIC", "all levels"
             );
             for c in &r.candidates {
                 s += &format!(
-                    "  {:<22} {:>3} {:>12.4e} {:>12.4e} {:>10.1} {:>11}{}\n",
-                    c.effect.id(),
+                    "  {:<41} {:>3} {:>12.4e} {:>12.4e} {:>10.1} {:>11}{}\n",
+                    match c.jointly_with {
+                        Some(w) => format!("{} + {}", c.effect.id(), w.id()),
+                        None => c.effect.id().to_string(),
+                    },
                     c.added_parameters,
                     c.train_cost,
                     c.held_out.cost,
@@ -613,7 +616,10 @@ impl Identification {
                     } else {
                         "not all"
                     },
-                    match (r.accepted == Some(c.effect), c.generalises) {
+                    match (
+                        r.accepted == Some(c.effect) && r.accepted_with == c.jointly_with,
+                        c.generalises,
+                    ) {
                         (true, Some(n)) => format!("  ← accepted, replaces {}", n.id()),
                         (true, None) => "  ← accepted".to_string(),
                         (false, Some(n)) => format!("  (generalises {})", n.id()),

@@ -27,6 +27,14 @@
 //!    nesting value, judged by the same ΔBIC with `Δp` the extra parameters only. It does not
 //!    count as a new effect. Without it, an effect that wins round 1 by its lower parameter
 //!    count would shut out its better-fitting generalisation for good.
+//!    **Interacting effects.** When two new candidates of a round each reach the ΔBIC
+//!    threshold on the pooled held-out rows while raising some level's residual (each suits
+//!    some levels at the others' expense), they are also fitted together in pairs (the
+//!    strongest [`MAX_PAIRED`]) and each pair judged as one candidate with `Δp` their
+//!    parameters together, by the same two tests, competing with
+//!    the single candidates by ΔBIC. A greedy search
+//!    one effect at a time cannot otherwise find effects that only work together — a stiffness
+//!    softening ∝ A and hardening ∝ A² that make a resonance fall and then rise.
 //! 4. **Scatter.** The measurement scatter of each level is estimated from the smoothness of its
 //!    sweep: for white noise of standard deviation `s` per component, the third difference of
 //!    consecutive rows `Δ³Y_i = Y_{i+2} − 3Y_{i+1} + 3Y_i − Y_{i−1}` has variance `20·s²` per
@@ -45,6 +53,10 @@ use super::model::{Model, ModelSpec};
 use crate::error::Result;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
+
+/// Candidates of one round paired with one another at most (the strongest by ΔBIC of those
+/// that reach the threshold but raise some level's residual): 4 give 6 pair fits.
+pub const MAX_PAIRED: usize = 4;
 
 /// Evidence threshold on the held-out ΔBIC.
 pub const BIC_THRESHOLD: f64 = -10.0;
@@ -149,6 +161,9 @@ pub struct Candidate {
     /// The accepted effect this candidate generalises (replaces by the nesting law, with
     /// the extra parameters only), if any.
     pub generalises: Option<Effect>,
+    /// The second effect of a pair tested jointly ([`select`]'s step for interacting effects),
+    /// if any: the candidate is `effect` and this one added together.
+    pub jointly_with: Option<Effect>,
     pub meaning: &'static str,
     pub added_parameters: usize,
     pub train_cost: f64,
@@ -171,6 +186,8 @@ pub struct Round {
     pub effective_samples: f64,
     pub candidates: Vec<Candidate>,
     pub accepted: Option<Effect>,
+    /// The second effect when the accepted candidate is a pair.
+    pub accepted_with: Option<Effect>,
 }
 
 /// The outcome of the search.
@@ -346,6 +363,7 @@ pub fn select(
             candidates.push(Candidate {
                 effect: e,
                 generalises,
+                jointly_with: None,
                 meaning: e.meaning(),
                 added_parameters: dp as usize,
                 train_cost: fit.cost,
@@ -356,11 +374,57 @@ pub fn select(
                 fit,
             });
         }
+        let accepts = |c: &Candidate| c.delta_bic < BIC_THRESHOLD && c.improves_every_level;
+        // Interacting effects: when two new effects each have strong evidence on the pooled
+        // held-out rows but raise some level's residual (on the Brake–Reuss beam fitted on all
+        // four levels: a stiffness softening ∝ A suits level 2, hardening ∝ A² levels 1 and 4,
+        // and the resonance needs both), every two of them (the strongest
+        // [`MAX_PAIRED`]) are also tested together, `Δp` their parameters together, and compete
+        // with the single candidates by ΔBIC.
+        if accepted_effects.len() + 2 <= opts.max_effects {
+            let mut strong: Vec<&Candidate> = candidates
+                .iter()
+                .filter(|c| {
+                    c.generalises.is_none()
+                        && c.delta_bic < BIC_THRESHOLD
+                        && !c.improves_every_level
+                })
+                .collect();
+            strong.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+            strong.truncate(MAX_PAIRED);
+            let mut pairs = Vec::new();
+            for (k, a) in strong.iter().enumerate() {
+                for b in &strong[k + 1..] {
+                    let pair = spec.with(a.effect);
+                    if !pair.admits(b.effect) {
+                        continue;
+                    }
+                    let cspec = pair.with(b.effect);
+                    let mut start = a.fit.model.values.clone();
+                    start.extend(&b.fit.model.values[current.model.values.len()..]);
+                    pairs.push(pair_candidate(
+                        &cspec,
+                        a.effect,
+                        b.effect,
+                        start,
+                        levels,
+                        &train,
+                        &held,
+                        &base_held,
+                        n_eff,
+                        spec.params().len(),
+                        opts,
+                        progress,
+                    )?);
+                }
+            }
+            candidates.extend(pairs);
+        }
         let best = candidates
             .iter()
-            .filter(|c| c.delta_bic < BIC_THRESHOLD && c.improves_every_level)
+            .filter(|c| accepts(c))
             .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
-            .map(|c| (c.effect, c.generalises, c.fit.clone()));
+            .map(|c| (c.effect, c.jointly_with, c.generalises, c.fit.clone()));
         if candidates.is_empty() {
             break;
         }
@@ -371,13 +435,15 @@ pub fn select(
             effective_samples: n_eff,
             candidates,
             accepted: best.as_ref().map(|b| b.0),
+            accepted_with: best.as_ref().and_then(|b| b.1),
         });
         match best {
-            Some((e, replaced, fit)) => {
+            Some((e, jointly, replaced, fit)) => {
                 match replaced.and_then(|r| accepted_effects.iter().position(|&x| x == r)) {
                     Some(i) => accepted_effects[i] = e,
                     None => accepted_effects.push(e),
                 }
+                accepted_effects.extend(jointly);
                 current = fit;
             }
             None => break,
@@ -406,6 +472,63 @@ pub fn select(
         scatter_floor: floor,
         relative_scatter_per_level: levels.iter().map(relative_scatter).collect(),
         verdict,
+    })
+}
+
+/// Fit and score a pair of effects added together: Nelder–Mead from the two single
+/// candidates' optima combined (`start`), and the global part of [`SelectOptions::candidate_fit`];
+/// the better.
+#[allow(clippy::too_many_arguments)]
+fn pair_candidate(
+    cspec: &ModelSpec,
+    first: Effect,
+    second: Effect,
+    start: Vec<f64>,
+    levels: &[LevelData],
+    train: &[Vec<bool>],
+    held: &[Vec<bool>],
+    base_held: &HeldOut,
+    n_eff: f64,
+    base_params: usize,
+    opts: &SelectOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Candidate> {
+    let local = fit_local(
+        cspec,
+        levels,
+        train,
+        &[start],
+        &opts.candidate_fit,
+        progress,
+    )?;
+    let fit = if opts.candidate_fit.starts == 0 {
+        local
+    } else {
+        let global = fit_global(cspec, levels, train, &opts.candidate_fit, progress)?;
+        if global.cost < local.cost {
+            global
+        } else {
+            local
+        }
+    };
+    let h = score(&fit.model, levels, held)?;
+    let dp = (cspec.params().len() - base_params) as f64;
+    Ok(Candidate {
+        effect: first,
+        generalises: None,
+        jointly_with: Some(second),
+        meaning: first.meaning(),
+        added_parameters: dp as usize,
+        train_cost: fit.cost,
+        delta_bic: n_eff * (h.cost / base_held.cost).ln() + dp * n_eff.ln(),
+        improves_every_level: h
+            .per_level
+            .iter()
+            .zip(&base_held.per_level)
+            .all(|(a, b)| a < b),
+        held_out: h,
+        converged: fit.converged,
+        fit,
     })
 }
 
