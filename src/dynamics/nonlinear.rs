@@ -114,16 +114,20 @@ pub trait HystereticElement: Send + Sync + std::fmt::Debug {
     fn status(&self, s: &[f64], u: &[f64], f: &[f64]) -> ContactStatus;
 }
 
-/// Cubic spring `f = k3·u³` on one displacement component (the Duffing nonlinearity), no memory.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CubicSpring {
-    /// Cubic stiffness (N/m³).
-    pub k3: f64,
+/// A memoryless spring `f(u)` on one displacement component: an elastic nonlinearity as a
+/// [`HystereticElement`] without state (always [`ContactStatus::Stick`]).
+pub trait MemorylessSpring: Send + Sync + std::fmt::Debug {
+    /// Short name of the law.
+    fn law_name(&self) -> &'static str;
+    /// Force `f(u)` and tangent stiffness `f'(u)`.
+    fn force_and_stiffness(&self, u: f64) -> (f64, f64);
+    /// Characteristic force (the stiffness coefficient's magnitude).
+    fn scale(&self) -> f64;
 }
 
-impl HystereticElement for CubicSpring {
+impl<T: MemorylessSpring> HystereticElement for T {
     fn name(&self) -> &'static str {
-        "cubic"
+        self.law_name()
     }
     fn dofs(&self) -> usize {
         1
@@ -134,7 +138,7 @@ impl HystereticElement for CubicSpring {
     fn virgin_state(&self, _s: &mut [f64]) {}
     fn state_scales(&self, _scales: &mut [f64]) {}
     fn force_scale(&self) -> f64 {
-        self.k3.abs()
+        self.scale()
     }
     fn step(
         &self,
@@ -145,13 +149,37 @@ impl HystereticElement for CubicSpring {
         f1: &mut [f64],
         partials: Option<&mut StepPartials>,
     ) {
-        f1[0] = crate::element::cubic::force(self.k3, u1[0]);
+        let (f, k) = self.force_and_stiffness(u1[0]);
+        f1[0] = f;
         if let Some(p) = partials {
-            p.df_du1[0] = crate::element::cubic::stiffness(self.k3, u1[0]);
+            p.df_du1[0] = k;
         }
     }
     fn status(&self, _s: &[f64], _u: &[f64], _f: &[f64]) -> ContactStatus {
         ContactStatus::Stick
+    }
+}
+
+/// Cubic spring `f = k3·u³` on one displacement component (the Duffing nonlinearity), no memory.
+/// Law: [`crate::element::cubic`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CubicSpring {
+    /// Cubic stiffness (N/m³).
+    pub k3: f64,
+}
+
+impl MemorylessSpring for CubicSpring {
+    fn law_name(&self) -> &'static str {
+        "cubic"
+    }
+    fn force_and_stiffness(&self, u: f64) -> (f64, f64) {
+        (
+            crate::element::cubic::force(self.k3, u),
+            crate::element::cubic::stiffness(self.k3, u),
+        )
+    }
+    fn scale(&self) -> f64 {
+        self.k3.abs()
     }
 }
 
@@ -163,37 +191,18 @@ pub struct QuadraticSpring {
     pub k2: f64,
 }
 
-impl HystereticElement for QuadraticSpring {
-    fn name(&self) -> &'static str {
+impl MemorylessSpring for QuadraticSpring {
+    fn law_name(&self) -> &'static str {
         "quadratic-spring"
     }
-    fn dofs(&self) -> usize {
-        1
+    fn force_and_stiffness(&self, u: f64) -> (f64, f64) {
+        (
+            crate::element::quadratic_spring::force(self.k2, u),
+            crate::element::quadratic_spring::stiffness(self.k2, u),
+        )
     }
-    fn state_len(&self) -> usize {
-        0
-    }
-    fn virgin_state(&self, _s: &mut [f64]) {}
-    fn state_scales(&self, _scales: &mut [f64]) {}
-    fn force_scale(&self) -> f64 {
+    fn scale(&self) -> f64 {
         self.k2.abs()
-    }
-    fn step(
-        &self,
-        _s0: &[f64],
-        _u0: &[f64],
-        u1: &[f64],
-        _s1: &mut [f64],
-        f1: &mut [f64],
-        partials: Option<&mut StepPartials>,
-    ) {
-        f1[0] = crate::element::quadratic_spring::force(self.k2, u1[0]);
-        if let Some(p) = partials {
-            p.df_du1[0] = crate::element::quadratic_spring::stiffness(self.k2, u1[0]);
-        }
-    }
-    fn status(&self, _s: &[f64], _u: &[f64], _f: &[f64]) -> ContactStatus {
-        ContactStatus::Stick
     }
 }
 
