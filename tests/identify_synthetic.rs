@@ -127,6 +127,27 @@ fn assert_chosen(verdict: &Verdict, effect: Effect, r: u64) {
     }
 }
 
+/// The strength of `effect` in the identified model is within 10 % of the truth's: the cubic or
+/// quadratic stiffness coefficient, or the damper's coefficient.
+fn assert_strength(got: &Model, truth: &Model, effect: Effect, r: u64) {
+    let strength = |m: &Model| match effect {
+        Effect::AmplitudeStiffness => m.cubic_stiffness().unwrap(),
+        Effect::QuadraticStiffness => m.quadratic_stiffness().unwrap(),
+        _ => m.damper().unwrap().0,
+    };
+    let (got, want) = (strength(got), strength(truth));
+    eprintln!(
+        "realisation {r}: {} found, strength {:+.1}%",
+        effect.id(),
+        100.0 * (got / want - 1.0)
+    );
+    assert!(
+        (got / want - 1.0).abs() < 0.1,
+        "realisation {r}: {} strength {got:.4e} vs {want:.4e}",
+        effect.id()
+    );
+}
+
 #[test]
 fn parameters_come_back_and_no_effect_is_invented() {
     let truth = Model::new(ModelSpec::baseline(Family::Jenkins, SCALES), TRUTH.to_vec()).unwrap();
@@ -204,26 +225,7 @@ fn the_effect_put_in_is_chosen() {
         .unwrap();
         assert_chosen(&id.selection.verdict, *effect, r);
         // The effect's strength comes back within 10 %.
-        let (got, want) = match effect {
-            Effect::AmplitudeStiffness => (
-                id.after.model.cubic_stiffness().unwrap(),
-                truth.cubic_stiffness().unwrap(),
-            ),
-            _ => (
-                id.after.model.damper().unwrap().0,
-                truth.damper().unwrap().0,
-            ),
-        };
-        eprintln!(
-            "realisation {r}: {} found, strength {:+.1}%",
-            effect.id(),
-            100.0 * (got / want - 1.0)
-        );
-        assert!(
-            (got / want - 1.0).abs() < 0.1,
-            "realisation {r}: {} strength {got:.4e} vs {want:.4e}",
-            effect.id()
-        );
+        assert_strength(&id.after.model, truth, *effect, r);
     }
 }
 
@@ -304,26 +306,7 @@ fn the_stiffness_law_put_in_is_chosen() {
         )
         .unwrap();
         assert_chosen(&id.selection.verdict, *effect, r);
-        let (got, want) = match effect {
-            Effect::AmplitudeStiffness => (
-                id.after.model.cubic_stiffness().unwrap(),
-                truth.cubic_stiffness().unwrap(),
-            ),
-            _ => (
-                id.after.model.quadratic_stiffness().unwrap(),
-                truth.quadratic_stiffness().unwrap(),
-            ),
-        };
-        eprintln!(
-            "realisation {r}: {} found, strength {:+.1}%",
-            effect.id(),
-            100.0 * (got / want - 1.0)
-        );
-        assert!(
-            (got / want - 1.0).abs() < 0.1,
-            "realisation {r}: {} strength {got:.4e} vs {want:.4e}",
-            effect.id()
-        );
+        assert_strength(&id.after.model, truth, *effect, r);
     }
 }
 

@@ -233,25 +233,17 @@ pub struct SelectOptions {
     pub candidate_fit: FitOptions,
 }
 
-/// Fit a candidate spec: one swarm over the box and a local start from `from` extended by the
-/// effect's neutral values, plus a local start from the optimum of a nested candidate of the
-/// same round (`nested`: its fitted values, extended to this effect by
-/// [`Effect::nested_values`]); the best.
+/// Fit a candidate spec: Nelder–Mead from each of `starts` (physical values) and one swarm
+/// over the box (the global part of [`SelectOptions::candidate_fit`]); the best.
 fn fit_candidate(
     spec: &ModelSpec,
-    from: &Model,
-    nested: Option<Vec<f64>>,
+    starts: &[Vec<f64>],
     levels: &[LevelData],
     train: &[Vec<bool>],
     opts: &SelectOptions,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<FitResult> {
-    let mut start = from.values.clone();
-    let params = spec.params();
-    start.extend(params[from.values.len()..].iter().map(|p| p.neutral));
-    let mut starts = vec![start];
-    starts.extend(nested);
-    let local = fit_local(spec, levels, train, &starts, &opts.candidate_fit, progress)?;
+    let local = fit_local(spec, levels, train, starts, &opts.candidate_fit, progress)?;
     if opts.candidate_fit.starts == 0 {
         return Ok(local);
     }
@@ -310,6 +302,13 @@ pub fn select(
         let rho = lag1_autocorrelation(&base_held.residuals);
         let n: usize = base_held.residuals.iter().map(|r| 2 * r.len()).sum();
         let n_eff = (n as f64 * (1.0 - rho) / (1.0 + rho)).max(2.0);
+        let evidence = Evidence {
+            levels,
+            held: &held,
+            base_held: &base_held,
+            n_eff,
+            base_params: spec.params().len(),
+        };
         // New effects while fewer than `max_effects` are in, and generalisations of accepted
         // ones (one extra parameter each, not counted as a new effect) in every round.
         let room = accepted_effects.len() < opts.max_effects;
@@ -333,46 +332,24 @@ pub fn select(
                     (cspec, fit)
                 }
                 None => {
+                    // From the current optimum with the effect at its neutral values, and from
+                    // the optimum of a nested candidate of the same round (extended to this
+                    // effect by [`Effect::nested_values`]).
                     let cspec = spec.with(e);
+                    let mut start = current.model.values.clone();
+                    start.extend(cspec.params()[start.len()..].iter().map(|p| p.neutral));
                     let nested = e.nests().and_then(|n| {
                         let c = candidates.iter().find(|c: &&Candidate| c.effect == n)?;
                         let mut v = c.fit.model.values.clone();
                         v.extend(e.nested_values());
                         Some(v)
                     });
-                    let fit = fit_candidate(
-                        &cspec,
-                        &current.model,
-                        nested,
-                        levels,
-                        &train,
-                        opts,
-                        progress,
-                    )?;
+                    let starts: Vec<Vec<f64>> = std::iter::once(start).chain(nested).collect();
+                    let fit = fit_candidate(&cspec, &starts, levels, &train, opts, progress)?;
                     (cspec, fit)
                 }
             };
-            let h = score(&fit.model, levels, &held)?;
-            let dp = (cspec.params().len() - spec.params().len()) as f64;
-            let delta_bic = n_eff * (h.cost / base_held.cost).ln() + dp * n_eff.ln();
-            let improves = h
-                .per_level
-                .iter()
-                .zip(&base_held.per_level)
-                .all(|(a, b)| a < b);
-            candidates.push(Candidate {
-                effect: e,
-                generalises,
-                jointly_with: None,
-                meaning: e.meaning(),
-                added_parameters: dp as usize,
-                train_cost: fit.cost,
-                held_out: h,
-                delta_bic,
-                improves_every_level: improves,
-                converged: fit.converged,
-                fit,
-            });
+            candidates.push(evidence.judge(&cspec, e, None, generalises, fit)?);
         }
         let accepts = |c: &Candidate| c.delta_bic < BIC_THRESHOLD && c.improves_every_level;
         // Interacting effects: when two new effects each have strong evidence on the pooled
@@ -399,23 +376,12 @@ pub fn select(
                     if !pair.admits(b.effect) {
                         continue;
                     }
+                    // From the two single candidates' optima combined.
                     let cspec = pair.with(b.effect);
                     let mut start = a.fit.model.values.clone();
                     start.extend(&b.fit.model.values[current.model.values.len()..]);
-                    pairs.push(pair_candidate(
-                        &cspec,
-                        a.effect,
-                        b.effect,
-                        start,
-                        levels,
-                        &train,
-                        &held,
-                        &base_held,
-                        n_eff,
-                        spec.params().len(),
-                        opts,
-                        progress,
-                    )?);
+                    let fit = fit_candidate(&cspec, &[start], levels, &train, opts, progress)?;
+                    pairs.push(evidence.judge(&cspec, a.effect, Some(b.effect), None, fit)?);
                 }
             }
             candidates.extend(pairs);
@@ -475,61 +441,47 @@ pub fn select(
     })
 }
 
-/// Fit and score a pair of effects added together: Nelder–Mead from the two single
-/// candidates' optima combined (`start`), and the global part of [`SelectOptions::candidate_fit`];
-/// the better.
-#[allow(clippy::too_many_arguments)]
-fn pair_candidate(
-    cspec: &ModelSpec,
-    first: Effect,
-    second: Effect,
-    start: Vec<f64>,
-    levels: &[LevelData],
-    train: &[Vec<bool>],
-    held: &[Vec<bool>],
-    base_held: &HeldOut,
+/// The held-out evidence a round judges its candidates by: the current model's held-out
+/// residual, the effective sample size and the current parameter count.
+struct Evidence<'a> {
+    levels: &'a [LevelData],
+    held: &'a [Vec<bool>],
+    base_held: &'a HeldOut,
     n_eff: f64,
     base_params: usize,
-    opts: &SelectOptions,
-    progress: Option<&indicatif::ProgressBar>,
-) -> Result<Candidate> {
-    let local = fit_local(
-        cspec,
-        levels,
-        train,
-        &[start],
-        &opts.candidate_fit,
-        progress,
-    )?;
-    let fit = if opts.candidate_fit.starts == 0 {
-        local
-    } else {
-        let global = fit_global(cspec, levels, train, &opts.candidate_fit, progress)?;
-        if global.cost < local.cost {
-            global
-        } else {
-            local
-        }
-    };
-    let h = score(&fit.model, levels, held)?;
-    let dp = (cspec.params().len() - base_params) as f64;
-    Ok(Candidate {
-        effect: first,
-        generalises: None,
-        jointly_with: Some(second),
-        meaning: first.meaning(),
-        added_parameters: dp as usize,
-        train_cost: fit.cost,
-        delta_bic: n_eff * (h.cost / base_held.cost).ln() + dp * n_eff.ln(),
-        improves_every_level: h
-            .per_level
-            .iter()
-            .zip(&base_held.per_level)
-            .all(|(a, b)| a < b),
-        held_out: h,
-        converged: fit.converged,
-        fit,
-    })
+}
+
+impl Evidence<'_> {
+    /// Score a fitted candidate (`effect`, with `jointly_with` for a pair) on the held-out rows:
+    /// `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` and whether every level's residual fell.
+    fn judge(
+        &self,
+        cspec: &ModelSpec,
+        effect: Effect,
+        jointly_with: Option<Effect>,
+        generalises: Option<Effect>,
+        fit: FitResult,
+    ) -> Result<Candidate> {
+        let h = score(&fit.model, self.levels, self.held)?;
+        let dp = (cspec.params().len() - self.base_params) as f64;
+        Ok(Candidate {
+            effect,
+            generalises,
+            jointly_with,
+            meaning: effect.meaning(),
+            added_parameters: dp as usize,
+            train_cost: fit.cost,
+            delta_bic: self.n_eff * (h.cost / self.base_held.cost).ln() + dp * self.n_eff.ln(),
+            improves_every_level: h
+                .per_level
+                .iter()
+                .zip(&self.base_held.per_level)
+                .all(|(a, b)| a < b),
+            held_out: h,
+            converged: fit.converged,
+            fit,
+        })
+    }
 }
 
 /// Refit a model on all rows of the fit levels (local, from its training optimum).
