@@ -179,6 +179,24 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
         "{err}"
     );
     assert!(!out.exists());
+    // Too short a chain for the bands is refused before any work.
+    let o = run(
+        "identify",
+        &[
+            s(&good1),
+            s(&good2),
+            "--chain-steps",
+            "50",
+            "--out-dir",
+            s(&out),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--chain-steps"),
+        "{err}"
+    );
+    assert!(!out.exists());
 }
 
 #[test]
@@ -236,6 +254,12 @@ fn identify_then_predict_both_controls() {
     assert!(stdout.contains("response channel inverted"), "{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("identify.json")).unwrap()).unwrap();
+    let json_id = json.clone();
+    assert_eq!(
+        json["uncertainty"]["status"], "estimated",
+        "{}",
+        json["uncertainty"]
+    );
     assert_eq!(json["inputs"][0]["sha256"].as_str().unwrap().len(), 64);
     // Exact data: the level not used is predicted within 1 % in peak.
     let e = &json["errors_after"][1];
@@ -312,4 +336,35 @@ fn identify_then_predict_both_controls() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(pout.join("predict-1.png").exists() && pout.join("predict-rows.csv").exists());
+    // The ensemble saved with the model gives the same 95 % band as the identification's report
+    // for the level not used (same models).
+    let id_band = &json_id["uncertainty"]["bands"][1]["peak"];
+    let pred: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(pout.join("predict.json")).unwrap()).unwrap();
+    let band = &pred["prediction"]["bands"]["Ok"][0]["peak"];
+    for k in ["value", "lo_95", "hi_95"] {
+        let (a, b) = (band[k].as_f64().unwrap(), id_band[k].as_f64().unwrap());
+        assert!(
+            (a / b - 1.0).abs() < 1e-9,
+            "{k}: predict {a} vs identify {b}"
+        );
+    }
+    // An ensemble with a model outside the bounds is refused, naming the model file.
+    let mut saved_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("model.json")).unwrap()).unwrap();
+    saved_json["ensemble"]["draws"][0][0] = serde_json::json!(1e6);
+    let bad = dir.path().join("bad-model.json");
+    std::fs::write(&bad, serde_json::to_string(&saved_json).unwrap()).unwrap();
+    let bad_out = dir.path().join("bad-pred");
+    let o = run(
+        "predict",
+        &["--model", s(&bad), s(&files[1]), "--out-dir", s(&bad_out)],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("bad-model.json"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("ensemble draw 0"), "{stderr}");
+    assert!(!bad_out.exists(), "nothing written");
 }

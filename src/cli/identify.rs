@@ -60,6 +60,10 @@ pub struct IdentifyArgs {
     /// measured peak responses.
     #[arg(long, value_delimiter = ',')]
     pub response_amplitude: Option<Vec<f64>>,
+    /// Steps of each of the two Metropolis chains that sample the models fitting about as well
+    /// (the 95 % bands of the predictions; 0: no bands).
+    #[arg(long, default_value_t = asperity::identify::uncertainty::CHAIN_STEPS)]
+    pub chain_steps: usize,
     /// Output directory: identify.{txt,json}, model.json, identify-rows.csv,
     /// identify-backbone.{csv,png}, identify-response-controlled.csv, identify-level<N>.png.
     #[arg(long, default_value = "identify-out")]
@@ -109,6 +113,13 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
         f.seed = args.seed;
     }
     opts.response_amplitudes = args.response_amplitude.clone();
+    if args.chain_steps != 0 && args.chain_steps < 1000 {
+        return Err(Error::param(
+            "--chain-steps",
+            format!("{} (0 for no bands, or at least 1000)", args.chain_steps),
+        ));
+    }
+    opts.chain_steps = args.chain_steps;
     let sweeps = read_sweeps(&args.files)?;
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");

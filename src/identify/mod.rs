@@ -18,6 +18,7 @@ pub mod pipeline;
 pub mod predict;
 pub mod report;
 pub mod select;
+pub mod uncertainty;
 
 pub use pipeline::{identify, read_sweeps, Identification, Options, SavedModel};
 pub use predict::{predict, Control, Prediction};

@@ -14,6 +14,7 @@ use super::report::{
     InputFile, LevelErrors,
 };
 use super::select::{self, refit_all_rows, SelectOptions, Selection, Verdict};
+use super::uncertainty::{self, Ensemble, Uncertainty};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
 use realfft::num_complex::Complex64;
@@ -33,6 +34,8 @@ pub struct Options {
     /// Response amplitudes (unit of the lowest level's quantity) at which the identified
     /// model's response-controlled FRF is reported; `None`: the measured peak responses.
     pub response_amplitudes: Option<Vec<f64>>,
+    /// Steps of each Metropolis chain of the prediction bands (0: no bands).
+    pub chain_steps: usize,
 }
 
 impl Options {
@@ -53,6 +56,7 @@ impl Options {
             },
             final_fit: FitOptions::default(),
             response_amplitudes: None,
+            chain_steps: uncertainty::CHAIN_STEPS,
         }
     }
 
@@ -103,6 +107,11 @@ pub struct Identification {
     /// Per level (all levels): errors of the baseline and of the final model.
     pub errors_before: Vec<LevelErrors>,
     pub errors_after: Vec<LevelErrors>,
+    /// Parameter intervals and 95 % bands of the final model's predictions.
+    pub uncertainty: Uncertainty,
+    /// The model the held-out evidence leaned to without accepting it, refitted on all rows:
+    /// the spread between its predictions and the final model's is model-form uncertainty.
+    pub alternative: Option<Alternative>,
     pub backbone_before: Vec<BackbonePoint>,
     pub backbone_after: Vec<BackbonePoint>,
     pub response_controlled: Vec<ResponseControlled>,
@@ -313,6 +322,52 @@ fn level_errors(model: &Model, levels: &[LevelData], fit: &[usize]) -> Result<Ve
         .collect()
 }
 
+/// A model the held-out evidence does not exclude.
+#[derive(Debug, Clone, Serialize)]
+pub struct Alternative {
+    pub effects: Vec<super::effects::Effect>,
+    /// Held-out ΔBIC against the final model (negative: the evidence leans to it, but not past
+    /// the threshold).
+    pub delta_bic: f64,
+    pub fit: FitResult,
+    pub errors: Vec<LevelErrors>,
+}
+
+/// The strongest refused candidate of the search's last round with `ΔBIC < 0`, refitted on all
+/// rows of the fit levels; `None` when the search stopped on `max_effects` (the last round then
+/// accepted an effect, and its other candidates extend the previous model, not the final one)
+/// or no candidate had `ΔBIC < 0`. An alternative whose refit does not converge is left out.
+fn alternative(
+    selection: &Selection,
+    fit_data: &[LevelData],
+    levels: &[LevelData],
+    fit_levels: &[usize],
+    opts: &Options,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Option<Alternative>> {
+    let Some(last) = selection.rounds.last().filter(|r| r.accepted.is_none()) else {
+        return Ok(None);
+    };
+    let Some(c) = last
+        .candidates
+        .iter()
+        .filter(|c| c.delta_bic < 0.0)
+        .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
+    else {
+        return Ok(None);
+    };
+    let fit = refit_all_rows(&c.fit, fit_data, &opts.final_fit, progress)?;
+    if !fit.converged {
+        return Ok(None);
+    }
+    Ok(Some(Alternative {
+        effects: fit.model.spec.effects.clone(),
+        delta_bic: c.delta_bic,
+        errors: level_errors(&fit.model, levels, fit_levels)?,
+        fit,
+    }))
+}
+
 /// Run an identification on measured sweeps (any order; they are sorted by mean force).
 pub fn identify(
     sweeps: Vec<Sweep>,
@@ -354,8 +409,20 @@ pub fn identify(
         require_converged(&a, &format!("final, effects {}", ids.join(" + ")), &levels)?;
         a
     };
+    let alternative = alternative(&selection, &fit_data, &levels, &fit_levels, opts, progress)?;
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
+    let roles: Vec<&str> = (0..levels.len())
+        .map(|i| {
+            if fit_levels.contains(&i) {
+                "fit"
+            } else {
+                "predicted"
+            }
+        })
+        .collect();
+    let uncertainty =
+        uncertainty::estimate(&after.model, &fit_data, &levels, &roles, opts.chain_steps);
     let backbone_before = model_backbone(&before.model, &data_backbone)?;
     let backbone_after = model_backbone(&after.model, &data_backbone)?;
     let quantity = sweeps[0].quantity;
@@ -393,6 +460,8 @@ pub fn identify(
         after,
         errors_before,
         errors_after,
+        uncertainty,
+        alternative,
         backbone_before,
         backbone_after,
         response_controlled,
@@ -413,6 +482,11 @@ pub struct SavedModel {
     /// Parameters with names, units and bounds (for reading; `model` is authoritative).
     pub parameters: Vec<serde_json::Value>,
     pub identified_from: Vec<serde_json::Value>,
+    /// Models of the same form that fit the fit levels about as well, with weights (for the
+    /// 95 % bands of `asperity predict`, `uncertainty.rs`); absent where they could not be
+    /// sampled and in files written before they were saved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<Ensemble>,
 }
 
 /// Format tag of [`SavedModel`].
@@ -435,6 +509,10 @@ impl SavedModel {
                     serde_json::json!({"path": s.path, "sha256": s.sha256})
                 })
                 .collect(),
+            ensemble: match &id.uncertainty {
+                Uncertainty::Estimated(e) => Some(e.ensemble.clone()),
+                Uncertainty::NotEstimated { .. } => None,
+            },
         }
     }
 
@@ -456,6 +534,9 @@ impl SavedModel {
         }
         Model::new(s.model.spec.clone(), s.model.values.clone())
             .map_err(|e| Error::parse(path, 0, e.to_string()))?;
+        if let Some(e) = &s.ensemble {
+            e.check(&s.model).map_err(|e| Error::parse(path, 0, e))?;
+        }
         Ok(s)
     }
 }
@@ -657,6 +738,30 @@ impl Identification {
             "errors per level, baseline → final model (resonance and peak of the response per unit force):",
             &rows,
         );
+        s += &self.uncertainty.text();
+        if let Some(a) = &self.alternative {
+            s +=
+                &format!(
+                "\nalternative the held-out evidence does not exclude: [{}] (held-out ΔBIC {:.1} \
+                 against the final model, threshold {:.0}), refitted on all rows (J = {:.4e}):\n{}",
+                a.effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", "),
+                a.delta_bic,
+                select::BIC_THRESHOLD,
+                a.fit.cost,
+                params_text(&a.fit.model)
+            );
+            let rows: Vec<_> = self
+                .errors_after
+                .iter()
+                .zip(&a.errors)
+                .map(|(f, a)| (f, Some(a)))
+                .collect();
+            s += &errors_table(
+                "errors per level, final model → alternative (their spread on the levels not used \
+                 is the model-form uncertainty the fit levels leave):",
+                &rows,
+            );
+        }
         s += "\nfinal model, residual per region (RMS complex / mean amplitude error / mean phase error):\n";
         for e in &self.errors_after {
             s += &format!("  {}:", e.file);
@@ -868,6 +973,8 @@ impl Identification {
             "final": {"fit": self.after, "parameters": parameter_table(&self.after.model), "backbone": self.backbone_after},
             "errors_before": self.errors_before,
             "errors_after": self.errors_after,
+            "uncertainty": self.uncertainty,
+            "alternative": self.alternative,
             "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
                 "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz
             })).collect::<Vec<_>>(),

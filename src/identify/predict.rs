@@ -20,6 +20,7 @@ use super::report::{
     errors_table, fine_curve, plot_level, write_json, write_rows_csv, CurveRow, InputFile,
     LevelErrors,
 };
+use super::uncertainty::{bands_table, prediction_bands, PredictionBand};
 use crate::error::{Error, Result};
 use crate::output::write_string_atomic;
 use realfft::num_complex::Complex64;
@@ -61,6 +62,9 @@ pub struct Prediction {
     pub sweeps: Vec<Sweep>,
     #[serde(skip)]
     pub model: Model,
+    /// 95 % bands of each file's peak and resonances over the ensemble saved with the model
+    /// (force control only; the reason where there are none).
+    pub bands: std::result::Result<Vec<PredictionBand>, String>,
 }
 
 /// Predict measured files with a saved model.
@@ -78,8 +82,10 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
     };
     let model = saved.model;
     let mut files = Vec::new();
+    let mut levels = Vec::new();
     for s in &sweeps {
         let level = LevelData::new(s, &convention);
+        levels.push(level.clone());
         let named = |e: Error| match e {
             Error::NonConvergence { .. } | Error::Data(_) => {
                 Error::Data(format!("{}: {e}", s.path.display()))
@@ -132,7 +138,18 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
             model_force_n: forces,
         });
     }
+    let bands = match (&saved.ensemble, control) {
+        (None, _) => Err("the model file holds no ensemble".to_string()),
+        (Some(_), Control::Response) => {
+            Err("bands are computed under force control only".to_string())
+        }
+        (Some(e), Control::Force) => {
+            let roles = vec!["predicted"; levels.len()];
+            prediction_bands(&model, e, &levels, &roles).map_err(|e| e.to_string())
+        }
+    };
     Ok(Prediction {
+        bands,
         model_file: model_file.to_path_buf(),
         control,
         convention,
@@ -160,6 +177,14 @@ impl Prediction {
         );
         let rows: Vec<_> = self.files.iter().map(|f| (&f.errors, None)).collect();
         s += &errors_table("errors per file (model − measured):", &rows);
+        match &self.bands {
+            Ok(b) => {
+                s += "95 % bands over the ensemble saved with the model (models of its form that \
+                      fit its data about as well; model-form error is not in the band):\n";
+                s += &bands_table(b);
+            }
+            Err(why) => s += &format!("no 95 % bands: {why}\n"),
+        }
         for f in &self.files {
             if let Some(e) = f.force_rms_error {
                 s += &format!(
