@@ -38,7 +38,7 @@
 use super::fit::LevelData;
 use super::model::Model;
 use super::report::LevelErrors;
-use super::select::{cost_all_rows, lag1_autocorrelation};
+use super::select::{cost_all_rows, lag1_autocorrelation, score};
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
@@ -122,21 +122,24 @@ impl ParameterCovariance {
     }
 }
 
-/// Weighted residual components of a model over all rows of some levels, and their weights.
-fn residual_components(model: &Model, levels: &[LevelData]) -> Result<(Vec<f64>, Vec<f64>)> {
-    let per: Vec<Vec<Complex64>> = levels
-        .par_iter()
-        .map(|l| l.model_frf(model).map(|(y, _)| l.residuals(&y)))
-        .collect::<Result<_>>()?;
+/// Residuals of a model at every row of some levels, per level ([`score`] on all rows).
+fn all_residuals(model: &Model, levels: &[LevelData]) -> Result<Vec<Vec<Complex64>>> {
+    let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
+    Ok(score(model, levels, &all)?.residuals)
+}
+
+/// Residual components (real and imaginary parts, level after level) and their weights in the
+/// objective, `1/(L·n_l)`.
+fn components(per_level: &[Vec<Complex64>]) -> (Vec<f64>, Vec<f64>) {
     let (mut r, mut w) = (Vec::new(), Vec::new());
-    for rl in &per {
-        let wl = 1.0 / (levels.len() * rl.len()) as f64;
+    for rl in per_level {
+        let wl = 1.0 / (per_level.len() * rl.len()) as f64;
         for v in rl {
             r.extend([v.re, v.im]);
             w.extend([wl, wl]);
         }
     }
-    Ok((r, w))
+    (r, w)
 }
 
 /// Covariance of a model fitted on all rows of `levels` (the model at its optimum).
@@ -157,14 +160,15 @@ pub fn parameter_covariance(model: &Model, levels: &[LevelData]) -> Result<Param
         spec: model.spec.clone(),
         values: params.iter().zip(zj).map(|(p, &v)| p.value(v)).collect(),
     };
-    let (r0, w) = residual_components(model, levels)?;
+    let per_level = all_residuals(model, levels)?;
+    let (r0, w) = components(&per_level);
     let columns: Vec<Vec<f64>> = free
         .iter()
         .map(|&j| {
             let shifted = |s: f64| {
                 let mut zz = z.clone();
                 zz[j] += s;
-                residual_components(&at(&zz), levels).map(|(r, _)| r)
+                all_residuals(&at(&zz), levels).map(|r| components(&r).0)
             };
             let (rp, rm) = (shifted(JACOBIAN_STEP)?, shifted(-JACOBIAN_STEP)?);
             Ok(rp
@@ -177,20 +181,6 @@ pub fn parameter_covariance(model: &Model, levels: &[LevelData]) -> Result<Param
     let n = r0.len();
     let jac = DMatrix::from_fn(n, free.len(), |i, k| columns[k][i]);
     let s2 = r0.iter().map(|v| v * v).sum::<f64>() / (n - free.len()).max(1) as f64;
-    let per_level: Vec<Vec<Complex64>> = {
-        let mut out = Vec::new();
-        let mut k = 0;
-        for l in levels {
-            let m = l.drives.len();
-            out.push(
-                (0..m)
-                    .map(|i| Complex64::new(r0[2 * (k + i)], r0[2 * (k + i) + 1]))
-                    .collect(),
-            );
-            k += m;
-        }
-        out
-    };
     let rho = lag1_autocorrelation(&per_level);
     let inflation = (1.0 + rho) / (1.0 - rho);
     let names: Vec<String> = free.iter().map(|&j| params[j].name.to_string()).collect();
@@ -232,18 +222,23 @@ pub const CHAINS: usize = 2;
 /// Largest `R̂` for a band to be given (Gelman & Rubin 1992; 1.1 the customary limit).
 pub const MAX_R_HAT: f64 = 1.1;
 
-/// Gelman–Rubin potential scale reduction of one quantity over equal-length chains
-/// (Gelman et al., *Bayesian Data Analysis*, 3rd ed., §11.4: `R̂ = √(((n−1)/n·W + B/n)/W)`).
+/// Gelman–Rubin potential scale reduction of one quantity over chains (Gelman et al.,
+/// *Bayesian Data Analysis*, 3rd ed., §11.4: `R̂ = √(((n−1)/n·W + B/n)/W)`; chains of unequal
+/// length — draws left out where a solve failed — with each chain's own mean and variance and
+/// `n` their mean length).
 pub fn gelman_rubin(chains: &[Vec<f64>]) -> f64 {
     let m = chains.len() as f64;
-    let n = chains[0].len() as f64;
-    let means: Vec<f64> = chains.iter().map(|c| c.iter().sum::<f64>() / n).collect();
+    let n = chains.iter().map(|c| c.len()).sum::<usize>() as f64 / m;
+    let means: Vec<f64> = chains
+        .iter()
+        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+        .collect();
     let grand = means.iter().sum::<f64>() / m;
     let b = n / (m - 1.0) * means.iter().map(|x| (x - grand).powi(2)).sum::<f64>();
     let w = chains
         .iter()
         .zip(&means)
-        .map(|(c, mu)| c.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0))
+        .map(|(c, mu)| c.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (c.len() as f64 - 1.0))
         .sum::<f64>()
         / m;
     if w <= 0.0 {
@@ -307,7 +302,7 @@ pub fn posterior_ensemble(
             // tenth of the Gauss–Newton covariance and follows the chain's own covariance
             // (second half of the history so far) every 100 steps after the first 500.
             let mut root = root_of(&(&cov.covariance_z * (0.1 * scale)));
-            let (mut kept, mut lps, mut accepted) = (Vec::new(), Vec::new(), 0);
+            let (mut lps, mut accepted) = (Vec::new(), 0);
             let mut history: Vec<DVector<f64>> = Vec::with_capacity(steps);
             for t in 0..steps {
                 if t >= 500 && t % 100 == 0 && t <= steps / 2 {
@@ -334,11 +329,10 @@ pub fn posterior_ensemble(
                 }
                 history.push(z.clone());
                 if t >= steps / 2 {
-                    kept.push(z.clone());
                     lps.push(lp);
                 }
             }
-            (kept, lps, accepted)
+            (history.split_off(steps / 2), lps, accepted)
         })
         .collect();
     let kept_len = chains[0].0.len();
@@ -400,7 +394,7 @@ impl Ensemble {
         Ok(())
     }
 
-    /// Weighted 95 % intervals of the model's parameters (`None` for a parameter held on its
+    /// 95 % intervals of the model's parameters (`None` for a parameter held on its
     /// bound, `free` the free ones).
     pub fn intervals(&self, model: &Model, free: &[usize]) -> Vec<ParameterInterval> {
         model
@@ -514,9 +508,8 @@ pub fn prediction_bands(
     levels: &[LevelData],
     roles: &[&str],
 ) -> Result<Vec<PredictionBand>> {
-    let e = ensemble;
     // Per model, per level: (peak, resonance, phase resonance), NaN where a row failed.
-    let outcomes: Vec<Vec<[f64; 3]>> = e
+    let outcomes: Vec<Vec<[f64; 3]>> = ensemble
         .draws
         .par_iter()
         .map(|v| {
@@ -563,7 +556,7 @@ pub fn prediction_bands(
                             .map(|c| {
                                 outcomes
                                     .iter()
-                                    .zip(&e.chain)
+                                    .zip(&ensemble.chain)
                                     .filter(|(o, &ch)| ch == c && o[i][k].is_finite())
                                     .map(|(o, _)| o[i][k])
                                     .collect()
