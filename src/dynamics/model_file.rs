@@ -140,6 +140,9 @@ pub struct LoadedModel {
     pub inputs: Vec<(String, PathBuf)>,
     /// Element ids per contact section, and how many were out of the calibration range.
     pub out_of_range: usize,
+    /// The law and table row of every attached element, in the order of
+    /// `structure.elements` (to rebuild them with updated parameters).
+    pub element_rows: Vec<(ContactLaw, TableElement)>,
 }
 
 /// 1-based line of `key = …` in TOML text (first occurrence), or 0.
@@ -591,6 +594,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             (s, Kinematics { n, nodes })
         };
     let mut out_of_range = 0;
+    let mut element_rows = Vec::new();
     for (ci, c) in file.contact.iter().enumerate() {
         let ep = resolve(&c.elements);
         let table: Vec<TableElement> = contact::read_element_table(&ep)?;
@@ -641,6 +645,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             let el = contact::element_for(c.law, e)
                 .map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
             structure.attach(format!("{}", e.id), el, map)?;
+            element_rows.push((c.law, e.clone()));
         }
         inputs.push((format!("contact {} elements", ci + 1), ep));
     }
@@ -674,5 +679,6 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         responses,
         inputs,
         out_of_range,
+        element_rows,
     })
 }

@@ -85,13 +85,16 @@ impl LevelData {
     /// Model response per unit force in the level's quantity; failed rows are NaN.
     pub fn model_frf(&self, model: &Model) -> Result<(Vec<Complex64>, usize)> {
         let (x, failures) = model.receptance_tolerant(&self.drives, self.mean_force_n, true)?;
-        let y = self
-            .drives
+        Ok((self.from_receptance(&x), failures.len()))
+    }
+
+    /// The level's quantity per unit force from drive-point receptances (m/N) at its rows.
+    pub fn from_receptance(&self, x: &[Complex64]) -> Vec<Complex64> {
+        self.drives
             .iter()
-            .zip(&x)
+            .zip(x)
             .map(|(d, xi)| xi * self.quantity.from_displacement(d.omega))
-            .collect();
-        Ok((y, failures.len()))
+            .collect()
     }
 
     /// Normalised residuals `r_i` of a model response (failed rows: `2`).
@@ -106,6 +109,43 @@ impl LevelData {
                 }
             })
             .collect()
+    }
+}
+
+/// What a fit searches over: a family of models with bounded parameters, and the response of
+/// one of them at a level's rows. The single nonlinear mode ([`ModelSpec`]) and the updated
+/// reduced model of a response-model file ([`super::reduced::ReducedSpec`]) are both fitted
+/// through it.
+pub trait Parametrised: Clone + Send + Sync {
+    /// A member of the family: the spec with values.
+    type Model: Clone + Send + Sync + Serialize + std::fmt::Debug;
+    /// The bounded parameters, in order.
+    fn params(&self) -> Vec<ParamSpec>;
+    /// The member with physical values (inside the bounds).
+    fn model(&self, values: Vec<f64>) -> Self::Model;
+    /// The physical values of a member.
+    fn values_of(model: &Self::Model) -> &[f64];
+    /// The member's response per unit force at every row of `level`, in the level's quantity
+    /// (failed rows NaN), and the count of failed rows.
+    fn frf(model: &Self::Model, level: &LevelData) -> Result<(Vec<Complex64>, usize)>;
+}
+
+impl Parametrised for ModelSpec {
+    type Model = Model;
+    fn params(&self) -> Vec<ParamSpec> {
+        ModelSpec::params(self)
+    }
+    fn model(&self, values: Vec<f64>) -> Model {
+        Model {
+            spec: self.clone(),
+            values,
+        }
+    }
+    fn values_of(model: &Model) -> &[f64] {
+        &model.values
+    }
+    fn frf(model: &Model, level: &LevelData) -> Result<(Vec<Complex64>, usize)> {
+        level.model_frf(model)
     }
 }
 
@@ -164,8 +204,8 @@ pub struct StartOutcome {
 
 /// Result of a fit.
 #[derive(Debug, Clone, Serialize)]
-pub struct FitResult {
-    pub model: Model,
+pub struct FitResult<M = Model> {
+    pub model: M,
     /// Objective `J` at the optimum.
     pub cost: f64,
     pub converged: bool,
@@ -180,8 +220,8 @@ pub struct FitResult {
 }
 
 /// The objective over the unit box.
-pub struct Objective<'a> {
-    spec: ModelSpec,
+pub struct Objective<'a, S: Parametrised = ModelSpec> {
+    spec: S,
     params: Vec<ParamSpec>,
     levels: &'a [LevelData],
     /// Rows that count, per level.
@@ -190,9 +230,9 @@ pub struct Objective<'a> {
     progress: Option<&'a indicatif::ProgressBar>,
 }
 
-impl<'a> Objective<'a> {
+impl<'a, S: Parametrised> Objective<'a, S> {
     pub fn new(
-        spec: ModelSpec,
+        spec: S,
         levels: &'a [LevelData],
         masks: &'a [Vec<bool>],
         progress: Option<&'a indicatif::ProgressBar>,
@@ -227,13 +267,13 @@ impl<'a> Objective<'a> {
     }
 
     /// Add the evaluations made by an optimiser's own copy of the objective.
-    fn add_evaluations_of(&self, run: Option<&Objective<'_>>) {
+    fn add_evaluations_of(&self, run: Option<&Objective<'_, S>>) {
         let n = run.map_or(0, |p| p.evaluations.load(Ordering::Relaxed));
         self.evaluations.fetch_add(n, Ordering::Relaxed);
     }
 
     /// `J` of a model and the number of failed rows.
-    pub fn cost_of(&self, model: &Model) -> (f64, usize) {
+    pub fn cost_of(&self, model: &S::Model) -> (f64, usize) {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         if let Some(b) = self.progress {
             b.inc(1);
@@ -242,7 +282,7 @@ impl<'a> Objective<'a> {
             .levels
             .par_iter()
             .zip(self.masks.par_iter())
-            .map(|(l, mask)| match l.model_frf(model) {
+            .map(|(l, mask)| match S::frf(model, l) {
                 Ok((y, failed)) => {
                     let r = l.residuals(&y);
                     let (mut s, mut n) = (0.0, 0usize);
@@ -261,15 +301,12 @@ impl<'a> Objective<'a> {
         (cost, per.iter().map(|p| p.1).sum())
     }
 
-    fn model(&self, z: &[f64]) -> Model {
-        Model {
-            spec: self.spec.clone(),
-            values: self.values(z),
-        }
+    fn model(&self, z: &[f64]) -> S::Model {
+        self.spec.model(self.values(z))
     }
 }
 
-impl CostFunction for Objective<'_> {
+impl<S: Parametrised> CostFunction for Objective<'_, S> {
     type Param = Vec<f64>;
     type Output = f64;
 
@@ -305,8 +342,8 @@ pub const LOCAL_RESTARTS: usize = 3;
 /// point, its cost, the iterations of all runs and whether a restart converged. A narrow valley
 /// (the Brake–Reuss beam's final model: the linear, proportional and cubic stiffness terms trade
 /// against one another) can need a second restart.
-fn nelder_mead(
-    obj: &Objective<'_>,
+fn nelder_mead<S: Parametrised>(
+    obj: &Objective<'_, S>,
     z0: &[f64],
     max_iter: u64,
 ) -> Result<(Vec<f64>, f64, u64, bool)> {
@@ -358,18 +395,18 @@ fn nelder_mead(
     Ok((z, cost, iterations, converged))
 }
 
-fn finish(
-    obj: &Objective<'_>,
+fn finish<S: Parametrised>(
+    obj: &Objective<'_, S>,
     best: (Vec<f64>, f64, bool),
     starts: Vec<StartOutcome>,
     t0: Instant,
-) -> FitResult {
+) -> FitResult<S::Model> {
     let model = obj.model(&best.0);
     let (cost, failed) = obj.cost_of(&model);
     let at_bounds = obj
         .params
         .iter()
-        .zip(&model.values)
+        .zip(S::values_of(&model))
         .filter(|(p, &v)| p.at_bound(v))
         .map(|(p, _)| p.name.to_string())
         .collect();
@@ -386,13 +423,13 @@ fn finish(
 }
 
 /// Global fit: for each start, particle swarm over the box then Nelder–Mead; the best start.
-pub fn fit_global(
-    spec: &ModelSpec,
+pub fn fit_global<S: Parametrised>(
+    spec: &S,
     levels: &[LevelData],
     masks: &[Vec<bool>],
     opts: &FitOptions,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<FitResult> {
+) -> Result<FitResult<S::Model>> {
     let t0 = Instant::now();
     let obj = Objective::new(spec.clone(), levels, masks, progress);
     let dim = obj.params.len();
@@ -429,14 +466,14 @@ pub fn fit_global(
 }
 
 /// Local fit: Nelder–Mead from each given start (physical values); the best.
-pub fn fit_local(
-    spec: &ModelSpec,
+pub fn fit_local<S: Parametrised>(
+    spec: &S,
     levels: &[LevelData],
     masks: &[Vec<bool>],
     starts_physical: &[Vec<f64>],
     opts: &FitOptions,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<FitResult> {
+) -> Result<FitResult<S::Model>> {
     let t0 = Instant::now();
     let obj = Objective::new(spec.clone(), levels, masks, progress);
     let mut starts = Vec::new();

@@ -137,8 +137,9 @@ fn names(sweeps: &[Sweep]) -> String {
         .join(", ")
 }
 
-/// The fit levels (0-based) from the options, checked.
-fn choose_fit_levels(sweeps: &[Sweep], opts: &Options) -> Result<Vec<usize>> {
+/// The fit levels (0-based) from the 1-based `--fit-levels` (`None`: lowest and highest),
+/// checked against the sweeps (ordered by mean force).
+pub fn choose_fit_levels(sweeps: &[Sweep], fit_levels: Option<&[usize]>) -> Result<Vec<usize>> {
     if sweeps.len() < 2 {
         return Err(Error::Data(format!(
             "{}: a single level; identification needs at least two excitation levels (the \
@@ -146,7 +147,7 @@ fn choose_fit_levels(sweeps: &[Sweep], opts: &Options) -> Result<Vec<usize>> {
             names(sweeps)
         )));
     }
-    let levels = match &opts.fit_levels {
+    let levels = match fit_levels {
         None => vec![0, sweeps.len() - 1],
         Some(v) => {
             let mut out = Vec::new();
@@ -377,7 +378,7 @@ pub fn identify(
     let t0 = std::time::Instant::now();
     let mut sweeps = sweeps;
     sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
-    let fit_levels = choose_fit_levels(&sweeps, opts)?;
+    let fit_levels = choose_fit_levels(&sweeps, opts.fit_levels.as_deref())?;
     let convention = PhaseConvention::detect(&sweeps)?;
     let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
     let data_backbone = backbone::from_data(&sweeps, &frfs)?;

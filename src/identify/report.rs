@@ -24,7 +24,7 @@
 use super::backbone::{half_power_rows, phase_resonance, resonance, BackbonePoint, LevelBackbone};
 use super::fit::LevelData;
 use super::measured::PhaseConvention;
-use super::model::Model;
+use super::model::{Drive, Model};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
 use crate::plot::{stacked_line_plots, LinePlot, Scale, Series};
@@ -143,25 +143,33 @@ impl LevelErrors {
 /// A model's response curve on a fine frequency grid for plots: the measured force
 /// interpolated linearly between rows (sweep order kept).
 pub fn fine_curve(model: &Model, level: &LevelData, per_interval: usize) -> Vec<(f64, Complex64)> {
+    fine_curve_with(level, per_interval, &|drives: &[Drive]| {
+        model
+            .receptance_tolerant(drives, level.mean_force_n, true)
+            .map(|(x, _)| x)
+    })
+}
+
+/// [`fine_curve`] of any model given by its drive-point receptance along a list of drives
+/// (m/N, sweep order; failed rows NaN).
+pub fn fine_curve_with(
+    level: &LevelData,
+    per_interval: usize,
+    receptance: &dyn Fn(&[Drive]) -> Result<Vec<Complex64>>,
+) -> Vec<(f64, Complex64)> {
     let mut drives = Vec::new();
     for w in level.drives.windows(2) {
         for k in 0..per_interval {
             let t = k as f64 / per_interval as f64;
-            drives.push(super::model::Drive {
+            drives.push(Drive {
                 omega: w[0].omega + t * (w[1].omega - w[0].omega),
                 force_n: w[0].force_n + t * (w[1].force_n - w[0].force_n),
             });
         }
     }
     drives.push(*level.drives.last().expect("rows"));
-    let (x, _) = model
-        .receptance_tolerant(&drives, level.mean_force_n, true)
-        .unwrap_or_else(|_| {
-            (
-                vec![Complex64::new(f64::NAN, f64::NAN); drives.len()],
-                vec![],
-            )
-        });
+    let x = receptance(&drives)
+        .unwrap_or_else(|_| vec![Complex64::new(f64::NAN, f64::NAN); drives.len()]);
     drives
         .iter()
         .zip(x)
