@@ -64,6 +64,12 @@ pub struct IdentifyArgs {
     /// (the 95 % bands of the predictions; 0: no bands).
     #[arg(long, default_value_t = asperity::identify::uncertainty::CHAIN_STEPS)]
     pub chain_steps: usize,
+    /// Multi-DOF reduced model to update instead of the single nonlinear mode: a model file of
+    /// `asperity response` (linear structure, contact element tables, excitation and response
+    /// DOFs, harmonics). Four factors are fitted (frequencies, damping ratios, contact stiffness,
+    /// friction); the effect search and the prediction bands are single-mode only.
+    #[arg(long, conflicts_with_all = ["family", "candidates", "max_effects", "response_amplitude", "chain_steps"])]
+    pub structure: Option<PathBuf>,
     /// Output directory: identify.{txt,json}, model.json, identify-rows.csv,
     /// identify-backbone.{csv,png}, identify-response-controlled.csv, identify-level<N>.png.
     #[arg(long, default_value = "identify-out")]
@@ -71,6 +77,9 @@ pub struct IdentifyArgs {
 }
 
 pub fn run_identify(args: IdentifyArgs) -> Result<()> {
+    if let Some(structure) = &args.structure {
+        return run_identify_reduced(structure, &args);
+    }
     let family = match args.family {
         FamilyArg::Jenkins => Family::Jenkins,
         FamilyArg::Valanis => Family::Valanis,
@@ -124,6 +133,45 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
     let result = identify(sweeps, &opts, Some(&bar));
+    bar.finish_and_clear();
+    let id = result?;
+    let written = id.write(&args.out_dir)?;
+    print!("{}", id.text());
+    println!("\nwrote:");
+    for p in written {
+        println!("  {}", p.display());
+    }
+    Ok(())
+}
+
+/// `asperity identify --structure`: update the reduced model of a response-model file.
+fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Result<()> {
+    use asperity::identify::fit::{FitOptions, Parametrised};
+    use asperity::identify::reduced::{identify_reduced, ReducedSpec};
+    if args.starts == 0 || args.particles < 2 {
+        return Err(Error::param(
+            "--starts/--particles",
+            "at least one start and two particles",
+        ));
+    }
+    let spec = ReducedSpec::load(structure)?;
+    let sweeps = read_sweeps(&args.files)?;
+    let fit_levels =
+        asperity::identify::pipeline::choose_fit_levels(&sweeps, args.fit_levels.as_deref())?;
+    let opts = FitOptions {
+        particles: args.particles,
+        swarm_iterations: args.swarm_iterations,
+        starts: args.starts,
+        seed: args.seed,
+        local_iterations: args.local_iterations,
+    };
+    let dim = spec.params().len() as u64;
+    let local = asperity::identify::fit::local_iteration_cap(opts.local_iterations, dim as usize);
+    let estimate =
+        opts.starts as u64 * (opts.particles as u64 * (opts.swarm_iterations + 1) + local) + local;
+    let bar = super::progress_bar("identify (reduced model)", estimate);
+    bar.set_message("model evaluations");
+    let result = identify_reduced(&spec, sweeps, fit_levels, &opts, Some(&bar));
     bar.finish_and_clear();
     let id = result?;
     let written = id.write(&args.out_dir)?;

@@ -16,6 +16,7 @@ pub mod measured;
 pub mod model;
 pub mod pipeline;
 pub mod predict;
+pub mod reduced;
 pub mod report;
 pub mod select;
 pub mod uncertainty;

@@ -13,12 +13,14 @@
 //! with the model is used, and the report says so.
 
 use super::fit::LevelData;
+use super::fit::Parametrised;
 use super::measured::{PhaseConvention, Sweep};
-use super::model::Model;
+use super::model::{Drive, Model};
 use super::pipeline::SavedModel;
+use super::reduced::{ReducedModel, ReducedSpec, SavedReducedModel};
 use super::report::{
-    errors_table, fine_curve, plot_level, write_json, write_rows_csv, CurveRow, InputFile,
-    LevelErrors,
+    errors_table, fine_curve, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow,
+    InputFile, LevelErrors,
 };
 use super::uncertainty::{bands_table, prediction_bands, PredictionBand};
 use crate::error::{Error, Result};
@@ -35,6 +37,47 @@ pub enum Control {
     Force,
     /// The response amplitude of each row is held; the force is the outcome.
     Response,
+}
+
+/// The model that predicts: the identified single nonlinear mode, or an updated reduced model.
+#[derive(Debug, Clone)]
+pub enum Predictor {
+    Mode(Model),
+    Reduced(ReducedModel),
+}
+
+impl Predictor {
+    /// Response per unit force at a level's rows (its quantity; failed rows NaN) and the count
+    /// of failed rows.
+    fn frf(&self, level: &LevelData) -> Result<(Vec<Complex64>, usize)> {
+        match self {
+            Predictor::Mode(m) => level.model_frf(m),
+            Predictor::Reduced(m) => ReducedSpec::frf(m, level),
+        }
+    }
+
+    /// Response-controlled: forces (N) and receptances (m/N) holding displacement amplitudes.
+    fn response_controlled(
+        &self,
+        omegas: &[f64],
+        targets: &[f64],
+        mean_force_n: f64,
+    ) -> Result<(Vec<f64>, Vec<Complex64>)> {
+        match self {
+            Predictor::Mode(m) => m.response_controlled(omegas, targets, mean_force_n),
+            Predictor::Reduced(m) => m.response_controlled(omegas, targets),
+        }
+    }
+
+    /// Curve for the plots on a fine frequency grid.
+    fn fine_curve(&self, level: &LevelData) -> Vec<(f64, Complex64)> {
+        match self {
+            Predictor::Mode(m) => fine_curve(m, level, 4),
+            Predictor::Reduced(m) => fine_curve_with(level, 4, &|d: &[Drive]| {
+                m.receptance_tolerant(d, true).map(|(x, _)| x)
+            }),
+        }
+    }
 }
 
 /// Prediction of one file.
@@ -61,7 +104,7 @@ pub struct Prediction {
     #[serde(skip)]
     pub sweeps: Vec<Sweep>,
     #[serde(skip)]
-    pub model: Model,
+    pub model: Predictor,
     /// 95 % bands of each file's peak and resonances over the ensemble saved with the model
     /// (force control only; the reason where there are none).
     pub bands: std::result::Result<Vec<PredictionBand>, String>,
@@ -69,18 +112,24 @@ pub struct Prediction {
 
 /// Predict measured files with a saved model.
 pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Result<Prediction> {
-    let saved = SavedModel::read(model_file)?;
+    let (model, saved_convention, ensemble) = if SavedReducedModel::is_reduced(model_file)? {
+        let (m, c) = SavedReducedModel::read(model_file)?;
+        (Predictor::Reduced(m), c, None)
+    } else {
+        let saved = SavedModel::read(model_file)?;
+        (
+            Predictor::Mode(saved.model),
+            saved.phase_convention,
+            saved.ensemble,
+        )
+    };
     if sweeps.is_empty() {
         return Err(Error::param("files", "at least one measured file"));
     }
     let (convention, source) = match PhaseConvention::detect(&sweeps) {
         Ok(c) => (c, "detected from the files".to_string()),
-        Err(e) => (
-            saved.phase_convention,
-            format!("saved with the model ({e})"),
-        ),
+        Err(e) => (saved_convention, format!("saved with the model ({e})")),
     };
-    let model = saved.model;
     let mut files = Vec::new();
     let mut levels = Vec::new();
     for s in &sweeps {
@@ -94,7 +143,7 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
         };
         let (y, failed, forces) = match control {
             Control::Force => {
-                let (y, failed) = level.model_frf(&model).map_err(named)?;
+                let (y, failed) = model.frf(&level).map_err(named)?;
                 (y, failed, None)
             }
             Control::Response => {
@@ -138,15 +187,18 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
             model_force_n: forces,
         });
     }
-    let bands = match (&saved.ensemble, control) {
+    let bands = match (&ensemble, control) {
         (None, _) => Err("the model file holds no ensemble".to_string()),
         (Some(_), Control::Response) => {
             Err("bands are computed under force control only".to_string())
         }
-        (Some(e), Control::Force) => {
-            let roles = vec!["predicted"; levels.len()];
-            prediction_bands(&model, e, &levels, &roles).map_err(|e| e.to_string())
-        }
+        (Some(e), Control::Force) => match &model {
+            Predictor::Mode(m) => {
+                let roles = vec!["predicted"; levels.len()];
+                prediction_bands(m, e, &levels, &roles).map_err(|e| e.to_string())
+            }
+            Predictor::Reduced(_) => Err("reduced models carry no ensemble".to_string()),
+        },
     };
     Ok(Prediction {
         bands,
@@ -239,7 +291,7 @@ impl Prediction {
         for (i, (f, s)) in self.files.iter().zip(&self.sweeps).enumerate() {
             let level = LevelData::new(s, &self.convention);
             let curve = match self.control {
-                Control::Force => fine_curve(&self.model, &level, 4),
+                Control::Force => self.model.fine_curve(&level),
                 Control::Response => level
                     .drives
                     .iter()

@@ -1,0 +1,690 @@
+//! Updating a multi-DOF reduced model against measured sweeps: the linear structure and the
+//! contact elements of an `asperity response` model file (lumped or reduced modal, element
+//! tables from `asperity elements`) with four updating factors fitted on some levels and the
+//! others predicted.
+//!
+//! # Model
+//!
+//! The equations of [`crate::dynamics::model`], `M·q̈ + C·q̇ + K·q + Σ_e P_eᵀ·f_e(P_e·q) = F(t)`,
+//! with the structure as the file gives it except for four factors (all 1 = the model as
+//! computed from the surfaces and the film, which is the prediction the measurement judges):
+//!
+//! | parameter | acts on | meaning |
+//! |---|---|---|
+//! | `frequency_factor` | `K → s_f²·K` | every natural frequency of the linear structure × `s_f` (the linear model's frequency error) |
+//! | `damping_factor` | `C → s_ζ·s_f·C` | every modal damping ratio × `s_ζ` (the `s_f` keeps the ratios under the frequency factor) |
+//! | `contact_stiffness_factor` | `E0, Et, kn → s_k·(E0, Et, kn)` | stiffness of every contact element (the calibration's stiffness error) |
+//! | `friction_factor` | `μ → s_μ·μ` | slip limit `μ·N` of every contact element (friction coefficient, or the preload, in error) |
+//!
+//! The drive is the file's `[excitation]` (DOFs and weights, one newton per unit level, each
+//! row's measured force applied), the measured response its first `[response]` DOF; harmonics,
+//! time samples and formulation are those of its `[sweep]`. Each sweep is solved row by row in
+//! sweep order, warm-started from the previous row; a row whose Newton iteration fails from the
+//! warm start is solved again from rest and then by a ramp of the force.
+//!
+//! # Fit
+//!
+//! The same objective, bounds handling and search as the single-mode identification
+//! ([`super::fit`]): complex response per unit force, each level divided by its peak and row
+//! count, particle swarm then Nelder–Mead restarted until it converges, plus one Nelder–Mead
+//! start from the model as given; the best is kept. The effect search of
+//! [`super::select`] is not run: its candidates are defined on the single nonlinear mode.
+
+use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
+use super::measured::{sha256_hex, PhaseConvention, Sweep};
+use super::model::{Drive, ParamSpec, RowFailure};
+use super::report::{
+    errors_table, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow, InputFile,
+    LevelErrors,
+};
+use crate::dynamics::aft::Harmonics;
+use crate::dynamics::contact::element_for;
+use crate::dynamics::hbm::{Excitation, HbmSystem};
+use crate::dynamics::model::Structure;
+use crate::dynamics::model_file::{self, LoadedModel};
+use crate::error::{Error, Result};
+use crate::output::write_string_atomic;
+use nalgebra::DVector;
+use realfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Bounds of the three multiplicative factors searched in `ln` (a factor of 50 either way: a
+/// calibration error larger than that is not an update but a different model).
+const FACTOR_RANGE: f64 = 50.0;
+
+/// Bounds of the frequency factor: the linear structure's frequencies within −20 % / +25 %.
+const FREQUENCY_FACTOR: (f64, f64) = (0.8, 1.25);
+
+/// The reduced model of a response-model file and its updating parameters.
+#[derive(Debug, Clone)]
+pub struct ReducedSpec {
+    pub loaded: Arc<LoadedModel>,
+}
+
+/// A reduced model with values of its updating factors.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReducedModel {
+    #[serde(skip)]
+    pub spec: ReducedSpec,
+    /// `frequency_factor, damping_factor, contact_stiffness_factor, friction_factor`.
+    pub values: Vec<f64>,
+}
+
+impl ReducedSpec {
+    /// Read a response-model file (`asperity response` format).
+    pub fn load(path: &Path) -> Result<Self> {
+        let loaded = model_file::load(path)?;
+        if loaded.responses.is_empty() {
+            return Err(Error::parse(path, 0, "`[response] dofs` is empty"));
+        }
+        if loaded.structure.damping.iter().all(|&c| c == 0.0) {
+            return Err(Error::parse(
+                path,
+                0,
+                "the linear structure has no damping: the damping factor would have nothing to \
+                 scale (give the modes' damping ratios or a damping matrix)",
+            ));
+        }
+        Ok(Self {
+            loaded: Arc::new(loaded),
+        })
+    }
+
+    /// The model file's path.
+    pub fn path(&self) -> &Path {
+        &self.loaded.path
+    }
+}
+
+impl Parametrised for ReducedSpec {
+    type Model = ReducedModel;
+
+    fn params(&self) -> Vec<ParamSpec> {
+        let (lo, hi) = (1.0 / FACTOR_RANGE, FACTOR_RANGE);
+        vec![
+            ParamSpec {
+                name: "frequency_factor",
+                unit: "-",
+                lo: FREQUENCY_FACTOR.0,
+                hi: FREQUENCY_FACTOR.1,
+                log: false,
+                neutral: 1.0,
+            },
+            ParamSpec {
+                name: "damping_factor",
+                unit: "-",
+                lo,
+                hi,
+                log: true,
+                neutral: 1.0,
+            },
+            ParamSpec {
+                name: "contact_stiffness_factor",
+                unit: "-",
+                lo,
+                hi,
+                log: true,
+                neutral: 1.0,
+            },
+            ParamSpec {
+                name: "friction_factor",
+                unit: "-",
+                lo,
+                hi,
+                log: true,
+                neutral: 1.0,
+            },
+        ]
+    }
+
+    fn model(&self, values: Vec<f64>) -> ReducedModel {
+        ReducedModel {
+            spec: self.clone(),
+            values,
+        }
+    }
+
+    fn values_of(model: &ReducedModel) -> &[f64] {
+        &model.values
+    }
+
+    fn frf(model: &ReducedModel, level: &LevelData) -> Result<(Vec<Complex64>, usize)> {
+        let (x, failures) = model.receptance_tolerant(&level.drives, true)?;
+        Ok((level.from_receptance(&x), failures.len()))
+    }
+}
+
+impl ReducedModel {
+    /// The model as the file gives it (every factor 1).
+    pub fn as_given(spec: &ReducedSpec) -> Self {
+        spec.model(vec![1.0; 4])
+    }
+
+    /// The updated structure: `K·s_f²`, `C·s_ζ·s_f`, contact elements rebuilt from their table
+    /// rows with `E0, Et, kn` × `s_k` and `μ` × `s_μ`.
+    pub fn structure(&self) -> Result<Structure> {
+        let [sf, sz, sk, smu] = <[f64; 4]>::try_from(self.values.as_slice())
+            .map_err(|_| Error::param("values", "four updating factors expected"))?;
+        let l = &self.spec.loaded;
+        let mut s = l.structure.clone();
+        s.stiffness *= sf * sf;
+        s.damping *= sz * sf;
+        for (att, (law, row)) in s.elements.iter_mut().zip(&l.element_rows) {
+            let mut r = row.clone();
+            r.e0_n_per_m *= sk;
+            r.et_n_per_m *= sk;
+            r.kn_n_per_m *= sk;
+            r.mu *= smu;
+            att.element = element_for(*law, &r)?;
+        }
+        Ok(s)
+    }
+
+    /// Complex fundamental response per unit force (m/N, `e^{iωt}` convention) of the first
+    /// response DOF at every drive, in order, warm-started along the list (the sweep order).
+    /// With `tolerant`, a row that fails is recorded (NaN) instead of ending the evaluation.
+    pub fn receptance_tolerant(
+        &self,
+        drives: &[Drive],
+        tolerant: bool,
+    ) -> Result<(Vec<Complex64>, Vec<RowFailure>)> {
+        let l = &self.spec.loaded;
+        let sw = &l.file.sweep;
+        let h = Harmonics::new(sw.harmonics, sw.odd_only, sw.time_samples)?;
+        let (ci, si) = h.index_of(1).expect("fundamental retained");
+        let len = h.len();
+        let s = self.structure()?;
+        let sys = HbmSystem::new(
+            &s,
+            h,
+            Excitation {
+                force: l.force.clone(),
+                harmonic: 1,
+            },
+            sw.formulation,
+        )?;
+        let obs = &l.responses[0].1;
+        let mut out = Vec::with_capacity(drives.len());
+        let mut failures = Vec::new();
+        let mut guess: Option<(DVector<f64>, f64)> = None;
+        for (i, d) in drives.iter().enumerate() {
+            let warm = guess.as_ref().map(|(z, f)| z * (d.force_n / f));
+            match solve_robust(&sys, d, warm.as_ref()) {
+                Ok(p) => {
+                    let q = sys.coordinates(&p);
+                    let (mut a, mut b) = (0.0, 0.0);
+                    for (c, &w) in obs.iter().enumerate() {
+                        a += w * q[c * len + ci];
+                        b += w * q[c * len + si];
+                    }
+                    out.push(Complex64::new(a, -b) / d.force_n);
+                    guess = Some((p.z, d.force_n));
+                }
+                Err(e) => {
+                    if !tolerant {
+                        return Err(e);
+                    }
+                    failures.push(RowFailure {
+                        index: i,
+                        error: e.to_string(),
+                    });
+                    out.push(Complex64::new(f64::NAN, f64::NAN));
+                    guess = None;
+                }
+            }
+        }
+        Ok((out, failures))
+    }
+}
+
+impl ReducedModel {
+    /// Response-controlled evaluation: at each frequency, the force that holds the amplitude of
+    /// the fundamental response at `target_m[i]` (m, first response DOF), and the complex
+    /// receptance there (coordinates formulation, warm-started along the sweep). Returns
+    /// `(force amplitudes (N), receptances (m/N))`.
+    pub fn response_controlled(
+        &self,
+        omegas: &[f64],
+        target_m: &[f64],
+    ) -> Result<(Vec<f64>, Vec<Complex64>)> {
+        let l = &self.spec.loaded;
+        let sw = &l.file.sweep;
+        let h = Harmonics::new(sw.harmonics, sw.odd_only, sw.time_samples)?;
+        let (ci, si) = h.index_of(1).expect("fundamental retained");
+        let len = h.len();
+        let s = self.structure()?;
+        let sys = HbmSystem::new(
+            &s,
+            h,
+            Excitation {
+                force: l.force.clone(),
+                harmonic: 1,
+            },
+            crate::dynamics::hbm::FormulationChoice::Coordinates,
+        )?;
+        let obs = &l.responses[0].1;
+        let (mut forces, mut recs) = (Vec::new(), Vec::new());
+        let mut guess: Option<(DVector<f64>, f64)> = None;
+        for (&w, &target) in omegas.iter().zip(target_m) {
+            let p = sys.solve_response_controlled(
+                w,
+                target,
+                obs,
+                guess.as_ref().map(|(z, f)| (z, *f)),
+            )?;
+            let (mut a, mut b) = (0.0, 0.0);
+            for (c, &wc) in obs.iter().enumerate() {
+                a += wc * p.z[c * len + ci];
+                b += wc * p.z[c * len + si];
+            }
+            forces.push(p.level);
+            recs.push(Complex64::new(a, -b) / p.level);
+            guess = Some((p.z, p.level));
+        }
+        Ok((forces, recs))
+    }
+}
+
+/// Newton from the warm start; on failure from rest, then by a ramp of the force in four steps.
+fn solve_robust(
+    sys: &HbmSystem<'_>,
+    d: &Drive,
+    warm: Option<&DVector<f64>>,
+) -> Result<crate::dynamics::hbm::HbmPoint> {
+    let first = match sys.solve(d.omega, d.force_n, warm) {
+        Ok(p) => return Ok(p),
+        Err(e) => e,
+    };
+    if warm.is_some() {
+        if let Ok(p) = sys.solve(d.omega, d.force_n, None) {
+            return Ok(p);
+        }
+    }
+    let mut z: Option<DVector<f64>> = None;
+    for step in 1..=4 {
+        match sys.solve(d.omega, d.force_n * step as f64 / 4.0, z.as_ref()) {
+            Ok(p) => {
+                if step == 4 {
+                    return Ok(p);
+                }
+                z = Some(p.z);
+            }
+            Err(_) => break,
+        }
+    }
+    Err(first)
+}
+
+/// The better of two fits of the same family, with the starts and evaluations of both.
+fn merge_fits(a: FitResult<ReducedModel>, b: FitResult<ReducedModel>) -> FitResult<ReducedModel> {
+    let (mut best, other) = if b.cost < a.cost { (b, a) } else { (a, b) };
+    best.starts.extend(other.starts);
+    best.evaluations += other.evaluations;
+    best.wall_time_s += other.wall_time_s;
+    best
+}
+
+/// Result of updating a reduced model.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReducedIdentification {
+    pub model_file: PathBuf,
+    pub model_sha256: String,
+    pub inputs: Vec<InputFile>,
+    pub phase_convention: String,
+    /// 0-based fit levels (by increasing mean force).
+    pub fit_levels: Vec<usize>,
+    pub parameters: Vec<ParamSpec>,
+    pub fit: FitResult<ReducedModel>,
+    /// Errors of the model as given (every factor 1) and of the updated model, per level.
+    pub errors_before: Vec<LevelErrors>,
+    pub errors_after: Vec<LevelErrors>,
+    /// Measurement scatter per component of each fit level (third differences, fraction of
+    /// its peak).
+    pub scatter: Vec<f64>,
+    /// The objective the scatter alone would leave ([`super::select::scatter_floor`]).
+    pub scatter_floor: f64,
+    /// Whether the updated model's objective is within [`super::select::SCATTER_FACTOR`] of it.
+    pub at_scatter: bool,
+    pub fit_options: FitOptions,
+    pub wall_time_s: f64,
+    #[serde(skip)]
+    pub sweeps: Vec<Sweep>,
+    #[serde(skip)]
+    pub levels: Vec<LevelData>,
+    #[serde(skip)]
+    pub convention: PhaseConvention,
+    #[serde(skip)]
+    pub before: ReducedModel,
+}
+
+fn level_errors(
+    model: &ReducedModel,
+    levels: &[LevelData],
+    fit: &[usize],
+) -> Result<Vec<LevelErrors>> {
+    levels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let (y, failed) = ReducedSpec::frf(model, l)?;
+            let role = if fit.contains(&i) { "fit" } else { "predicted" };
+            Ok(LevelErrors::new(l, &y, role, failed))
+        })
+        .collect()
+}
+
+/// Update the reduced model of `spec` on the fit levels (0-based, already checked) and score
+/// every level, before (as given) and after.
+pub fn identify_reduced(
+    spec: &ReducedSpec,
+    sweeps: Vec<Sweep>,
+    fit_levels: Vec<usize>,
+    opts: &FitOptions,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<ReducedIdentification> {
+    let t0 = std::time::Instant::now();
+    let convention = PhaseConvention::detect(&sweeps)?;
+    let levels: Vec<LevelData> = sweeps
+        .iter()
+        .map(|s| LevelData::new(s, &convention))
+        .collect();
+    let fit_data: Vec<LevelData> = fit_levels.iter().map(|&i| levels[i].clone()).collect();
+    let masks: Vec<Vec<bool>> = fit_data
+        .iter()
+        .map(|l| vec![true; l.drives.len()])
+        .collect();
+    // The swarm's starts and one Nelder–Mead start from the model as given (the prediction
+    // being updated is the natural first guess); the better is kept.
+    let global = fit_global(spec, &fit_data, &masks, opts, progress)?;
+    let local = fit_local(spec, &fit_data, &masks, &[vec![1.0; 4]], opts, progress)?;
+    let fit = merge_fits(global, local);
+    if !fit.converged {
+        return Err(Error::NonConvergence {
+            solver: format!(
+                "reduced-model update ({}, Nelder–Mead restarted from its optimum up to {} times)",
+                spec.path().display(),
+                super::fit::LOCAL_RESTARTS
+            ),
+            iterations: fit.starts.iter().map(|s| s.local_iterations as usize).sum(),
+            residual: fit.cost,
+            tolerance: 1e-7 * fit.cost,
+        });
+    }
+    for l in &levels {
+        let (_, fails) = fit.model.receptance_tolerant(&l.drives, true)?;
+        if let Some(f) = fails.first() {
+            return Err(Error::Data(format!(
+                "{}:{}: the updated model has no harmonic-balance solution at this row: {}",
+                l.name, l.lines[f.index], f.error
+            )));
+        }
+    }
+    let before = ReducedModel::as_given(spec);
+    let errors_before = level_errors(&before, &levels, &fit_levels)?;
+    let errors_after = level_errors(&fit.model, &levels, &fit_levels)?;
+    let scatter = fit_data
+        .iter()
+        .map(super::select::relative_scatter)
+        .collect();
+    let scatter_floor = super::select::scatter_floor(&fit_data);
+    let at_scatter = fit.cost <= super::select::SCATTER_FACTOR * scatter_floor;
+    let bytes = std::fs::read(spec.path()).map_err(|e| Error::io(spec.path(), e))?;
+    Ok(ReducedIdentification {
+        model_file: spec.path().to_path_buf(),
+        model_sha256: sha256_hex(&bytes),
+        inputs: sweeps
+            .iter()
+            .map(|s| InputFile {
+                path: s.path.clone(),
+                sha256: s.sha256.clone(),
+                quantity: s.quantity,
+                rows: s.rows.len(),
+                mean_force_n: s.mean_force_n(),
+            })
+            .collect(),
+        phase_convention: convention.describe(),
+        fit_levels,
+        parameters: spec.params(),
+        fit,
+        errors_before,
+        errors_after,
+        scatter,
+        scatter_floor,
+        at_scatter,
+        fit_options: *opts,
+        wall_time_s: t0.elapsed().as_secs_f64(),
+        sweeps,
+        levels,
+        convention,
+        before,
+    })
+}
+
+/// `kind` of a saved reduced model.
+pub const REDUCED_KIND: &str = "reduced";
+
+/// The saved updated model (`model.json` of a reduced-model identification): the response-model
+/// file (absolute path and SHA-256: a file changed since is refused) and the factors.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SavedReducedModel {
+    pub kind: String,
+    pub model_file: PathBuf,
+    pub model_sha256: String,
+    /// `(name, value)` of every updating factor.
+    pub factors: Vec<(String, f64)>,
+    /// Phase convention of the identification's files (used where a file to predict does not
+    /// pass through a resonance).
+    pub phase_convention: PhaseConvention,
+}
+
+impl SavedReducedModel {
+    /// Whether a saved model file is a reduced model (by its `kind`).
+    pub fn is_reduced(path: &Path) -> Result<bool> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+            Error::parse(
+                path,
+                e.line(),
+                format!("not an identified model file (JSON of `asperity identify`): {e}"),
+            )
+        })?;
+        Ok(v.get("kind").and_then(|k| k.as_str()) == Some(REDUCED_KIND))
+    }
+
+    /// Read a saved reduced model and rebuild it: the response-model file must be unchanged and
+    /// the factors named and inside their bounds.
+    pub fn read(path: &Path) -> Result<(ReducedModel, PhaseConvention)> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let s: SavedReducedModel = serde_json::from_str(&text)
+            .map_err(|e| Error::parse(path, e.line(), format!("not a reduced model file: {e}")))?;
+        let bytes = std::fs::read(&s.model_file).map_err(|e| Error::io(&s.model_file, e))?;
+        if sha256_hex(&bytes) != s.model_sha256 {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "{} has changed since the identification (SHA-256 differs): the factors \
+                     update the model as it was",
+                    s.model_file.display()
+                ),
+            ));
+        }
+        let spec = ReducedSpec::load(&s.model_file)?;
+        let params = spec.params();
+        if s.factors.len() != params.len() {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("{} factors, expected {}", s.factors.len(), params.len()),
+            ));
+        }
+        for (p, (name, v)) in params.iter().zip(&s.factors) {
+            let tol = 1e-9 * p.hi;
+            if name != p.name || !(v.is_finite() && *v >= p.lo - tol && *v <= p.hi + tol) {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    format!(
+                        "factor {name} = {v}: expected {} in [{}, {}]",
+                        p.name, p.lo, p.hi
+                    ),
+                ));
+            }
+        }
+        Ok((
+            spec.model(s.factors.iter().map(|f| f.1).collect()),
+            s.phase_convention,
+        ))
+    }
+}
+
+impl ReducedIdentification {
+    /// The report text.
+    pub fn text(&self) -> String {
+        let mut s = format!(
+            "reduced-model update of {} (sha256 {})\n{}\n\n",
+            self.model_file.display(),
+            &self.model_sha256[..16.min(self.model_sha256.len())],
+            self.phase_convention
+        );
+        s += "levels (by increasing mean force):\n";
+        for (i, inp) in self.inputs.iter().enumerate() {
+            s += &format!(
+                "  {} {:<40} {:>3} rows, mean force {:.4} N  [{}]\n",
+                i + 1,
+                inp.path.display(),
+                inp.rows,
+                inp.mean_force_n,
+                if self.fit_levels.contains(&i) {
+                    "fit"
+                } else {
+                    "predicted"
+                }
+            );
+        }
+        s += "\nupdating factors (1 = the model as given):\n";
+        for (p, v) in self.parameters.iter().zip(&self.fit.model.values) {
+            s += &format!(
+                "  {:<26} {:>10.5}   bounds [{}, {}]{}\n",
+                p.name,
+                v,
+                p.lo,
+                p.hi,
+                if p.at_bound(*v) { "  AT BOUND" } else { "" }
+            );
+        }
+        s += &format!(
+            "objective J = {:.4e} ({} model evaluations, {} starts, converged: {})\n",
+            self.fit.cost,
+            self.fit.evaluations,
+            self.fit.starts.len(),
+            self.fit.converged
+        );
+        s += "effect search: not run (its candidates are defined on the single nonlinear mode)\n\n";
+        let rows: Vec<(&LevelErrors, Option<&LevelErrors>)> = self
+            .errors_before
+            .iter()
+            .zip(&self.errors_after)
+            .map(|(b, a)| (b, Some(a)))
+            .collect();
+        s += &errors_table("errors, model as given → updated", &rows);
+        s += &format!(
+            "\nmeasurement scatter per component (third differences) of the fit levels: {} of \
+             their peaks; objective J = {:.3e} against the {:.3e} the scatter alone leaves: {}\n",
+            self.scatter
+                .iter()
+                .map(|v| format!("{v:.4}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            self.fit.cost,
+            self.scatter_floor,
+            if self.at_scatter {
+                "the updated model fits to the measurement scatter"
+            } else {
+                "the residual stays above the scatter — part of the misfit is not explained by \
+                 the updated model (its four factors cannot express what the measurement shows)"
+            }
+        );
+        s
+    }
+
+    /// Write `identify.{txt,json}`, `model.json`, `identify-rows.csv`, `identify-level<N>.png`.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let mut written = Vec::new();
+        let p = dir.join("identify.txt");
+        write_string_atomic(&p, &self.text())?;
+        written.push(p);
+        let p = dir.join("identify.json");
+        write_json(&p, self)?;
+        written.push(p);
+        let saved = SavedReducedModel {
+            kind: REDUCED_KIND.into(),
+            model_file: std::fs::canonicalize(&self.model_file)
+                .map_err(|e| Error::io(&self.model_file, e))?,
+            model_sha256: self.model_sha256.clone(),
+            factors: self
+                .parameters
+                .iter()
+                .zip(&self.fit.model.values)
+                .map(|(p, &v)| (p.name.to_string(), v))
+                .collect(),
+            phase_convention: self.convention,
+        };
+        let p = dir.join("model.json");
+        write_json(&p, &saved)?;
+        written.push(p);
+        let mut rows = Vec::new();
+        for (i, l) in self.levels.iter().enumerate() {
+            let (yb, _) = ReducedSpec::frf(&self.before, l)?;
+            let (ya, _) = ReducedSpec::frf(&self.fit.model, l)?;
+            let role = self.errors_after[i].role.clone();
+            for (k, d) in l.drives.iter().enumerate() {
+                rows.push(CurveRow {
+                    file: l.name.clone(),
+                    role: role.clone(),
+                    line: l.lines[k],
+                    frequency_hz: d.omega / TAU,
+                    force_n: d.force_n,
+                    measured: l.measured[k],
+                    models: vec![yb[k], ya[k]],
+                });
+            }
+            let curve = |m: &ReducedModel| {
+                fine_curve_with(l, 4, &|drives: &[Drive]| {
+                    m.receptance_tolerant(drives, true).map(|(x, _)| x)
+                })
+            };
+            let png = dir.join(format!("identify-level{}.png", i + 1));
+            plot_level(
+                &png,
+                l,
+                &self.convention,
+                &[
+                    ("as given".to_string(), curve(&self.before)),
+                    (format!("updated ({role})"), curve(&self.fit.model)),
+                ],
+                &format!("level {} ({}), {role}", i + 1, l.name),
+            )?;
+            written.push(png);
+        }
+        let p = dir.join("identify-rows.csv");
+        let conv = self.convention;
+        write_rows_csv(
+            &p,
+            &format!(
+                "units: frequency Hz, force N, response per force in the file's unit per N, \
+                 phase rad; models: the reduced model {} as given and updated",
+                self.model_file.display()
+            ),
+            &["as_given", "updated"],
+            &rows,
+            &|_| conv,
+        )?;
+        written.push(p);
+        Ok(written)
+    }
+}
