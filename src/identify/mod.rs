@@ -1,6 +1,7 @@
 //! Closing the loop on measured frequency responses: identify a jointed structure's
 //! single-nonlinear-mode model from stepped-sine sweeps at several excitation levels, find the
-//! effect the model lacks, and predict the levels and tests not used.
+//! effect the model lacks, and predict the levels and tests not used; or update a multi-DOF
+//! reduced model (an `asperity response` model file) by four factors ([`reduced`]).
 //!
 //! ```text
 //! measured (stepped-sine CSVs, phase convention) ──► backbone (equivalent linear per level)
