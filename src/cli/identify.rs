@@ -76,6 +76,17 @@ pub struct IdentifyArgs {
     pub out_dir: PathBuf,
 }
 
+/// The search settings must allow a swarm.
+fn check_search(args: &IdentifyArgs) -> Result<()> {
+    if args.starts == 0 || args.particles < 2 {
+        return Err(Error::param(
+            "--starts/--particles",
+            "at least one start and two particles",
+        ));
+    }
+    Ok(())
+}
+
 pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     if let Some(structure) = &args.structure {
         return run_identify_reduced(structure, &args);
@@ -103,12 +114,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
             })
             .collect::<Result<_>>()?;
     }
-    if args.starts == 0 || args.particles < 2 {
-        return Err(Error::param(
-            "--starts/--particles",
-            "at least one start and two particles",
-        ));
-    }
+    check_search(&args)?;
     opts.select.max_effects = args.max_effects;
     opts.select.baseline_fit.starts = args.starts;
     for f in [
@@ -148,12 +154,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
 fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Result<()> {
     use asperity::identify::fit::{FitOptions, Parametrised};
     use asperity::identify::reduced::{identify_reduced, ReducedSpec};
-    if args.starts == 0 || args.particles < 2 {
-        return Err(Error::param(
-            "--starts/--particles",
-            "at least one start and two particles",
-        ));
-    }
+    check_search(args)?;
     let spec = ReducedSpec::load(structure)?;
     let sweeps = read_sweeps(&args.files)?;
     let fit_levels =

@@ -461,6 +461,41 @@ pub struct RowFailure {
     pub error: String,
 }
 
+/// Solve a sweep row by row in its order, each row warm-started from the previous row's
+/// unknowns scaled by the force ratio. `solve(drive, warm)` gives the row's receptance (m/N) and
+/// unknowns. With `tolerant`, a row that fails is recorded (its value NaN) and the next row
+/// starts cold; otherwise the first failure ends the sweep.
+pub fn solve_sweep(
+    drives: &[Drive],
+    tolerant: bool,
+    mut solve: impl FnMut(&Drive, Option<&DVector<f64>>) -> Result<(Complex64, DVector<f64>)>,
+) -> Result<(Vec<Complex64>, Vec<RowFailure>)> {
+    let mut out = Vec::with_capacity(drives.len());
+    let mut failures = Vec::new();
+    let mut guess: Option<(DVector<f64>, f64)> = None;
+    for (i, d) in drives.iter().enumerate() {
+        let warm = guess.as_ref().map(|(z, f)| z * (d.force_n / f));
+        match solve(d, warm.as_ref()) {
+            Ok((x, z)) => {
+                out.push(x);
+                guess = Some((z, d.force_n));
+            }
+            Err(e) => {
+                if !tolerant {
+                    return Err(e);
+                }
+                failures.push(RowFailure {
+                    index: i,
+                    error: e.to_string(),
+                });
+                out.push(Complex64::new(f64::NAN, f64::NAN));
+                guess = None;
+            }
+        }
+    }
+    Ok((out, failures))
+}
+
 impl Model {
     /// Build and check the value count and bounds (values outside the bounds are refused:
     /// a saved model must describe the physics it was fitted with).
@@ -671,11 +706,8 @@ impl Model {
         let rres = self.residual_receptance();
         let tau = self.force_delay();
         let velocity_dependent = self.damper().is_some();
-        let mut out = Vec::with_capacity(drives.len());
-        let mut failures = Vec::new();
-        let mut guess: Option<(DVector<f64>, f64)> = None;
         let mut built: Option<(Structure, f64)> = None;
-        for (i, d) in drives.iter().enumerate() {
+        solve_sweep(drives, tolerant, |d, warm| {
             if built.is_none() || velocity_dependent {
                 built = Some(self.structure(preload, d.omega, h.n_time())?);
             }
@@ -690,28 +722,11 @@ impl Model {
                 FormulationChoice::Coordinates,
             )?;
             let sys = tuned(sys);
-            let warm = guess.as_ref().map(|(z, f)| z * (d.force_n / f));
-            match solve_robust(&sys, d, warm.as_ref(), self) {
-                Ok(p) => {
-                    let (a, b) = (phi * p.z[ci], phi * p.z[si]);
-                    let x = Complex64::new(a, -b) / d.force_n + rres;
-                    out.push(x * Complex64::from_polar(1.0, -d.omega * tau));
-                    guess = Some((p.z, d.force_n));
-                }
-                Err(e) => {
-                    if !tolerant {
-                        return Err(e);
-                    }
-                    failures.push(RowFailure {
-                        index: i,
-                        error: e.to_string(),
-                    });
-                    out.push(Complex64::new(f64::NAN, f64::NAN));
-                    guess = None;
-                }
-            }
-        }
-        Ok((out, failures))
+            let p = solve_robust(&sys, d, warm, self)?;
+            let (a, b) = (phi * p.z[ci], phi * p.z[si]);
+            let x = Complex64::new(a, -b) / d.force_n + rres;
+            Ok((x * Complex64::from_polar(1.0, -d.omega * tau), p.z))
+        })
     }
 
     /// Response-controlled evaluation: at each frequency, the force that holds the amplitude of

@@ -32,14 +32,14 @@
 
 use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
 use super::measured::{sha256_hex, PhaseConvention, Sweep};
-use super::model::{Drive, ParamSpec, RowFailure};
+use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
 use super::report::{
     errors_table, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow, InputFile,
     LevelErrors,
 };
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::contact::element_for;
-use crate::dynamics::hbm::{Excitation, HbmSystem};
+use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use crate::dynamics::model::Structure;
 use crate::dynamics::model_file::{self, LoadedModel};
 use crate::error::{Error, Result};
@@ -191,56 +191,49 @@ impl ReducedModel {
         drives: &[Drive],
         tolerant: bool,
     ) -> Result<(Vec<Complex64>, Vec<RowFailure>)> {
+        let s = self.structure()?;
+        let sys = self.system(&s, self.spec.loaded.file.sweep.formulation)?;
+        solve_sweep(drives, tolerant, |d, warm| {
+            let p = solve_robust(&sys, d, warm)?;
+            let x = self.observed(&sys.harmonics, &sys.coordinates(&p)) / d.force_n;
+            Ok((x, p.z))
+        })
+    }
+
+    /// The harmonic-balance system of the updated structure `s`: the file's excitation (one
+    /// newton per unit level, fundamental), harmonics and time samples.
+    fn system<'a>(
+        &self,
+        s: &'a Structure,
+        formulation: FormulationChoice,
+    ) -> Result<HbmSystem<'a>> {
         let l = &self.spec.loaded;
         let sw = &l.file.sweep;
-        let h = Harmonics::new(sw.harmonics, sw.odd_only, sw.time_samples)?;
-        let (ci, si) = h.index_of(1).expect("fundamental retained");
-        let len = h.len();
-        let s = self.structure()?;
-        let sys = HbmSystem::new(
-            &s,
-            h,
+        HbmSystem::new(
+            s,
+            Harmonics::new(sw.harmonics, sw.odd_only, sw.time_samples)?,
             Excitation {
                 force: l.force.clone(),
                 harmonic: 1,
             },
-            sw.formulation,
-        )?;
-        let obs = &l.responses[0].1;
-        let mut out = Vec::with_capacity(drives.len());
-        let mut failures = Vec::new();
-        let mut guess: Option<(DVector<f64>, f64)> = None;
-        for (i, d) in drives.iter().enumerate() {
-            let warm = guess.as_ref().map(|(z, f)| z * (d.force_n / f));
-            match solve_robust(&sys, d, warm.as_ref()) {
-                Ok(p) => {
-                    let q = sys.coordinates(&p);
-                    let (mut a, mut b) = (0.0, 0.0);
-                    for (c, &w) in obs.iter().enumerate() {
-                        a += w * q[c * len + ci];
-                        b += w * q[c * len + si];
-                    }
-                    out.push(Complex64::new(a, -b) / d.force_n);
-                    guess = Some((p.z, d.force_n));
-                }
-                Err(e) => {
-                    if !tolerant {
-                        return Err(e);
-                    }
-                    failures.push(RowFailure {
-                        index: i,
-                        error: e.to_string(),
-                    });
-                    out.push(Complex64::new(f64::NAN, f64::NAN));
-                    guess = None;
-                }
-            }
-        }
-        Ok((out, failures))
+            formulation,
+        )
     }
-}
 
-impl ReducedModel {
+    /// Complex fundamental (`e^{iωt}`) of the first response DOF from the coordinates'
+    /// harmonics `q` (coordinate-major).
+    fn observed(&self, h: &Harmonics, q: &DVector<f64>) -> Complex64 {
+        let (ci, si) = h.index_of(1).expect("fundamental retained");
+        let len = h.len();
+        let obs = &self.spec.loaded.responses[0].1;
+        let (mut a, mut b) = (0.0, 0.0);
+        for (c, &w) in obs.iter().enumerate() {
+            a += w * q[c * len + ci];
+            b += w * q[c * len + si];
+        }
+        Complex64::new(a, -b)
+    }
+
     /// Response-controlled evaluation: at each frequency, the force that holds the amplitude of
     /// the fundamental response at `target_m[i]` (m, first response DOF), and the complex
     /// receptance there (coordinates formulation, warm-started along the sweep). Returns
@@ -250,22 +243,9 @@ impl ReducedModel {
         omegas: &[f64],
         target_m: &[f64],
     ) -> Result<(Vec<f64>, Vec<Complex64>)> {
-        let l = &self.spec.loaded;
-        let sw = &l.file.sweep;
-        let h = Harmonics::new(sw.harmonics, sw.odd_only, sw.time_samples)?;
-        let (ci, si) = h.index_of(1).expect("fundamental retained");
-        let len = h.len();
         let s = self.structure()?;
-        let sys = HbmSystem::new(
-            &s,
-            h,
-            Excitation {
-                force: l.force.clone(),
-                harmonic: 1,
-            },
-            crate::dynamics::hbm::FormulationChoice::Coordinates,
-        )?;
-        let obs = &l.responses[0].1;
+        let sys = self.system(&s, FormulationChoice::Coordinates)?;
+        let obs = &self.spec.loaded.responses[0].1;
         let (mut forces, mut recs) = (Vec::new(), Vec::new());
         let mut guess: Option<(DVector<f64>, f64)> = None;
         for (&w, &target) in omegas.iter().zip(target_m) {
@@ -275,13 +255,8 @@ impl ReducedModel {
                 obs,
                 guess.as_ref().map(|(z, f)| (z, *f)),
             )?;
-            let (mut a, mut b) = (0.0, 0.0);
-            for (c, &wc) in obs.iter().enumerate() {
-                a += wc * p.z[c * len + ci];
-                b += wc * p.z[c * len + si];
-            }
             forces.push(p.level);
-            recs.push(Complex64::new(a, -b) / p.level);
+            recs.push(self.observed(&sys.harmonics, &p.z) / p.level);
             guess = Some((p.z, p.level));
         }
         Ok((forces, recs))
