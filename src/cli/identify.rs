@@ -76,6 +76,15 @@ pub struct IdentifyArgs {
     pub out_dir: PathBuf,
 }
 
+/// Print the report and the files written.
+fn report(text: &str, written: &[PathBuf]) {
+    print!("{text}");
+    println!("\nwrote:");
+    for p in written {
+        println!("  {}", p.display());
+    }
+}
+
 /// The search settings must allow a swarm.
 fn check_search(args: &IdentifyArgs) -> Result<()> {
     if args.starts == 0 || args.particles < 2 {
@@ -141,12 +150,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     let result = identify(sweeps, &opts, Some(&bar));
     bar.finish_and_clear();
     let id = result?;
-    let written = id.write(&args.out_dir)?;
-    print!("{}", id.text());
-    println!("\nwrote:");
-    for p in written {
-        println!("  {}", p.display());
-    }
+    report(&id.text(), &id.write(&args.out_dir)?);
     Ok(())
 }
 
@@ -175,12 +179,7 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     let result = identify_reduced(&spec, sweeps, fit_levels, &opts, Some(&bar));
     bar.finish_and_clear();
     let id = result?;
-    let written = id.write(&args.out_dir)?;
-    print!("{}", id.text());
-    println!("\nwrote:");
-    for p in written {
-        println!("  {}", p.display());
-    }
+    report(&id.text(), &id.write(&args.out_dir)?);
     Ok(())
 }
 

@@ -100,7 +100,8 @@ pub struct ParamSpec {
 }
 
 impl ParamSpec {
-    fn lin(name: &'static str, unit: &'static str, lo: f64, hi: f64, neutral: f64) -> Self {
+    /// A parameter searched linearly between its bounds.
+    pub fn lin(name: &'static str, unit: &'static str, lo: f64, hi: f64, neutral: f64) -> Self {
         Self {
             name,
             unit,
@@ -110,7 +111,8 @@ impl ParamSpec {
             neutral,
         }
     }
-    fn log(name: &'static str, unit: &'static str, lo: f64, hi: f64, neutral: f64) -> Self {
+    /// A positive parameter searched in `ln` between its bounds.
+    pub fn log(name: &'static str, unit: &'static str, lo: f64, hi: f64, neutral: f64) -> Self {
         Self {
             name,
             unit,

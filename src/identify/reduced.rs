@@ -104,39 +104,12 @@ impl Parametrised for ReducedSpec {
 
     fn params(&self) -> Vec<ParamSpec> {
         let (lo, hi) = (1.0 / FACTOR_RANGE, FACTOR_RANGE);
+        let (flo, fhi) = FREQUENCY_FACTOR;
         vec![
-            ParamSpec {
-                name: "frequency_factor",
-                unit: "-",
-                lo: FREQUENCY_FACTOR.0,
-                hi: FREQUENCY_FACTOR.1,
-                log: false,
-                neutral: 1.0,
-            },
-            ParamSpec {
-                name: "damping_factor",
-                unit: "-",
-                lo,
-                hi,
-                log: true,
-                neutral: 1.0,
-            },
-            ParamSpec {
-                name: "contact_stiffness_factor",
-                unit: "-",
-                lo,
-                hi,
-                log: true,
-                neutral: 1.0,
-            },
-            ParamSpec {
-                name: "friction_factor",
-                unit: "-",
-                lo,
-                hi,
-                log: true,
-                neutral: 1.0,
-            },
+            ParamSpec::lin("frequency_factor", "-", flo, fhi, 1.0),
+            ParamSpec::log("damping_factor", "-", lo, hi, 1.0),
+            ParamSpec::log("contact_stiffness_factor", "-", lo, hi, 1.0),
+            ParamSpec::log("friction_factor", "-", lo, hi, 1.0),
         ]
     }
 
