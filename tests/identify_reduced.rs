@@ -307,6 +307,22 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
     );
     assert!(!bad_out.exists(), "nothing written on bad input");
 
+    // A model without contact elements: nothing for the contact factors to act on.
+    let toml = std::fs::read_to_string(&bad).unwrap();
+    let i = toml.find("[[contact]]").unwrap();
+    let j = toml.find("[excitation]").unwrap();
+    std::fs::write(&bad, format!("{}{}", &toml[..i], &toml[j..])).unwrap();
+    let mut args = vec!["identify", "--structure", bad.to_str().unwrap()];
+    args.extend(files.iter().map(|s| s.as_str()));
+    args.extend(["--out-dir", bad_out.to_str().unwrap()]);
+    let o = asperity(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("no `[[contact]]` elements"),
+        "{err}"
+    );
+    assert!(!bad_out.exists(), "nothing written on bad input");
+
     // Options of the single-mode path are refused with a reduced model.
     let mut args = vec!["identify", "--structure", model.to_str().unwrap()];
     args.extend(files.iter().map(|s| s.as_str()));

@@ -77,8 +77,13 @@ impl ReducedSpec {
     /// Read a response-model file (`asperity response` format).
     pub fn load(path: &Path) -> Result<Self> {
         let loaded = model_file::load(path)?;
-        if loaded.responses.is_empty() {
-            return Err(Error::parse(path, 0, "`[response] dofs` is empty"));
+        if loaded.element_rows.is_empty() {
+            return Err(Error::parse(
+                path,
+                0,
+                "no `[[contact]]` elements: the contact stiffness and friction factors would \
+                 have nothing to act on (a linear structure is updated by a linear fit)",
+            ));
         }
         if loaded.structure.damping.iter().all(|&c| c == 0.0) {
             return Err(Error::parse(
