@@ -37,7 +37,8 @@ pub struct IdentifyArgs {
     /// Maximum number of effects added (each needs strong held-out evidence).
     #[arg(long, default_value_t = 3)]
     pub max_effects: usize,
-    /// Particle-swarm starts of the baseline fit (each followed by Nelder–Mead).
+    /// Particle-swarm starts of the baseline fit (each followed by Nelder–Mead). With
+    /// `--structure`, 0 is allowed: Nelder–Mead from the model as given only.
     #[arg(long, default_value_t = 3)]
     pub starts: usize,
     /// Particles of the swarm.
@@ -158,7 +159,9 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
 fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Result<()> {
     use asperity::identify::fit::{FitOptions, Parametrised};
     use asperity::identify::reduced::{identify_reduced, ReducedSpec};
-    check_search(args)?;
+    if args.starts > 0 {
+        check_search(args)?;
+    }
     let spec = ReducedSpec::load(structure)?;
     let sweeps = read_sweeps(&args.files)?;
     let fit_levels =

@@ -27,7 +27,7 @@
 //! The same objective, bounds handling and search as the single-mode identification
 //! ([`super::fit`]): complex response per unit force, each level divided by its peak and row
 //! count, particle swarm then Nelder–Mead restarted until it converges, plus one Nelder–Mead
-//! start from the model as given; the best is kept. The effect search of
+//! start from the model as given; the best is kept (with no swarm starts, the local start only). The effect search of
 //! [`super::select`] is not run: its candidates are defined on the single nonlinear mode.
 
 use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
@@ -349,11 +349,16 @@ pub fn identify_reduced(
         .iter()
         .map(|l| vec![true; l.drives.len()])
         .collect();
-    // The swarm's starts and one Nelder–Mead start from the model as given (the prediction
-    // being updated is the natural first guess); the better is kept.
-    let global = fit_global(spec, &fit_data, &masks, opts, progress)?;
+    // One Nelder–Mead start from the model as given (the prediction being updated is the
+    // natural first guess) and the swarm's starts, if any; the best is kept. Without swarm
+    // starts the update is local: the choice for large models, whose every evaluation costs
+    // seconds (README).
     let local = fit_local(spec, &fit_data, &masks, &[vec![1.0; 4]], opts, progress)?;
-    let fit = merge_fits(global, local);
+    let fit = if opts.starts == 0 {
+        local
+    } else {
+        merge_fits(fit_global(spec, &fit_data, &masks, opts, progress)?, local)
+    };
     if !fit.converged {
         return Err(Error::NonConvergence {
             solver: format!(
