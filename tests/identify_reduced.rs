@@ -5,15 +5,17 @@
 //! realisations. The CLI writes its report and refuses bad input.
 
 use asperity::identify::fit::{FitOptions, Parametrised};
-use asperity::identify::measured::{Quantity, Row, Sweep};
+use asperity::identify::measured::Sweep;
 use asperity::identify::model::Drive;
 use asperity::identify::reduced::{identify_reduced, ReducedSpec};
 use asperity::identify::report::LevelErrors;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
 use std::f64::consts::TAU;
+
+#[path = "support/synthetic_sweep.rs"]
+mod synthetic_sweep;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use synthetic_sweep::noisy_sweep;
 
 /// Two modes (100 Hz and 400 Hz, ζ = 0.5 %, mass-normalised shapes), driven and measured at
 /// `tip.x`; one Jenkins contact element between `joint` and ground (tangent x, normal z):
@@ -65,8 +67,6 @@ fn sweep(spec: &ReducedSpec, force: f64, seed: u64) -> Sweep {
 /// [`sweep`] with relative amplitude noise and phase noise (rad) of standard deviation `noise`.
 fn sweep_with_noise(spec: &ReducedSpec, force: f64, seed: u64, noise: f64) -> Sweep {
     let truth = spec.model(TRUTH.to_vec());
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let n = Normal::new(0.0, noise).unwrap();
     let drives: Vec<Drive> = (0..57)
         .map(|i| {
             let f = 100.0 + 0.25 * i as f64;
@@ -78,28 +78,13 @@ fn sweep_with_noise(spec: &ReducedSpec, force: f64, seed: u64, noise: f64) -> Sw
         })
         .collect();
     let (x, _) = truth.receptance_tolerant(&drives, false).unwrap();
-    let rows = drives
-        .iter()
-        .zip(&x)
-        .enumerate()
-        .map(|(i, (d, xi))| {
-            let y = xi * Quantity::Acceleration.from_displacement(d.omega);
-            Row {
-                line: i + 2,
-                frequency_hz: d.omega / TAU,
-                force_n: d.force_n,
-                response: y.norm() * d.force_n * (1.0 + n.sample(&mut rng)),
-                phase_rad: y.arg() + n.sample(&mut rng),
-            }
-        })
-        .collect();
-    Sweep {
-        path: format!("synthetic-{force}N-{seed}.csv").into(),
-        sha256: String::new(),
-        quantity: Quantity::Acceleration,
-        rows,
-        header_line: 1,
-    }
+    noisy_sweep(
+        format!("synthetic-{force}N-{seed}.csv"),
+        &drives,
+        &x,
+        noise,
+        seed,
+    )
 }
 
 fn fit_options(seed: u64) -> FitOptions {

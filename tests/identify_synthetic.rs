@@ -6,13 +6,15 @@
 use asperity::identify::backbone::resonance;
 use asperity::identify::effects::Effect;
 use asperity::identify::fit::FitOptions;
-use asperity::identify::measured::{Quantity, Row, Sweep};
+use asperity::identify::measured::Sweep;
 use asperity::identify::model::{Drive, Family, Model, ModelSpec, PowerLawDamper, Scales};
 use asperity::identify::select::Verdict;
 use asperity::identify::{identify, Options};
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
 use std::f64::consts::TAU;
+
+#[path = "support/synthetic_sweep.rs"]
+mod synthetic_sweep;
+use synthetic_sweep::noisy_sweep;
 
 /// Scales only state the truth's dimensionless effect parameters; the identification derives
 /// its own from the data.
@@ -37,8 +39,6 @@ const LEVELS_N: [f64; 3] = [0.02, 0.15, 0.6];
 /// dipping by up to 20 % near 79.6 Hz (as a shaker's does at resonance), acceleration amplitude
 /// and phase with 1 % relative amplitude noise and 0.01 rad phase noise.
 fn sweep(model: &Model, force: f64, seed: u64) -> Sweep {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let n = Normal::new(0.0, 0.01).unwrap();
     let drives: Vec<Drive> = (0..31)
         .map(|i| {
             let f = 79.0 + 0.05 * i as f64;
@@ -50,28 +50,13 @@ fn sweep(model: &Model, force: f64, seed: u64) -> Sweep {
         })
         .collect();
     let x = model.receptance(&drives, force).unwrap();
-    let rows = drives
-        .iter()
-        .zip(&x)
-        .enumerate()
-        .map(|(i, (d, xi))| {
-            let y = xi * Quantity::Acceleration.from_displacement(d.omega);
-            Row {
-                line: i + 2,
-                frequency_hz: d.omega / TAU,
-                force_n: d.force_n,
-                response: y.norm() * d.force_n * (1.0 + n.sample(&mut rng)),
-                phase_rad: y.arg() + n.sample(&mut rng),
-            }
-        })
-        .collect();
-    Sweep {
-        path: format!("synthetic-{force}N-{seed}.csv").into(),
-        sha256: String::new(),
-        quantity: Quantity::Acceleration,
-        rows,
-        header_line: 1,
-    }
+    noisy_sweep(
+        format!("synthetic-{force}N-{seed}.csv"),
+        &drives,
+        &x,
+        0.01,
+        seed,
+    )
 }
 
 fn options(candidates: Vec<Effect>) -> Options {

@@ -1,0 +1,46 @@
+//! Measured-format sweeps of a model's response, shared by the identification tests
+//! (`tests/identify_synthetic.rs`, `tests/identify_reduced.rs`). Units: SI (m/N receptances,
+//! m/s² accelerations, N, Hz, rad).
+
+use asperity::identify::measured::{Quantity, Row, Sweep};
+use asperity::identify::model::Drive;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use realfft::num_complex::Complex64;
+use std::f64::consts::TAU;
+
+/// The sweep an accelerometer would record of drive-point receptances `x` (m/N) at `drives`:
+/// acceleration amplitude with relative noise and phase with noise (rad), both of standard
+/// deviation `noise` (normal, seeded; drawn per row, amplitude then phase).
+pub fn noisy_sweep(
+    path: String,
+    drives: &[Drive],
+    x: &[Complex64],
+    noise: f64,
+    seed: u64,
+) -> Sweep {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let n = Normal::new(0.0, noise).unwrap();
+    let rows = drives
+        .iter()
+        .zip(x)
+        .enumerate()
+        .map(|(i, (d, xi))| {
+            let y = xi * Quantity::Acceleration.from_displacement(d.omega);
+            Row {
+                line: i + 2,
+                frequency_hz: d.omega / TAU,
+                force_n: d.force_n,
+                response: y.norm() * d.force_n * (1.0 + n.sample(&mut rng)),
+                phase_rad: y.arg() + n.sample(&mut rng),
+            }
+        })
+        .collect();
+    Sweep {
+        path: path.into(),
+        sha256: String::new(),
+        quantity: Quantity::Acceleration,
+        rows,
+        header_line: 1,
+    }
+}
