@@ -175,8 +175,7 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     };
     let dim = spec.params().len() as u64;
     let local = asperity::identify::fit::local_iteration_cap(opts.local_iterations, dim as usize);
-    let estimate =
-        opts.starts as u64 * (opts.particles as u64 * (opts.swarm_iterations + 1) + local) + local;
+    let estimate = opts.swarm_evaluations() + (opts.starts as u64 + 1) * local;
     let bar = super::progress_bar("identify (reduced model)", estimate);
     bar.set_message("model evaluations");
     let result = identify_reduced(&spec, sweeps, fit_levels, &opts, Some(&bar));

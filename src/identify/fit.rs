@@ -166,6 +166,14 @@ pub struct FitOptions {
     pub local_iterations: u64,
 }
 
+impl FitOptions {
+    /// Model evaluations of the particle swarms (every start: the initial particles and one
+    /// evaluation per particle per iteration).
+    pub fn swarm_evaluations(&self) -> u64 {
+        self.starts as u64 * self.particles as u64 * (self.swarm_iterations + 1)
+    }
+}
+
 /// Parameter count up to which [`FitOptions::local_iterations`] is the cap as given.
 pub const LOCAL_ITERATIONS_DIMENSION: usize = 5;
 

@@ -62,8 +62,7 @@ impl Options {
 
     /// Model evaluations the whole run is expected to take (progress-bar length).
     pub fn estimated_evaluations(&self) -> u64 {
-        let swarm =
-            |o: &FitOptions| o.starts as u64 * o.particles as u64 * (o.swarm_iterations + 1);
+        let swarm = |o: &FitOptions| o.swarm_evaluations();
         let local = |o: &FitOptions| o.local_iterations;
         let b = &self.select.baseline_fit;
         let c = &self.select.candidate_fit;
@@ -953,9 +952,7 @@ impl Identification {
             "tool": "asperity identify",
             "crate_version": env!("CARGO_PKG_VERSION"),
             "units": "SI: frequencies Hz, forces N, displacements m; FRFs in the unit of each file's quantity per N; errors relative to each level's measured peak",
-            "inputs": self.sweeps.iter().map(|s| InputFile {
-                path: s.path.clone(), sha256: s.sha256.clone(), quantity: s.quantity, rows: s.rows.len(), mean_force_n: s.mean_force_n()
-            }).collect::<Vec<_>>(),
+            "inputs": self.sweeps.iter().map(InputFile::of).collect::<Vec<_>>(),
             "levels_fit": self.fit_levels.iter().map(|i| i + 1).collect::<Vec<_>>(),
             "phase_convention": {"value": self.convention, "description": self.convention.describe()},
             "scales": self.scales,

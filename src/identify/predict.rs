@@ -22,7 +22,7 @@ use super::report::{
     errors_table, fine_curve, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow,
     InputFile, LevelErrors,
 };
-use super::uncertainty::{bands_table, prediction_bands, PredictionBand};
+use super::uncertainty::{bands_table, prediction_bands, Ensemble, PredictionBand};
 use crate::error::{Error, Result};
 use crate::output::write_string_atomic;
 use realfft::num_complex::Complex64;
@@ -42,7 +42,8 @@ pub enum Control {
 /// The model that predicts: the identified single nonlinear mode, or an updated reduced model.
 #[derive(Debug, Clone)]
 pub enum Predictor {
-    Mode(Model),
+    /// The single nonlinear mode and the ensemble saved with it, if any.
+    Mode(Model, Option<Ensemble>),
     Reduced(ReducedModel),
 }
 
@@ -51,7 +52,7 @@ impl Predictor {
     /// of failed rows.
     fn frf(&self, level: &LevelData) -> Result<(Vec<Complex64>, usize)> {
         match self {
-            Predictor::Mode(m) => level.model_frf(m),
+            Predictor::Mode(m, _) => level.model_frf(m),
             Predictor::Reduced(m) => ReducedSpec::frf(m, level),
         }
     }
@@ -64,7 +65,7 @@ impl Predictor {
         mean_force_n: f64,
     ) -> Result<(Vec<f64>, Vec<Complex64>)> {
         match self {
-            Predictor::Mode(m) => m.response_controlled(omegas, targets, mean_force_n),
+            Predictor::Mode(m, _) => m.response_controlled(omegas, targets, mean_force_n),
             Predictor::Reduced(m) => m.response_controlled(omegas, targets),
         }
     }
@@ -72,7 +73,7 @@ impl Predictor {
     /// Curve for the plots on a fine frequency grid.
     fn fine_curve(&self, level: &LevelData) -> Vec<(f64, Complex64)> {
         match self {
-            Predictor::Mode(m) => fine_curve(m, level, 4),
+            Predictor::Mode(m, _) => fine_curve(m, level, 4),
             Predictor::Reduced(m) => fine_curve_with(level, 4, &|d: &[Drive]| {
                 m.receptance_tolerant(d, true).map(|(x, _)| x)
             }),
@@ -112,15 +113,14 @@ pub struct Prediction {
 
 /// Predict measured files with a saved model.
 pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Result<Prediction> {
-    let (model, saved_convention, ensemble) = if SavedReducedModel::is_reduced(model_file)? {
+    let (model, saved_convention) = if SavedReducedModel::is_reduced(model_file)? {
         let (m, c) = SavedReducedModel::read(model_file)?;
-        (Predictor::Reduced(m), c, None)
+        (Predictor::Reduced(m), c)
     } else {
         let saved = SavedModel::read(model_file)?;
         (
-            Predictor::Mode(saved.model),
+            Predictor::Mode(saved.model, saved.ensemble),
             saved.phase_convention,
-            saved.ensemble,
         )
     };
     if sweeps.is_empty() {
@@ -174,31 +174,23 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
                 .sqrt()
         });
         files.push(FilePrediction {
-            input: InputFile {
-                path: s.path.clone(),
-                sha256: s.sha256.clone(),
-                quantity: s.quantity,
-                rows: s.rows.len(),
-                mean_force_n: s.mean_force_n(),
-            },
+            input: InputFile::of(s),
             errors: LevelErrors::new(&level, &y, "predicted", failed),
             force_rms_error,
             model_frf: y,
             model_force_n: forces,
         });
     }
-    let bands = match (&ensemble, control) {
-        (None, _) => Err("the model file holds no ensemble".to_string()),
-        (Some(_), Control::Response) => {
+    let bands = match (&model, control) {
+        (Predictor::Reduced(_), _) => Err("reduced models carry no ensemble".to_string()),
+        (Predictor::Mode(_, None), _) => Err("the model file holds no ensemble".to_string()),
+        (Predictor::Mode(_, Some(_)), Control::Response) => {
             Err("bands are computed under force control only".to_string())
         }
-        (Some(e), Control::Force) => match &model {
-            Predictor::Mode(m) => {
-                let roles = vec!["predicted"; levels.len()];
-                prediction_bands(m, e, &levels, &roles).map_err(|e| e.to_string())
-            }
-            Predictor::Reduced(_) => Err("reduced models carry no ensemble".to_string()),
-        },
+        (Predictor::Mode(m, Some(e)), Control::Force) => {
+            let roles = vec!["predicted"; levels.len()];
+            prediction_bands(m, e, &levels, &roles).map_err(|e| e.to_string())
+        }
     };
     Ok(Prediction {
         bands,

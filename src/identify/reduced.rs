@@ -304,29 +304,34 @@ pub struct ReducedIdentification {
     pub fit_options: FitOptions,
     pub wall_time_s: f64,
     #[serde(skip)]
-    pub sweeps: Vec<Sweep>,
-    #[serde(skip)]
     pub levels: Vec<LevelData>,
+    /// Responses per unit force of the model as given and updated at every level's rows (the
+    /// level's quantity), kept for the files.
+    #[serde(skip)]
+    pub responses_before: Vec<Vec<Complex64>>,
+    #[serde(skip)]
+    pub responses_after: Vec<Vec<Complex64>>,
     #[serde(skip)]
     pub convention: PhaseConvention,
     #[serde(skip)]
     pub before: ReducedModel,
 }
 
-fn level_errors(
+/// A model's response at every level's rows and its errors there (role `fit` or `predicted`).
+fn responses_and_errors(
     model: &ReducedModel,
     levels: &[LevelData],
     fit: &[usize],
-) -> Result<Vec<LevelErrors>> {
-    levels
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let (y, failed) = ReducedSpec::frf(model, l)?;
-            let role = if fit.contains(&i) { "fit" } else { "predicted" };
-            Ok(LevelErrors::new(l, &y, role, failed))
-        })
-        .collect()
+) -> Result<(Vec<Vec<Complex64>>, Vec<LevelErrors>)> {
+    let mut responses = Vec::new();
+    let mut errors = Vec::new();
+    for (i, l) in levels.iter().enumerate() {
+        let (y, failed) = ReducedSpec::frf(model, l)?;
+        let role = if fit.contains(&i) { "fit" } else { "predicted" };
+        errors.push(LevelErrors::new(l, &y, role, failed));
+        responses.push(y);
+    }
+    Ok((responses, errors))
 }
 
 /// Update the reduced model of `spec` on the fit levels (0-based, already checked) and score
@@ -371,18 +376,17 @@ pub fn identify_reduced(
             tolerance: 1e-7 * fit.cost,
         });
     }
-    for l in &levels {
-        let (_, fails) = fit.model.receptance_tolerant(&l.drives, true)?;
-        if let Some(f) = fails.first() {
+    let (responses_after, errors_after) = responses_and_errors(&fit.model, &levels, &fit_levels)?;
+    for (l, y) in levels.iter().zip(&responses_after) {
+        if let Some(k) = y.iter().position(|v| !v.re.is_finite()) {
             return Err(Error::Data(format!(
-                "{}:{}: the updated model has no harmonic-balance solution at this row: {}",
-                l.name, l.lines[f.index], f.error
+                "{}:{}: the updated model has no harmonic-balance solution at this row",
+                l.name, l.lines[k]
             )));
         }
     }
     let before = ReducedModel::as_given(spec);
-    let errors_before = level_errors(&before, &levels, &fit_levels)?;
-    let errors_after = level_errors(&fit.model, &levels, &fit_levels)?;
+    let (responses_before, errors_before) = responses_and_errors(&before, &levels, &fit_levels)?;
     let scatter = fit_data
         .iter()
         .map(super::select::relative_scatter)
@@ -393,16 +397,7 @@ pub fn identify_reduced(
     Ok(ReducedIdentification {
         model_file: spec.path().to_path_buf(),
         model_sha256: sha256_hex(&bytes),
-        inputs: sweeps
-            .iter()
-            .map(|s| InputFile {
-                path: s.path.clone(),
-                sha256: s.sha256.clone(),
-                quantity: s.quantity,
-                rows: s.rows.len(),
-                mean_force_n: s.mean_force_n(),
-            })
-            .collect(),
+        inputs: sweeps.iter().map(InputFile::of).collect(),
         phase_convention: convention.describe(),
         fit_levels,
         parameters: spec.params(),
@@ -414,8 +409,9 @@ pub fn identify_reduced(
         at_scatter,
         fit_options: *opts,
         wall_time_s: t0.elapsed().as_secs_f64(),
-        sweeps,
         levels,
+        responses_before,
+        responses_after,
         convention,
         before,
     })
@@ -597,8 +593,7 @@ impl ReducedIdentification {
         written.push(p);
         let mut rows = Vec::new();
         for (i, l) in self.levels.iter().enumerate() {
-            let (yb, _) = ReducedSpec::frf(&self.before, l)?;
-            let (ya, _) = ReducedSpec::frf(&self.fit.model, l)?;
+            let (yb, ya) = (&self.responses_before[i], &self.responses_after[i]);
             let role = self.errors_after[i].role.clone();
             for (k, d) in l.drives.iter().enumerate() {
                 rows.push(CurveRow {

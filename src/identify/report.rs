@@ -398,6 +398,19 @@ pub struct InputFile {
     pub mean_force_n: f64,
 }
 
+impl InputFile {
+    /// The record of a measured sweep.
+    pub fn of(s: &super::measured::Sweep) -> Self {
+        Self {
+            path: s.path.clone(),
+            sha256: s.sha256.clone(),
+            quantity: s.quantity,
+            rows: s.rows.len(),
+            mean_force_n: s.mean_force_n(),
+        }
+    }
+}
+
 /// Text table of level errors (before/after).
 pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) -> String {
     let mut s = format!("{title}\n");
