@@ -69,7 +69,7 @@ pub struct IdentifyArgs {
     /// `asperity response` (linear structure, contact element tables, excitation and response
     /// DOFs, harmonics). Four factors are fitted (frequencies, damping ratios, contact stiffness,
     /// friction); the effect search and the prediction bands are single-mode only.
-    #[arg(long, conflicts_with_all = ["family", "candidates", "max_effects", "response_amplitude", "chain_steps"])]
+    #[arg(long, conflicts_with_all = ["family", "candidates", "max_effects", "chain_steps"])]
     pub structure: Option<PathBuf>,
     /// Output directory: identify.{txt,json}, model.json, identify-rows.csv,
     /// identify-backbone.{csv,png}, identify-response-controlled.csv, identify-level<N>.png.
@@ -178,7 +178,14 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     let estimate = opts.swarm_evaluations() + (opts.starts as u64 + 1) * local;
     let bar = super::progress_bar("identify (reduced model)", estimate);
     bar.set_message("model evaluations");
-    let result = identify_reduced(&spec, sweeps, fit_levels, &opts, Some(&bar));
+    let result = identify_reduced(
+        &spec,
+        sweeps,
+        fit_levels,
+        &opts,
+        args.response_amplitude.as_deref(),
+        Some(&bar),
+    );
     bar.finish_and_clear();
     let id = result?;
     report(&id.text(), &id.write(&args.out_dir)?);

@@ -210,6 +210,36 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
         .collect())
 }
 
+/// Equivalent linear mode of a response per unit force `y` (the level's quantity, `e^{iωt}`) at
+/// one level's rows — the estimator [`from_data`] applies to each measured sweep, applied to a
+/// model's response at the same rows, so that a model's backbone is compared with the data's
+/// like for like — as a backbone point at the response's peak displacement amplitude. `None`
+/// where the response has failed rows or no resonance the fit can place (a model whose mode
+/// lies outside the measured band).
+pub fn equivalent_mode(
+    quantity: Quantity,
+    omegas: &[f64],
+    forces_n: &[f64],
+    y: &[Complex64],
+) -> Option<BackbonePoint> {
+    if y.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
+        return None;
+    }
+    let x = receptance(quantity, omegas, y);
+    let lin = fit_linear_mode(omegas, &x).ok()?;
+    let (w_lo, w_hi) = omegas
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &w| (a.min(w), b.max(w)));
+    let wn = TAU * lin.frequency_hz;
+    let inside = wn >= w_lo && wn <= w_hi && lin.damping_ratio > 0.0 && lin.modal_mass_kg > 0.0;
+    let ip = (0..x.len()).max_by(|&a, &b| x[a].norm().total_cmp(&x[b].norm()))?;
+    inside.then(|| BackbonePoint {
+        amplitude_m: x[ip].norm() * forces_n[ip],
+        frequency_hz: lin.frequency_hz,
+        damping_ratio: lin.damping_ratio,
+    })
+}
+
 /// Phase resonance of a sampled drive-point receptance `x` (m/N, `e^{iωt}` convention): the
 /// frequency where the displacement is in quadrature with the force (`Re x = 0`, `Im x < 0`),
 /// by linear interpolation of the dynamic stiffness `Re(1/x)` between the two rows of the sign

@@ -10,8 +10,8 @@ use super::fit::{FitOptions, FitResult, LevelData};
 use super::measured::{PhaseConvention, Quantity, Sweep};
 use super::model::{Family, Model, ModelSpec, Scales};
 use super::report::{
-    errors_table, fine_curve, plot_backbone, plot_level, write_json, write_rows_csv, CurveRow,
-    InputFile, LevelErrors,
+    errors_table, fine_curve, plot_backbone, plot_level, regions_text, write_json, write_rows_csv,
+    CurveRow, InputFile, LevelErrors,
 };
 use super::select::{self, refit_all_rows, SelectOptions, Selection, Verdict};
 use super::uncertainty::{self, Ensemble, Uncertainty};
@@ -280,6 +280,21 @@ pub fn response_controlled(
     band_hz: (f64, f64),
     mean_force_n: f64,
 ) -> Result<ResponseControlled> {
+    response_controlled_with(quantity, amplitude, band_hz, |om, targets| {
+        model.response_controlled(om, targets, mean_force_n)
+    })
+}
+
+/// The response-controlled FRF at response amplitude `amplitude` of `quantity` on 81
+/// frequencies over `[f_lo, f_hi]`, from a solver that returns, for angular frequencies and
+/// target displacement amplitudes (m), the forces (N) that hold them and the receptances (m/N).
+/// Shared by the single mode and the reduced models.
+pub fn response_controlled_with(
+    quantity: Quantity,
+    amplitude: f64,
+    band_hz: (f64, f64),
+    solve: impl FnOnce(&[f64], &[f64]) -> Result<(Vec<f64>, Vec<Complex64>)>,
+) -> Result<ResponseControlled> {
     let n = 81;
     let f: Vec<f64> = (0..n)
         .map(|i| band_hz.0 + (band_hz.1 - band_hz.0) * i as f64 / (n - 1) as f64)
@@ -289,7 +304,7 @@ pub fn response_controlled(
         .iter()
         .map(|&w| amplitude / quantity.from_displacement(w).norm())
         .collect();
-    let (forces, x) = model.response_controlled(&om, &targets, mean_force_n)?;
+    let (forces, x) = solve(&om, &targets)?;
     let frf: Vec<Complex64> = x
         .iter()
         .zip(&om)
@@ -306,6 +321,119 @@ pub fn response_controlled(
         frf_amplitude: amp,
         peak_frequency_hz: pf,
         peak_frf: pa,
+    })
+}
+
+/// The response amplitudes at which an identified model's response-controlled FRF is reported
+/// (`given`, or the measured peak response of every level, in the unit of its quantity) and the
+/// frequency band of all the measured rows (Hz).
+pub fn response_control_amplitudes(
+    sweeps: &[Sweep],
+    given: Option<&[f64]>,
+) -> (Vec<f64>, (f64, f64)) {
+    let amplitudes = match given {
+        Some(a) => a.to_vec(),
+        None => sweeps
+            .iter()
+            .map(|s| s.rows[s.peak_row()].response)
+            .collect(),
+    };
+    let band = sweeps
+        .iter()
+        .flat_map(|s| &s.rows)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), r| {
+            (a.min(r.frequency_hz), b.max(r.frequency_hz))
+        });
+    (amplitudes, band)
+}
+
+/// Report lines of the response-controlled FRFs.
+pub fn response_controlled_text(rows: &[ResponseControlled]) -> String {
+    let mut s = "\nidentified model under response control (response amplitude held, force solved \
+                 for):\n"
+        .to_string();
+    for r in rows {
+        s += &format!(
+            "  response amplitude {:.4} {}: peak {} {:.3} ({}/N) at {:.3} Hz\n",
+            r.amplitude,
+            r.quantity.unit(),
+            r.quantity.frf_name(),
+            r.peak_frf,
+            r.quantity.unit(),
+            r.peak_frequency_hz
+        );
+    }
+    s
+}
+
+/// `identify-response-controlled.csv`: the identified model's FRF at each held response
+/// amplitude, row by row.
+pub fn write_response_controlled_csv(path: &Path, rows: &[ResponseControlled]) -> Result<()> {
+    write_atomic(path, |w| {
+        let io = |e| Error::io(path, e);
+        writeln!(w, "# identified (final) model under response control: the response amplitude is held, the force solved for; FRF = response per unit force in the model's phase convention (e^(i omega t))").map_err(io)?;
+        writeln!(
+            w,
+            "response_amplitude,unit,frequency_Hz,force_amplitude_N,frf_amplitude,frf_phase_rad"
+        )
+        .map_err(io)?;
+        for r in rows {
+            for k in 0..r.frequency_hz.len() {
+                writeln!(
+                    w,
+                    "{},{},{},{:.6e},{:.6e},{:.6e}",
+                    r.amplitude,
+                    r.quantity.unit(),
+                    r.frequency_hz[k],
+                    r.force_n[k],
+                    r.frf_amplitude[k],
+                    r.frf[k].arg()
+                )
+                .map_err(io)?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// `identify-backbone.csv`: the data's backbone (equivalent linear mode per level and pointwise
+/// estimates) and the models' (`(source name, points)`).
+pub fn write_backbone_csv(
+    path: &Path,
+    data: &[LevelBackbone],
+    models: &[(&str, &[BackbonePoint])],
+) -> Result<()> {
+    write_atomic(path, |w| {
+        let io = |e| Error::io(path, e);
+        writeln!(w, "# backbone: drive-point displacement amplitude (m), natural frequency (Hz), damping ratio (-)").map_err(io)?;
+        writeln!(w, "source,amplitude_m,frequency_Hz,damping_ratio").map_err(io)?;
+        for b in data {
+            writeln!(
+                w,
+                "data-level-{},{:.6e},{:.6},{:.6e}",
+                b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio
+            )
+            .map_err(io)?;
+            for q in &b.points {
+                writeln!(
+                    w,
+                    "data-pointwise-{},{:.6e},{:.6},{:.6e}",
+                    b.file, q.amplitude_m, q.frequency_hz, q.damping_ratio
+                )
+                .map_err(io)?;
+            }
+        }
+        for (name, bb) in models {
+            for q in bb.iter() {
+                writeln!(
+                    w,
+                    "{name},{:.6e},{:.6},{:.6e}",
+                    q.amplitude_m, q.frequency_hz, q.damping_ratio
+                )
+                .map_err(io)?;
+            }
+        }
+        Ok(())
     })
 }
 
@@ -426,22 +554,8 @@ pub fn identify(
     let backbone_before = model_backbone(&before.model, &data_backbone)?;
     let backbone_after = model_backbone(&after.model, &data_backbone)?;
     let quantity = sweeps[0].quantity;
-    let amplitudes = match &opts.response_amplitudes {
-        Some(a) => a.clone(),
-        None => sweeps
-            .iter()
-            .map(|s| {
-                let r = &s.rows[s.peak_row()];
-                r.response
-            })
-            .collect(),
-    };
-    let (flo, fhi) = sweeps
-        .iter()
-        .flat_map(|s| &s.rows)
-        .fold((f64::INFINITY, 0.0f64), |(a, b), r| {
-            (a.min(r.frequency_hz), b.max(r.frequency_hz))
-        });
+    let (amplitudes, (flo, fhi)) =
+        response_control_amplitudes(&sweeps, opts.response_amplitudes.as_deref());
     let response_controlled = amplitudes
         .iter()
         .map(|&a| {
@@ -762,21 +876,9 @@ impl Identification {
                 &rows,
             );
         }
-        s += "\nfinal model, residual per region (RMS complex / mean amplitude error / mean phase error):\n";
-        for e in &self.errors_after {
-            s += &format!("  {}:", e.file);
-            for r in &e.regions {
-                s += &format!(
-                    "  {} ({} rows) {:.3} / {:+.1}% / {:+.3} rad;",
-                    r.region,
-                    r.rows,
-                    r.rms_complex,
-                    100.0 * r.mean_amplitude_error,
-                    r.mean_phase_error_rad
-                );
-            }
-            s += "\n";
-        }
+        let rows: Vec<(&LevelErrors, Option<&LevelErrors>)> =
+            self.errors_after.iter().map(|e| (e, None)).collect();
+        s += &regions_text("final model, residual per region", &rows);
         s += "\nbackbone: data (equivalent linear mode per level) beside the final model at the \
               same amplitude:\n";
         for b in &self.data_backbone {
@@ -791,19 +893,7 @@ impl Identification {
                 b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio, f, z
             );
         }
-        s += "\nidentified model under response control (response amplitude held, force solved \
-              for):\n";
-        for r in &self.response_controlled {
-            s += &format!(
-                "  response amplitude {:.4} {}: peak {} {:.3} ({}/N) at {:.3} Hz\n",
-                r.amplitude,
-                r.quantity.unit(),
-                r.quantity.frf_name(),
-                r.peak_frf,
-                r.quantity.unit(),
-                r.peak_frequency_hz
-            );
-        }
+        s += &response_controlled_text(&self.response_controlled);
         s += &format!("\nwall time {:.1} s\n", self.wall_time_s);
         s
     }
@@ -882,65 +972,18 @@ impl Identification {
         )?;
         written.push(p);
         let p = dir.join("identify-backbone.csv");
-        write_atomic(&p, |w| {
-            let io = |e| Error::io(&p, e);
-            writeln!(w, "# backbone: drive-point displacement amplitude (m), natural frequency (Hz), damping ratio (-)").map_err(io)?;
-            writeln!(w, "source,amplitude_m,frequency_Hz,damping_ratio").map_err(io)?;
-            for b in &self.data_backbone {
-                writeln!(
-                    w,
-                    "data-level-{},{:.6e},{:.6},{:.6e}",
-                    b.file, b.peak_amplitude_m, b.linear.frequency_hz, b.linear.damping_ratio
-                )
-                .map_err(io)?;
-                for q in &b.points {
-                    writeln!(
-                        w,
-                        "data-pointwise-{},{:.6e},{:.6},{:.6e}",
-                        b.file, q.amplitude_m, q.frequency_hz, q.damping_ratio
-                    )
-                    .map_err(io)?;
-                }
-            }
-            for (name, bb) in [
+        write_backbone_csv(
+            &p,
+            &self.data_backbone,
+            &[
                 ("baseline-model", &self.backbone_before),
                 ("final-model", &self.backbone_after),
-            ] {
-                for q in bb.iter() {
-                    writeln!(
-                        w,
-                        "{name},{:.6e},{:.6},{:.6e}",
-                        q.amplitude_m, q.frequency_hz, q.damping_ratio
-                    )
-                    .map_err(io)?;
-                }
-            }
-            Ok(())
-        })?;
+            ],
+        )?;
         written.push(p);
         // Response-controlled FRFs.
         let p = dir.join("identify-response-controlled.csv");
-        write_atomic(&p, |w| {
-            let io = |e| Error::io(&p, e);
-            writeln!(w, "# identified (final) model under response control: the response amplitude is held, the force solved for; FRF = response per unit force in the model's phase convention (e^(i omega t))").map_err(io)?;
-            writeln!(w, "response_amplitude,unit,frequency_Hz,force_amplitude_N,frf_amplitude,frf_phase_rad").map_err(io)?;
-            for r in &self.response_controlled {
-                for k in 0..r.frequency_hz.len() {
-                    writeln!(
-                        w,
-                        "{},{},{},{:.6e},{:.6e},{:.6e}",
-                        r.amplitude,
-                        r.quantity.unit(),
-                        r.frequency_hz[k],
-                        r.force_n[k],
-                        r.frf_amplitude[k],
-                        r.frf[k].arg()
-                    )
-                    .map_err(io)?;
-                }
-            }
-            Ok(())
-        })?;
+        write_response_controlled_csv(&p, &self.response_controlled)?;
         written.push(p);
         // Model file.
         let p = dir.join("model.json");

@@ -29,13 +29,26 @@
 //! count, particle swarm then Nelder–Mead restarted until it converges, plus one Nelder–Mead
 //! start from the model as given; the best is kept (with no swarm starts, the local start only). The effect search of
 //! [`super::select`] is not run: its candidates are defined on the single nonlinear mode.
+//!
+//! # Report
+//!
+//! Every level's errors as given and updated (resonance, phase resonance, peak, RMS complex,
+//! residual per region), the measurement scatter, the backbone as the equivalent linear mode
+//! per level ([`backbone::equivalent_mode`]: the estimator the data's backbone uses, applied to
+//! each model's response at the same rows) and the updated model's response-controlled FRF at
+//! the measured peak responses.
 
+use super::backbone::{self, BackbonePoint, LevelBackbone};
 use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
 use super::measured::{sha256_hex, PhaseConvention, Sweep};
 use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
+use super::pipeline::{
+    response_control_amplitudes, response_controlled_text, response_controlled_with,
+    write_backbone_csv, write_response_controlled_csv, ResponseControlled,
+};
 use super::report::{
-    errors_table, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow, InputFile,
-    LevelErrors,
+    errors_table, fine_curve_with, plot_backbone, plot_level, regions_text, write_json,
+    write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::contact::element_for;
@@ -301,6 +314,17 @@ pub struct ReducedIdentification {
     pub scatter_floor: f64,
     /// Whether the updated model's objective is within [`super::select::SCATTER_FACTOR`] of it.
     pub at_scatter: bool,
+    /// The data's backbone (equivalent linear mode per level, pointwise estimates), or why it
+    /// could not be estimated (a sweep that is not one lightly damped mode).
+    pub data_backbone: std::result::Result<Vec<LevelBackbone>, String>,
+    /// Per level: the equivalent linear mode of the model's response at the level's rows, as
+    /// given and updated (`None`: no resonance inside the measured band).
+    pub backbone_before: Vec<Option<BackbonePoint>>,
+    pub backbone_after: Vec<Option<BackbonePoint>>,
+    /// The updated model under response control at the measured peak responses (or the given
+    /// amplitudes), and the amplitudes where that solve failed, with the reason.
+    pub response_controlled: Vec<ResponseControlled>,
+    pub response_control_failures: Vec<(f64, String)>,
     pub fit_options: FitOptions,
     pub wall_time_s: f64,
     #[serde(skip)]
@@ -334,13 +358,29 @@ fn responses_and_errors(
     Ok((responses, errors))
 }
 
+/// Per level, the equivalent linear mode of a model's responses at the level's rows
+/// ([`backbone::equivalent_mode`]).
+fn model_modes(levels: &[LevelData], responses: &[Vec<Complex64>]) -> Vec<Option<BackbonePoint>> {
+    levels
+        .iter()
+        .zip(responses)
+        .map(|(l, y)| {
+            let om: Vec<f64> = l.drives.iter().map(|d| d.omega).collect();
+            let f: Vec<f64> = l.drives.iter().map(|d| d.force_n).collect();
+            backbone::equivalent_mode(l.quantity, &om, &f, y)
+        })
+        .collect()
+}
+
 /// Update the reduced model of `spec` on the fit levels (0-based, already checked) and score
-/// every level, before (as given) and after.
+/// every level, before (as given) and after; the updated model's response-controlled FRF at
+/// `response_amplitudes` (unit of the lowest level's quantity; `None`: the measured peaks).
 pub fn identify_reduced(
     spec: &ReducedSpec,
     sweeps: Vec<Sweep>,
     fit_levels: Vec<usize>,
     opts: &FitOptions,
+    response_amplitudes: Option<&[f64]>,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<ReducedIdentification> {
     let t0 = std::time::Instant::now();
@@ -393,6 +433,22 @@ pub fn identify_reduced(
         .collect();
     let scatter_floor = super::select::scatter_floor(&fit_data);
     let at_scatter = fit.cost <= super::select::SCATTER_FACTOR * scatter_floor;
+    let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
+    let data_backbone = backbone::from_data(&sweeps, &frfs).map_err(|e| e.to_string());
+    let backbone_before = model_modes(&levels, &responses_before);
+    let backbone_after = model_modes(&levels, &responses_after);
+    let quantity = sweeps[0].quantity;
+    let (amplitudes, band) = response_control_amplitudes(&sweeps, response_amplitudes);
+    let (mut response_controlled, mut response_control_failures) = (Vec::new(), Vec::new());
+    for a in amplitudes {
+        crate::error::require_positive("--response-amplitude", a)?;
+        match response_controlled_with(quantity, a, band, |om, targets| {
+            fit.model.response_controlled(om, targets)
+        }) {
+            Ok(r) => response_controlled.push(r),
+            Err(e) => response_control_failures.push((a, e.to_string())),
+        }
+    }
     let bytes = std::fs::read(spec.path()).map_err(|e| Error::io(spec.path(), e))?;
     Ok(ReducedIdentification {
         model_file: spec.path().to_path_buf(),
@@ -407,6 +463,11 @@ pub fn identify_reduced(
         scatter,
         scatter_floor,
         at_scatter,
+        data_backbone,
+        backbone_before,
+        backbone_after,
+        response_controlled,
+        response_control_failures,
         fit_options: *opts,
         wall_time_s: t0.elapsed().as_secs_f64(),
         levels,
@@ -562,10 +623,57 @@ impl ReducedIdentification {
                  the updated model (its four factors cannot express what the measurement shows)"
             }
         );
+        s += &regions_text("residual per region, model as given → updated", &rows);
+        s += "\nbackbone: equivalent linear mode per level (the same estimator on the measured \
+              sweep and on each model's response at its rows; amplitude = peak drive-point \
+              displacement):\n";
+        let cell = |b: Option<&BackbonePoint>| match b {
+            Some(b) => format!(
+                "{:>9.3e} m {:>9.3} Hz ζ {:.5}",
+                b.amplitude_m, b.frequency_hz, b.damping_ratio
+            ),
+            None => format!("{:>36}", "no resonance in the band"),
+        };
+        match &self.data_backbone {
+            Ok(data) => {
+                s += &format!(
+                    "  {:<34} | {:<36} | {:<36} | {:<36}\n",
+                    "level", "data", "as given", "updated"
+                );
+                for (i, d) in data.iter().enumerate() {
+                    let p = BackbonePoint {
+                        amplitude_m: d.peak_amplitude_m,
+                        frequency_hz: d.linear.frequency_hz,
+                        damping_ratio: d.linear.damping_ratio,
+                    };
+                    s += &format!(
+                        "  {:<34} | {} | {} | {}\n",
+                        d.file,
+                        cell(Some(&p)),
+                        cell(self.backbone_before[i].as_ref()),
+                        cell(self.backbone_after[i].as_ref())
+                    );
+                }
+            }
+            Err(reason) => s += &format!("  not estimated from the data: {reason}\n"),
+        }
+        s += &response_controlled_text(&self.response_controlled);
+        for (a, e) in &self.response_control_failures {
+            s += &format!("  response amplitude {a}: no solution under response control: {e}\n");
+        }
         s
     }
 
-    /// Write `identify.{txt,json}`, `model.json`, `identify-rows.csv`, `identify-level<N>.png`.
+    /// The model backbones as plotted and written: the levels' equivalent modes in order of
+    /// amplitude (levels without a resonance in the band left out).
+    fn model_backbone_points(modes: &[Option<BackbonePoint>]) -> Vec<BackbonePoint> {
+        let mut pts: Vec<BackbonePoint> = modes.iter().flatten().copied().collect();
+        pts.sort_by(|a, b| a.amplitude_m.total_cmp(&b.amplitude_m));
+        pts
+    }
+
+    /// Write `identify.{txt,json}`, `model.json`, `identify-rows.csv`, `identify-level<N>.png`,
+    /// `identify-backbone.{csv,png}` and `identify-response-controlled.csv`.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let mut written = Vec::new();
@@ -638,6 +746,33 @@ impl ReducedIdentification {
             &|_| conv,
         )?;
         written.push(p);
+        let before = Self::model_backbone_points(&self.backbone_before);
+        let after = Self::model_backbone_points(&self.backbone_after);
+        let data: &[LevelBackbone] = self.data_backbone.as_deref().unwrap_or(&[]);
+        let p = dir.join("identify-backbone.csv");
+        write_backbone_csv(
+            &p,
+            data,
+            &[("as-given-model", &before), ("updated-model", &after)],
+        )?;
+        written.push(p);
+        if !data.is_empty() {
+            let p = dir.join("identify-backbone.png");
+            plot_backbone(
+                &p,
+                data,
+                &[
+                    ("as given (equivalent mode per level)".into(), before),
+                    ("updated (equivalent mode per level)".into(), after),
+                ],
+            )?;
+            written.push(p);
+        }
+        if !self.response_controlled.is_empty() {
+            let p = dir.join("identify-response-controlled.csv");
+            write_response_controlled_csv(&p, &self.response_controlled)?;
+            written.push(p);
+        }
         Ok(written)
     }
 }

@@ -140,6 +140,40 @@ impl LevelErrors {
     }
 }
 
+/// Residual per region (below, at and above resonance) of every level: RMS complex error /
+/// mean amplitude error / mean phase error; with a second model, `first → second` for each.
+pub fn regions_text(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) -> String {
+    let mut s = format!("\n{title} (RMS complex / mean amplitude error / mean phase error):\n");
+    for (a, b) in rows {
+        s += &format!("  {}:", a.file);
+        for (k, r) in a.regions.iter().enumerate() {
+            s += &match b.and_then(|b| b.regions.get(k)) {
+                None => format!(
+                    "  {} ({} rows) {:.3} / {:+.1}% / {:+.3} rad;",
+                    r.region,
+                    r.rows,
+                    r.rms_complex,
+                    100.0 * r.mean_amplitude_error,
+                    r.mean_phase_error_rad
+                ),
+                Some(q) => format!(
+                    "  {} ({} rows) {:.3} → {:.3} / {:+.1} → {:+.1}% / {:+.3} → {:+.3} rad;",
+                    r.region,
+                    r.rows,
+                    r.rms_complex,
+                    q.rms_complex,
+                    100.0 * r.mean_amplitude_error,
+                    100.0 * q.mean_amplitude_error,
+                    r.mean_phase_error_rad,
+                    q.mean_phase_error_rad
+                ),
+            };
+        }
+        s += "\n";
+    }
+    s
+}
+
 /// A model's response curve on a fine frequency grid for plots: the measured force
 /// interpolated linearly between rows (sweep order kept).
 pub fn fine_curve(model: &Model, level: &LevelData, per_interval: usize) -> Vec<(f64, Complex64)> {
