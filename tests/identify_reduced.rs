@@ -7,7 +7,7 @@
 use asperity::identify::fit::{FitOptions, Parametrised};
 use asperity::identify::measured::Sweep;
 use asperity::identify::model::Drive;
-use asperity::identify::reduced::{identify_reduced, ReducedSpec};
+use asperity::identify::reduced::{identify_reduced, ReducedOptions, ReducedSpec};
 use asperity::identify::report::LevelErrors;
 use std::f64::consts::TAU;
 
@@ -97,6 +97,14 @@ fn fit_options(seed: u64) -> FitOptions {
     }
 }
 
+/// [`fit_options`] without prediction bands (their chains would dominate the test's time).
+fn options(seed: u64) -> ReducedOptions {
+    ReducedOptions {
+        chain_steps: Some(0),
+        ..ReducedOptions::new(fit_options(seed))
+    }
+}
+
 #[test]
 fn updating_factors_come_back_within_two_percent_in_ten_of_ten_realisations() {
     let dir = tempfile::tempdir().unwrap();
@@ -109,8 +117,7 @@ fn updating_factors_come_back_within_two_percent_in_ten_of_ten_realisations() {
             .enumerate()
             .map(|(k, &f)| sweep(&spec, f, 100 * r + k as u64))
             .collect();
-        let id =
-            identify_reduced(&spec, sweeps, vec![0, 2], &fit_options(r + 1), None, None).unwrap();
+        let id = identify_reduced(&spec, sweeps, vec![0, 2], &options(r + 1), None).unwrap();
         assert!(id.fit.converged, "realisation {r}: fit not converged");
         for (k, (&v, &t)) in id.fit.model.values.iter().zip(&TRUTH).enumerate() {
             let e = (v / t - 1.0).abs();
@@ -237,6 +244,8 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
         "1",
         "--response-amplitude",
         "2,10",
+        "--chain-steps",
+        "3000",
         "--out-dir",
         out.to_str().unwrap(),
     ]);
@@ -252,6 +261,7 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
         "residual per region, model as given → updated",
         "backbone: equivalent linear mode per level",
         "response amplitude 2.0000 m/s²",
+        "prediction uncertainty of the updated model",
     ] {
         assert!(
             text.contains(section),
@@ -316,6 +326,32 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
             assert!(f < 0.01, "force RMS error {f}\n{text}");
         }
         assert!(pout.join("predict-1.png").is_file());
+        // Under force control, `predict` gives the 95 % bands of the ensemble saved with the
+        // model. One noise realisation cannot test their coverage (that is tested on the single
+        // mode, `identify_synthetic`, over 20); it can test their scale: the truth's peak and
+        // phase resonance lie within twice the band's half-width of the band's centre (≈ 3.9
+        // standard deviations of a Gaussian prediction; a band too narrow by more than a factor
+        // of two fails), and the peak band is narrower than 5 % of the peak.
+        if control == "force" {
+            let b = &json["prediction"]["bands"]["Ok"][0];
+            let within = |q: &str, m: &str| {
+                let (lo, hi) = (
+                    b[q]["lo_95"].as_f64().unwrap(),
+                    b[q]["hi_95"].as_f64().unwrap(),
+                );
+                let v = b[m].as_f64().unwrap();
+                let (centre, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+                assert!(
+                    half > 0.0 && (v - centre).abs() <= 2.0 * half,
+                    "{q}: truth {v} against the band [{lo}, {hi}]\n{text}"
+                );
+                2.0 * half / v
+            };
+            let width = within("peak", "peak_measured");
+            assert!(width < 0.05, "peak band {width}\n{text}");
+            within("phase_resonance_hz", "phase_resonance_measured_hz");
+            assert!(b["r_hat"].as_f64().unwrap() < 1.1, "{text}");
+        }
     }
     // A response-model file changed since the identification is refused.
     let toml = std::fs::read_to_string(&model).unwrap();

@@ -415,9 +415,18 @@ fn prediction_band_covers_the_truth_at_its_stated_rate() {
             None,
         )
         .unwrap();
-        let cov = parameter_covariance(&fit.model, &fit_levels).unwrap();
-        let ensemble = posterior_ensemble(&fit.model, &cov, &fit_levels, 200, 3000, r).unwrap();
-        let bands = prediction_bands(&fit.model, &ensemble, &levels[1..2], &["predicted"]).unwrap();
+        let cov = parameter_covariance(&fit.model.spec, &fit.model, &fit_levels).unwrap();
+        let ensemble =
+            posterior_ensemble(&fit.model.spec, &fit.model, &cov, &fit_levels, 200, 3000, r)
+                .unwrap();
+        let bands = prediction_bands(
+            &fit.model.spec,
+            &fit.model,
+            &ensemble,
+            &levels[1..2],
+            &["predicted"],
+        )
+        .unwrap();
         // The truth's peak on the same rows (same forces), without noise.
         let (y, _) = levels[1].model_frf(&truth).unwrap();
         let f: Vec<f64> = levels[1].drives.iter().map(|d| d.omega / TAU).collect();

@@ -62,14 +62,16 @@ pub struct IdentifyArgs {
     #[arg(long, value_delimiter = ',')]
     pub response_amplitude: Option<Vec<f64>>,
     /// Steps of each of the two Metropolis chains that sample the models fitting about as well
-    /// (the 95 % bands of the predictions; 0: no bands).
-    #[arg(long, default_value_t = asperity::identify::uncertainty::CHAIN_STEPS)]
-    pub chain_steps: usize,
+    /// (the 95 % bands of the predictions; 0: no bands, otherwise at least 1000). Default 6000;
+    /// with `--structure` the default bands are left out when they would take more than ten
+    /// minutes (the report gives the expected time), and an explicit value runs them.
+    #[arg(long)]
+    pub chain_steps: Option<usize>,
     /// Multi-DOF reduced model to update instead of the single nonlinear mode: a model file of
     /// `asperity response` (linear structure, contact element tables, excitation and response
     /// DOFs, harmonics). Four factors are fitted (frequencies, damping ratios, contact stiffness,
-    /// friction); the effect search and the prediction bands are single-mode only.
-    #[arg(long, conflicts_with_all = ["family", "candidates", "max_effects", "chain_steps"])]
+    /// friction); the effect search is single-mode only.
+    #[arg(long, conflicts_with_all = ["family", "candidates", "max_effects"])]
     pub structure: Option<PathBuf>,
     /// Output directory: identify.{txt,json}, model.json, identify-rows.csv,
     /// identify-backbone.{csv,png}, identify-response-controlled.csv, identify-level<N>.png.
@@ -83,6 +85,17 @@ fn report(text: &str, written: &[PathBuf]) {
     println!("\nwrote:");
     for p in written {
         println!("  {}", p.display());
+    }
+}
+
+/// `--chain-steps`, checked: 0 (no bands) or at least 1000.
+fn chain_steps(args: &IdentifyArgs) -> Result<Option<usize>> {
+    match args.chain_steps {
+        Some(n) if n != 0 && n < 1000 => Err(Error::param(
+            "--chain-steps",
+            format!("{n} (0 for no bands, or at least 1000)"),
+        )),
+        n => Ok(n),
     }
 }
 
@@ -138,13 +151,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
         f.seed = args.seed;
     }
     opts.response_amplitudes = args.response_amplitude.clone();
-    if args.chain_steps != 0 && args.chain_steps < 1000 {
-        return Err(Error::param(
-            "--chain-steps",
-            format!("{} (0 for no bands, or at least 1000)", args.chain_steps),
-        ));
-    }
-    opts.chain_steps = args.chain_steps;
+    opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
     let sweeps = read_sweeps(&args.files)?;
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
@@ -158,7 +165,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
 /// `asperity identify --structure`: update the reduced model of a response-model file.
 fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Result<()> {
     use asperity::identify::fit::{FitOptions, Parametrised};
-    use asperity::identify::reduced::{identify_reduced, ReducedSpec};
+    use asperity::identify::reduced::{identify_reduced, ReducedOptions, ReducedSpec};
     if args.starts > 0 {
         check_search(args)?;
     }
@@ -178,14 +185,12 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     let estimate = opts.swarm_evaluations() + (opts.starts as u64 + 1) * local;
     let bar = super::progress_bar("identify (reduced model)", estimate);
     bar.set_message("model evaluations");
-    let result = identify_reduced(
-        &spec,
-        sweeps,
-        fit_levels,
-        &opts,
-        args.response_amplitude.as_deref(),
-        Some(&bar),
-    );
+    let options = ReducedOptions {
+        fit: opts,
+        response_amplitudes: args.response_amplitude.clone(),
+        chain_steps: chain_steps(args)?,
+    };
+    let result = identify_reduced(&spec, sweeps, fit_levels, &options, Some(&bar));
     bar.finish_and_clear();
     let id = result?;
     report(&id.text(), &id.write(&args.out_dir)?);

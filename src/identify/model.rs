@@ -502,22 +502,7 @@ impl Model {
     /// Build and check the value count and bounds (values outside the bounds are refused:
     /// a saved model must describe the physics it was fitted with).
     pub fn new(spec: ModelSpec, values: Vec<f64>) -> Result<Self> {
-        let p = spec.params();
-        if p.len() != values.len() {
-            return Err(Error::param(
-                "values",
-                format!("{} parameters expected, got {}", p.len(), values.len()),
-            ));
-        }
-        for (s, &v) in p.iter().zip(&values) {
-            let tol = 1e-9 * (s.hi - s.lo).abs().max(s.hi.abs());
-            if !(v.is_finite() && v >= s.lo - tol && v <= s.hi + tol) {
-                return Err(Error::param(
-                    s.name,
-                    format!("{v} is outside its bounds [{}, {}] {}", s.lo, s.hi, s.unit),
-                ));
-            }
-        }
+        check_values(&spec.params(), &values)?;
         Ok(Self { spec, values })
     }
 
@@ -921,6 +906,27 @@ fn solve_robust(
         }
     }
     Err(first)
+}
+
+/// Check a set of physical values against the parameters: one per parameter, finite and inside
+/// its bounds (to 1e-9 of the box); the error names the parameter.
+pub fn check_values(params: &[ParamSpec], values: &[f64]) -> Result<()> {
+    if params.len() != values.len() {
+        return Err(Error::param(
+            "values",
+            format!("{} parameters expected, got {}", params.len(), values.len()),
+        ));
+    }
+    for (s, &v) in params.iter().zip(values) {
+        let tol = 1e-9 * (s.hi - s.lo).abs().max(s.hi.abs());
+        if !(v.is_finite() && v >= s.lo - tol && v <= s.hi + tol) {
+            return Err(Error::param(
+                s.name,
+                format!("{v} is outside its bounds [{}, {}] {}", s.lo, s.hi, s.unit),
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -549,8 +549,14 @@ pub fn identify(
             }
         })
         .collect();
-    let uncertainty =
-        uncertainty::estimate(&after.model, &fit_data, &levels, &roles, opts.chain_steps);
+    let uncertainty = uncertainty::estimate(
+        &after.model.spec,
+        &after.model,
+        &fit_data,
+        &levels,
+        &roles,
+        opts.chain_steps,
+    );
     let backbone_before = model_backbone(&before.model, &data_backbone)?;
     let backbone_after = model_backbone(&after.model, &data_backbone)?;
     let quantity = sweeps[0].quantity;
@@ -649,7 +655,8 @@ impl SavedModel {
         Model::new(s.model.spec.clone(), s.model.values.clone())
             .map_err(|e| Error::parse(path, 0, e.to_string()))?;
         if let Some(e) = &s.ensemble {
-            e.check(&s.model).map_err(|e| Error::parse(path, 0, e))?;
+            e.check(&s.model.spec.params())
+                .map_err(|e| Error::parse(path, 0, e))?;
         }
         Ok(s)
     }
@@ -852,7 +859,7 @@ impl Identification {
             "errors per level, baseline → final model (resonance and peak of the response per unit force):",
             &rows,
         );
-        s += &self.uncertainty.text();
+        s += &self.uncertainty.text("final model");
         if let Some(a) = &self.alternative {
             s +=
                 &format!(

@@ -44,7 +44,8 @@ pub enum Control {
 pub enum Predictor {
     /// The single nonlinear mode and the ensemble saved with it, if any.
     Mode(Model, Option<Ensemble>),
-    Reduced(ReducedModel),
+    /// An updated reduced model and the ensemble saved with it, if any.
+    Reduced(ReducedModel, Option<Ensemble>),
 }
 
 impl Predictor {
@@ -53,7 +54,7 @@ impl Predictor {
     fn frf(&self, level: &LevelData) -> Result<(Vec<Complex64>, usize)> {
         match self {
             Predictor::Mode(m, _) => level.model_frf(m),
-            Predictor::Reduced(m) => ReducedSpec::frf(m, level),
+            Predictor::Reduced(m, _) => ReducedSpec::frf(m, level),
         }
     }
 
@@ -66,7 +67,7 @@ impl Predictor {
     ) -> Result<(Vec<f64>, Vec<Complex64>)> {
         match self {
             Predictor::Mode(m, _) => m.response_controlled(omegas, targets, mean_force_n),
-            Predictor::Reduced(m) => m.response_controlled(omegas, targets),
+            Predictor::Reduced(m, _) => m.response_controlled(omegas, targets),
         }
     }
 
@@ -74,7 +75,7 @@ impl Predictor {
     fn fine_curve(&self, level: &LevelData) -> Vec<(f64, Complex64)> {
         match self {
             Predictor::Mode(m, _) => fine_curve(m, level, 4),
-            Predictor::Reduced(m) => fine_curve_with(level, 4, &|d: &[Drive]| {
+            Predictor::Reduced(m, _) => fine_curve_with(level, 4, &|d: &[Drive]| {
                 m.receptance_tolerant(d, true).map(|(x, _)| x)
             }),
         }
@@ -114,8 +115,8 @@ pub struct Prediction {
 /// Predict measured files with a saved model.
 pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Result<Prediction> {
     let (model, saved_convention) = if SavedReducedModel::is_reduced(model_file)? {
-        let (m, c) = SavedReducedModel::read(model_file)?;
-        (Predictor::Reduced(m), c)
+        let (m, c, e) = SavedReducedModel::read(model_file)?;
+        (Predictor::Reduced(m, e), c)
     } else {
         let saved = SavedModel::read(model_file)?;
         (
@@ -181,15 +182,17 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
             model_force_n: forces,
         });
     }
+    let roles = vec!["predicted"; levels.len()];
     let bands = match (&model, control) {
-        (Predictor::Reduced(_), _) => Err("reduced models carry no ensemble".to_string()),
-        (Predictor::Mode(_, None), _) => Err("the model file holds no ensemble".to_string()),
-        (Predictor::Mode(_, Some(_)), Control::Response) => {
-            Err("bands are computed under force control only".to_string())
+        (Predictor::Mode(_, None) | Predictor::Reduced(_, None), _) => {
+            Err("the model file holds no ensemble".to_string())
         }
+        (_, Control::Response) => Err("bands are computed under force control only".to_string()),
         (Predictor::Mode(m, Some(e)), Control::Force) => {
-            let roles = vec!["predicted"; levels.len()];
-            prediction_bands(m, e, &levels, &roles).map_err(|e| e.to_string())
+            prediction_bands(&m.spec, m, e, &levels, &roles).map_err(|e| e.to_string())
+        }
+        (Predictor::Reduced(m, Some(e)), Control::Force) => {
+            prediction_bands(&m.spec, m, e, &levels, &roles).map_err(|e| e.to_string())
         }
     };
     Ok(Prediction {
@@ -238,6 +241,10 @@ impl Prediction {
                 );
             }
             for r in &f.errors.regions {
+                if r.rows == 0 {
+                    s += &format!("  {} {}: no rows\n", f.errors.file, r.region);
+                    continue;
+                }
                 s += &format!(
                     "  {} {} ({} rows): RMS {:.3}, amplitude {:+.1}%, phase {:+.3} rad\n",
                     f.errors.file,

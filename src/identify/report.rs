@@ -148,6 +148,7 @@ pub fn regions_text(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
         s += &format!("  {}:", a.file);
         for (k, r) in a.regions.iter().enumerate() {
             s += &match b.and_then(|b| b.regions.get(k)) {
+                _ if r.rows == 0 => format!("  {} (no rows);", r.region),
                 None => format!(
                     "  {} ({} rows) {:.3} / {:+.1}% / {:+.3} rad;",
                     r.region,

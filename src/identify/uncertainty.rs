@@ -35,10 +35,10 @@
 //! one-sided uncertainty is not in the band (the report lists them). The ensemble is saved with
 //! the model (`model.json`) so that `asperity predict` gives the same bands for any file.
 
-use super::fit::LevelData;
-use super::model::Model;
+use super::fit::{LevelData, Objective, Parametrised};
+use super::model::{check_values, ParamSpec};
 use super::report::LevelErrors;
-use super::select::{cost_all_rows, lag1_autocorrelation, score};
+use super::select::lag1_autocorrelation;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
@@ -122,10 +122,23 @@ impl ParameterCovariance {
     }
 }
 
-/// Residuals of a model at every row of some levels, per level ([`score`] on all rows).
-fn all_residuals(model: &Model, levels: &[LevelData]) -> Result<Vec<Vec<Complex64>>> {
+/// Residuals of a model at every row of some levels, per level.
+fn all_residuals<S: Parametrised>(
+    model: &S::Model,
+    levels: &[LevelData],
+) -> Result<Vec<Vec<Complex64>>> {
+    levels
+        .iter()
+        .map(|l| Ok(l.residuals(&S::frf(model, l)?.0)))
+        .collect()
+}
+
+/// The objective `J` of a model on all rows of some levels.
+fn cost_all_rows<S: Parametrised>(spec: &S, model: &S::Model, levels: &[LevelData]) -> f64 {
     let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
-    Ok(score(model, levels, &all)?.residuals)
+    Objective::new(spec.clone(), levels, &all, None)
+        .cost_of(model)
+        .0
 }
 
 /// Residual components (real and imaginary parts, level after level) and their weights in the
@@ -142,25 +155,28 @@ fn components(per_level: &[Vec<Complex64>]) -> (Vec<f64>, Vec<f64>) {
     (r, w)
 }
 
-/// Covariance of a model fitted on all rows of `levels` (the model at its optimum).
-pub fn parameter_covariance(model: &Model, levels: &[LevelData]) -> Result<ParameterCovariance> {
-    let params = model.spec.params();
+/// Covariance of a model of the family `spec` fitted on all rows of `levels` (the model at its
+/// optimum).
+pub fn parameter_covariance<S: Parametrised>(
+    spec: &S,
+    model: &S::Model,
+    levels: &[LevelData],
+) -> Result<ParameterCovariance> {
+    let params = spec.params();
+    let values = S::values_of(model);
     let free: Vec<usize> = (0..params.len())
-        .filter(|&j| !params[j].at_bound(model.values[j]))
+        .filter(|&j| !params[j].at_bound(values[j]))
         .collect();
     if free.is_empty() {
         return Err(Error::Data("every parameter is on a bound".into()));
     }
     let z: Vec<f64> = params
         .iter()
-        .zip(&model.values)
+        .zip(values)
         .map(|(p, &v)| p.coordinate(v))
         .collect();
-    let at = |zj: &[f64]| Model {
-        spec: model.spec.clone(),
-        values: params.iter().zip(zj).map(|(p, &v)| p.value(v)).collect(),
-    };
-    let per_level = all_residuals(model, levels)?;
+    let at = |zj: &[f64]| spec.model(params.iter().zip(zj).map(|(p, &v)| p.value(v)).collect());
+    let per_level = all_residuals::<S>(model, levels)?;
     let (r0, w) = components(&per_level);
     let columns: Vec<Vec<f64>> = free
         .iter()
@@ -168,7 +184,7 @@ pub fn parameter_covariance(model: &Model, levels: &[LevelData]) -> Result<Param
             let shifted = |s: f64| {
                 let mut zz = z.clone();
                 zz[j] += s;
-                all_residuals(&at(&zz), levels).map(|r| components(&r).0)
+                all_residuals::<S>(&at(&zz), levels).map(|r| components(&r).0)
             };
             let (rp, rm) = (shifted(JACOBIAN_STEP)?, shifted(-JACOBIAN_STEP)?);
             Ok(rp
@@ -251,18 +267,19 @@ pub fn gelman_rubin(chains: &[Vec<f64>]) -> f64 {
 /// documentation): [`CHAINS`] adaptive Metropolis chains of `steps` steps from the optimum,
 /// the second halves thinned to `draws` models in all. `Err` when the chains disagree on the
 /// fit (`R̂` of `ln J` above [`MAX_R_HAT`]); parameters on which they disagree are listed.
-pub fn posterior_ensemble(
-    model: &Model,
+pub fn posterior_ensemble<S: Parametrised>(
+    spec: &S,
+    model: &S::Model,
     cov: &ParameterCovariance,
     fit_levels: &[LevelData],
     draws: usize,
     steps: usize,
     seed: u64,
 ) -> Result<Ensemble> {
-    let params = model.spec.params();
+    let params = spec.params();
     let z_hat: Vec<f64> = params
         .iter()
-        .zip(&model.values)
+        .zip(S::values_of(model))
         .map(|(p, &v)| p.coordinate(v))
         .collect();
     let dim = cov.free.len();
@@ -279,11 +296,7 @@ pub fn posterior_ensemble(
         if zf.iter().any(|v| !(0.0..=1.0).contains(v)) {
             return f64::NEG_INFINITY;
         }
-        let m = Model {
-            spec: model.spec.clone(),
-            values: values_of(zf),
-        };
-        -0.5 * n_eff * cost_all_rows(&m, fit_levels).ln()
+        -0.5 * n_eff * cost_all_rows(spec, &spec.model(values_of(zf)), fit_levels).ln()
     };
     let scale = 2.38 * 2.38 / dim as f64;
     let floor = cov.covariance_z.diagonal().map(|v| 1e-6 * v);
@@ -377,9 +390,9 @@ pub fn posterior_ensemble(
 }
 
 impl Ensemble {
-    /// Check an ensemble read from a file against its model: every draw a valid parameter set
-    /// of the model's form.
-    pub fn check(&self, model: &Model) -> std::result::Result<(), String> {
+    /// Check an ensemble read from a file against its model's parameters: every draw a valid
+    /// parameter set of the model's form.
+    pub fn check(&self, params: &[ParamSpec]) -> std::result::Result<(), String> {
         if self.draws.is_empty() || self.chain.len() != self.draws.len() {
             return Err(format!(
                 "ensemble: {} draws with {} chain labels",
@@ -388,28 +401,30 @@ impl Ensemble {
             ));
         }
         for (i, d) in self.draws.iter().enumerate() {
-            Model::new(model.spec.clone(), d.clone())
-                .map_err(|e| format!("ensemble draw {i}: {e}"))?;
+            check_values(params, d).map_err(|e| format!("ensemble draw {i}: {e}"))?;
         }
         Ok(())
     }
 
-    /// 95 % intervals of the model's parameters (`None` for a parameter held on its
-    /// bound, `free` the free ones).
-    pub fn intervals(&self, model: &Model, free: &[usize]) -> Vec<ParameterInterval> {
-        model
-            .spec
-            .params()
+    /// 95 % intervals of the parameters `params` with the model's `values` (`None` for a
+    /// parameter held on its bound, `free` the free ones).
+    pub fn intervals(
+        &self,
+        params: &[ParamSpec],
+        values: &[f64],
+        free: &[usize],
+    ) -> Vec<ParameterInterval> {
+        params
             .iter()
             .enumerate()
             .map(|(j, p)| {
                 let b = free
                     .contains(&j)
-                    .then(|| band(model.values[j], self.draws.iter().map(|d| d[j]).collect()));
+                    .then(|| band(values[j], self.draws.iter().map(|d| d[j]).collect()));
                 ParameterInterval {
                     name: p.name.to_string(),
                     unit: p.unit.to_string(),
-                    value: model.values[j],
+                    value: values[j],
                     lo_95: b.map(|b| b.lo_95),
                     hi_95: b.map(|b| b.hi_95),
                     at_bound: b.is_none(),
@@ -502,8 +517,9 @@ fn band(value: f64, xs: Vec<f64>) -> Band {
 
 /// 95 % bands of every level's peak, resonance and phase resonance over the ensemble's models;
 /// `roles[i]` is level `i`'s role ("fit", "predicted").
-pub fn prediction_bands(
-    model: &Model,
+pub fn prediction_bands<S: Parametrised>(
+    spec: &S,
+    model: &S::Model,
     ensemble: &Ensemble,
     levels: &[LevelData],
     roles: &[&str],
@@ -513,13 +529,10 @@ pub fn prediction_bands(
         .draws
         .par_iter()
         .map(|v| {
-            let m = Model {
-                spec: model.spec.clone(),
-                values: v.clone(),
-            };
+            let m = spec.model(v.clone());
             levels
                 .iter()
-                .map(|l| match l.model_frf(&m) {
+                .map(|l| match S::frf(&m, l) {
                     Ok((y, 0)) => {
                         let e = LevelErrors::new(l, &y, "", 0);
                         [
@@ -537,7 +550,7 @@ pub fn prediction_bands(
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            let (y, failed) = l.model_frf(model)?;
+            let (y, failed) = S::frf(model, l)?;
             let own = LevelErrors::new(l, &y, roles[i], failed);
             let col = |k: usize| outcomes.iter().map(|o| o[i][k]).collect::<Vec<f64>>();
             Ok(PredictionBand {
@@ -598,8 +611,9 @@ pub enum Uncertainty {
 
 /// The ensemble of `model` fitted on all rows of `fit_levels` (chains of `steps` steps; 0: none),
 /// and the bands of every level of `levels` (`roles[i]` level `i`'s role).
-pub fn estimate(
-    model: &Model,
+pub fn estimate<S: Parametrised>(
+    spec: &S,
+    model: &S::Model,
     fit_levels: &[LevelData],
     levels: &[LevelData],
     roles: &[&str],
@@ -611,8 +625,9 @@ pub fn estimate(
         };
     }
     let run = || -> Result<Uncertainty> {
-        let covariance = parameter_covariance(model, fit_levels)?;
+        let covariance = parameter_covariance(spec, model, fit_levels)?;
         let ensemble = posterior_ensemble(
+            spec,
             model,
             &covariance,
             fit_levels,
@@ -620,9 +635,9 @@ pub fn estimate(
             steps,
             ENSEMBLE_SEED,
         )?;
-        let bands = prediction_bands(model, &ensemble, levels, roles)?;
+        let bands = prediction_bands(spec, model, &ensemble, levels, roles)?;
         Ok(Uncertainty::Estimated(Box::new(Estimate {
-            intervals: ensemble.intervals(model, &covariance.free),
+            intervals: ensemble.intervals(&spec.params(), S::values_of(model), &covariance.free),
             acceptance_rate: ensemble.acceptance_rate,
             r_hat_ln_j: ensemble.r_hat_ln_j,
             undetermined: ensemble.undetermined.clone(),
@@ -637,8 +652,8 @@ pub fn estimate(
 }
 
 impl Uncertainty {
-    /// Report section.
-    pub fn text(&self) -> String {
+    /// Report section on the model called `name` ("final model", "updated model").
+    pub fn text(&self, name: &str) -> String {
         let e = match self {
             Uncertainty::Estimated(e) => e,
             Uncertainty::NotEstimated { reason } => {
@@ -655,7 +670,7 @@ impl Uncertainty {
             ..
         } = e.as_ref();
         let mut s = format!(
-            "\nprediction uncertainty of the final model: models of its form that fit the fit \
+            "\nprediction uncertainty of the {name}: models of its form that fit the fit \
              levels about as well (posterior ∝ J^(−n_eff/2), n_eff = {:.1} of {} residual \
              components: residual sd {:.4} of the peak per component, lag-1 autocorrelation \
              {:.2}; {CHAINS} adaptive Metropolis chains of {} steps from the optimum, \
