@@ -354,16 +354,28 @@ pub fn response_controlled_text(rows: &[ResponseControlled]) -> String {
         .to_string();
     for r in rows {
         s += &format!(
-            "  response amplitude {:.4} {}: peak {} {:.3} ({}/N) at {:.3} Hz\n",
-            r.amplitude,
+            "  response amplitude {} {}: peak {} {} ({}/N) at {:.3} Hz\n",
+            significant(r.amplitude),
             r.quantity.unit(),
             r.quantity.frf_name(),
-            r.peak_frf,
+            significant(r.peak_frf),
             r.quantity.unit(),
             r.peak_frequency_hz
         );
     }
     s
+}
+
+/// Five significant digits, fixed-point for magnitudes 1e-2 to 1e5 (accelerations, accelerances)
+/// and in exponent form otherwise (displacements in m, receptances in m/N).
+fn significant(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || (1e-2..1e5).contains(&a) {
+        let decimals = (4 - a.log10().floor() as i32).clamp(0, 6) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.4e}")
+    }
 }
 
 /// `identify-response-controlled.csv`: the identified model's FRF at each held response
@@ -1034,5 +1046,19 @@ impl Identification {
         write_string_atomic(&p, &self.text())?;
         written.push(p);
         Ok(written)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Amplitudes print with five significant digits whatever their unit.
+    #[test]
+    fn significant_digits() {
+        assert_eq!(significant(19.9), "19.900");
+        assert_eq!(significant(138.91), "138.91");
+        assert_eq!(significant(0.0123456), "0.012346");
+        assert_eq!(significant(3.096e-8), "3.0960e-8");
     }
 }
