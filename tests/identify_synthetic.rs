@@ -433,7 +433,8 @@ fn prediction_band_covers_the_truth_at_its_stated_rate() {
         let a: Vec<f64> = y.iter().map(|v| v.norm()).collect();
         truth_peak = resonance(&f, &a).1;
         let b = bands[0].peak;
-        let truth_cost = asperity::identify::select::cost_all_rows(&truth, &fit_levels);
+        let truth_cost =
+            asperity::identify::select::cost_all_rows(&truth.spec, &truth, &fit_levels);
         eprintln!(
             "realisation {r}: predicted peak {:.3} [{:.3}, {:.3}], truth {truth_peak:.3}; \
              J {:.3e} (truth's {truth_cost:.3e}), residual sd {:.2e}, rho {:.2}, acceptance {:.2}, R̂ {:.3}",

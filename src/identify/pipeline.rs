@@ -10,8 +10,8 @@ use super::fit::{FitOptions, FitResult, LevelData};
 use super::measured::{PhaseConvention, Quantity, Sweep};
 use super::model::{Family, Model, ModelSpec, Scales};
 use super::report::{
-    errors_table, fine_curve, plot_backbone, plot_level, regions_text, write_json, write_rows_csv,
-    CurveRow, InputFile, LevelErrors,
+    errors_table, fine_curve, level_role, level_roles, plot_backbone, plot_level, regions_text,
+    write_json, write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
 use super::select::{self, refit_all_rows, SelectOptions, Selection, Verdict};
 use super::uncertainty::{self, Ensemble, Uncertainty};
@@ -456,7 +456,7 @@ fn level_errors(model: &Model, levels: &[LevelData], fit: &[usize]) -> Result<Ve
         .enumerate()
         .map(|(i, l)| {
             let (y, failed) = l.model_frf(model)?;
-            let role = if fit.contains(&i) { "fit" } else { "predicted" };
+            let role = level_role(i, fit);
             Ok(LevelErrors::new(l, &y, role, failed))
         })
         .collect()
@@ -552,15 +552,7 @@ pub fn identify(
     let alternative = alternative(&selection, &fit_data, &levels, &fit_levels, opts, progress)?;
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
-    let roles: Vec<&str> = (0..levels.len())
-        .map(|i| {
-            if fit_levels.contains(&i) {
-                "fit"
-            } else {
-                "predicted"
-            }
-        })
-        .collect();
+    let roles = level_roles(levels.len(), &fit_levels);
     let uncertainty = uncertainty::estimate(
         &after.model.spec,
         &after.model,
@@ -762,11 +754,7 @@ impl Identification {
                 sw.quantity.column(),
                 sw.mean_force_n(),
                 &sw.sha256[..16],
-                if self.fit_levels.contains(&i) {
-                    "fit"
-                } else {
-                    "predicted"
-                }
+                level_role(i, &self.fit_levels)
             );
         }
         s += &format!(
@@ -930,11 +918,7 @@ impl Identification {
         for (i, (l, sw)) in levels.iter().zip(&self.sweeps).enumerate() {
             let (yb, _) = l.model_frf(&self.before.model)?;
             let (ya, _) = l.model_frf(&self.after.model)?;
-            let role = if self.fit_levels.contains(&i) {
-                "fit"
-            } else {
-                "predicted"
-            };
+            let role = level_role(i, &self.fit_levels);
             for (k, r) in sw.rows.iter().enumerate() {
                 rows.push(CurveRow {
                     file: l.name.clone(),

@@ -39,9 +39,7 @@
 //! the measured peak responses.
 
 use super::backbone::{self, BackbonePoint, LevelBackbone};
-use super::fit::{
-    fit_global, fit_local, FitOptions, FitResult, LevelData, Objective, Parametrised,
-};
+use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
 use super::measured::{sha256_hex, PhaseConvention, Sweep};
 use super::model::check_values;
 use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
@@ -50,8 +48,8 @@ use super::pipeline::{
     write_backbone_csv, write_response_controlled_csv, ResponseControlled,
 };
 use super::report::{
-    errors_table, fine_curve_with, plot_backbone, plot_level, regions_text, write_json,
-    write_rows_csv, CurveRow, InputFile, LevelErrors,
+    errors_table, fine_curve_with, level_role, level_roles, plot_backbone, plot_level,
+    regions_text, write_json, write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
 use super::uncertainty::{self, Ensemble, Uncertainty};
 use crate::dynamics::aft::Harmonics;
@@ -357,7 +355,7 @@ fn responses_and_errors(
     let mut errors = Vec::new();
     for (i, l) in levels.iter().enumerate() {
         let (y, failed) = ReducedSpec::frf(model, l)?;
-        let role = if fit.contains(&i) { "fit" } else { "predicted" };
+        let role = level_role(i, fit);
         errors.push(LevelErrors::new(l, &y, role, failed));
         responses.push(y);
     }
@@ -419,12 +417,8 @@ fn band_chain_steps(
     if let Some(n) = chain_steps {
         return Ok(n);
     }
-    let all: Vec<Vec<bool>> = fit_data
-        .iter()
-        .map(|l| vec![true; l.drives.len()])
-        .collect();
     let t0 = std::time::Instant::now();
-    Objective::new(spec.clone(), fit_data, &all, None).cost_of(model);
+    super::select::cost_all_rows(spec, model, fit_data);
     default_band_steps(
         t0.elapsed().as_secs_f64(),
         levels,
@@ -528,15 +522,7 @@ pub fn identify_reduced(
         .collect();
     let scatter_floor = super::select::scatter_floor(&fit_data);
     let at_scatter = fit.cost <= super::select::SCATTER_FACTOR * scatter_floor;
-    let roles: Vec<&str> = (0..levels.len())
-        .map(|i| {
-            if fit_levels.contains(&i) {
-                "fit"
-            } else {
-                "predicted"
-            }
-        })
-        .collect();
+    let roles = level_roles(levels.len(), &fit_levels);
     let uncertainty = match band_chain_steps(
         spec,
         &fit.model,
@@ -689,11 +675,7 @@ impl ReducedIdentification {
                 inp.path.display(),
                 inp.rows,
                 inp.mean_force_n,
-                if self.fit_levels.contains(&i) {
-                    "fit"
-                } else {
-                    "predicted"
-                }
+                level_role(i, &self.fit_levels)
             );
         }
         s += "\nupdating factors (1 = the model as given):\n";

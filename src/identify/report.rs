@@ -33,6 +33,20 @@ use serde::Serialize;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 
+/// Role of level `i` in an identification: "fit" (one of `fit_levels`) or "predicted".
+pub fn level_role(i: usize, fit_levels: &[usize]) -> &'static str {
+    if fit_levels.contains(&i) {
+        "fit"
+    } else {
+        "predicted"
+    }
+}
+
+/// Roles of levels `0..n` ([`level_role`]).
+pub fn level_roles(n: usize, fit_levels: &[usize]) -> Vec<&'static str> {
+    (0..n).map(|i| level_role(i, fit_levels)).collect()
+}
+
 /// Errors of one region of a sweep.
 #[derive(Debug, Clone, Serialize)]
 pub struct RegionErrors {

@@ -48,7 +48,9 @@
 //! above the scatter and no candidate explains it — reported as such, nothing forced.
 
 use super::effects::Effect;
-use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Objective};
+use super::fit::{
+    fit_global, fit_local, FitOptions, FitResult, LevelData, Objective, Parametrised,
+};
 use super::model::{Model, ModelSpec};
 use crate::error::Result;
 use realfft::num_complex::Complex64;
@@ -502,10 +504,10 @@ pub fn refit_all_rows(
     )
 }
 
-/// The objective of a model over all rows of some levels.
-pub fn cost_all_rows(model: &Model, levels: &[LevelData]) -> f64 {
+/// The objective of a model of the family `spec` over all rows of some levels.
+pub fn cost_all_rows<S: Parametrised>(spec: &S, model: &S::Model, levels: &[LevelData]) -> f64 {
     let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
-    Objective::new(model.spec.clone(), levels, &all, None)
+    Objective::new(spec.clone(), levels, &all, None)
         .cost_of(model)
         .0
 }

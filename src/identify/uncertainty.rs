@@ -35,10 +35,10 @@
 //! one-sided uncertainty is not in the band (the report lists them). The ensemble is saved with
 //! the model (`model.json`) so that `asperity predict` gives the same bands for any file.
 
-use super::fit::{LevelData, Objective, Parametrised};
+use super::fit::{LevelData, Parametrised};
 use super::model::{check_values, ParamSpec};
 use super::report::LevelErrors;
-use super::select::lag1_autocorrelation;
+use super::select::{cost_all_rows, lag1_autocorrelation};
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
@@ -131,14 +131,6 @@ fn all_residuals<S: Parametrised>(
         .iter()
         .map(|l| Ok(l.residuals(&S::frf(model, l)?.0)))
         .collect()
-}
-
-/// The objective `J` of a model on all rows of some levels.
-fn cost_all_rows<S: Parametrised>(spec: &S, model: &S::Model, levels: &[LevelData]) -> f64 {
-    let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
-    Objective::new(spec.clone(), levels, &all, None)
-        .cost_of(model)
-        .0
 }
 
 /// Residual components (real and imaginary parts, level after level) and their weights in the
