@@ -48,8 +48,6 @@ pub struct Harmonics {
     synthesis: Vec<f64>,
     /// `len × n_time` analysis matrix: `X_c = Σ_i D[c][i]·x_i`.
     analysis: Vec<f64>,
-    /// The same as a matrix (for products with sensitivities).
-    analysis_matrix: DMatrix<f64>,
     forward: Arc<dyn realfft::RealToComplex<f64>>,
     inverse: Arc<dyn realfft::ComplexToReal<f64>>,
 }
@@ -114,13 +112,11 @@ impl Harmonics {
             }
         }
         let mut planner = RealFftPlanner::<f64>::new();
-        let analysis_matrix = DMatrix::from_row_slice(len, n, &analysis);
         Ok(Self {
             orders,
             n_time: n,
             synthesis,
             analysis,
-            analysis_matrix,
             forward: planner.plan_fft_forward(n),
             inverse: planner.plan_fft_inverse(n),
         })
@@ -422,6 +418,12 @@ fn run_sensitive(
 
 /// `(I − Φ)⁺` in the element's state scales, returned unscaled (`m × m`, row-major).
 fn periodic_pinv(phi: &[f64], scales: &[f64], m: usize) -> Vec<f64> {
+    if m == 1 {
+        // One state (a Jenkins slider): the scaling cancels and the pseudo-inverse of the
+        // scalar 1 − φ is its reciprocal, or zero below the SVD's cut-off.
+        let a = 1.0 - phi[0];
+        return vec![if a.abs() > 1e-10 { 1.0 / a } else { 0.0 }];
+    }
     // Â = I − D⁻¹ Φ D with D = diag(scales); (I − Φ)⁺ ≈ D Â⁺ D⁻¹.
     let a = DMatrix::from_fn(m, m, |r, c| {
         let v = -phi[r * m + c] * scales[c] / scales[r];
@@ -672,29 +674,29 @@ pub fn evaluate_from(
                 }
             }
         }
-        // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU (rows (i, c)), then its
-        // harmonics J = D·T, both as matrix products.
-        let dfm = DMatrix::from_row_slice(n * d, ncol, &sens.df);
-        let mut t = dfm.columns(0, nu).into_owned();
-        if m > 0 {
-            let ds0m = DMatrix::from_row_slice(m, nu, &ds0);
-            t += dfm.columns(nu, m) * ds0m;
-        }
-        // Rows (i, c) → row i, column block c.
-        let mut t2 = DMatrix::zeros(n, d * nu);
+        // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU, and its harmonics
+        // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
+        // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
+        // to pay for its temporaries.
+        jac = vec![0.0; d * len * nu];
+        let mut t = vec![0.0; nu];
         for i in 0..n {
             for c in 0..d {
-                for col in 0..nu {
-                    t2[(i, c * nu + col)] = t[(i * d + c, col)];
+                let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
+                t.copy_from_slice(&row[..nu]);
+                for (k, &dfs) in row[nu..].iter().enumerate() {
+                    if dfs != 0.0 {
+                        for (tv, dv) in t.iter_mut().zip(&ds0[k * nu..(k + 1) * nu]) {
+                            *tv += dfs * dv;
+                        }
+                    }
                 }
-            }
-        }
-        let j2 = &harmonics.analysis_matrix * t2;
-        jac = vec![0.0; d * len * nu];
-        for c in 0..d {
-            for hc in 0..len {
-                for col in 0..nu {
-                    jac[(c * len + hc) * nu + col] = j2[(hc, c * nu + col)];
+                for hc in 0..len {
+                    let w = harmonics.analysis[hc * n + i];
+                    let out = &mut jac[(c * len + hc) * nu..(c * len + hc + 1) * nu];
+                    for (o, tv) in out.iter_mut().zip(&t) {
+                        *o += w * tv;
+                    }
                 }
             }
         }
