@@ -36,6 +36,11 @@ use std::time::Instant;
 
 /// Elements per block of the Jacobian assembly ([`HbmSystem::element_jacobian`]).
 const JACOBIAN_BLOCK_ELEMENTS: usize = 8;
+/// Fewest elements a parallel task evaluates: one element's AFT costs microseconds (a single
+/// joint of a modal model), less than waking a worker thread, so a structure with a handful of
+/// elements is evaluated on the calling thread (which is usually a parallel task already, e.g.
+/// one level of an identification).
+const PARALLEL_MIN_ELEMENTS: usize = 4;
 
 /// Harmonic force `F(t) = level·force·cos(harmonic·ω·t)` on the coordinates (`force` in N per
 /// unit level for physical DOFs; `Φᵀ·f` for modal coordinates).
@@ -255,6 +260,7 @@ impl<'a> HbmSystem<'a> {
             .elements
             .par_iter()
             .zip(self.offsets.par_iter())
+            .with_min_len(PARALLEL_MIN_ELEMENTS)
             .enumerate()
             .map(|(i, (e, &off))| {
                 let d = e.element.dofs();
@@ -536,6 +542,7 @@ impl<'a> HbmSystem<'a> {
             .elements
             .par_iter()
             .zip(us.par_iter())
+            .with_min_len(PARALLEL_MIN_ELEMENTS)
             .map(|(e, u)| aft::cycle_summary(e.element.as_ref(), &self.harmonics, u, &self.aft))
             .collect()
     }
