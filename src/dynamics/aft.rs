@@ -329,12 +329,52 @@ struct Sensitivity {
     ncol: usize,
     /// `m × ncol` state sensitivity at the end of the period.
     ds_end: Vec<f64>,
-    /// `N × d × ncol` force sensitivities per sample.
+    /// `N × d × ncol` force sensitivities per sample (empty for the monodromy alone).
     df: Vec<f64>,
 }
 
-/// Run one period from `p.s0` with forward sensitivities (columns: `with_u` displacement
-/// harmonics, then the `m` start-state components).
+/// `out[r] += Σ_k a[r,k]·ds[k] + Σ_c (b0[r,c]·E_i + b1[r,c]·E_i1)` over the `rows` rows of one
+/// step's chain rule (`ds`, `out`: rows of `ncol` columns; `E_i`, `E_i1` the synthesis rows of
+/// the step's two samples, entering the displacement columns `c·len..(c+1)·len` when `with_u`).
+#[allow(clippy::too_many_arguments)]
+fn chain_rule_rows(
+    rows: usize,
+    m: usize,
+    d: usize,
+    ncol: usize,
+    ds: &[f64],
+    (a, b0, b1): (&[f64], &[f64], &[f64]),
+    synthesis: Option<(&[f64], &[f64])>,
+    out: &mut [f64],
+) {
+    for r in 0..rows {
+        let orow = &mut out[r * ncol..(r + 1) * ncol];
+        for k in 0..m {
+            let coef = a[r * m + k];
+            if coef != 0.0 {
+                for (o, v) in orow.iter_mut().zip(&ds[k * ncol..(k + 1) * ncol]) {
+                    *o += coef * v;
+                }
+            }
+        }
+        if let Some((ea, eb)) = synthesis {
+            let len = ea.len();
+            for c in 0..d {
+                let (c0, c1) = (b0[r * d + c], b1[r * d + c]);
+                if c0 != 0.0 || c1 != 0.0 {
+                    let block = &mut orow[c * len..(c + 1) * len];
+                    for ((o, x), y) in block.iter_mut().zip(ea).zip(eb) {
+                        *o += c0 * x + c1 * y;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Run one period from `p.s0` with forward sensitivities. With `with_u` the columns are the
+/// displacement harmonics, then the `m` start-state components, and the force sensitivities of
+/// every sample are kept (for the Jacobian); without, only the monodromy `∂s_N/∂s_0` is formed.
 fn run_sensitive(
     el: &dyn HystereticElement,
     h: &Harmonics,
@@ -349,7 +389,11 @@ fn run_sensitive(
         ds[r * ncol + nu + r] = 1.0;
     }
     let mut ds_next = vec![0.0; m * ncol];
-    let mut df = vec![0.0; n * d * ncol];
+    let mut df = if with_u {
+        vec![0.0; n * d * ncol]
+    } else {
+        Vec::new()
+    };
     let mut part = StepPartials::new(m, d);
     let mut s = p.s0.clone();
     let mut s1 = vec![0.0; m];
@@ -365,45 +409,30 @@ fn run_sensitive(
         for c in 0..d {
             p.f[c * n + i1] = f1[c];
         }
-        let ea = h.synthesis_row(i);
-        let eb = h.synthesis_row(i1);
+        let synthesis = with_u.then(|| (h.synthesis_row(i), h.synthesis_row(i1)));
         // ds_next = A·ds + B0·dU_i + B1·dU_i1 ; df_i1 = Fs·ds + F0·dU_i + F1·dU_i1.
-        let dfi = &mut df[i1 * d * ncol..(i1 + 1) * d * ncol];
-        dfi.fill(0.0);
         ds_next.fill(0.0);
-        for (rows, out, a, b0, b1) in [
-            (
+        chain_rule_rows(
+            m,
+            m,
+            d,
+            ncol,
+            &ds,
+            (&part.ds_ds0, &part.ds_du0, &part.ds_du1),
+            synthesis,
+            &mut ds_next,
+        );
+        if with_u {
+            chain_rule_rows(
+                d,
                 m,
-                &mut ds_next[..],
-                &part.ds_ds0,
-                &part.ds_du0,
-                &part.ds_du1,
-            ),
-            (d, &mut dfi[..], &part.df_ds0, &part.df_du0, &part.df_du1),
-        ] {
-            for r in 0..rows {
-                let orow = &mut out[r * ncol..(r + 1) * ncol];
-                for k in 0..m {
-                    let coef = a[r * m + k];
-                    if coef != 0.0 {
-                        let src = &ds[k * ncol..(k + 1) * ncol];
-                        for (o, v) in orow.iter_mut().zip(src) {
-                            *o += coef * v;
-                        }
-                    }
-                }
-                if with_u {
-                    for c in 0..d {
-                        let (c0, c1) = (b0[r * d + c], b1[r * d + c]);
-                        if c0 != 0.0 || c1 != 0.0 {
-                            let block = &mut orow[c * len..(c + 1) * len];
-                            for ((o, x), y) in block.iter_mut().zip(ea).zip(eb) {
-                                *o += c0 * x + c1 * y;
-                            }
-                        }
-                    }
-                }
-            }
+                d,
+                ncol,
+                &ds,
+                (&part.df_ds0, &part.df_du0, &part.df_du1),
+                synthesis,
+                &mut df[i1 * d * ncol..(i1 + 1) * d * ncol],
+            );
         }
         std::mem::swap(&mut ds, &mut ds_next);
         std::mem::swap(&mut s, &mut s1);
