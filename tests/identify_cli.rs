@@ -261,6 +261,17 @@ fn identify_then_predict_both_controls() {
         json["uncertainty"]
     );
     assert_eq!(json["inputs"][0]["sha256"].as_str().unwrap().len(), 64);
+    // Exact data: the offered delay is not accepted for fitting the solver's rounding (both
+    // misfits lie below the numerical floor, `NUMERICAL_RESIDUAL_FLOOR`), and the posterior
+    // chains move (before the floor, ln J jumped at the noise level: acceptance 0 % after a
+    // rounding-level change to the AFT's sums).
+    assert_eq!(
+        json["selection"]["verdict"], "NoEffectNeeded",
+        "{}",
+        json["selection"]
+    );
+    let acceptance = json["uncertainty"]["acceptance_rate"].as_f64().unwrap();
+    assert!(acceptance > 0.1, "acceptance {acceptance}");
     // Exact data: the level not used is predicted within 1 % in peak.
     let e = &json["errors_after"][1];
     assert_eq!(e["role"], "predicted");

@@ -51,7 +51,7 @@ use super::effects::Effect;
 use super::fit::{
     fit_global, fit_local, FitOptions, FitResult, LevelData, Objective, Parametrised,
 };
-use super::model::{Model, ModelSpec};
+use super::model::{numerical_cost_floor, Model, ModelSpec};
 use crate::error::Result;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
@@ -473,7 +473,11 @@ impl Evidence<'_> {
             meaning: effect.meaning(),
             added_parameters: dp as usize,
             train_cost: fit.cost,
-            delta_bic: self.n_eff * (h.cost / self.base_held.cost).ln() + dp * self.n_eff.ln(),
+            delta_bic: self.n_eff
+                * ((h.cost + numerical_cost_floor())
+                    / (self.base_held.cost + numerical_cost_floor()))
+                .ln()
+                + dp * self.n_eff.ln(),
             improves_every_level: h
                 .per_level
                 .iter()

@@ -36,7 +36,7 @@
 //! the model (`model.json`) so that `asperity predict` gives the same bands for any file.
 
 use super::fit::{LevelData, Parametrised};
-use super::model::{check_values, ParamSpec};
+use super::model::{check_values, numerical_cost_floor, ParamSpec};
 use super::report::LevelErrors;
 use super::select::{cost_all_rows, lag1_autocorrelation};
 use crate::error::{Error, Result};
@@ -188,7 +188,9 @@ pub fn parameter_covariance<S: Parametrised>(
         .collect::<Result<_>>()?;
     let n = r0.len();
     let jac = DMatrix::from_fn(n, free.len(), |i, k| columns[k][i]);
-    let s2 = r0.iter().map(|v| v * v).sum::<f64>() / (n - free.len()).max(1) as f64;
+    // Residual variance, not below the solver's numerical floor (noise-free data).
+    let s2 = (r0.iter().map(|v| v * v).sum::<f64>() / (n - free.len()).max(1) as f64)
+        .max(numerical_cost_floor());
     let rho = lag1_autocorrelation(&per_level);
     let inflation = (1.0 + rho) / (1.0 - rho);
     let names: Vec<String> = free.iter().map(|&j| params[j].name.to_string()).collect();
@@ -283,12 +285,13 @@ pub fn posterior_ensemble<S: Parametrised>(
         }
         params.iter().zip(&z).map(|(p, &v)| p.value(v)).collect()
     };
-    // ln π up to a constant: −(n_eff/2)·ln J on the box.
+    // ln π up to a constant: −(n_eff/2)·ln(J + J_num) on the box (J_num the numerical floor).
     let ln_post = |zf: &DVector<f64>| -> f64 {
         if zf.iter().any(|v| !(0.0..=1.0).contains(v)) {
             return f64::NEG_INFINITY;
         }
-        -0.5 * n_eff * cost_all_rows(spec, &spec.model(values_of(zf)), fit_levels).ln()
+        let j = cost_all_rows(spec, &spec.model(values_of(zf)), fit_levels);
+        -0.5 * n_eff * (j + numerical_cost_floor()).ln()
     };
     let scale = 2.38 * 2.38 / dim as f64;
     let floor = cov.covariance_z.diagonal().map(|v| 1e-6 * v);
