@@ -666,7 +666,7 @@ impl Uncertainty {
         } = e.as_ref();
         let mut s = format!(
             "\nprediction uncertainty of the {name}: models of its form that fit the fit \
-             levels about as well (posterior ∝ J^(−n_eff/2), n_eff = {:.1} of {} residual \
+             levels about as well (posterior ∝ (J + 1e-12)^(−n_eff/2), 1e-12 the numerical floor, n_eff = {:.1} of {} residual \
              components: residual sd {:.4} of the peak per component, lag-1 autocorrelation \
              {:.2}; {CHAINS} adaptive Metropolis chains of {} steps from the optimum, \
              acceptance {:.0} %, R̂ of ln J {:.3}; {ENSEMBLE_DRAWS} models kept); 95 % intervals and bands; \
