@@ -855,15 +855,13 @@ pub const NEWTON_TOLERANCE: f64 = 1e-8;
 /// responses are exact only to about the balance tolerance times the resonance's
 /// amplification (`NEWTON_TOLERANCE·Q`, `Q = 1/2ζ`: 5e-6 at ζ = 0.1 %); `1e-6` is taken. A
 /// misfit below it is solver noise, not evidence: the effect search and the posterior add its
-/// square to the cost ([`numerical_cost_floor`]), so noise-free (e.g. synthetic) data neither
+/// square to the cost ([`NUMERICAL_COST_FLOOR`]), so noise-free (e.g. synthetic) data neither
 /// accept an effect for fitting rounding nor give bands whose chains cannot move because ln J
 /// jumps at the noise level.
 pub const NUMERICAL_RESIDUAL_FLOOR: f64 = 1e-6;
 
 /// The cost `J` (mean squared relative residual) of residuals at [`NUMERICAL_RESIDUAL_FLOOR`].
-pub fn numerical_cost_floor() -> f64 {
-    NUMERICAL_RESIDUAL_FLOOR * NUMERICAL_RESIDUAL_FLOOR
-}
+pub const NUMERICAL_COST_FLOOR: f64 = NUMERICAL_RESIDUAL_FLOOR * NUMERICAL_RESIDUAL_FLOOR;
 
 fn tuned(mut sys: HbmSystem<'_>) -> HbmSystem<'_> {
     sys.newton.tolerance = NEWTON_TOLERANCE;

@@ -51,7 +51,7 @@ use super::effects::Effect;
 use super::fit::{
     fit_global, fit_local, FitOptions, FitResult, LevelData, Objective, Parametrised,
 };
-use super::model::{numerical_cost_floor, Model, ModelSpec};
+use super::model::{Model, ModelSpec, NUMERICAL_COST_FLOOR};
 use crate::error::Result;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
@@ -474,9 +474,8 @@ impl Evidence<'_> {
             added_parameters: dp as usize,
             train_cost: fit.cost,
             delta_bic: self.n_eff
-                * ((h.cost + numerical_cost_floor())
-                    / (self.base_held.cost + numerical_cost_floor()))
-                .ln()
+                * ((h.cost + NUMERICAL_COST_FLOOR) / (self.base_held.cost + NUMERICAL_COST_FLOOR))
+                    .ln()
                 + dp * self.n_eff.ln(),
             improves_every_level: h
                 .per_level

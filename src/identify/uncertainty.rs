@@ -36,7 +36,7 @@
 //! the model (`model.json`) so that `asperity predict` gives the same bands for any file.
 
 use super::fit::{LevelData, Parametrised};
-use super::model::{check_values, numerical_cost_floor, ParamSpec};
+use super::model::{check_values, ParamSpec, NUMERICAL_COST_FLOOR};
 use super::report::LevelErrors;
 use super::select::{cost_all_rows, lag1_autocorrelation};
 use crate::error::{Error, Result};
@@ -190,7 +190,7 @@ pub fn parameter_covariance<S: Parametrised>(
     let jac = DMatrix::from_fn(n, free.len(), |i, k| columns[k][i]);
     // Residual variance, not below the solver's numerical floor (noise-free data).
     let s2 = (r0.iter().map(|v| v * v).sum::<f64>() / (n - free.len()).max(1) as f64)
-        .max(numerical_cost_floor());
+        .max(NUMERICAL_COST_FLOOR);
     let rho = lag1_autocorrelation(&per_level);
     let inflation = (1.0 + rho) / (1.0 - rho);
     let names: Vec<String> = free.iter().map(|&j| params[j].name.to_string()).collect();
@@ -291,7 +291,7 @@ pub fn posterior_ensemble<S: Parametrised>(
             return f64::NEG_INFINITY;
         }
         let j = cost_all_rows(spec, &spec.model(values_of(zf)), fit_levels);
-        -0.5 * n_eff * (j + numerical_cost_floor()).ln()
+        -0.5 * n_eff * (j + NUMERICAL_COST_FLOOR).ln()
     };
     let scale = 2.38 * 2.38 / dim as f64;
     let floor = cov.covariance_z.diagonal().map(|v| 1e-6 * v);
@@ -666,7 +666,8 @@ impl Uncertainty {
         } = e.as_ref();
         let mut s = format!(
             "\nprediction uncertainty of the {name}: models of its form that fit the fit \
-             levels about as well (posterior ∝ (J + 1e-12)^(−n_eff/2), 1e-12 the numerical floor, n_eff = {:.1} of {} residual \
+             levels about as well (posterior ∝ (J + {NUMERICAL_COST_FLOOR:.0e})^(−n_eff/2), the second term \
+             the solver's numerical floor; n_eff = {:.1} of {} residual \
              components: residual sd {:.4} of the peak per component, lag-1 autocorrelation \
              {:.2}; {CHAINS} adaptive Metropolis chains of {} steps from the optimum, \
              acceptance {:.0} %, R̂ of ln J {:.3}; {ENSEMBLE_DRAWS} models kept); 95 % intervals and bands; \
