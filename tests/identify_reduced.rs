@@ -4,11 +4,15 @@
 //! factors come back within 2 % and the middle level is predicted, in 10 of 10 noise
 //! realisations. The CLI writes its report and refuses bad input.
 
+use asperity::identify::effects::Effect;
 use asperity::identify::fit::{FitOptions, Parametrised};
 use asperity::identify::measured::Sweep;
-use asperity::identify::model::Drive;
-use asperity::identify::reduced::{identify_reduced, ReducedOptions, ReducedSpec};
+use asperity::identify::model::{Drive, Scales};
+use asperity::identify::reduced::{
+    identify_reduced, EffectSearch, ReducedModel, ReducedOptions, ReducedSpec, SavedReducedModel,
+};
 use asperity::identify::report::LevelErrors;
+use asperity::identify::select::Extensible;
 use std::f64::consts::TAU;
 
 #[path = "support/synthetic_sweep.rs"]
@@ -77,7 +81,7 @@ fn sweep_with_noise(spec: &ReducedSpec, force: f64, seed: u64, noise: f64) -> Sw
             }
         })
         .collect();
-    let (x, _) = truth.receptance_tolerant(&drives, false).unwrap();
+    let (x, _) = truth.receptance_tolerant(&drives, force, false).unwrap();
     noisy_sweep(
         format!("synthetic-{force}N-{seed}.csv"),
         &drives,
@@ -111,6 +115,7 @@ fn updating_factors_come_back_within_two_percent_in_ten_of_ten_realisations() {
     let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
     let mut worst = [0.0f64; 4];
     let (mut worst_peak, mut worst_res, mut worst_backbone) = (0.0f64, 0.0f64, 0.0f64);
+    let mut searches_not_needed = 0;
     for r in 0..10u64 {
         let sweeps: Vec<Sweep> = LEVELS_N
             .iter()
@@ -119,6 +124,17 @@ fn updating_factors_come_back_within_two_percent_in_ten_of_ten_realisations() {
             .collect();
         let id = identify_reduced(&spec, sweeps, vec![0, 2], &options(r + 1), None).unwrap();
         assert!(id.fit.converged, "realisation {r}: fit not converged");
+        // The truth has no effect beyond the four factors: none is added (the search is not
+        // needed at the scatter, or finds no candidate with strong held-out evidence).
+        match &id.effect_search {
+            EffectSearch::NotNeeded => searches_not_needed += 1,
+            EffectSearch::Run(sel) => assert!(
+                sel.final_spec.effects.is_empty(),
+                "realisation {r}: effects forced on data without one: {:?}",
+                sel.final_spec.effects
+            ),
+            EffectSearch::NotRun { reason } => panic!("realisation {r}: search not run: {reason}"),
+        }
         for (k, (&v, &t)) in id.fit.model.values.iter().zip(&TRUTH).enumerate() {
             let e = (v / t - 1.0).abs();
             worst[k] = worst[k].max(e);
@@ -191,7 +207,8 @@ fn updating_factors_come_back_within_two_percent_in_ten_of_ten_realisations() {
     }
     eprintln!(
         "largest factor errors {:.2?} %, level 2 predicted within {:.2} % peak and {:.3} Hz \
-         phase resonance of the truth; backbone frequencies within {:.3} % of the data's",
+         phase resonance of the truth; backbone frequencies within {:.3} % of the data's; the \
+         factors fitted to the scatter (no search needed) in {searches_not_needed} of 10",
         worst.map(|e| 100.0 * e),
         100.0 * worst_peak,
         worst_res,
@@ -399,11 +416,180 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
     );
     assert!(!bad_out.exists(), "nothing written on bad input");
 
-    // Options of the single-mode path are refused with a reduced model.
+    // A candidate the reduced model does not take (a velocity-dependent damper is defined on
+    // the single mode's coordinate only) is refused, naming the option and the candidates.
     let mut args = vec!["identify", "--structure", model.to_str().unwrap()];
     args.extend(files.iter().map(|s| s.as_str()));
     args.extend(["--candidates", "quadratic_damping"]);
     let o = asperity(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--candidates"));
+    assert!(
+        err.contains("--candidates") && err.contains("amplitude_stiffness"),
+        "{err}"
+    );
+}
+
+/// Reference scales of the truth's cubic spring: `k_ref = m·(2π·f)²` with the first mode's
+/// modal mass at the tip (1 kg: mass-normalised shape 1.0) and 106 Hz; `A_ref` 40 µm (the
+/// tip's peak displacement at the highest level is about 25 µm).
+const EFFECT_SCALES: Scales = Scales {
+    frequency_hz: 106.0,
+    modal_mass_kg: 1.0,
+    amplitude_max_m: 4e-5,
+    amplitude_min_m: 4e-6,
+    force_n: 0.6,
+};
+
+/// The truth's value of each effect tested: a hardening cubic spring at the tip giving +2 %
+/// stiffness at `A_ref` = 40 µm; a preload loss taking 30 % of the contact's slip force and
+/// stiffness at 0.6 N (7.5 % at the middle level).
+fn truth_value(effect: Effect) -> f64 {
+    match effect {
+        Effect::AmplitudeStiffness => 0.02,
+        Effect::PreloadLoss => 0.3,
+        e => panic!("no truth for {e:?}"),
+    }
+}
+
+/// The truth (the four factors of [`TRUTH`]) with one effect the four factors cannot express.
+fn truth_with(spec: &ReducedSpec, effect: Effect) -> ReducedModel {
+    let mut values = TRUTH.to_vec();
+    values.push(truth_value(effect));
+    spec.with_scales(EFFECT_SCALES).with(effect).model(values)
+}
+
+/// The effect's physical parameter, independent of the data's reference scales: `k3` (N/m³)
+/// of the cubic spring, the preload loss per newton of mean force `λ/F_ref` (1/N).
+fn physical(model: &ReducedModel, effect: Effect) -> f64 {
+    match effect {
+        Effect::AmplitudeStiffness => model.cubic_stiffness().unwrap(),
+        Effect::PreloadLoss => (1.0 - model.preload_factor(0.1)) / 0.1, // λ/F_ref
+        e => panic!("no physical parameter for {e:?}"),
+    }
+}
+
+/// Sweeps of a model at the three levels (57 rows as [`sweep`]), 1 % noise.
+fn sweeps_of(truth: &ReducedModel, seed: u64) -> Vec<Sweep> {
+    LEVELS_N
+        .iter()
+        .enumerate()
+        .map(|(k, &force)| {
+            let drives: Vec<Drive> = (0..57)
+                .map(|i| {
+                    let f = 100.0 + 0.25 * i as f64;
+                    let dip = 0.2 / (1.0 + ((f - 107.0) / 1.0).powi(2));
+                    Drive {
+                        omega: TAU * f,
+                        force_n: force * (1.0 - dip),
+                    }
+                })
+                .collect();
+            let mean = drives.iter().map(|d| d.force_n).sum::<f64>() / drives.len() as f64;
+            let (x, _) = truth.receptance_tolerant(&drives, mean, false).unwrap();
+            noisy_sweep(
+                format!("effect-{force}N-{}.csv", seed + k as u64),
+                &drives,
+                &x,
+                0.01,
+                seed + k as u64,
+            )
+        })
+        .collect()
+}
+
+/// Closing the loop on a reduced model, `realisations` noise realisations of the truth with
+/// `effect`, fitted on the lowest and highest level: the four factors alone leave a residual
+/// above the scatter; the search adds `effect` and nothing else, the factors come back within
+/// 2 % (the friction factor 3 % beside the preload loss) and the effect's physical parameter
+/// within 10 %, and the middle level's prediction improves on the factors-only update's.
+fn search_finds(effect: Effect, realisations: u64) {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
+    let truth = truth_with(&spec, effect);
+    let mut worst = 0.0f64;
+    let mut worst_factor = [0.0f64; 4];
+    for r in 0..realisations {
+        let sweeps = sweeps_of(&truth, 1000 + 100 * r);
+        let id = identify_reduced(&spec, sweeps, vec![0, 2], &options(r + 1), None).unwrap();
+        let EffectSearch::Run(sel) = &id.effect_search else {
+            panic!("realisation {r}: search {:?}", id.effect_search);
+        };
+        assert_eq!(sel.final_spec.effects, vec![effect], "realisation {r}");
+        let (got, want) = (physical(&id.fit.model, effect), physical(&truth, effect));
+        eprintln!(
+            "{} realisation {r}: factors {:.4?}, effect parameter {got:.4e} against {want:.4e}",
+            effect.id(),
+            id.fit.model.values
+        );
+        for (k, (&v, &t)) in id.fit.model.values.iter().zip(&TRUTH).enumerate() {
+            // With the preload loss, the friction factor alone (the slip force without loss)
+            // is seen where the loss is small, at the lowest level, where the joint is nearly
+            // stuck: it trades off against λ (probe of 4 realisations: up to +2.04 %, with λ
+            // +1.6 % and the highest level's slip force within 1.4 %), hence 3 %.
+            let tolerance = if effect == Effect::PreloadLoss && k == 3 {
+                0.03
+            } else {
+                0.02
+            };
+            worst_factor[k] = worst_factor[k].max((v / t - 1.0).abs());
+            assert!(
+                (v / t - 1.0).abs() < tolerance,
+                "realisation {r}: {} = {v} against {t}",
+                id.parameters[k].name
+            );
+        }
+        assert!(
+            (got / want - 1.0).abs() < 0.1,
+            "realisation {r}: {} parameter {got:.4e} against {want:.4e}",
+            effect.id()
+        );
+        worst = worst.max((got / want - 1.0).abs());
+        if r == 0 {
+            // The saved model carries the effect: read back, it gives the same response.
+            let out = dir.path().join("out");
+            id.write(&out).unwrap();
+            let (saved, _, _) = SavedReducedModel::read(&out.join("model.json")).unwrap();
+            assert_eq!(saved.spec.effects, vec![effect]);
+            let (a, _) = ReducedSpec::frf(&saved, &id.levels[1]).unwrap();
+            let (b, _) = ReducedSpec::frf(&id.fit.model, &id.levels[1]).unwrap();
+            assert!(a
+                .iter()
+                .zip(&b)
+                .all(|(x, y)| (x - y).norm() <= 1e-9 * y.norm()));
+            let report = std::fs::read_to_string(out.join("identify.txt")).unwrap();
+            assert!(
+                report.contains("← accepted") && report.contains("before and after the effects")
+            );
+        }
+        let (_, before) = id.factors_only.as_ref().unwrap();
+        assert!(
+            id.errors_after[1].rms_complex < before[1].rms_complex,
+            "realisation {r}: middle level RMS {} with the effect, {} without",
+            id.errors_after[1].rms_complex,
+            before[1].rms_complex
+        );
+    }
+    eprintln!(
+        "{}: found alone in {realisations} of {realisations} realisations, physical parameter \
+         within {:.2} %, factors within {:.2?} %",
+        effect.id(),
+        100.0 * worst,
+        worst_factor.map(|e| 100.0 * e)
+    );
+}
+
+/// The stiffening spring, two realisations (each about a minute on two cores).
+#[test]
+fn the_search_finds_a_stiffening_spring_the_factors_cannot_express() {
+    search_finds(Effect::AmplitudeStiffness, 2);
+}
+
+/// Ten realisations each of the stiffening spring and the preload loss (about 20 minutes on
+/// two cores): `cargo test --release --test identify_reduced -- --ignored`.
+#[test]
+#[ignore]
+fn the_search_finds_each_effect_in_ten_of_ten_realisations() {
+    search_finds(Effect::AmplitudeStiffness, 10);
+    search_finds(Effect::PreloadLoss, 10);
 }

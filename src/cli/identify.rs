@@ -29,8 +29,10 @@ pub struct IdentifyArgs {
     /// Joint element of the baseline model.
     #[arg(long, value_enum, default_value = "jenkins")]
     pub family: FamilyArg,
-    /// Candidate effects to test (comma-separated ids; default: all). Ids: valanis_joint,
-    /// iwan_joint, amplitude_stiffness, quadratic_stiffness, quadratic_damping, power_law_damping, preload_loss,
+    /// Candidate effects to test (comma-separated ids; default: all; `none`: no search). Ids:
+    /// valanis_joint, iwan_joint, amplitude_stiffness, quadratic_stiffness, quadratic_damping,
+    /// power_law_damping, preload_loss, higher_harmonics, out_of_band_modes, shaker_interaction.
+    /// With `--structure`: amplitude_stiffness, quadratic_stiffness, preload_loss,
     /// higher_harmonics, out_of_band_modes, shaker_interaction.
     #[arg(long, value_delimiter = ',')]
     pub candidates: Option<Vec<String>>,
@@ -70,8 +72,10 @@ pub struct IdentifyArgs {
     /// Multi-DOF reduced model to update instead of the single nonlinear mode: a model file of
     /// `asperity response` (linear structure, contact element tables, excitation and response
     /// DOFs, harmonics). Four factors are fitted (frequencies, damping ratios, contact stiffness,
-    /// friction); the effect search is single-mode only.
-    #[arg(long, conflicts_with_all = ["family", "candidates", "max_effects"])]
+    /// friction); when they leave a residual above the measurement scatter, the effect search
+    /// runs on the structure-level candidates that act on the response coordinate (by default
+    /// when it is expected to take at most ten minutes; `--candidates` runs it regardless).
+    #[arg(long, conflicts_with_all = ["family"])]
     pub structure: Option<PathBuf>,
     /// Output directory: identify.{txt,json}, model.json, identify-rows.csv,
     /// identify-backbone.{csv,png}, identify-response-controlled.csv, identify-level<N>.png.
@@ -122,20 +126,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     let mut opts = Options::new(family);
     opts.fit_levels = args.fit_levels.clone();
     if let Some(c) = &args.candidates {
-        opts.select.candidates = c
-            .iter()
-            .map(|id| {
-                Effect::from_id(id.trim()).ok_or_else(|| {
-                    Error::param(
-                        "--candidates",
-                        format!(
-                            "unknown effect {id:?}; known: {}",
-                            Effect::ALL.map(|e| e.id()).join(", ")
-                        ),
-                    )
-                })
-            })
-            .collect::<Result<_>>()?;
+        opts.select.candidates = parse_candidates(c, &Effect::ALL)?;
     }
     check_search(&args)?;
     opts.select.max_effects = args.max_effects;
@@ -162,10 +153,38 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     Ok(())
 }
 
+/// The effects of `--candidates` (`none`: no search), each one of `allowed`.
+fn parse_candidates(ids: &[String], allowed: &[Effect]) -> Result<Vec<Effect>> {
+    if ids.len() == 1 && ids[0].trim() == "none" {
+        return Ok(Vec::new());
+    }
+    ids.iter()
+        .map(|id| {
+            Effect::from_id(id.trim())
+                .filter(|e| allowed.contains(e))
+                .ok_or_else(|| {
+                    Error::param(
+                        "--candidates",
+                        format!(
+                            "effect {id:?} is not a candidate here; candidates: {} (or none)",
+                            allowed
+                                .iter()
+                                .map(|e| e.id())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    )
+                })
+        })
+        .collect()
+}
+
 /// `asperity identify --structure`: update the reduced model of a response-model file.
 fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Result<()> {
     use asperity::identify::fit::{FitOptions, Parametrised};
-    use asperity::identify::reduced::{identify_reduced, ReducedOptions, ReducedSpec};
+    use asperity::identify::reduced::{
+        identify_reduced, ReducedOptions, ReducedSpec, REDUCED_EFFECTS,
+    };
     if args.starts > 0 {
         check_search(args)?;
     }
@@ -182,13 +201,26 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     };
     let dim = spec.params().len() as u64;
     let local = asperity::identify::fit::local_iteration_cap(opts.local_iterations, dim as usize);
-    let estimate = opts.swarm_evaluations() + (opts.starts as u64 + 1) * local;
+    // The update, and the effect search if it runs: the baseline and each candidate refitted
+    // by Nelder–Mead in each round, then the final refit.
+    let candidates = args
+        .candidates
+        .as_ref()
+        .map_or(REDUCED_EFFECTS.len(), |c| c.len()) as u64;
+    let estimate = opts.swarm_evaluations()
+        + (opts.starts as u64 + 1) * local
+        + (1 + args.max_effects.max(1) as u64 * candidates + 1) * local;
     let bar = super::progress_bar("identify (reduced model)", estimate);
     bar.set_message("model evaluations");
     let options = ReducedOptions {
         fit: opts,
         response_amplitudes: args.response_amplitude.clone(),
         chain_steps: chain_steps(args)?,
+        candidates: match &args.candidates {
+            Some(c) => Some(parse_candidates(c, &REDUCED_EFFECTS)?),
+            None => None,
+        },
+        max_effects: args.max_effects,
     };
     let result = identify_reduced(&spec, sweeps, fit_levels, &options, Some(&bar));
     bar.finish_and_clear();

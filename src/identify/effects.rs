@@ -1,5 +1,7 @@
 //! Candidate structure-level effects beyond the baseline single-nonlinear-mode model, each with
-//! one or two parameters and a physical meaning.
+//! one or two parameters and a physical meaning. A multi-DOF reduced model takes those that act
+//! on its response coordinate, the level or the measurement chain
+//! ([`super::reduced::REDUCED_EFFECTS`], laws in [`super::reduced`]).
 //!
 //! | effect | law | parameters |
 //! |---|---|---|

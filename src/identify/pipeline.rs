@@ -13,7 +13,7 @@ use super::report::{
     errors_table, fine_curve, level_role, level_roles, plot_backbone, plot_level, regions_text,
     write_json, write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
-use super::select::{self, refit_all_rows, SelectOptions, Selection, Verdict};
+use super::select::{self, refit_all_rows, Round, SelectOptions, Selection, Verdict};
 use super::uncertainty::{self, Ensemble, Uncertainty};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
@@ -179,7 +179,7 @@ pub fn choose_fit_levels(sweeps: &[Sweep], fit_levels: Option<&[usize]>) -> Resu
 }
 
 /// Drive-point displacement amplitude of the largest response per force of each sweep.
-fn scales_from(sweeps: &[Sweep], fit: &[usize], bb: &[LevelBackbone]) -> Scales {
+pub(crate) fn scales_from(sweeps: &[Sweep], fit: &[usize], bb: &[LevelBackbone]) -> Scales {
     let mut fres: Vec<f64> = fit.iter().map(|&i| bb[i].linear.frequency_hz).collect();
     fres.sort_by(|a, b| a.total_cmp(b));
     let amps: Vec<f64> = fit.iter().map(|&i| bb[i].peak_amplitude_m).collect();
@@ -496,7 +496,7 @@ fn alternative(
     else {
         return Ok(None);
     };
-    let fit = refit_all_rows(&c.fit, fit_data, &opts.final_fit, progress)?;
+    let fit = refit_all_rows::<ModelSpec>(&c.fit, fit_data, &opts.final_fit, progress)?;
     if !fit.converged {
         return Ok(None);
     }
@@ -528,8 +528,14 @@ pub fn identify(
         .collect();
     let fit_data: Vec<LevelData> = fit_levels.iter().map(|&i| levels[i].clone()).collect();
     let baseline = ModelSpec::baseline(opts.family, scales);
-    let selection = select::select(&baseline, &fit_data, &opts.select, progress)?;
-    let before = refit_all_rows(
+    let selection = select::select(
+        &baseline,
+        &select::neutral_start(&baseline),
+        &fit_data,
+        &opts.select,
+        progress,
+    )?;
+    let before = refit_all_rows::<ModelSpec>(
         &selection.baseline_train_fit,
         &fit_data,
         &opts.final_fit,
@@ -539,7 +545,7 @@ pub fn identify(
     let after = if selection.final_spec == baseline {
         before.clone()
     } else {
-        let a = refit_all_rows(
+        let a = refit_all_rows::<ModelSpec>(
             &selection.final_train_fit,
             &fit_data,
             &opts.final_fit,
@@ -701,6 +707,59 @@ fn params_text(m: &Model) -> String {
     s
 }
 
+/// The search's rounds as a table per round: every candidate's training and held-out
+/// objective, ΔBIC and whether every fit level improved, the accepted one marked.
+pub fn rounds_text<M>(rounds: &[Round<M>]) -> String {
+    let mut s = String::new();
+    for (k, r) in rounds.iter().enumerate() {
+        s += &format!(
+            "\nround {}: base effects [{}], held-out J = {:.4e}, lag-1 autocorrelation {:.2}, \
+                 n_eff = {:.1}\n",
+            k + 1,
+            r.base_effects
+                .iter()
+                .map(|e| e.id())
+                .collect::<Vec<_>>()
+                .join(", "),
+            r.base_held_out.cost,
+            r.lag1_autocorrelation,
+            r.effective_samples
+        );
+        s += &format!(
+            "  {:<41} {:>3} {:>12} {:>12} {:>10} {:>11}\n",
+            "candidate", "Δp", "train J", "held-out J", "ΔBIC", "all levels"
+        );
+        for c in &r.candidates {
+            s += &format!(
+                "  {:<41} {:>3} {:>12.4e} {:>12.4e} {:>10.1} {:>11}{}\n",
+                match c.jointly_with {
+                    Some(w) => format!("{} + {}", c.effect.id(), w.id()),
+                    None => c.effect.id().to_string(),
+                },
+                c.added_parameters,
+                c.train_cost,
+                c.held_out.cost,
+                c.delta_bic,
+                if c.improves_every_level {
+                    "better"
+                } else {
+                    "not all"
+                },
+                match (
+                    r.accepted == Some(c.effect) && r.accepted_with == c.jointly_with,
+                    c.generalises,
+                ) {
+                    (true, Some(n)) => format!("  ← accepted, replaces {}", n.id()),
+                    (true, None) => "  ← accepted".to_string(),
+                    (false, Some(n)) => format!("  (generalises {})", n.id()),
+                    (false, None) => String::new(),
+                }
+            );
+        }
+    }
+    s
+}
+
 /// Text of the verdict.
 pub fn verdict_text(v: &Verdict) -> String {
     match v {
@@ -787,49 +846,7 @@ impl Identification {
             b.evaluations,
             b.wall_time_s
         );
-        for (k, r) in self.selection.rounds.iter().enumerate() {
-            s +=
-                &format!(
-                "\nround {}: base effects [{}], held-out J = {:.4e}, lag-1 autocorrelation {:.2}, \
-                 n_eff = {:.1}\n",
-                k + 1,
-                r.base_effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", "),
-                r.base_held_out.cost,
-                r.lag1_autocorrelation,
-                r.effective_samples
-            );
-            s += &format!(
-                "  {:<41} {:>3} {:>12} {:>12} {:>10} {:>11}\n",
-                "candidate", "Δp", "train J", "held-out J", "ΔBIC", "all levels"
-            );
-            for c in &r.candidates {
-                s += &format!(
-                    "  {:<41} {:>3} {:>12.4e} {:>12.4e} {:>10.1} {:>11}{}\n",
-                    match c.jointly_with {
-                        Some(w) => format!("{} + {}", c.effect.id(), w.id()),
-                        None => c.effect.id().to_string(),
-                    },
-                    c.added_parameters,
-                    c.train_cost,
-                    c.held_out.cost,
-                    c.delta_bic,
-                    if c.improves_every_level {
-                        "better"
-                    } else {
-                        "not all"
-                    },
-                    match (
-                        r.accepted == Some(c.effect) && r.accepted_with == c.jointly_with,
-                        c.generalises,
-                    ) {
-                        (true, Some(n)) => format!("  ← accepted, replaces {}", n.id()),
-                        (true, None) => "  ← accepted".to_string(),
-                        (false, Some(n)) => format!("  (generalises {})", n.id()),
-                        (false, None) => String::new(),
-                    }
-                );
-            }
-        }
+        s += &rounds_text(&self.selection.rounds);
         s += &format!("\nverdict: {}\n", verdict_text(&self.selection.verdict));
         s += &format!(
             "\nbaseline refitted on all rows of the fit levels (J = {:.4e}):\n{}",

@@ -67,7 +67,7 @@ impl Predictor {
     ) -> Result<(Vec<f64>, Vec<Complex64>)> {
         match self {
             Predictor::Mode(m, _) => m.response_controlled(omegas, targets, mean_force_n),
-            Predictor::Reduced(m, _) => m.response_controlled(omegas, targets),
+            Predictor::Reduced(m, _) => m.response_controlled(omegas, targets, mean_force_n),
         }
     }
 
@@ -76,7 +76,8 @@ impl Predictor {
         match self {
             Predictor::Mode(m, _) => fine_curve(m, level, 4),
             Predictor::Reduced(m, _) => fine_curve_with(level, 4, &|d: &[Drive]| {
-                m.receptance_tolerant(d, true).map(|(x, _)| x)
+                m.receptance_tolerant(d, level.mean_force_n, true)
+                    .map(|(x, _)| x)
             }),
         }
     }

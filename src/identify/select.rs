@@ -7,7 +7,8 @@
 //! 1. **Split.** The rows of every fit level are split alternately into training rows (even
 //!    positions in the sweep) and held-out rows (odd positions). Models are always evaluated
 //!    along the whole sweep (warm starts follow the test), and fitted on training rows only.
-//! 2. **Candidates.** Each admissible effect ([`super::model::ModelSpec::admits`]) is added and
+//! 2. **Candidates.** Each admissible effect ([`Extensible::admits`]: every candidate for the
+//!    single mode, [`super::reduced::REDUCED_EFFECTS`] for a reduced model) is added and
 //!    the model refitted: a particle swarm over the whole box (one start) and Nelder–Mead from
 //!    the current model's optimum with the effect's parameters at their neutral values; the
 //!    better of the two is kept. An effect with a neutral value (zero stiffness change, zero
@@ -66,6 +67,42 @@ pub const BIC_THRESHOLD: f64 = -10.0;
 /// (RMS within twice the scatter).
 pub const SCATTER_FACTOR: f64 = 4.0;
 
+/// A model family the search can extend by candidate effects ([`super::effects`]): the single
+/// nonlinear mode ([`ModelSpec`], every candidate) and the updated reduced model
+/// ([`super::reduced::ReducedSpec`], the structure-level candidates that act on its response
+/// coordinate).
+pub trait Extensible: Parametrised + PartialEq {
+    /// The effects added so far, in order.
+    fn effects(&self) -> &[Effect];
+    /// This family with one more effect (its parameters appended).
+    fn with(&self, e: Effect) -> Self;
+    /// Whether `e` may be added.
+    fn admits(&self, e: Effect) -> bool;
+    /// The family with the accepted effect that `e` nests replaced by `e`, and `values` mapped
+    /// onto it (the same model); `None` when `e` nests no effect of this family.
+    fn generalised(&self, e: Effect, values: &[f64]) -> Option<(Self, Vec<f64>)>;
+    /// The family a member belongs to.
+    fn spec_of(model: &Self::Model) -> &Self;
+}
+
+impl Extensible for ModelSpec {
+    fn effects(&self) -> &[Effect] {
+        &self.effects
+    }
+    fn with(&self, e: Effect) -> Self {
+        ModelSpec::with(self, e)
+    }
+    fn admits(&self, e: Effect) -> bool {
+        ModelSpec::admits(self, e)
+    }
+    fn generalised(&self, e: Effect, values: &[f64]) -> Option<(Self, Vec<f64>)> {
+        ModelSpec::generalised(self, e, values)
+    }
+    fn spec_of(model: &Model) -> &Self {
+        &model.spec
+    }
+}
+
 /// Measurement scatter of one level per component, relative to its peak (see the module
 /// documentation).
 pub fn relative_scatter(level: &LevelData) -> f64 {
@@ -114,11 +151,15 @@ pub struct HeldOut {
 }
 
 /// Score a model on masked rows.
-pub fn score(model: &Model, levels: &[LevelData], masks: &[Vec<bool>]) -> Result<HeldOut> {
+pub fn score<S: Parametrised>(
+    model: &S::Model,
+    levels: &[LevelData],
+    masks: &[Vec<bool>],
+) -> Result<HeldOut> {
     let mut per_level = Vec::new();
     let mut residuals = Vec::new();
     for (l, m) in levels.iter().zip(masks) {
-        let (y, _) = l.model_frf(model)?;
+        let (y, _) = S::frf(model, l)?;
         let r: Vec<Complex64> = l
             .residuals(&y)
             .into_iter()
@@ -158,7 +199,7 @@ pub fn lag1_autocorrelation(residuals: &[Vec<Complex64>]) -> f64 {
 
 /// One candidate of a round.
 #[derive(Debug, Clone, Serialize)]
-pub struct Candidate {
+pub struct Candidate<M = Model> {
     pub effect: Effect,
     /// The accepted effect this candidate generalises (replaces by the nesting law, with
     /// the extra parameters only), if any.
@@ -175,18 +216,18 @@ pub struct Candidate {
     pub improves_every_level: bool,
     pub converged: bool,
     #[serde(skip)]
-    pub fit: FitResult,
+    pub fit: FitResult<M>,
 }
 
 /// One round of the search.
 #[derive(Debug, Clone, Serialize)]
-pub struct Round {
+pub struct Round<M = Model> {
     /// Spec the candidates were added to.
     pub base_effects: Vec<Effect>,
     pub base_held_out: HeldOut,
     pub lag1_autocorrelation: f64,
     pub effective_samples: f64,
-    pub candidates: Vec<Candidate>,
+    pub candidates: Vec<Candidate<M>>,
     pub accepted: Option<Effect>,
     /// The second effect when the accepted candidate is a pair.
     pub accepted_with: Option<Effect>,
@@ -212,13 +253,14 @@ pub enum Verdict {
 
 /// Result of the effect search.
 #[derive(Debug, Clone, Serialize)]
-pub struct Selection {
-    pub baseline_train_fit: FitResult,
-    pub rounds: Vec<Round>,
-    pub final_spec: ModelSpec,
+#[serde(bound(serialize = "S: Serialize"))]
+pub struct Selection<S: Extensible = ModelSpec> {
+    pub baseline_train_fit: FitResult<S::Model>,
+    pub rounds: Vec<Round<S::Model>>,
+    pub final_spec: S,
     /// Training fit of the final spec.
     #[serde(skip)]
-    pub final_train_fit: FitResult,
+    pub final_train_fit: FitResult<S::Model>,
     pub scatter_floor: f64,
     pub relative_scatter_per_level: Vec<f64>,
     pub verdict: Verdict,
@@ -237,14 +279,14 @@ pub struct SelectOptions {
 
 /// Fit a candidate spec: Nelder–Mead from each of `starts` (physical values) and one swarm
 /// over the box (the global part of [`SelectOptions::candidate_fit`]); the best.
-fn fit_candidate(
-    spec: &ModelSpec,
+fn fit_candidate<S: Extensible>(
+    spec: &S,
     starts: &[Vec<f64>],
     levels: &[LevelData],
     train: &[Vec<bool>],
     opts: &SelectOptions,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<FitResult> {
+) -> Result<FitResult<S::Model>> {
     let local = fit_local(spec, levels, train, starts, &opts.candidate_fit, progress)?;
     if opts.candidate_fit.starts == 0 {
         return Ok(local);
@@ -257,66 +299,84 @@ fn fit_candidate(
     })
 }
 
-/// Fit the baseline: the swarm starts of [`fit_global`] and one Nelder–Mead start from the
-/// data's own scales ([`Model::neutral`]: the resonance frequency and modal mass of the fit
-/// levels' equivalent linear modes, ζ0 = 0.1 %, a 1 % joint stiffness share slipping at the
-/// lowest fit level's peak amplitude), the better. A small swarm can settle in the basin of a heavily damped linear mode
-/// between the levels' resonances; the data start does not, and costs one local fit.
-fn fit_baseline(
-    baseline: &ModelSpec,
+/// Fit the baseline on the training rows: the swarm starts of [`fit_global`] (none when
+/// `opts.starts` is 0) and Nelder–Mead from each of `starts` (physical values), the best. For
+/// the single mode the start is the data's own scales ([`Model::neutral`]: the resonance
+/// frequency and modal mass of the fit levels' equivalent linear modes, ζ0 = 0.1 %, a 1 % joint
+/// stiffness share slipping at the lowest fit level's peak amplitude): a small swarm can settle
+/// in the basin of a heavily damped linear mode between the levels' resonances; the data start
+/// does not, and costs one local fit. For the reduced model it is the update on all rows.
+fn fit_baseline<S: Extensible>(
+    baseline: &S,
+    starts: &[Vec<f64>],
     levels: &[LevelData],
     train: &[Vec<bool>],
     opts: &FitOptions,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<FitResult> {
+) -> Result<FitResult<S::Model>> {
+    let local = fit_local(baseline, levels, train, starts, opts, progress)?;
+    if opts.starts == 0 {
+        return Ok(local);
+    }
     let global = fit_global(baseline, levels, train, opts, progress)?;
-    let start = Model::neutral(baseline.clone()).values;
-    let local = fit_local(baseline, levels, train, &[start], opts, progress)?;
-    Ok(if local.cost < global.cost {
-        let mut best = local;
-        best.starts.extend(global.starts);
-        best.evaluations += global.evaluations;
-        best
+    let (mut best, other) = if local.cost < global.cost {
+        (local, global)
     } else {
-        let mut best = global;
-        best.starts.extend(local.starts);
-        best.evaluations += local.evaluations;
-        best
-    })
+        (global, local)
+    };
+    best.starts.extend(other.starts);
+    best.evaluations += other.evaluations;
+    Ok(best)
 }
 
-/// Run the search on the fit levels.
-pub fn select(
-    baseline: &ModelSpec,
+/// The data start of the single mode's baseline fit ([`Model::neutral`]).
+pub fn neutral_start(baseline: &ModelSpec) -> Vec<Vec<f64>> {
+    vec![Model::neutral(baseline.clone()).values]
+}
+
+/// Run the search on the fit levels; the baseline's training fit starts from `baseline_starts`
+/// (physical values; [`neutral_start`] for the single mode) and, with swarm starts in
+/// [`SelectOptions::baseline_fit`], from the swarm.
+pub fn select<S: Extensible>(
+    baseline: &S,
+    baseline_starts: &[Vec<f64>],
     levels: &[LevelData],
     opts: &SelectOptions,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<Selection> {
+) -> Result<Selection<S>> {
     let (train, held) = split(levels);
-    let base_fit = fit_baseline(baseline, levels, &train, &opts.baseline_fit, progress)?;
+    let base_fit = fit_baseline(
+        baseline,
+        baseline_starts,
+        levels,
+        &train,
+        &opts.baseline_fit,
+        progress,
+    )?;
     let floor = scatter_floor(levels);
     let mut current = base_fit.clone();
     let mut rounds = Vec::new();
     let mut accepted_effects = Vec::new();
     loop {
-        let spec = current.model.spec.clone();
-        let base_held = score(&current.model, levels, &held)?;
+        let spec = S::spec_of(&current.model).clone();
+        let base_held = score::<S>(&current.model, levels, &held)?;
         let rho = lag1_autocorrelation(&base_held.residuals);
         let n: usize = base_held.residuals.iter().map(|r| 2 * r.len()).sum();
         let n_eff = (n as f64 * (1.0 - rho) / (1.0 + rho)).max(2.0);
-        let evidence = Evidence {
+        let evidence = Evidence::<S> {
             levels,
             held: &held,
             base_held: &base_held,
             n_eff,
             base_params: spec.params().len(),
+            family: std::marker::PhantomData,
         };
         // New effects while fewer than `max_effects` are in, and generalisations of accepted
         // ones (one extra parameter each, not counted as a new effect) in every round.
         let room = accepted_effects.len() < opts.max_effects;
         let mut candidates = Vec::new();
         for &e in &opts.candidates {
-            let generalisation = spec.generalised(e, &current.model.values);
+            let generalisation = spec.generalised(e, S::values_of(&current.model));
             if generalisation.is_none() && !(room && spec.admits(e)) {
                 continue;
             }
@@ -338,11 +398,13 @@ pub fn select(
                     // the optimum of a nested candidate of the same round (extended to this
                     // effect by [`Effect::nested_values`]).
                     let cspec = spec.with(e);
-                    let mut start = current.model.values.clone();
+                    let mut start = S::values_of(&current.model).to_vec();
                     start.extend(cspec.params()[start.len()..].iter().map(|p| p.neutral));
                     let nested = e.nests().and_then(|n| {
-                        let c = candidates.iter().find(|c: &&Candidate| c.effect == n)?;
-                        let mut v = c.fit.model.values.clone();
+                        let c = candidates
+                            .iter()
+                            .find(|c: &&Candidate<S::Model>| c.effect == n)?;
+                        let mut v = S::values_of(&c.fit.model).to_vec();
                         v.extend(e.nested_values());
                         Some(v)
                     });
@@ -353,7 +415,8 @@ pub fn select(
             };
             candidates.push(evidence.judge(&cspec, e, None, generalises, fit)?);
         }
-        let accepts = |c: &Candidate| c.delta_bic < BIC_THRESHOLD && c.improves_every_level;
+        let accepts =
+            |c: &Candidate<S::Model>| c.delta_bic < BIC_THRESHOLD && c.improves_every_level;
         // Interacting effects: when two new effects each have strong evidence on the pooled
         // held-out rows but raise some level's residual (on the Brake–Reuss beam fitted on all
         // four levels: a stiffness softening ∝ A suits level 2, hardening ∝ A² levels 1 and 4,
@@ -361,7 +424,7 @@ pub fn select(
         // [`MAX_PAIRED`]) are also tested together, `Δp` their parameters together, and compete
         // with the single candidates by ΔBIC.
         if accepted_effects.len() + 2 <= opts.max_effects {
-            let mut strong: Vec<&Candidate> = candidates
+            let mut strong: Vec<&Candidate<S::Model>> = candidates
                 .iter()
                 .filter(|c| {
                     c.generalises.is_none()
@@ -380,8 +443,8 @@ pub fn select(
                     }
                     // From the two single candidates' optima combined.
                     let cspec = pair.with(b.effect);
-                    let mut start = a.fit.model.values.clone();
-                    start.extend(&b.fit.model.values[current.model.values.len()..]);
+                    let mut start = S::values_of(&a.fit.model).to_vec();
+                    start.extend(&S::values_of(&b.fit.model)[S::values_of(&current.model).len()..]);
                     let fit = fit_candidate(&cspec, &[start], levels, &train, opts, progress)?;
                     pairs.push(evidence.judge(&cspec, a.effect, Some(b.effect), None, fit)?);
                 }
@@ -397,7 +460,7 @@ pub fn select(
             break;
         }
         rounds.push(Round {
-            base_effects: spec.effects.clone(),
+            base_effects: spec.effects().to_vec(),
             base_held_out: base_held,
             lag1_autocorrelation: rho,
             effective_samples: n_eff,
@@ -417,8 +480,8 @@ pub fn select(
             None => break,
         }
     }
-    let final_held = score(&current.model, levels, &held)?;
-    let base_held = score(&base_fit.model, levels, &held)?;
+    let final_held = score::<S>(&current.model, levels, &held)?;
+    let base_held = score::<S>(&base_fit.model, levels, &held)?;
     let verdict = if !accepted_effects.is_empty() {
         Verdict::EffectsFound {
             effects: accepted_effects,
@@ -434,7 +497,7 @@ pub fn select(
     };
     Ok(Selection {
         baseline_train_fit: base_fit,
-        final_spec: current.model.spec.clone(),
+        final_spec: S::spec_of(&current.model).clone(),
         final_train_fit: current,
         rounds,
         scatter_floor: floor,
@@ -445,26 +508,27 @@ pub fn select(
 
 /// The held-out evidence a round judges its candidates by: the current model's held-out
 /// residual, the effective sample size and the current parameter count.
-struct Evidence<'a> {
+struct Evidence<'a, S> {
     levels: &'a [LevelData],
     held: &'a [Vec<bool>],
     base_held: &'a HeldOut,
     n_eff: f64,
     base_params: usize,
+    family: std::marker::PhantomData<S>,
 }
 
-impl Evidence<'_> {
+impl<S: Extensible> Evidence<'_, S> {
     /// Score a fitted candidate (`effect`, with `jointly_with` for a pair) on the held-out rows:
     /// `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` and whether every level's residual fell.
     fn judge(
         &self,
-        cspec: &ModelSpec,
+        cspec: &S,
         effect: Effect,
         jointly_with: Option<Effect>,
         generalises: Option<Effect>,
-        fit: FitResult,
-    ) -> Result<Candidate> {
-        let h = score(&fit.model, self.levels, self.held)?;
+        fit: FitResult<S::Model>,
+    ) -> Result<Candidate<S::Model>> {
+        let h = score::<S>(&fit.model, self.levels, self.held)?;
         let dp = (cspec.params().len() - self.base_params) as f64;
         Ok(Candidate {
             effect,
@@ -490,18 +554,18 @@ impl Evidence<'_> {
 }
 
 /// Refit a model on all rows of the fit levels (local, from its training optimum).
-pub fn refit_all_rows(
-    from: &FitResult,
+pub fn refit_all_rows<S: Extensible>(
+    from: &FitResult<S::Model>,
     levels: &[LevelData],
     opts: &FitOptions,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<FitResult> {
+) -> Result<FitResult<S::Model>> {
     let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
     fit_local(
-        &from.model.spec,
+        S::spec_of(&from.model),
         levels,
         &all,
-        std::slice::from_ref(&from.model.values),
+        &[S::values_of(&from.model).to_vec()],
         opts,
         progress,
     )
