@@ -12,7 +12,7 @@ use asperity::identify::reduced::{
     identify_reduced, EffectSearch, ReducedModel, ReducedOptions, ReducedSpec, SavedReducedModel,
 };
 use asperity::identify::report::LevelErrors;
-use asperity::identify::select::Extensible;
+use asperity::identify::select::{Extensible, Verdict};
 use std::f64::consts::TAU;
 
 #[path = "support/synthetic_sweep.rs"]
@@ -583,6 +583,33 @@ fn search_finds(effect: Effect, realisations: u64) {
 #[test]
 fn the_search_finds_a_stiffening_spring_the_factors_cannot_express() {
     search_finds(Effect::AmplitudeStiffness, 2);
+}
+
+/// Offered only candidates that cannot express a stiffening spring (a force delay, the same at
+/// every level; more harmonics), the search says that the residual stays above the scatter and
+/// no candidate explains it, and the update keeps the four factors: nothing is forced.
+#[test]
+fn without_the_right_candidate_the_residual_is_reported_unexplained() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
+    let truth = truth_with(&spec, Effect::AmplitudeStiffness);
+    let options = ReducedOptions {
+        candidates: Some(vec![Effect::ShakerInteraction, Effect::HigherHarmonics]),
+        ..options(1)
+    };
+    let id = identify_reduced(&spec, sweeps_of(&truth, 1000), vec![0, 2], &options, None).unwrap();
+    let EffectSearch::Run(sel) = &id.effect_search else {
+        panic!("search {:?}", id.effect_search);
+    };
+    assert!(
+        matches!(sel.verdict, Verdict::Unexplained { .. }),
+        "{:?}\n{}",
+        sel.verdict,
+        id.text()
+    );
+    assert!(id.fit.model.spec.effects.is_empty() && id.factors_only.is_none());
+    assert!(!id.at_scatter);
+    assert!(id.text().contains("no candidate effect explains it"));
 }
 
 /// Ten realisations each of the stiffening spring and the preload loss (about 20 minutes on
