@@ -68,10 +68,10 @@ fn sweep(spec: &ReducedSpec, force: f64, seed: u64) -> Sweep {
     sweep_with_noise(spec, force, seed, 0.01)
 }
 
-/// [`sweep`] with relative amplitude noise and phase noise (rad) of standard deviation `noise`.
-fn sweep_with_noise(spec: &ReducedSpec, force: f64, seed: u64, noise: f64) -> Sweep {
-    let truth = spec.model(TRUTH.to_vec());
-    let drives: Vec<Drive> = (0..57)
+/// The rows of every synthetic sweep: 100–114 Hz in 0.25 Hz steps, the force `force` dipping
+/// by up to 20 % near 107 Hz.
+fn sweep_drives(force: f64) -> Vec<Drive> {
+    (0..57)
         .map(|i| {
             let f = 100.0 + 0.25 * i as f64;
             let dip = 0.2 / (1.0 + ((f - 107.0) / 1.0).powi(2));
@@ -80,7 +80,13 @@ fn sweep_with_noise(spec: &ReducedSpec, force: f64, seed: u64, noise: f64) -> Sw
                 force_n: force * (1.0 - dip),
             }
         })
-        .collect();
+        .collect()
+}
+
+/// [`sweep`] with relative amplitude noise and phase noise (rad) of standard deviation `noise`.
+fn sweep_with_noise(spec: &ReducedSpec, force: f64, seed: u64, noise: f64) -> Sweep {
+    let truth = spec.model(TRUTH.to_vec());
+    let drives = sweep_drives(force);
     let (x, _) = truth.receptance_tolerant(&drives, force, false).unwrap();
     noisy_sweep(
         format!("synthetic-{force}N-{seed}.csv"),
@@ -475,16 +481,7 @@ fn sweeps_of(truth: &ReducedModel, seed: u64) -> Vec<Sweep> {
         .iter()
         .enumerate()
         .map(|(k, &force)| {
-            let drives: Vec<Drive> = (0..57)
-                .map(|i| {
-                    let f = 100.0 + 0.25 * i as f64;
-                    let dip = 0.2 / (1.0 + ((f - 107.0) / 1.0).powi(2));
-                    Drive {
-                        omega: TAU * f,
-                        force_n: force * (1.0 - dip),
-                    }
-                })
-                .collect();
+            let drives = sweep_drives(force);
             let mean = drives.iter().map(|d| d.force_n).sum::<f64>() / drives.len() as f64;
             let (x, _) = truth.receptance_tolerant(&drives, mean, false).unwrap();
             noisy_sweep(
