@@ -617,3 +617,37 @@ fn the_search_finds_each_effect_in_ten_of_ten_realisations() {
     search_finds(Effect::AmplitudeStiffness, 10);
     search_finds(Effect::PreloadLoss, 10);
 }
+
+/// Under response control with a residual receptance `r`, the measured amplitude `|x + r|·F`
+/// is held (fixed point on the structure's target), not the structure's `|x|·F` alone.
+#[test]
+fn response_control_holds_the_measured_amplitude_with_a_residual_receptance() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
+    let mut values = TRUTH.to_vec();
+    values.push(1.0); // ρ = 1: r = 1/k_ref ≈ 2.3e-6 m/N, a few per cent of the response
+    let with_r = spec
+        .with_scales(EFFECT_SCALES)
+        .with(Effect::OutOfBandModes)
+        .model(values);
+    let without_r = spec.model(TRUTH.to_vec());
+    let omegas: Vec<f64> = [104.0, 106.0, 108.0].iter().map(|f| TAU * f).collect();
+    let target = [5e-6; 3];
+    let (forces, recs) = with_r.response_controlled(&omegas, &target, 0.15).unwrap();
+    let (forces0, _) = without_r
+        .response_controlled(&omegas, &target, 0.15)
+        .unwrap();
+    for i in 0..3 {
+        let held = recs[i].norm() * forces[i];
+        assert!(
+            (held / target[i] - 1.0).abs() < 1e-8,
+            "row {i}: held {held}"
+        );
+        assert!(
+            (forces[i] / forces0[i] - 1.0).abs() > 1e-3,
+            "row {i}: the residual receptance changed nothing ({} N vs {} N)",
+            forces[i],
+            forces0[i]
+        );
+    }
+}

@@ -433,7 +433,7 @@ impl ReducedModel {
         let mut guess: Option<(DVector<f64>, f64)> = None;
         for (&w, &target) in omegas.iter().zip(target_m) {
             let mut structural = target;
-            let mut point = None;
+            let (mut point, mut error) = (None, f64::NAN);
             for _ in 0..RESIDUAL_TARGET_ITERATIONS {
                 let p = sys.solve_response_controlled(
                     w,
@@ -443,14 +443,27 @@ impl ReducedModel {
                 )?;
                 let x = self.observed(&sys.harmonics, &p.z) / p.level;
                 let held = (x + r).norm() * p.level;
+                error = (held / target - 1.0).abs();
                 guess = Some((p.z.clone(), p.level));
-                point = Some((p.level, x));
-                if r == 0.0 || (held / target - 1.0).abs() < 1e-10 {
+                if r == 0.0 || error < RESIDUAL_TARGET_TOLERANCE {
+                    point = Some((p.level, x));
                     break;
                 }
                 structural *= target / held;
             }
-            let (f, x) = point.expect("at least one iteration");
+            let Some((f, x)) = point else {
+                return Err(Error::NonConvergence {
+                    solver: format!(
+                        "response control of {} at {:.4} Hz with the residual receptance \
+                         (fixed point on the structure's amplitude)",
+                        self.spec.path().display(),
+                        w / TAU
+                    ),
+                    iterations: RESIDUAL_TARGET_ITERATIONS,
+                    residual: error,
+                    tolerance: RESIDUAL_TARGET_TOLERANCE,
+                });
+            };
             forces.push(f);
             recs.push(self.measured_chain(x, w, r, tau));
         }
@@ -461,6 +474,9 @@ impl ReducedModel {
 /// Fixed-point iterations of the response-controlled target under a residual receptance (it
 /// converges geometrically at the ratio `|r|·F/|x|`, small away from antiresonances).
 const RESIDUAL_TARGET_ITERATIONS: usize = 30;
+
+/// Relative tolerance on the held (measured) amplitude under a residual receptance.
+const RESIDUAL_TARGET_TOLERANCE: f64 = 1e-10;
 
 /// Newton from the warm start; on failure from rest, then by a ramp of the force in four steps.
 fn solve_robust(
