@@ -201,15 +201,8 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     };
     let dim = spec.params().len() as u64;
     let local = asperity::identify::fit::local_iteration_cap(opts.local_iterations, dim as usize);
-    // The update, and the effect search if it runs: the baseline and each candidate refitted
-    // by Nelder–Mead in each round, then the final refit.
-    let candidates = args
-        .candidates
-        .as_ref()
-        .map_or(REDUCED_EFFECTS.len(), |c| c.len()) as u64;
-    let estimate = opts.swarm_evaluations()
-        + (opts.starts as u64 + 1) * local
-        + (1 + args.max_effects.max(1) as u64 * candidates + 1) * local;
+    // The update; the effect search, if it runs, lengthens the bar by its own estimate.
+    let estimate = opts.swarm_evaluations() + (opts.starts as u64 + 1) * local;
     let bar = super::progress_bar("identify (reduced model)", estimate);
     bar.set_message("model evaluations");
     let options = ReducedOptions {
