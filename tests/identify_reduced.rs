@@ -522,8 +522,8 @@ fn search_finds(effect: Effect, realisations: u64) {
         for (k, (&v, &t)) in id.fit.model.values.iter().zip(&TRUTH).enumerate() {
             // With the preload loss, the friction factor alone (the slip force without loss)
             // is seen where the loss is small, at the lowest level, where the joint is nearly
-            // stuck: it trades off against λ (probe of 4 realisations: up to +2.04 %, with λ
-            // +1.6 % and the highest level's slip force within 1.4 %), hence 3 %.
+            // stuck: it trades off against λ (in a probe of 4 realisations up to +2.04 %, where
+            // λ/F_ref was +1.6 % and the highest level's slip force within 1.4 %), hence 3 %.
             let tolerance = if effect == Effect::PreloadLoss && k == 3 {
                 0.03
             } else {

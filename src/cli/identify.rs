@@ -209,10 +209,11 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
         fit: opts,
         response_amplitudes: args.response_amplitude.clone(),
         chain_steps: chain_steps(args)?,
-        candidates: match &args.candidates {
-            Some(c) => Some(parse_candidates(c, &REDUCED_EFFECTS)?),
-            None => None,
-        },
+        candidates: args
+            .candidates
+            .as_ref()
+            .map(|c| parse_candidates(c, &REDUCED_EFFECTS))
+            .transpose()?,
         max_effects: args.max_effects,
     };
     let result = identify_reduced(&spec, sweeps, fit_levels, &options, Some(&bar));

@@ -351,6 +351,25 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
     }
 }
 
+/// Factor on a joint's slip force and stiffness after a preload loss `λ` per reference force:
+/// `1 − λ·F̄/F_ref` at a level of mean force `F̄`, at least 0.05 (a joint never loses all
+/// its preload within a test series).
+pub fn preload_factor_law(lambda: f64, mean_force_n: f64, force_ref_n: f64) -> f64 {
+    (1.0 - lambda * mean_force_n / force_ref_n).max(0.05)
+}
+
+/// Cubic stiffness `k3` (N/m³) whose describing-function stiffness `(3/4)·k3·A²` is `ε·k` at
+/// the reference amplitude `A_ref`: `k3 = 4ε·k/(3·A_ref²)`.
+pub fn cubic_stiffness_law(eps: f64, k: f64, a_ref: f64) -> f64 {
+    4.0 * eps * k / (3.0 * a_ref * a_ref)
+}
+
+/// Quadratic stiffness `k2` (N/m²) of `k2·|u|·u` whose describing-function stiffness
+/// `(8/3π)·k2·A` is `ε1·k` at the reference amplitude `A_ref`: `k2 = 3π·ε1·k/(8·A_ref)`.
+pub fn quadratic_stiffness_law(eps: f64, k: f64, a_ref: f64) -> f64 {
+    3.0 * PI * eps * k / (8.0 * a_ref)
+}
+
 /// A model with parameter values (physical units, in the order of [`ModelSpec::params`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Model {
@@ -549,7 +568,7 @@ impl Model {
     /// (preload loss; 1 without it).
     pub fn preload_factor(&self, mean_force_n: f64) -> f64 {
         self.get("preload_loss_per_ref_force").map_or(1.0, |l| {
-            (1.0 - l * mean_force_n / self.spec.scales.force_n).max(0.05)
+            preload_factor_law(l, mean_force_n, self.spec.scales.force_n)
         })
     }
 
@@ -581,8 +600,11 @@ impl Model {
     pub fn cubic_stiffness(&self) -> Option<f64> {
         self.get("stiffness_change_at_ref_amplitude").map(|eps| {
             let ph = self.physical();
-            let a = self.spec.scales.amplitude_max_m;
-            4.0 * eps * ph.mass_kg * ph.omega_s * ph.omega_s / (3.0 * a * a)
+            cubic_stiffness_law(
+                eps,
+                ph.mass_kg * ph.omega_s * ph.omega_s,
+                self.spec.scales.amplitude_max_m,
+            )
         })
     }
 
@@ -592,8 +614,11 @@ impl Model {
         self.get("proportional_stiffness_change_at_ref_amplitude")
             .map(|eps| {
                 let ph = self.physical();
-                let a = self.spec.scales.amplitude_max_m;
-                3.0 * PI * eps * ph.mass_kg * ph.omega_s * ph.omega_s / (8.0 * a)
+                quadratic_stiffness_law(
+                    eps,
+                    ph.mass_kg * ph.omega_s * ph.omega_s,
+                    self.spec.scales.amplitude_max_m,
+                )
             })
     }
 

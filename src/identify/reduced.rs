@@ -71,7 +71,9 @@ use super::effects::Effect;
 use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
 use super::measured::{sha256_hex, PhaseConvention, Sweep};
 use super::model::check_values;
-use super::model::{effect_params, Scales};
+use super::model::{
+    cubic_stiffness_law, effect_params, preload_factor_law, quadratic_stiffness_law, Scales,
+};
 use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
 use super::pipeline::{
     response_control_amplitudes, response_controlled_text, response_controlled_with,
@@ -94,7 +96,7 @@ use crate::output::write_string_atomic;
 use nalgebra::{DMatrix, DVector};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -279,7 +281,7 @@ impl ReducedModel {
     /// of the single mode ([`super::model::Model::preload_factor`]).
     pub fn preload_factor(&self, mean_force_n: f64) -> f64 {
         match (self.get("preload_loss_per_ref_force"), self.spec.scales) {
-            (Some(l), Some(s)) => (1.0 - l * mean_force_n / s.force_n).max(0.05),
+            (Some(l), Some(s)) => preload_factor_law(l, mean_force_n, s.force_n),
             _ => 1.0,
         }
     }
@@ -289,7 +291,7 @@ impl ReducedModel {
     pub fn cubic_stiffness(&self) -> Option<f64> {
         let eps = self.get("stiffness_change_at_ref_amplitude")?;
         let (k, s) = (self.spec.reference_stiffness()?, self.spec.scales?);
-        Some(4.0 * eps * k / (3.0 * s.amplitude_max_m.powi(2)))
+        Some(cubic_stiffness_law(eps, k, s.amplitude_max_m))
     }
 
     /// Quadratic stiffness `k2 = 3π·ε1·k_ref/(8·A_ref)` (N/m²) on the response coordinate:
@@ -297,7 +299,7 @@ impl ReducedModel {
     pub fn quadratic_stiffness(&self) -> Option<f64> {
         let eps = self.get("proportional_stiffness_change_at_ref_amplitude")?;
         let (k, s) = (self.spec.reference_stiffness()?, self.spec.scales?);
-        Some(3.0 * PI * eps * k / (8.0 * s.amplitude_max_m))
+        Some(quadratic_stiffness_law(eps, k, s.amplitude_max_m))
     }
 
     /// Residual receptance `r = ρ/k_ref` (m/N) of the modes outside the model's basis.
@@ -362,14 +364,8 @@ impl ReducedModel {
         solve_sweep(drives, tolerant, |d, warm| {
             let p = solve_robust(&sys, d, warm)?;
             let x = self.observed(&sys.harmonics, &sys.coordinates(&p)) / d.force_n;
-            Ok((self.measured_chain(x, d.omega, r, tau), p.z))
+            Ok((measured_chain(x, d.omega, r, tau), p.z))
         })
-    }
-
-    /// The response per unit measured force from the structure's `x` (m/N): the residual
-    /// receptance `r` added and the force delayed by `τ`, `(x + r)·e^{−iωτ}`.
-    fn measured_chain(&self, x: Complex64, omega: f64, r: f64, tau: f64) -> Complex64 {
-        (x + r) * Complex64::from_polar(1.0, -omega * tau)
     }
 
     /// The harmonic-balance system of the updated structure `s`: the file's excitation (one
@@ -465,7 +461,7 @@ impl ReducedModel {
                 });
             };
             forces.push(f);
-            recs.push(self.measured_chain(x, w, r, tau));
+            recs.push(measured_chain(x, w, r, tau));
         }
         Ok((forces, recs))
     }
@@ -477,6 +473,12 @@ const RESIDUAL_TARGET_ITERATIONS: usize = 30;
 
 /// Relative tolerance on the held (measured) amplitude under a residual receptance.
 const RESIDUAL_TARGET_TOLERANCE: f64 = 1e-10;
+
+/// The response per unit measured force from the structure's `x` (m/N): the residual
+/// receptance `r` added and the force delayed by `τ`, `(x + r)·e^{−iωτ}`.
+fn measured_chain(x: Complex64, omega: f64, r: f64, tau: f64) -> Complex64 {
+    (x + r) * Complex64::from_polar(1.0, -omega * tau)
+}
 
 /// Newton from the warm start; on failure from rest, then by a ramp of the force in four steps.
 fn solve_robust(
@@ -711,11 +713,12 @@ fn search_evaluations(candidates: usize, max_effects: usize) -> u64 {
 /// search's refits ([`search_fits`]: the baseline, every candidate in each of up to
 /// `max_effects` rounds and the final refit, at
 /// [`SEARCH_EVALUATIONS_PER_FIT`] evaluations each) are expected to take at most
-/// [`BAND_BUDGET_S`] at `per_evaluation_s` per evaluation of the fit levels; otherwise why not.
+/// [`BAND_BUDGET_S`] at `per_evaluation_s()` per evaluation of the fit levels (timed only for
+/// the default); otherwise why not.
 pub fn search_candidates(
     explicit: Option<&[Effect]>,
     max_effects: usize,
-    per_evaluation_s: f64,
+    per_evaluation_s: impl FnOnce() -> f64,
 ) -> std::result::Result<Vec<Effect>, String> {
     if let Some(c) = explicit {
         return if c.is_empty() {
@@ -724,6 +727,7 @@ pub fn search_candidates(
             Ok(c.to_vec())
         };
     }
+    let per_evaluation_s = per_evaluation_s();
     let fits = search_fits(REDUCED_EFFECTS.len(), max_effects);
     let expected = fits as f64 * SEARCH_EVALUATIONS_PER_FIT * per_evaluation_s;
     if expected <= BAND_BUDGET_S {
@@ -837,13 +841,12 @@ pub fn identify_reduced(
     let effect_search = if factors_fit.cost <= super::select::SCATTER_FACTOR * scatter_floor {
         EffectSearch::NotNeeded
     } else {
-        let t0 = std::time::Instant::now();
-        super::select::cost_all_rows(spec, &factors_fit.model, &fit_data);
-        let candidates = search_candidates(
-            options.candidates.as_deref(),
-            options.max_effects,
-            t0.elapsed().as_secs_f64(),
-        );
+        let candidates =
+            search_candidates(options.candidates.as_deref(), options.max_effects, || {
+                let t0 = std::time::Instant::now();
+                super::select::cost_all_rows(spec, &factors_fit.model, &fit_data);
+                t0.elapsed().as_secs_f64()
+            });
         match (candidates, &data_backbone) {
             (Err(reason), _) => EffectSearch::NotRun { reason },
             (Ok(_), Err(reason)) => EffectSearch::NotRun {
@@ -1345,19 +1348,19 @@ mod tests {
     #[test]
     fn default_search_follows_the_cost_of_an_evaluation() {
         assert_eq!(
-            search_candidates(None, 3, 0.014),
+            search_candidates(None, 3, || 0.014),
             Ok(REDUCED_EFFECTS.to_vec())
         );
-        let why = search_candidates(None, 3, 6.3).unwrap_err();
+        let why = search_candidates(None, 3, || 6.3).unwrap_err();
         assert!(
             why.contains("14.0 h") && why.contains("--candidates"),
             "{why}"
         );
         assert_eq!(
-            search_candidates(Some(&[Effect::PreloadLoss]), 3, 6.3),
+            search_candidates(Some(&[Effect::PreloadLoss]), 3, || unreachable!()),
             Ok(vec![Effect::PreloadLoss])
         );
-        assert!(search_candidates(Some(&[]), 3, 0.0).is_err());
+        assert!(search_candidates(Some(&[]), 3, || unreachable!()).is_err());
     }
 
     /// The default bands run where the chains take a few minutes (the two-mode test model,
