@@ -276,6 +276,16 @@ fn identify_then_predict_both_controls() {
     let e = &json["errors_after"][1];
     assert_eq!(e["role"], "predicted");
     assert!(e["peak_error"].as_f64().unwrap().abs() < 0.01, "{e}");
+    // The model-free check is reported: six laws, each level's spread, and a verdict per
+    // level not used.
+    let mf = &json["model_free"];
+    assert_eq!(mf["laws"].as_array().map(Vec::len), Some(6), "{mf}");
+    assert_eq!(mf["levels"][1]["role"], "predicted", "{mf}");
+    let text = std::fs::read_to_string(out.join("identify.txt")).unwrap();
+    assert!(
+        text.contains("model-free check") && text.contains("level 2: "),
+        "{text}"
+    );
 
     // A response-controlled test of the saved model: rows whose response amplitudes come from
     // the model's own force-controlled response at known forces; holding them must need those

@@ -607,6 +607,11 @@ fn without_the_right_candidate_the_residual_is_reported_unexplained() {
     assert!(id.fit.model.spec.effects.is_empty() && id.factors_only.is_none());
     assert!(!id.at_scatter);
     assert!(id.text().contains("no candidate effect explains it"));
+    // The model-free check is in the report, with a comparison on the level not used.
+    let mf = id.model_free.as_ref().expect("model-free check");
+    assert_eq!(mf.comparisons.len(), 1);
+    assert_eq!(mf.comparisons[0].level, 2);
+    assert!(id.text().contains("model-free check"));
 }
 
 /// Ten realisations each of the stiffening spring and the preload loss (about 20 minutes on

@@ -15,6 +15,7 @@ pub mod effects;
 pub mod fit;
 pub mod measured;
 pub mod model;
+pub mod model_free;
 pub mod pipeline;
 pub mod predict;
 pub mod reduced;

@@ -9,6 +9,7 @@ use super::backbone::{self, BackbonePoint, LevelBackbone};
 use super::fit::{FitOptions, FitResult, LevelData};
 use super::measured::{PhaseConvention, Quantity, Sweep};
 use super::model::{Family, Model, ModelSpec, Scales};
+use super::model_free::{self, ModelFreeCheck};
 use super::report::{
     errors_table, fine_curve, level_role, level_roles, plot_backbone, plot_level, regions_text,
     write_json, write_rows_csv, CurveRow, InputFile, LevelErrors,
@@ -111,6 +112,9 @@ pub struct Identification {
     /// The model the held-out evidence leaned to without accepting it, refitted on all rows:
     /// the spread between its predictions and the final model's is model-form uncertainty.
     pub alternative: Option<Alternative>,
+    /// The fit levels' own backbone interpolated in a single-nonlinear-mode response, no
+    /// model: what the data alone predict for every level (or why it could not be built).
+    pub model_free: std::result::Result<ModelFreeCheck, String>,
     pub backbone_before: Vec<BackbonePoint>,
     pub backbone_after: Vec<BackbonePoint>,
     pub response_controlled: Vec<ResponseControlled>,
@@ -558,6 +562,8 @@ pub fn identify(
     let alternative = alternative(&selection, &fit_data, &levels, &fit_levels, opts, progress)?;
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
+    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
+        .map_err(|e| e.to_string());
     let roles = level_roles(levels.len(), &fit_levels);
     let uncertainty = uncertainty::estimate(
         &after.model.spec,
@@ -592,6 +598,7 @@ pub fn identify(
         errors_after,
         uncertainty,
         alternative,
+        model_free,
         backbone_before,
         backbone_after,
         response_controlled,
@@ -900,6 +907,10 @@ impl Identification {
                 &rows,
             );
         }
+        match &self.model_free {
+            Ok(m) => s += &m.text(&self.errors_after),
+            Err(e) => s += &format!("\nmodel-free check not available: {e}\n"),
+        }
         let rows: Vec<(&LevelErrors, Option<&LevelErrors>)> =
             self.errors_after.iter().map(|e| (e, None)).collect();
         s += &regions_text("final model, residual per region", &rows);
@@ -1036,6 +1047,10 @@ impl Identification {
             "errors_after": self.errors_after,
             "uncertainty": self.uncertainty,
             "alternative": self.alternative,
+            "model_free": match &self.model_free {
+                Ok(m) => serde_json::json!(m),
+                Err(e) => serde_json::json!({"not_available": e}),
+            },
             "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
                 "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz
             })).collect::<Vec<_>>(),

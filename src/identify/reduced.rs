@@ -75,6 +75,7 @@ use super::model::{
     cubic_stiffness_law, effect_params, preload_factor_law, quadratic_stiffness_law, Scales,
 };
 use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
+use super::model_free::{self, ModelFreeCheck};
 use super::pipeline::{
     response_control_amplitudes, response_controlled_text, response_controlled_with,
     write_backbone_csv, write_response_controlled_csv, ResponseControlled,
@@ -568,6 +569,9 @@ pub struct ReducedIdentification {
     /// The data's backbone (equivalent linear mode per level, pointwise estimates), or why it
     /// could not be estimated (a sweep that is not one lightly damped mode).
     pub data_backbone: std::result::Result<Vec<LevelBackbone>, String>,
+    /// The fit levels' own backbone interpolated in a single-nonlinear-mode response, no model
+    /// ([`super::model_free`]): what the data alone predict for every level, or why not.
+    pub model_free: std::result::Result<ModelFreeCheck, String>,
     /// Per level: the equivalent linear mode of the model's response at the level's rows, as
     /// given and updated (`None`: no resonance inside the measured band).
     pub backbone_before: Vec<Option<BackbonePoint>>,
@@ -890,6 +894,8 @@ pub fn identify_reduced(
         _ => (factors_fit, None),
     };
     let (responses_after, errors_after) = responses_and_errors(&fit.model, &levels, &fit_levels)?;
+    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
+        .map_err(|e| e.to_string());
     for (l, y) in levels.iter().zip(&responses_after) {
         if let Some(k) = y.iter().position(|v| !v.re.is_finite()) {
             return Err(Error::Data(format!(
@@ -956,6 +962,7 @@ pub fn identify_reduced(
         at_scatter,
         uncertainty,
         data_backbone,
+        model_free,
         backbone_before,
         backbone_after,
         response_controlled,
@@ -1132,6 +1139,10 @@ impl ReducedIdentification {
                 ),
                 &rows,
             );
+        }
+        match &self.model_free {
+            Ok(m) => s += &m.text(&self.errors_after),
+            Err(e) => s += &format!("\nmodel-free check not available: {e}\n"),
         }
         s += &format!(
             "\nmeasurement scatter per component (third differences) of the fit levels: {} of \
