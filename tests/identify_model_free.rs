@@ -6,22 +6,14 @@
 use asperity::identify::effects::Effect;
 use asperity::identify::fit::LevelData;
 use asperity::identify::measured::{PhaseConvention, Sweep};
-use asperity::identify::model::{Drive, Family, Model, ModelSpec, Scales};
+use asperity::identify::model::{Drive, Family, Model, ModelSpec};
 use asperity::identify::model_free::{check, Comparison, ModelFreeCheck};
 use asperity::identify::report::{level_role, LevelErrors};
 use std::f64::consts::TAU;
 
 #[path = "support/synthetic_sweep.rs"]
 mod synthetic_sweep;
-use synthetic_sweep::noisy_sweep;
-
-const SCALES: Scales = Scales {
-    frequency_hz: 80.0,
-    modal_mass_kg: 2.0,
-    amplitude_max_m: 2e-4,
-    amplitude_min_m: 2e-5,
-    force_n: 0.4,
-};
+use synthetic_sweep::{noisy_sweep, SCALES};
 
 /// f = 80 Hz, ζ0 = 0.1 %, m = 2 kg; joint share 1e-4 with a 2 mm slip distance (stuck at
 /// every level); +1 % in ω² at 200 µm (cubic spring), ζ_q = 0.1 % at 200 µm (quadratic damper).

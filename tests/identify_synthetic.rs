@@ -7,24 +7,14 @@ use asperity::identify::backbone::resonance;
 use asperity::identify::effects::Effect;
 use asperity::identify::fit::FitOptions;
 use asperity::identify::measured::Sweep;
-use asperity::identify::model::{Drive, Family, Model, ModelSpec, PowerLawDamper, Scales};
+use asperity::identify::model::{Drive, Family, Model, ModelSpec, PowerLawDamper};
 use asperity::identify::select::Verdict;
 use asperity::identify::{identify, Options};
 use std::f64::consts::TAU;
 
 #[path = "support/synthetic_sweep.rs"]
 mod synthetic_sweep;
-use synthetic_sweep::noisy_sweep;
-
-/// Scales only state the truth's dimensionless effect parameters; the identification derives
-/// its own from the data.
-const SCALES: Scales = Scales {
-    frequency_hz: 80.0,
-    modal_mass_kg: 2.0,
-    amplitude_max_m: 2e-4,
-    amplitude_min_m: 2e-5,
-    force_n: 0.4,
-};
+use synthetic_sweep::{noisy_sweep, SCALES};
 
 /// Truth: f_s = 80 Hz, ζ0 = 0.1 %, m = 2 kg, κ = 2 %, δ = 30 µm (Jenkins joint): the joint is
 /// stuck at the lowest level (20 µm) and well into slip at the highest (about 370 µm, 79.2 Hz).

@@ -3,7 +3,7 @@
 //! m/s² accelerations, N, Hz, rad).
 
 use asperity::identify::measured::{Quantity, Row, Sweep};
-use asperity::identify::model::Drive;
+use asperity::identify::model::{Drive, Scales};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use realfft::num_complex::Complex64;
@@ -44,3 +44,15 @@ pub fn noisy_sweep(
         header_line: 1,
     }
 }
+
+/// Reference scales of the single-mode synthetic cases (80 Hz, 2 kg, 20–200 µm, 0.4 N): they only
+/// state the truths' dimensionless effect parameters; an identification derives its own from the
+/// data. Not every test binary that includes this file uses them.
+#[allow(dead_code)]
+pub const SCALES: Scales = Scales {
+    frequency_hz: 80.0,
+    modal_mass_kg: 2.0,
+    amplitude_max_m: 2e-4,
+    amplitude_min_m: 2e-5,
+    force_n: 0.4,
+};
