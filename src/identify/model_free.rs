@@ -483,6 +483,17 @@ impl ModelFreeCheck {
     }
 }
 
+/// The report section of a check, or the reason it is not available.
+pub fn section(
+    check: &std::result::Result<ModelFreeCheck, String>,
+    model: &[LevelErrors],
+) -> String {
+    match check {
+        Ok(c) => c.text(model),
+        Err(e) => format!("\nmodel-free check not available: {e}\n"),
+    }
+}
+
 /// RMS complex error of the rows in the half-power band ("at resonance" region).
 fn rms_at_resonance(e: &LevelErrors) -> f64 {
     e.regions

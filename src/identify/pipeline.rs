@@ -907,10 +907,7 @@ impl Identification {
                 &rows,
             );
         }
-        match &self.model_free {
-            Ok(m) => s += &m.text(&self.errors_after),
-            Err(e) => s += &format!("\nmodel-free check not available: {e}\n"),
-        }
+        s += &model_free::section(&self.model_free, &self.errors_after);
         let rows: Vec<(&LevelErrors, Option<&LevelErrors>)> =
             self.errors_after.iter().map(|e| (e, None)).collect();
         s += &regions_text("final model, residual per region", &rows);

@@ -1140,10 +1140,7 @@ impl ReducedIdentification {
                 &rows,
             );
         }
-        match &self.model_free {
-            Ok(m) => s += &m.text(&self.errors_after),
-            Err(e) => s += &format!("\nmodel-free check not available: {e}\n"),
-        }
+        s += &model_free::section(&self.model_free, &self.errors_after);
         s += &format!(
             "\nmeasurement scatter per component (third differences) of the fit levels: {} of \
              their peaks; objective J = {:.3e} against the {:.3e} the scatter alone leaves: {}\n",
