@@ -286,6 +286,15 @@ fn identify_then_predict_both_controls() {
         text.contains("model-free check") && text.contains("level 2: "),
         "{text}"
     );
+    // The laws' backbones sit beside the data's and the models' in the backbone CSV.
+    let backbone = std::fs::read_to_string(out.join("identify-backbone.csv")).unwrap();
+    assert_eq!(
+        backbone
+            .lines()
+            .filter(|l| l.starts_with("model-free-wn-quadratic-zeta-power-law,"))
+            .count(),
+        40
+    );
 
     // A response-controlled test of the saved model: rows whose response amplitudes come from
     // the model's own force-controlled response at known forces; holding them must need those

@@ -167,6 +167,8 @@ impl DampingLaw {
 pub struct BackboneLaw {
     /// E.g. "ω_n quadratic, ζ power law".
     pub name: String,
+    /// The same as a file-safe id, e.g. "wn-quadratic-zeta-power-law".
+    pub id: String,
     /// Natural frequency (Hz) against the amplitude.
     pub frequency_hz: Polynomial,
     pub damping: DampingLaw,
@@ -185,6 +187,21 @@ impl BackboneLaw {
         let zeta = self.damping.at(a);
         (wn > 0.0 && zeta > 0.0 && wn.is_finite() && zeta.is_finite())
             .then(|| Complex64::new(wn * wn - omega * omega, 2.0 * zeta * wn * omega))
+    }
+
+    /// The law sampled at `n` amplitudes spaced logarithmically over the points' range.
+    pub fn curve(&self, n: usize) -> Vec<BackbonePoint> {
+        let (lo, hi) = self.amplitude_range_m;
+        (0..n)
+            .map(|k| {
+                let a = lo * (hi / lo).powf(k as f64 / (n - 1).max(1) as f64);
+                BackbonePoint {
+                    amplitude_m: a,
+                    frequency_hz: self.frequency_hz.at(a),
+                    damping_ratio: self.damping.at(a),
+                }
+            })
+            .collect()
     }
 
     /// The six laws fitted to `points`; a law the points cannot determine is left out.
@@ -219,6 +236,7 @@ impl BackboneLaw {
                 if let Some(damping) = law {
                     laws.push(BackboneLaw {
                         name: format!("ω_n {fname}, ζ {zname}"),
+                        id: format!("wn-{fname}-zeta-{}", zname.replace(' ', "-")),
                         frequency_hz: freq.clone(),
                         damping,
                         amplitude_range_m: (a_min, a_ref),
@@ -483,6 +501,19 @@ impl ModelFreeCheck {
     }
 }
 
+/// Every law's backbone over the points' amplitudes (40 points each), labelled by its id, for
+/// the backbone figure and CSV; none when the check is not available.
+pub fn law_curves(
+    check: &std::result::Result<ModelFreeCheck, String>,
+) -> Vec<(String, Vec<BackbonePoint>)> {
+    check.as_ref().map_or(Vec::new(), |c| {
+        c.laws
+            .iter()
+            .map(|l| (format!("model-free-{}", l.law.id), l.law.curve(40)))
+            .collect()
+    })
+}
+
 /// The report section of a check, or the reason it is not available.
 pub fn section(
     check: &std::result::Result<ModelFreeCheck, String>,
@@ -694,6 +725,7 @@ mod tests {
     fn the_sweep_stays_on_its_branch_through_a_fold() {
         let law = BackboneLaw {
             name: "test".into(),
+            id: "test".into(),
             frequency_hz: Polynomial {
                 coefficients: vec![80.0, 0.0, 0.5],
                 a_ref_m: 1e-4,

@@ -990,24 +990,21 @@ impl Identification {
         }
         // Backbones.
         let p = dir.join("identify-backbone.png");
-        plot_backbone(
-            &p,
-            &self.data_backbone,
-            &[
-                ("baseline model".into(), self.backbone_before.clone()),
-                ("final model".into(), self.backbone_after.clone()),
-            ],
-        )?;
+        let laws = model_free::law_curves(&self.model_free);
+        let mut curves = vec![
+            ("baseline model".to_string(), self.backbone_before.clone()),
+            ("final model".to_string(), self.backbone_after.clone()),
+        ];
+        curves.extend(laws.iter().cloned());
+        plot_backbone(&p, &self.data_backbone, &curves)?;
         written.push(p);
         let p = dir.join("identify-backbone.csv");
-        write_backbone_csv(
-            &p,
-            &self.data_backbone,
-            &[
-                ("baseline-model", &self.backbone_before),
-                ("final-model", &self.backbone_after),
-            ],
-        )?;
+        let mut rows: Vec<(&str, &[BackbonePoint])> = vec![
+            ("baseline-model", &self.backbone_before),
+            ("final-model", &self.backbone_after),
+        ];
+        rows.extend(laws.iter().map(|(id, c)| (id.as_str(), c.as_slice())));
+        write_backbone_csv(&p, &self.data_backbone, &rows)?;
         written.push(p);
         // Response-controlled FRFs.
         let p = dir.join("identify-response-controlled.csv");

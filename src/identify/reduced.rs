@@ -1317,23 +1317,21 @@ impl ReducedIdentification {
         let before = Self::model_backbone_points(&self.backbone_before);
         let after = Self::model_backbone_points(&self.backbone_after);
         let data: &[LevelBackbone] = self.data_backbone.as_deref().unwrap_or(&[]);
+        let laws = model_free::law_curves(&self.model_free);
         let p = dir.join("identify-backbone.csv");
-        write_backbone_csv(
-            &p,
-            data,
-            &[("as-given-model", &before), ("updated-model", &after)],
-        )?;
+        let mut rows: Vec<(&str, &[BackbonePoint])> =
+            vec![("as-given-model", &before), ("updated-model", &after)];
+        rows.extend(laws.iter().map(|(id, c)| (id.as_str(), c.as_slice())));
+        write_backbone_csv(&p, data, &rows)?;
         written.push(p);
         if !data.is_empty() {
             let p = dir.join("identify-backbone.png");
-            plot_backbone(
-                &p,
-                data,
-                &[
-                    ("as given (equivalent mode per level)".into(), before),
-                    ("updated (equivalent mode per level)".into(), after),
-                ],
-            )?;
+            let mut curves = vec![
+                ("as given (equivalent mode per level)".to_string(), before),
+                ("updated (equivalent mode per level)".to_string(), after),
+            ];
+            curves.extend(laws);
+            plot_backbone(&p, data, &curves)?;
             written.push(p);
         }
         if !self.response_controlled.is_empty() {
