@@ -16,12 +16,13 @@
 //! sweep (the root nearest the previous row's, as a stepped sine stays on its branch).
 //!
 //! Six laws are tried: `ω_n` linear or quadratic in `a`; `ζ` linear, quadratic, or
-//! `ζ0 + c·(a/a_ref)^p` (`p` in 0.25–4). The spread of their errors on a level is what the fit
-//! levels' data alone predict for it. Where the identified model's error on a level not used is
-//! no larger than the best law's, interpolating the data does no better than the model: the
-//! residual there is not something the fit levels carry, and no effect fitted to them can be
-//! expected to remove it. Where a law does clearly better, the fit levels carry an amplitude
-//! dependence the model lacks.
+//! `ζ0 + c·(a/a_ref)^p` (`p` in 0.25–4), each held at its end values outside the amplitudes the
+//! points span. The spread of their errors on a level is what the fit levels' data alone
+//! predict for it. The verdict on a level not used ([`Comparison`]) compares the RMS complex
+//! error in the half-power band (where the synthesis holds): only laws that reproduce the fit
+//! levels within [`REPRODUCTION_FACTOR`] of the model may judge (otherwise *inconclusive*); one
+//! below [`BETTER_FACTOR`] of the model's error says the fit levels carry an amplitude
+//! dependence the model lacks; none says the fit levels show no trend the model misses there.
 //!
 //! Units: SI (m, Hz, rad/s, N, kg).
 
