@@ -346,31 +346,67 @@ pub fn plot_backbone(
                 .collect(),
         ));
     }
-    stacked_line_plots(
-        path,
-        &[
-            (
-                LinePlot {
-                    title: "Backbone: natural frequency versus amplitude",
-                    x_label: "drive-point displacement amplitude (µm)",
-                    y_label: "natural frequency (Hz)",
-                    x_scale: Scale::Log,
-                    y_scale: Scale::Linear,
-                },
-                fr,
+    // The same, restricted to the amplitudes the pointwise estimates span: a model's backbone
+    // far outside them (a slipping joint's drop) otherwise sets the scale and flattens the data.
+    let (lo, hi) = pts.iter().fold((f64::INFINITY, 0.0f64), |(l, h), p| {
+        (l.min(p.amplitude_m * 1e6), h.max(p.amplitude_m * 1e6))
+    });
+    let within = |v: &[Series]| -> Vec<Series> {
+        v.iter()
+            .enumerate()
+            .map(|(k, s)| Series {
+                points: s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| p.0 >= lo && p.0 <= hi)
+                    .collect(),
+                colour: s.colour.or(Some(k)),
+                ..s.clone()
+            })
+            .collect()
+    };
+    let (fz, zz) = (within(&fr), within(&zr));
+    let panel = |title, y_label| LinePlot {
+        title,
+        x_label: "drive-point displacement amplitude (µm)",
+        y_label,
+        x_scale: Scale::Log,
+        y_scale: Scale::Linear,
+    };
+    let mut panels = vec![
+        (
+            panel(
+                "Backbone: natural frequency versus amplitude",
+                "natural frequency (Hz)",
             ),
-            (
-                LinePlot {
-                    title: "Backbone: damping ratio versus amplitude",
-                    x_label: "drive-point displacement amplitude (µm)",
-                    y_label: "damping ratio (%)",
-                    x_scale: Scale::Log,
-                    y_scale: Scale::Linear,
-                },
-                zr,
+            fr,
+        ),
+        (
+            panel(
+                "Backbone: damping ratio versus amplitude",
+                "damping ratio (%)",
             ),
-        ],
-    )
+            zr,
+        ),
+    ];
+    if lo < hi {
+        panels.push((
+            panel(
+                "Natural frequency over the amplitudes of the pointwise estimates",
+                "natural frequency (Hz)",
+            ),
+            fz,
+        ));
+        panels.push((
+            panel(
+                "Damping ratio over the amplitudes of the pointwise estimates",
+                "damping ratio (%)",
+            ),
+            zz,
+        ));
+    }
+    stacked_line_plots(path, &panels)
 }
 
 /// Rows of the per-row CSV: one per measured row and model.
