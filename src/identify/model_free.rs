@@ -423,12 +423,7 @@ pub fn check(
                         l.drives.iter().map(|d| (d.omega, d.force_n)).collect();
                     let x = law.receptance(r, &drives, a_max);
                     let failed = x.iter().filter(|v| !v.re.is_finite()).count();
-                    let y: Vec<Complex64> = x
-                        .iter()
-                        .zip(&l.drives)
-                        .map(|(x, d)| x * l.quantity.from_displacement(d.omega))
-                        .collect();
-                    LevelErrors::new(l, &y, level_role(i, fit_levels), failed)
+                    LevelErrors::new(l, &l.from_receptance(&x), level_role(i, fit_levels), failed)
                 })
                 .collect();
             LawPrediction { law, errors }
