@@ -371,7 +371,7 @@ fn identify_then_predict_both_controls() {
     let id_band = &json_id["uncertainty"]["bands"][1]["peak"];
     let pred: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(pout.join("predict.json")).unwrap()).unwrap();
-    let band = &pred["prediction"]["bands"]["Ok"][0]["peak"];
+    let band = &pred["prediction"]["bands"][0]["peak"];
     for k in ["value", "lo_95", "hi_95"] {
         let (a, b) = (band[k].as_f64().unwrap(), id_band[k].as_f64().unwrap());
         assert!(

@@ -305,6 +305,21 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // identify.json has the single-mode report's shape: the data's backbone and the
+    // model-free check as values (not nested under serde's "Ok").
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("identify.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["model_free"]["laws"].as_array().map(Vec::len),
+        Some(6),
+        "{}",
+        report["model_free"]
+    );
+    assert!(
+        report["data_backbone"].is_array(),
+        "{}",
+        report["data_backbone"]
+    );
     // Two response amplitudes asked for, 81 frequencies each, after two header lines.
     let rc = std::fs::read_to_string(out.join("identify-response-controlled.csv")).unwrap();
     assert_eq!(rc.lines().count(), 2 + 2 * 81);
@@ -356,7 +371,7 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
         // standard deviations of a Gaussian prediction; a band too narrow by more than a factor
         // of two fails), and the peak band is narrower than 5 % of the peak.
         if control == "force" {
-            let b = &json["prediction"]["bands"]["Ok"][0];
+            let b = &json["prediction"]["bands"][0];
             let within = |q: &str, m: &str| {
                 let (lo, hi) = (
                     b[q]["lo_95"].as_f64().unwrap(),

@@ -1016,6 +1016,9 @@ impl Identification {
         written.push(p);
         // JSON report.
         let p = dir.join("identify.json");
+        let model_free_json =
+            super::report::available_or_reason(&self.model_free, serde_json::value::Serializer)
+                .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", p.display())))?;
         let json = serde_json::json!({
             "tool": "asperity identify",
             "crate_version": env!("CARGO_PKG_VERSION"),
@@ -1041,10 +1044,7 @@ impl Identification {
             "errors_after": self.errors_after,
             "uncertainty": self.uncertainty,
             "alternative": self.alternative,
-            "model_free": match &self.model_free {
-                Ok(m) => serde_json::json!(m),
-                Err(e) => serde_json::json!({"not_available": e}),
-            },
+            "model_free": model_free_json,
             "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
                 "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz
             })).collect::<Vec<_>>(),

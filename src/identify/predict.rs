@@ -110,6 +110,7 @@ pub struct Prediction {
     pub model: Predictor,
     /// 95 % bands of each file's peak and resonances over the ensemble saved with the model
     /// (force control only; the reason where there are none).
+    #[serde(serialize_with = "super::report::available_or_reason")]
     pub bands: std::result::Result<Vec<PredictionBand>, String>,
 }
 

@@ -568,9 +568,11 @@ pub struct ReducedIdentification {
     pub at_scatter: bool,
     /// The data's backbone (equivalent linear mode per level, pointwise estimates), or why it
     /// could not be estimated (a sweep that is not one lightly damped mode).
+    #[serde(serialize_with = "super::report::available_or_reason")]
     pub data_backbone: std::result::Result<Vec<LevelBackbone>, String>,
     /// The fit levels' own backbone interpolated in a single-nonlinear-mode response, no model
     /// ([`super::model_free`]): what the data alone predict for every level, or why not.
+    #[serde(serialize_with = "super::report::available_or_reason")]
     pub model_free: std::result::Result<ModelFreeCheck, String>,
     /// Per level: the equivalent linear mode of the model's response at the level's rows, as
     /// given and updated (`None`: no resonance inside the measured band).
@@ -894,8 +896,6 @@ pub fn identify_reduced(
         _ => (factors_fit, None),
     };
     let (responses_after, errors_after) = responses_and_errors(&fit.model, &levels, &fit_levels)?;
-    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
-        .map_err(|e| e.to_string());
     for (l, y) in levels.iter().zip(&responses_after) {
         if let Some(k) = y.iter().position(|v| !v.re.is_finite()) {
             return Err(Error::Data(format!(
@@ -904,6 +904,8 @@ pub fn identify_reduced(
             )));
         }
     }
+    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
+        .map_err(|e| e.to_string());
     let before = ReducedModel::as_given(spec);
     let (responses_before, errors_before) = responses_and_errors(&before, &levels, &fit_levels)?;
     let scatter = fit_data

@@ -473,6 +473,24 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     write_string_atomic(path, &(text + "\n"))
 }
 
+/// Serialises a result that may be unavailable with one shape in every JSON file of `identify`
+/// and `predict`: the value itself when available, `{"not_available": reason}` when not (serde's
+/// default would nest the value under `"Ok"`). For `#[serde(serialize_with = …)]`.
+pub fn available_or_reason<T: Serialize, S: serde::Serializer>(
+    value: &std::result::Result<T, String>,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    match value {
+        Ok(v) => v.serialize(s),
+        Err(reason) => {
+            let mut m = s.serialize_map(Some(1))?;
+            m.serialize_entry("not_available", reason)?;
+            m.end()
+        }
+    }
+}
+
 /// Input file description for JSON sidecars.
 #[derive(Debug, Clone, Serialize)]
 pub struct InputFile {
@@ -543,4 +561,21 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::available_or_reason;
+
+    #[test]
+    fn unavailable_results_have_one_json_shape() {
+        let ok: std::result::Result<Vec<f64>, String> = Ok(vec![1.0, 2.0]);
+        let err: std::result::Result<Vec<f64>, String> = Err("no resonance in band".into());
+        let json = |r| available_or_reason(r, serde_json::value::Serializer).unwrap();
+        assert_eq!(json(&ok), serde_json::json!([1.0, 2.0]));
+        assert_eq!(
+            json(&err),
+            serde_json::json!({"not_available": "no resonance in band"})
+        );
+    }
 }
