@@ -35,8 +35,10 @@
 
 use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
 use crate::error::{Error, Result};
+use bumpalo::Bump;
 use nalgebra::DMatrix;
 use realfft::RealFftPlanner;
+use std::cell::RefCell;
 use std::sync::Arc;
 
 /// Retained harmonic orders, the number of time samples per period and the transforms.
@@ -277,16 +279,53 @@ pub struct ElementCycle {
     pub separation_fraction: f64,
 }
 
-/// Reusable buffers of one element evaluation.
-struct Period {
+/// Scratch of one element evaluation: an arena for its sample and sensitivity buffers and the
+/// step partials.
+struct Workspace {
+    arena: Bump,
+    part: StepPartials,
+}
+
+thread_local! {
+    /// The element evaluations' scratch on this thread, emptied at the start of each. An
+    /// identification evaluates a one-state joint thousands of times per second; its few dozen
+    /// buffers, taken from the system allocator per evaluation, cost a fifth of the run
+    /// (BENCHMARKS.md, "Identify").
+    static WORKSPACE: RefCell<Workspace> = RefCell::new(Workspace {
+        arena: Bump::new(),
+        part: StepPartials::new(0, 0),
+    });
+}
+
+/// Run `f` with this thread's scratch, emptied first, the partials sized for `m` states and `d`
+/// components (a fresh scratch should the call be re-entered).
+fn with_workspace<R>(m: usize, d: usize, f: impl FnOnce(&Bump, &mut StepPartials) -> R) -> R {
+    WORKSPACE.with(|w| match w.try_borrow_mut() {
+        Ok(mut w) => {
+            let Workspace { arena, part } = &mut *w;
+            arena.reset();
+            part.reset(m, d);
+            f(arena, part)
+        }
+        Err(_) => f(&Bump::new(), &mut StepPartials::new(m, d)),
+    })
+}
+
+/// A zeroed scratch slice of `n` values in `arena`.
+fn zeros(arena: &Bump, n: usize) -> &mut [f64] {
+    arena.alloc_slice_fill_copy(n, 0.0)
+}
+
+/// Buffers of one element evaluation (in the evaluation's arena).
+struct Period<'a> {
     /// `d × N` displacement samples.
-    u: Vec<f64>,
+    u: &'a mut [f64],
     /// `d × N` force samples.
-    f: Vec<f64>,
+    f: &'a mut [f64],
     /// State at the start of the period.
-    s0: Vec<f64>,
+    s0: &'a mut [f64],
     /// State at the end.
-    s_end: Vec<f64>,
+    s_end: &'a mut [f64],
 }
 
 fn sample(u: &[f64], n: usize, d: usize, i: usize, out: &mut [f64]) {
@@ -301,36 +340,37 @@ fn run_plain(
     el: &dyn HystereticElement,
     n: usize,
     p: &mut Period,
+    arena: &Bump,
     mut visit: impl FnMut(usize, &[f64], &[f64], &[f64]),
 ) {
     let (m, d) = (el.state_len(), el.dofs());
-    let mut s = p.s0.clone();
-    let mut s1 = vec![0.0; m];
-    let mut f1 = vec![0.0; d];
-    let mut ua = vec![0.0; d];
-    let mut ub = vec![0.0; d];
+    let mut s = arena.alloc_slice_copy(p.s0);
+    let mut s1 = zeros(arena, m);
+    let f1 = zeros(arena, d);
+    let ua = zeros(arena, d);
+    let ub = zeros(arena, d);
     for i in 0..n {
         let i1 = (i + 1) % n;
-        sample(&p.u, n, d, i, &mut ua);
-        sample(&p.u, n, d, i1, &mut ub);
-        el.step(&s, &ua, &ub, &mut s1, &mut f1, None);
+        sample(p.u, n, d, i, ua);
+        sample(p.u, n, d, i1, ub);
+        el.step(s, ua, ub, s1, f1, None);
         for c in 0..d {
             p.f[c * n + i1] = f1[c];
         }
         std::mem::swap(&mut s, &mut s1);
-        visit(i1, &s, &ub, &f1);
+        visit(i1, s, ub, f1);
     }
-    p.s_end.copy_from_slice(&s);
+    p.s_end.copy_from_slice(s);
 }
 
 /// Sensitivities over one period with respect to `ncol` columns: the first `nu` are the
 /// displacement harmonics (`d × len`, component-major), the last `m` the start state.
-struct Sensitivity {
+struct Sensitivity<'a> {
     ncol: usize,
     /// `m × ncol` state sensitivity at the end of the period.
-    ds_end: Vec<f64>,
+    ds_end: &'a [f64],
     /// `N × d × ncol` force sensitivities per sample (empty for the monodromy alone).
-    df: Vec<f64>,
+    df: &'a [f64],
 }
 
 /// `out[r] += Σ_k a[r,k]·ds[k] + Σ_c (b0[r,c]·E_i + b1[r,c]·E_i1)` over the `rows` rows of one
@@ -375,37 +415,34 @@ fn chain_rule_rows(
 /// Run one period from `p.s0` with forward sensitivities. With `with_u` the columns are the
 /// displacement harmonics, then the `m` start-state components, and the force sensitivities of
 /// every sample are kept (for the Jacobian); without, only the monodromy `∂s_N/∂s_0` is formed.
-fn run_sensitive(
+fn run_sensitive<'a>(
     el: &dyn HystereticElement,
     h: &Harmonics,
     p: &mut Period,
     with_u: bool,
-) -> Sensitivity {
+    arena: &'a Bump,
+    part: &mut StepPartials,
+) -> Sensitivity<'a> {
     let (m, d, n, len) = (el.state_len(), el.dofs(), h.n_time(), h.len());
     let nu = if with_u { d * len } else { 0 };
     let ncol = nu + m;
-    let mut ds = vec![0.0; m * ncol];
+    let mut ds = zeros(arena, m * ncol);
     for r in 0..m {
         ds[r * ncol + nu + r] = 1.0;
     }
-    let mut ds_next = vec![0.0; m * ncol];
-    let mut df = if with_u {
-        vec![0.0; n * d * ncol]
-    } else {
-        Vec::new()
-    };
-    let mut part = StepPartials::new(m, d);
-    let mut s = p.s0.clone();
-    let mut s1 = vec![0.0; m];
-    let mut f1 = vec![0.0; d];
-    let mut ua = vec![0.0; d];
-    let mut ub = vec![0.0; d];
+    let mut ds_next = zeros(arena, m * ncol);
+    let df = zeros(arena, if with_u { n * d * ncol } else { 0 });
+    let mut s = arena.alloc_slice_copy(p.s0);
+    let mut s1 = zeros(arena, m);
+    let f1 = zeros(arena, d);
+    let ua = zeros(arena, d);
+    let ub = zeros(arena, d);
     for i in 0..n {
         let i1 = (i + 1) % n;
-        sample(&p.u, n, d, i, &mut ua);
-        sample(&p.u, n, d, i1, &mut ub);
+        sample(p.u, n, d, i, ua);
+        sample(p.u, n, d, i1, ub);
         part.clear();
-        el.step(&s, &ua, &ub, &mut s1, &mut f1, Some(&mut part));
+        el.step(s, ua, ub, s1, f1, Some(part));
         for c in 0..d {
             p.f[c * n + i1] = f1[c];
         }
@@ -417,10 +454,10 @@ fn run_sensitive(
             m,
             d,
             ncol,
-            &ds,
+            ds,
             (&part.ds_ds0, &part.ds_du0, &part.ds_du1),
             synthesis,
-            &mut ds_next,
+            ds_next,
         );
         if with_u {
             chain_rule_rows(
@@ -428,7 +465,7 @@ fn run_sensitive(
                 m,
                 d,
                 ncol,
-                &ds,
+                ds,
                 (&part.df_ds0, &part.df_du0, &part.df_du1),
                 synthesis,
                 &mut df[i1 * d * ncol..(i1 + 1) * d * ncol],
@@ -437,7 +474,7 @@ fn run_sensitive(
         std::mem::swap(&mut ds, &mut ds_next);
         std::mem::swap(&mut s, &mut s1);
     }
-    p.s_end.copy_from_slice(&s);
+    p.s_end.copy_from_slice(s);
     Sensitivity {
         ncol,
         ds_end: ds,
@@ -446,12 +483,12 @@ fn run_sensitive(
 }
 
 /// `(I − Φ)⁺` in the element's state scales, returned unscaled (`m × m`, row-major).
-fn periodic_pinv(phi: &[f64], scales: &[f64], m: usize) -> Vec<f64> {
+fn periodic_pinv<'a>(phi: &[f64], scales: &[f64], m: usize, arena: &'a Bump) -> &'a [f64] {
     if m == 1 {
         // One state (a Jenkins slider): the scaling cancels and the pseudo-inverse of the
         // scalar 1 − φ is its reciprocal, or zero below the SVD's cut-off.
         let a = 1.0 - phi[0];
-        return vec![if a.abs() > 1e-10 { 1.0 / a } else { 0.0 }];
+        return arena.alloc_slice_copy(&[if a.abs() > 1e-10 { 1.0 / a } else { 0.0 }]);
     }
     // Â = I − D⁻¹ Φ D with D = diag(scales); (I − Φ)⁺ ≈ D Â⁺ D⁻¹.
     let a = DMatrix::from_fn(m, m, |r, c| {
@@ -466,7 +503,7 @@ fn periodic_pinv(phi: &[f64], scales: &[f64], m: usize) -> Vec<f64> {
         .svd(true, true)
         .pseudo_inverse(1e-10)
         .unwrap_or_else(|_| DMatrix::zeros(m, m));
-    let mut out = vec![0.0; m * m];
+    let out = zeros(arena, m * m);
     for r in 0..m {
         for c in 0..m {
             out[r * m + c] = pinv[(r, c)] * scales[r] / scales[c];
@@ -476,28 +513,30 @@ fn periodic_pinv(phi: &[f64], scales: &[f64], m: usize) -> Vec<f64> {
 }
 
 /// Everything the evaluation found about the periodic cycle of one element.
-struct Cycle {
-    period: Period,
+struct Cycle<'a> {
+    period: Period<'a>,
     periods: usize,
     error: f64,
     periodic: bool,
     /// `∂s_init/∂U` of the virgin start (`m × d·len`).
-    ds_init: Vec<f64>,
+    ds_init: &'a [f64],
 }
 
-fn periodic_cycle(
+fn periodic_cycle<'a>(
     el: &dyn HystereticElement,
     h: &Harmonics,
     u_coeffs: &[f64],
     warm: Option<&[f64]>,
     settings: &AftSettings,
-) -> Cycle {
+    arena: &'a Bump,
+    part: &mut StepPartials,
+) -> Cycle<'a> {
     let (m, d, n, len) = (el.state_len(), el.dofs(), h.n_time(), h.len());
     let mut p = Period {
-        u: vec![0.0; d * n],
-        f: vec![0.0; d * n],
-        s0: vec![0.0; m],
-        s_end: vec![0.0; m],
+        u: zeros(arena, d * n),
+        f: zeros(arena, d * n),
+        s0: zeros(arena, m),
+        s_end: zeros(arena, m),
     };
     for c in 0..d {
         h.to_time(
@@ -506,23 +545,16 @@ fn periodic_cycle(
         );
     }
     // Virgin element at u = 0 loaded to the first sample.
-    let mut virgin = vec![0.0; m];
-    el.virgin_state(&mut virgin);
-    let zero = vec![0.0; d];
-    let mut u_first = vec![0.0; d];
-    sample(&p.u, n, d, 0, &mut u_first);
-    let mut part = StepPartials::new(m, d);
-    let mut f1 = vec![0.0; d];
-    el.step(
-        &virgin,
-        &zero,
-        &u_first,
-        &mut p.s0,
-        &mut f1,
-        Some(&mut part),
-    );
+    let virgin = zeros(arena, m);
+    el.virgin_state(virgin);
+    let zero = zeros(arena, d);
+    let u_first = zeros(arena, d);
+    sample(p.u, n, d, 0, u_first);
+    let f1 = zeros(arena, d);
+    part.clear();
+    el.step(virgin, zero, u_first, p.s0, f1, Some(part));
     let e0 = h.synthesis_row(0);
-    let mut ds_init = vec![0.0; m * d * len];
+    let ds_init = zeros(arena, m * d * len);
     for r in 0..m {
         for c in 0..d {
             let b = part.ds_du1[r * d + c];
@@ -531,13 +563,13 @@ fn periodic_cycle(
             }
         }
     }
-    let mut scales = vec![0.0; m];
-    el.state_scales(&mut scales);
+    let scales = zeros(arena, m);
+    el.state_scales(scales);
     for s in scales.iter_mut() {
         *s = s.abs().max(f64::MIN_POSITIVE);
     }
     if m == 0 {
-        run_plain(el, n, &mut p, |_, _, _, _| {});
+        run_plain(el, n, &mut p, arena, |_, _, _, _| {});
         return Cycle {
             period: p,
             periods: 1,
@@ -549,7 +581,7 @@ fn periodic_cycle(
     // Warm start: the caller's state (e.g. the periodic state of a nearby evaluation); the
     // neutral components are reset to the virgin start's below, so the cycle found does not
     // depend on where it started.
-    let s_init = p.s0.clone();
+    let s_init: &[f64] = arena.alloc_slice_copy(p.s0);
     if let Some(w) = warm {
         if w.len() == m && w.iter().all(|v| v.is_finite()) {
             p.s0.copy_from_slice(w);
@@ -559,21 +591,21 @@ fn periodic_cycle(
     let mut error = f64::INFINITY;
     let mut previous_error = f64::INFINITY;
     // (I − Φ)⁺ and the projector P = (I − Φ)⁺·(I − Φ) of the last monodromy computed.
-    let mut newton: Option<(Vec<f64>, Vec<f64>)> = None;
-    let mut r = vec![0.0; m];
-    let mut neutral = vec![0.0; m];
-    let mut correction = vec![0.0; m];
+    let mut newton: Option<(&[f64], &[f64])> = None;
+    let r = zeros(arena, m);
+    let neutral = zeros(arena, m);
+    let correction = zeros(arena, m);
     while periods < settings.max_periods {
         periods += 1;
         let (pinv, proj) = match newton.take() {
             Some(np) => {
-                run_plain(el, n, &mut p, |_, _, _, _| {});
+                run_plain(el, n, &mut p, arena, |_, _, _, _| {});
                 np
             }
             None => {
-                let sens = run_sensitive(el, h, &mut p, false);
-                let pinv = periodic_pinv(&sens.ds_end, &scales, m);
-                let proj = projector(&pinv, &sens.ds_end, m);
+                let sens = run_sensitive(el, h, &mut p, false, arena, part);
+                let pinv = periodic_pinv(sens.ds_end, scales, m, arena);
+                let proj = projector(pinv, sens.ds_end, m, arena);
                 (pinv, proj)
             }
         };
@@ -626,8 +658,8 @@ fn periodic_cycle(
 }
 
 /// `P = (I − Φ)⁺·(I − Φ)`: the projector on the non-neutral directions of the monodromy.
-fn projector(pinv: &[f64], phi: &[f64], m: usize) -> Vec<f64> {
-    let mut proj = vec![0.0; m * m];
+fn projector<'a>(pinv: &[f64], phi: &[f64], m: usize, arena: &'a Bump) -> &'a [f64] {
+    let proj = zeros(arena, m * m);
     for r in 0..m {
         for c in 0..m {
             proj[r * m + c] = (0..m)
@@ -672,25 +704,62 @@ pub fn evaluate_from(
         harmonics.n_time(),
         harmonics.len(),
     );
-    let mut cycle = periodic_cycle(element, harmonics, u, warm, settings);
-    let mut jac = Vec::new();
-    if jacobian {
+    with_workspace(m, d, |arena, part| {
+        let mut cycle = periodic_cycle(element, harmonics, u, warm, settings, arena, part);
+        let jac = if jacobian {
+            element_jacobian(element, harmonics, &mut cycle, arena, part)
+        } else {
+            Vec::new()
+        };
+        let mut forces = vec![0.0; d * len];
+        for c in 0..d {
+            harmonics.to_harmonics(
+                &mut cycle.period.f[c * n..(c + 1) * n],
+                &mut forces[c * len..(c + 1) * len],
+            );
+        }
+        ElementHarmonics {
+            start_state: cycle.period.s0.to_vec(),
+            forces,
+            jacobian: jac,
+            periods: cycle.periods,
+            periodicity_error: cycle.error,
+            periodic: cycle.periodic,
+        }
+    })
+}
+
+/// The exact Jacobian `∂forces/∂u` (`d·len × d·len`, row-major) of the periodic cycle found.
+fn element_jacobian(
+    element: &dyn HystereticElement,
+    harmonics: &Harmonics,
+    cycle: &mut Cycle,
+    arena: &Bump,
+    part: &mut StepPartials,
+) -> Vec<f64> {
+    let (m, d, n, len) = (
+        element.state_len(),
+        element.dofs(),
+        harmonics.n_time(),
+        harmonics.len(),
+    );
+    {
         let nu = d * len;
-        let sens = run_sensitive(element, harmonics, &mut cycle.period, true);
+        let sens = run_sensitive(element, harmonics, &mut cycle.period, true, arena, part);
         let ncol = sens.ncol;
         // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
-        let mut ds0 = vec![0.0; m * nu];
+        let ds0 = zeros(arena, m * nu);
         if m > 0 {
             let phi: Vec<f64> = (0..m * m)
                 .map(|idx| sens.ds_end[(idx / m) * ncol + nu + idx % m])
                 .collect();
-            let mut scales = vec![0.0; m];
-            element.state_scales(&mut scales);
+            let scales = zeros(arena, m);
+            element.state_scales(scales);
             for s in scales.iter_mut() {
                 *s = s.abs().max(f64::MIN_POSITIVE);
             }
-            let pinv = periodic_pinv(&phi, &scales, m);
-            let proj = projector(&pinv, &phi, m);
+            let pinv = periodic_pinv(&phi, scales, m, arena);
+            let proj = projector(pinv, &phi, m, arena);
             for r in 0..m {
                 for col in 0..nu {
                     let mut v = 0.0;
@@ -707,8 +776,8 @@ pub fn evaluate_from(
         // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
         // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
         // to pay for its temporaries.
-        jac = vec![0.0; d * len * nu];
-        let mut t = vec![0.0; nu];
+        let mut jac = vec![0.0; d * len * nu];
+        let t = zeros(arena, nu);
         for i in 0..n {
             for c in 0..d {
                 let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
@@ -723,27 +792,13 @@ pub fn evaluate_from(
                 for hc in 0..len {
                     let w = harmonics.analysis[hc * n + i];
                     let out = &mut jac[(c * len + hc) * nu..(c * len + hc + 1) * nu];
-                    for (o, tv) in out.iter_mut().zip(&t) {
+                    for (o, tv) in out.iter_mut().zip(t.iter()) {
                         *o += w * tv;
                     }
                 }
             }
         }
-    }
-    let mut forces = vec![0.0; d * len];
-    for c in 0..d {
-        harmonics.to_harmonics(
-            &mut cycle.period.f[c * n..(c + 1) * n],
-            &mut forces[c * len..(c + 1) * len],
-        );
-    }
-    ElementHarmonics {
-        start_state: cycle.period.s0.clone(),
-        forces,
-        jacobian: jac,
-        periods: cycle.periods,
-        periodicity_error: cycle.error,
-        periodic: cycle.periodic,
+        jac
     }
 }
 
@@ -754,33 +809,35 @@ pub fn cycle_summary(
     u: &[f64],
     settings: &AftSettings,
 ) -> ElementCycle {
-    let (d, n) = (element.dofs(), harmonics.n_time());
-    let mut cycle = periodic_cycle(element, harmonics, u, None, settings);
-    let mut counts = [0usize; 3];
-    run_plain(element, n, &mut cycle.period, |_, s, uu, f| {
-        let k = match element.status(s, uu, f) {
-            ContactStatus::Stick => 0,
-            ContactStatus::Slip => 1,
-            ContactStatus::Separated => 2,
-        };
-        counts[k] += 1;
-    });
-    let p = &cycle.period;
-    let mut energy = 0.0;
-    for c in 0..d {
-        let uc = &p.u[c * n..(c + 1) * n];
-        let fc = &p.f[c * n..(c + 1) * n];
-        for i in 0..n {
-            let i1 = (i + 1) % n;
-            energy += 0.5 * (fc[i] + fc[i1]) * (uc[i1] - uc[i]);
+    let (m, d, n) = (element.state_len(), element.dofs(), harmonics.n_time());
+    with_workspace(m, d, |arena, part| {
+        let mut cycle = periodic_cycle(element, harmonics, u, None, settings, arena, part);
+        let mut counts = [0usize; 3];
+        run_plain(element, n, &mut cycle.period, arena, |_, s, uu, f| {
+            let k = match element.status(s, uu, f) {
+                ContactStatus::Stick => 0,
+                ContactStatus::Slip => 1,
+                ContactStatus::Separated => 2,
+            };
+            counts[k] += 1;
+        });
+        let p = &cycle.period;
+        let mut energy = 0.0;
+        for c in 0..d {
+            let uc = &p.u[c * n..(c + 1) * n];
+            let fc = &p.f[c * n..(c + 1) * n];
+            for i in 0..n {
+                let i1 = (i + 1) % n;
+                energy += 0.5 * (fc[i] + fc[i1]) * (uc[i1] - uc[i]);
+            }
         }
-    }
-    ElementCycle {
-        dissipated_energy_j: energy,
-        stick_fraction: counts[0] as f64 / n as f64,
-        slip_fraction: counts[1] as f64 / n as f64,
-        separation_fraction: counts[2] as f64 / n as f64,
-    }
+        ElementCycle {
+            dissipated_energy_j: energy,
+            stick_fraction: counts[0] as f64 / n as f64,
+            slip_fraction: counts[1] as f64 / n as f64,
+            separation_fraction: counts[2] as f64 / n as f64,
+        }
+    })
 }
 
 #[cfg(test)]

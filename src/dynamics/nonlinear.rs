@@ -69,6 +69,23 @@ impl StepPartials {
         }
     }
 
+    /// Zero partials for `m` states and `d` components, reusing the buffers.
+    pub fn reset(&mut self, m: usize, d: usize) {
+        self.m = m;
+        self.d = d;
+        for (v, n) in [
+            (&mut self.ds_ds0, m * m),
+            (&mut self.ds_du0, m * d),
+            (&mut self.ds_du1, m * d),
+            (&mut self.df_ds0, d * m),
+            (&mut self.df_du0, d * d),
+            (&mut self.df_du1, d * d),
+        ] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+    }
+
     /// Reset every entry to zero.
     pub fn clear(&mut self) {
         for v in [
