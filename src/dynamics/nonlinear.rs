@@ -86,7 +86,9 @@ impl StepPartials {
         }
     }
 
-    /// Reset every entry to zero.
+    /// Reset every entry to zero. Called before every sample's step: a one-state,
+    /// one-component element's six single entries are stored directly rather than through six
+    /// `memset` calls, which took a tenth of an identification's time.
     pub fn clear(&mut self) {
         for v in [
             &mut self.ds_ds0,
@@ -96,7 +98,11 @@ impl StepPartials {
             &mut self.df_du0,
             &mut self.df_du1,
         ] {
-            v.fill(0.0);
+            if let [x] = v.as_mut_slice() {
+                *x = 0.0;
+            } else {
+                v.fill(0.0);
+            }
         }
     }
 }
