@@ -187,6 +187,26 @@ pub fn local_iteration_cap(local_iterations: u64, dim: usize) -> u64 {
         / LOCAL_ITERATIONS_DIMENSION as u64
 }
 
+/// Model evaluations one Nelder–Mead fit of `dim` parameters is budgeted on the progress bar:
+/// two runs' iteration caps ([`local_iteration_cap`]), as the run's estimate at its start counts
+/// it (`Options::estimated_evaluations`); a fit that needs all its restarts overruns it.
+pub fn local_evaluations(local_iterations: u64, dim: usize) -> u64 {
+    2 * local_iteration_cap(local_iterations, dim)
+}
+
+/// Make room on the progress bar for a fit of `n` more evaluations. The bar's length is the
+/// run's estimate at its start; a search can fit more than estimated (pairs of effects, a
+/// round that accepts nothing, larger final models), and a bar past its length shows no time
+/// left for the rest of the run. The length grows only where the fit would overrun it.
+pub fn reserve_progress(progress: Option<&indicatif::ProgressBar>, n: u64) {
+    if let Some(b) = progress {
+        let need = b.position() + n;
+        if b.length().is_some_and(|len| len < need) {
+            b.set_length(need);
+        }
+    }
+}
+
 impl Default for FitOptions {
     fn default() -> Self {
         Self {
@@ -445,6 +465,11 @@ pub fn fit_global<S: Parametrised>(
     let mut best: Option<(Vec<f64>, f64, bool)> = None;
     for k in 0..opts.starts.max(1) {
         let seed = opts.seed + k as u64;
+        reserve_progress(
+            progress,
+            opts.particles as u64 * (opts.swarm_iterations + 1)
+                + local_evaluations(opts.local_iterations, dim),
+        );
         let pso = ParticleSwarm::new((vec![0.0; dim], vec![1.0; dim]), opts.particles)
             .with_rng_generator(rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed));
         let res = Executor::new(Objective::new(spec.clone(), levels, masks, progress), pso)
@@ -488,6 +513,7 @@ pub fn fit_local<S: Parametrised>(
     let mut best: Option<(Vec<f64>, f64, bool)> = None;
     for v in starts_physical {
         let z0 = obj.coordinates(v);
+        reserve_progress(progress, local_evaluations(opts.local_iterations, z0.len()));
         let (z, cost, it, conv) = nelder_mead(&obj, &z0, opts.local_iterations)?;
         starts.push(StartOutcome {
             seed: None,
@@ -502,4 +528,21 @@ pub fn fit_local<S: Parametrised>(
     }
     let best = best.ok_or_else(|| Error::param("starts", "at least one start"))?;
     Ok(finish(&obj, best, starts, t0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::reserve_progress;
+
+    #[test]
+    fn progress_grows_only_where_a_fit_would_overrun_the_estimate() {
+        let bar = indicatif::ProgressBar::hidden();
+        bar.set_length(100);
+        bar.set_position(90);
+        reserve_progress(Some(&bar), 5);
+        assert_eq!(bar.length(), Some(100));
+        reserve_progress(Some(&bar), 50);
+        assert_eq!(bar.length(), Some(140));
+        reserve_progress(None, 1000);
+    }
 }
