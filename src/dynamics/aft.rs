@@ -743,63 +743,60 @@ fn element_jacobian(
         harmonics.n_time(),
         harmonics.len(),
     );
-    {
-        let nu = d * len;
-        let sens = run_sensitive(element, harmonics, &mut cycle.period, true, arena, part);
-        let ncol = sens.ncol;
-        // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
-        let ds0 = zeros(arena, m * nu);
-        if m > 0 {
-            let phi: Vec<f64> = (0..m * m)
-                .map(|idx| sens.ds_end[(idx / m) * ncol + nu + idx % m])
-                .collect();
-            let scales = zeros(arena, m);
-            element.state_scales(scales);
-            for s in scales.iter_mut() {
-                *s = s.abs().max(f64::MIN_POSITIVE);
-            }
-            let pinv = periodic_pinv(&phi, scales, m, arena);
-            let proj = projector(pinv, &phi, m, arena);
-            for r in 0..m {
-                for col in 0..nu {
-                    let mut v = 0.0;
-                    for k in 0..m {
-                        v += pinv[r * m + k] * sens.ds_end[k * ncol + col];
-                        let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
-                        v += null * cycle.ds_init[k * nu + col];
-                    }
-                    ds0[r * nu + col] = v;
+    let nu = d * len;
+    let sens = run_sensitive(element, harmonics, &mut cycle.period, true, arena, part);
+    let ncol = sens.ncol;
+    // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
+    let ds0 = zeros(arena, m * nu);
+    if m > 0 {
+        let phi: &[f64] =
+            arena.alloc_slice_fill_with(m * m, |idx| sens.ds_end[(idx / m) * ncol + nu + idx % m]);
+        let scales = zeros(arena, m);
+        element.state_scales(scales);
+        for s in scales.iter_mut() {
+            *s = s.abs().max(f64::MIN_POSITIVE);
+        }
+        let pinv = periodic_pinv(phi, scales, m, arena);
+        let proj = projector(pinv, phi, m, arena);
+        for r in 0..m {
+            for col in 0..nu {
+                let mut v = 0.0;
+                for k in 0..m {
+                    v += pinv[r * m + k] * sens.ds_end[k * ncol + col];
+                    let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
+                    v += null * cycle.ds_init[k * nu + col];
                 }
+                ds0[r * nu + col] = v;
             }
         }
-        // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU, and its harmonics
-        // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
-        // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
-        // to pay for its temporaries.
-        let mut jac = vec![0.0; d * len * nu];
-        let t = zeros(arena, nu);
-        for i in 0..n {
-            for c in 0..d {
-                let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
-                t.copy_from_slice(&row[..nu]);
-                for (k, &dfs) in row[nu..].iter().enumerate() {
-                    if dfs != 0.0 {
-                        for (tv, dv) in t.iter_mut().zip(&ds0[k * nu..(k + 1) * nu]) {
-                            *tv += dfs * dv;
-                        }
-                    }
-                }
-                for hc in 0..len {
-                    let w = harmonics.analysis[hc * n + i];
-                    let out = &mut jac[(c * len + hc) * nu..(c * len + hc + 1) * nu];
-                    for (o, tv) in out.iter_mut().zip(t.iter()) {
-                        *o += w * tv;
-                    }
-                }
-            }
-        }
-        jac
     }
+    // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU, and its harmonics
+    // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
+    // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
+    // to pay for its temporaries.
+    let mut jac = vec![0.0; d * len * nu];
+    let t = zeros(arena, nu);
+    for i in 0..n {
+        for c in 0..d {
+            let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
+            t.copy_from_slice(&row[..nu]);
+            for (k, &dfs) in row[nu..].iter().enumerate() {
+                if dfs != 0.0 {
+                    for (tv, dv) in t.iter_mut().zip(&ds0[k * nu..(k + 1) * nu]) {
+                        *tv += dfs * dv;
+                    }
+                }
+            }
+            for hc in 0..len {
+                let w = harmonics.analysis[hc * n + i];
+                let out = &mut jac[(c * len + hc) * nu..(c * len + hc + 1) * nu];
+                for (o, tv) in out.iter_mut().zip(t.iter()) {
+                    *o += w * tv;
+                }
+            }
+        }
+    }
+    jac
 }
 
 /// Dissipated energy and stick/slip/separation fractions of the periodic cycle.
