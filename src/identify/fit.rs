@@ -170,7 +170,12 @@ impl FitOptions {
     /// Model evaluations of the particle swarms (every start: the initial particles and one
     /// evaluation per particle per iteration).
     pub fn swarm_evaluations(&self) -> u64 {
-        self.starts as u64 * self.particles as u64 * (self.swarm_iterations + 1)
+        self.starts as u64 * self.swarm_evaluations_per_start()
+    }
+
+    /// Model evaluations of one start's swarm.
+    pub fn swarm_evaluations_per_start(&self) -> u64 {
+        self.particles as u64 * (self.swarm_iterations + 1)
     }
 }
 
@@ -467,8 +472,7 @@ pub fn fit_global<S: Parametrised>(
         let seed = opts.seed + k as u64;
         reserve_progress(
             progress,
-            opts.particles as u64 * (opts.swarm_iterations + 1)
-                + local_evaluations(opts.local_iterations, dim),
+            opts.swarm_evaluations_per_start() + local_evaluations(opts.local_iterations, dim),
         );
         let pso = ParticleSwarm::new((vec![0.0; dim], vec![1.0; dim]), opts.particles)
             .with_rng_generator(rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed));

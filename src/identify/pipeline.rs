@@ -412,6 +412,45 @@ pub fn write_response_controlled_csv(path: &Path, rows: &[ResponseControlled]) -
     })
 }
 
+/// The backbone files of both identify paths in `dir`: `identify-backbone.csv` and, where the
+/// data gave estimates, `identify-backbone.png` — the data's backbone, the models' (`(CSV source
+/// name, legend label, points)`) and the model-free laws' of `check`
+/// ([`model_free::law_curves`]: source name and label their id).
+pub fn write_backbone_files(
+    dir: &Path,
+    data: &[LevelBackbone],
+    models: [(&str, &str, Vec<BackbonePoint>); 2],
+    check: &std::result::Result<ModelFreeCheck, String>,
+) -> Result<Vec<PathBuf>> {
+    let mut curves: Vec<(String, String, Vec<BackbonePoint>)> = models
+        .into_iter()
+        .map(|(id, label, points)| (id.to_string(), label.to_string(), points))
+        .collect();
+    curves.extend(
+        model_free::law_curves(check)
+            .into_iter()
+            .map(|(id, points)| (id.clone(), id, points)),
+    );
+    let mut written = Vec::new();
+    let p = dir.join("identify-backbone.csv");
+    let rows: Vec<(&str, &[BackbonePoint])> = curves
+        .iter()
+        .map(|(id, _, points)| (id.as_str(), points.as_slice()))
+        .collect();
+    write_backbone_csv(&p, data, &rows)?;
+    written.push(p);
+    if !data.is_empty() {
+        let p = dir.join("identify-backbone.png");
+        let labelled: Vec<(String, Vec<BackbonePoint>)> = curves
+            .into_iter()
+            .map(|(_, label, points)| (label, points))
+            .collect();
+        plot_backbone(&p, data, &labelled)?;
+        written.push(p);
+    }
+    Ok(written)
+}
+
 /// `identify-backbone.csv`: the data's backbone (equivalent linear mode per level and pointwise
 /// estimates) and the models' (`(source name, points)`).
 pub fn write_backbone_csv(
@@ -989,23 +1028,19 @@ impl Identification {
             written.push(p);
         }
         // Backbones.
-        let p = dir.join("identify-backbone.png");
-        let laws = model_free::law_curves(&self.model_free);
-        let mut curves = vec![
-            ("baseline model".to_string(), self.backbone_before.clone()),
-            ("final model".to_string(), self.backbone_after.clone()),
-        ];
-        curves.extend(laws.iter().cloned());
-        plot_backbone(&p, &self.data_backbone, &curves)?;
-        written.push(p);
-        let p = dir.join("identify-backbone.csv");
-        let mut rows: Vec<(&str, &[BackbonePoint])> = vec![
-            ("baseline-model", &self.backbone_before),
-            ("final-model", &self.backbone_after),
-        ];
-        rows.extend(laws.iter().map(|(id, c)| (id.as_str(), c.as_slice())));
-        write_backbone_csv(&p, &self.data_backbone, &rows)?;
-        written.push(p);
+        written.extend(write_backbone_files(
+            dir,
+            &self.data_backbone,
+            [
+                (
+                    "baseline-model",
+                    "baseline model",
+                    self.backbone_before.clone(),
+                ),
+                ("final-model", "final model", self.backbone_after.clone()),
+            ],
+            &self.model_free,
+        )?);
         // Response-controlled FRFs.
         let p = dir.join("identify-response-controlled.csv");
         write_response_controlled_csv(&p, &self.response_controlled)?;

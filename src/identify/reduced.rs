@@ -78,11 +78,11 @@ use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
 use super::model_free::{self, ModelFreeCheck};
 use super::pipeline::{
     response_control_amplitudes, response_controlled_text, response_controlled_with,
-    write_backbone_csv, write_response_controlled_csv, ResponseControlled,
+    write_backbone_files, write_response_controlled_csv, ResponseControlled,
 };
 use super::report::{
-    errors_table, fine_curve_with, level_role, level_roles, plot_backbone, plot_level,
-    regions_text, write_json, write_rows_csv, CurveRow, InputFile, LevelErrors,
+    errors_table, fine_curve_with, level_role, level_roles, plot_level, regions_text, write_json,
+    write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
 use super::select::{Extensible, SelectOptions, Selection};
 use super::uncertainty::{self, Ensemble, Uncertainty};
@@ -1319,23 +1319,23 @@ impl ReducedIdentification {
         let before = Self::model_backbone_points(&self.backbone_before);
         let after = Self::model_backbone_points(&self.backbone_after);
         let data: &[LevelBackbone] = self.data_backbone.as_deref().unwrap_or(&[]);
-        let laws = model_free::law_curves(&self.model_free);
-        let p = dir.join("identify-backbone.csv");
-        let mut rows: Vec<(&str, &[BackbonePoint])> =
-            vec![("as-given-model", &before), ("updated-model", &after)];
-        rows.extend(laws.iter().map(|(id, c)| (id.as_str(), c.as_slice())));
-        write_backbone_csv(&p, data, &rows)?;
-        written.push(p);
-        if !data.is_empty() {
-            let p = dir.join("identify-backbone.png");
-            let mut curves = vec![
-                ("as given (equivalent mode per level)".to_string(), before),
-                ("updated (equivalent mode per level)".to_string(), after),
-            ];
-            curves.extend(laws);
-            plot_backbone(&p, data, &curves)?;
-            written.push(p);
-        }
+        written.extend(write_backbone_files(
+            dir,
+            data,
+            [
+                (
+                    "as-given-model",
+                    "as given (equivalent mode per level)",
+                    before,
+                ),
+                (
+                    "updated-model",
+                    "updated (equivalent mode per level)",
+                    after,
+                ),
+            ],
+            &self.model_free,
+        )?);
         if !self.response_controlled.is_empty() {
             let p = dir.join("identify-response-controlled.csv");
             write_response_controlled_csv(&p, &self.response_controlled)?;
