@@ -289,24 +289,36 @@ impl FftPlan {
 
 /// Reusable work arrays for allocation-free convolutions with one [`FftPlan`]
 /// ([`FftPlan::convolve_into`]); iterative solvers create one and keep it for all iterations.
+///
+/// The rows are padded ([`padded_row_length`]): the x-transforms read and write them down
+/// columns, and with the power-of-two strides of the transform sizes every element of a column
+/// would fall into the same few cache sets.
 #[derive(Debug, Clone)]
 pub struct ConvolutionWorkspace {
-    /// Row transforms, shape `(nfx, nfy/2 + 1)`.
-    rows: Array2<Complex64>,
-    /// Transposed spectrum, shape `(nfy/2 + 1, nfx)`.
-    spec: Array2<Complex64>,
+    /// Row transforms: `nfx` rows of `nfy/2 + 1` values, row stride `padded_row_length(nfy/2 + 1)`.
+    rows: Vec<Complex64>,
 }
 
-/// Side of the square tiles of the blocked transposes (complex values; 32×32×16 B = 16 KiB).
-const TILE: usize = 32;
+/// Row stride (complex values) for rows of `n` values walked across by a transpose: the
+/// smallest `m ≥ n` whose rows start an odd number of 64-byte cache lines apart, so that a
+/// column's elements spread over all cache sets instead of aliasing to a few (a stride of
+/// `2^k + 16` bytes, as for `n = 2^j + 1`, maps 32 consecutive rows to one or two sets).
+fn padded_row_length(n: usize) -> usize {
+    // Four 16-byte complex values per 64-byte line: m = 4·(odd).
+    let lines = n.div_ceil(4);
+    4 * (lines | 1)
+}
+
+/// y-frequencies transformed along x together: their columns of the row transforms are gathered
+/// into one buffer (`COLUMNS` rows of `nfx` values, 128 KiB at `nfx = 1024`, in L2).
+const COLUMNS: usize = 8;
 
 impl FftPlan {
     /// Work arrays for [`FftPlan::convolve_into`].
     pub fn workspace(&self) -> ConvolutionWorkspace {
         let nh = self.nfy / 2 + 1;
         ConvolutionWorkspace {
-            rows: Array2::zeros((self.nfx, nh)),
-            spec: Array2::zeros((nh, self.nfx)),
+            rows: vec![Complex64::default(); self.nfx * padded_row_length(nh)],
         }
     }
 
@@ -356,9 +368,10 @@ impl FftPlan {
     /// 2. `mid(&sums)` sees the sums of step 1 (added in row order, so they do not depend on the
     ///    thread count) and returns the context `M` of step 4, or `None` to stop here: the caller
     ///    found that the convolution is not needed after all (e.g. converged);
-    /// 3. blocked transpose → per y-frequency: x-transform, kernel product, inverse x-transform
-    ///    → transpose back → inverse real transforms of the `nx` rows that are kept; step 3 also
-    ///    sums the energy `E = Σ_x f·(K⊛f) = (1/N_fft) Σ_q K̃(q)|f̂(q)|²` (Parseval; the kernel
+    /// 3. per block of [`COLUMNS`] y-frequencies (in parallel): their columns gathered into a
+    ///    buffer that stays in cache, x-transform, kernel product, inverse x-transform, the `nx`
+    ///    rows that are kept scattered back (no transposed copy of the spectrum is made); then the
+    ///    inverse real transforms of those rows. Step 3 also sums the energy `E = Σ_x f·(K⊛f) = (1/N_fft) Σ_q K̃(q)|f̂(q)|²` (Parseval; the kernel
     ///    spectrum is taken as real, as for every even kernel);
     /// 4. for every grid row `i`: `store(&context, E, i, result)` receives the scaled result row
     ///    and returns `B` partial sums (added in row order).
@@ -380,12 +393,13 @@ impl FftPlan {
             (nh, nfx),
             "convolve_fused: kernel shape"
         );
-        assert_eq!(ws.rows.dim(), (nfx, nh), "convolve_fused: workspace shape");
+        // Row strides of the row transforms and of the column buffer.
+        let (sh, sx) = (padded_row_length(nh), padded_row_length(nfx));
+        assert_eq!(ws.rows.len(), nfx * sh, "convolve_fused: workspace shape");
         // 1. Load and real-transform the nx data rows (rows nx.. of `ws.rows` stay zero).
         let mut load_parts = vec![[0.0; A]; nx];
-        let rows = ws.rows.as_slice_mut().expect("standard layout");
-        rows[..nx * nh]
-            .par_chunks_mut(nh)
+        ws.rows[..nx * sh]
+            .par_chunks_mut(sh)
             .zip(load_parts.par_iter_mut())
             .enumerate()
             .for_each_init(
@@ -394,7 +408,7 @@ impl FftPlan {
                     *part = load(i, &mut buf[..ny]);
                     buf[ny..].fill(0.0);
                     self.r2c
-                        .process_with_scratch(buf, row_out, scratch)
+                        .process_with_scratch(buf, &mut row_out[..nh], scratch)
                         .expect("r2c sizes match the plan");
                 },
             );
@@ -402,36 +416,16 @@ impl FftPlan {
         let Some(context) = mid(&load_sums) else {
             return (load_sums, None);
         };
-        // 2. Blocked transpose rows (nfx, nh) → spec (nh, nfx).
-        let rows = ws.rows.as_slice().expect("standard layout");
-        ws.spec
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(TILE * nfx)
-            .enumerate()
-            .for_each(|(b, block)| {
-                let m0 = b * TILE;
-                let mb = block.len() / nfx;
-                for k0 in (0..nfx).step_by(TILE) {
-                    for k in k0..(k0 + TILE).min(nfx) {
-                        let src = &rows[k * nh + m0..k * nh + m0 + mb];
-                        for (dm, v) in src.iter().enumerate() {
-                            block[dm * nfx + k] = *v;
-                        }
-                    }
-                }
-            });
-        // 3. Per y-frequency: forward x-transform, kernel product (and energy), inverse
-        // x-transform. The half spectrum holds y-frequencies 0..=nfy/2; all but 0 and (even
-        // nfy) nfy/2 stand for their mirror images too.
+        // 2.–3. Per block of COLUMNS y-frequencies (in parallel): gather the block's columns of
+        // the row transforms into a local buffer, x-transform each y-frequency, multiply by
+        // the kernel (and sum the energy), inverse x-transform, scatter the kept rows back.
+        // The half spectrum holds y-frequencies 0..=nfy/2; all but 0 and (even nfy) nfy/2 stand
+        // for their mirror images too.
         let kern = kernel.values.as_slice().expect("standard layout");
         let mut energy_parts = vec![[0.0; 1]; nh];
-        ws.spec
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(nfx)
-            .zip(kern.par_chunks(nfx))
-            .zip(energy_parts.par_iter_mut())
+        let rows = SharedRows(ws.rows.as_mut_ptr());
+        energy_parts
+            .par_chunks_mut(COLUMNS)
             .enumerate()
             .for_each_init(
                 || {
@@ -439,64 +433,92 @@ impl FftPlan {
                         .fwd
                         .get_inplace_scratch_len()
                         .max(self.inv.get_inplace_scratch_len());
-                    vec![Complex64::default(); n]
+                    (
+                        vec![Complex64::default(); COLUMNS * sx],
+                        vec![Complex64::default(); n],
+                    )
                 },
-                |scratch, (m, ((row, krow), energy))| {
-                    self.fwd.process_with_scratch(row, scratch);
-                    let mut e = 0.0;
-                    for (s, k) in row.iter_mut().zip(krow) {
-                        e += s.norm_sqr() * k.re;
-                        *s *= k;
+                |(block, scratch), (b, energy)| {
+                    let m0 = b * COLUMNS;
+                    let mb = energy.len();
+                    for k in 0..nfx {
+                        // SAFETY: columns m0..m0 + mb are read and written by this call only.
+                        let src = unsafe { rows.get(k * sh + m0, mb) };
+                        for (dm, v) in src.iter().enumerate() {
+                            block[dm * sx + k] = *v;
+                        }
                     }
-                    let weight = if m == 0 || (nfy % 2 == 0 && m == nfy / 2) {
-                        1.0
-                    } else {
-                        2.0
-                    };
-                    energy[0] = weight * e;
-                    self.inv.process_with_scratch(row, scratch);
+                    for (dm, e_part) in energy.iter_mut().enumerate() {
+                        let m = m0 + dm;
+                        let row = &mut block[dm * sx..dm * sx + nfx];
+                        let krow = &kern[m * nfx..(m + 1) * nfx];
+                        self.fwd.process_with_scratch(row, scratch);
+                        let mut e = 0.0;
+                        for (s, k) in row.iter_mut().zip(krow) {
+                            e += s.norm_sqr() * k.re;
+                            *s *= k;
+                        }
+                        let weight = if m == 0 || (nfy % 2 == 0 && m == nfy / 2) {
+                            1.0
+                        } else {
+                            2.0
+                        };
+                        e_part[0] = weight * e;
+                        self.inv.process_with_scratch(row, scratch);
+                    }
+                    // Only the nx rows of the grid are kept (zero-padded rows stay zero).
+                    for k in 0..nx {
+                        // SAFETY: as above.
+                        let dst = unsafe { rows.get(k * sh + m0, mb) };
+                        for (dm, v) in dst.iter_mut().enumerate() {
+                            *v = block[dm * sx + k];
+                        }
+                    }
                 },
             );
         let scale = 1.0 / (nfx * nfy) as f64;
         let energy = sum_in_order(&energy_parts)[0] * scale;
-        // 4. Transpose back the nx rows that are kept, inverse real transforms, scale, store.
-        let spec = ws.spec.as_slice().expect("standard layout");
+        // 4. Inverse real transforms of the nx rows that are kept, scale, store.
         let mut store_parts = vec![[0.0; B]; nx];
         let context = &context;
-        ws.rows.as_slice_mut().expect("standard layout")[..nx * nh]
-            .par_chunks_mut(TILE * nh)
-            .zip(store_parts.par_chunks_mut(TILE))
+        ws.rows[..nx * sh]
+            .par_chunks_mut(sh)
+            .zip(store_parts.par_iter_mut())
             .enumerate()
             .for_each_init(
                 || (vec![0.0; nfy], self.c2r.make_scratch_vec()),
-                |(buf, scratch), (b, (block, parts))| {
-                    let k0 = b * TILE;
-                    let kb = block.len() / nh;
-                    for m in 0..nh {
-                        let src = &spec[m * nfx + k0..m * nfx + k0 + kb];
-                        for (dk, v) in src.iter().enumerate() {
-                            block[dk * nh + m] = *v;
-                        }
+                |(buf, scratch), (i, (row, part))| {
+                    let row = &mut row[..nh];
+                    // Imaginary parts of the DC (and Nyquist) terms of a real signal are
+                    // round-off; realfft insists they are zero.
+                    row[0].im = 0.0;
+                    if nfy.is_multiple_of(2) {
+                        row[nfy / 2].im = 0.0;
                     }
-                    for (dk, (row, part)) in block.chunks_mut(nh).zip(parts.iter_mut()).enumerate()
-                    {
-                        // Imaginary parts of the DC (and Nyquist) terms of a real signal are
-                        // round-off; realfft insists they are zero.
-                        row[0].im = 0.0;
-                        if nfy.is_multiple_of(2) {
-                            row[nfy / 2].im = 0.0;
-                        }
-                        self.c2r
-                            .process_with_scratch(row, buf, scratch)
-                            .expect("c2r sizes match the plan");
-                        for v in &mut buf[..ny] {
-                            *v *= scale;
-                        }
-                        *part = store(context, energy, k0 + dk, &buf[..ny]);
+                    self.c2r
+                        .process_with_scratch(row, buf, scratch)
+                        .expect("c2r sizes match the plan");
+                    for v in &mut buf[..ny] {
+                        *v *= scale;
                     }
+                    *part = store(context, energy, i, &buf[..ny]);
                 },
             );
         (load_sums, Some((energy, sum_in_order(&store_parts))))
+    }
+}
+
+/// Raw pointer to the row transforms of a workspace, shared by the column blocks of
+/// [`FftPlan::convolve_fused`] (each block reads and writes its own columns only).
+#[derive(Clone, Copy)]
+struct SharedRows(*mut Complex64);
+unsafe impl Send for SharedRows {}
+unsafe impl Sync for SharedRows {}
+impl SharedRows {
+    /// The `len` values from `start`. Safety: no other call touches them meanwhile.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn get(&self, start: usize, len: usize) -> &mut [Complex64] {
+        std::slice::from_raw_parts_mut(self.0.add(start), len)
     }
 }
 
