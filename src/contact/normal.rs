@@ -33,7 +33,8 @@
 //! - [`NormalMethod::Preconditioned`]: the gap filtered by `E*|q|/2` (the exact inverse of the
 //!   periodic compliance) and restricted to `Ic`, the FFT preconditioner of Vollebregt (2014);
 //!   Polak–Ribière+ with a restart test; penetrating points join the line search. Two transform
-//!   pairs per iteration (one preconditioner, one `K⊛t`), but 10–50 iterations, nearly
+//!   pairs per iteration (one `K⊛t`; one preconditioner, in single precision, about half the
+//!   cost of a double-precision pair), but 10–50 iterations, nearly
 //!   independent of the grid and of the contact fraction; cold solves start from the solution
 //!   on the grid coarsened 2 × 2 (nested iteration down to [`COARSEST_GRID`]). For zero-padded
 //!   windows the preconditioner is the periodic `E*|q|/2` of the window (the iteration counts on
@@ -290,10 +291,15 @@ pub struct NormalSolver {
 /// Periodic patches use the solver's own plan; zero-padded windows use a periodic plan of the
 /// window (its |q| is the inverse of the free-space compliance up to the wrap-around coupling,
 /// which the projected iteration tolerates; half the cost of a padded transform pair).
+///
+/// It runs in single precision: it only shapes the search directions, while the residual, the
+/// steps and the convergence test are computed in double precision on the operator `K⊛`; its
+/// rounding (relative 1e-7, as if `M` were perturbed by that much) costs no iterations and
+/// halves its memory traffic (BENCHMARKS.md, issue 16).
 struct Preconditioner {
-    plan: FftPlan,
-    spectrum: KernelSpectrum,
-    ws: ConvolutionWorkspace,
+    plan: FftPlan<f32>,
+    spectrum: KernelSpectrum<f32>,
+    ws: ConvolutionWorkspace<f32>,
     /// Diagonal of the circulant `M⁻¹`, `mean_q(E*|q|/2)` (Pa/m).
     diagonal: f64,
 }

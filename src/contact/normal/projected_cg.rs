@@ -12,7 +12,7 @@
 //!
 //! 1. `z = P M⁻¹ P g`, the preconditioned residual: `M = I` (Polonsky–Keer) or
 //!    `M⁻¹ = F⁻¹ (E*|q|/2) F`, the inverse of the periodic Boussinesq operator `2/(E*|q|)`
-//!    ([`precond_spectrum`]);
+//!    ([`precond_spectrum`]), applied in single precision (everything else is double);
 //! 2. `t = z + β t_old` on `Ic`, shifted so that `Σ t = 0` (the step keeps the load).
 //!    Polonsky–Keer: Fletcher–Reeves `β = G/G_old`, `G = Σ_Ic g²`, reset after points entered.
 //!    Preconditioned: Polak–Ribière+ `β = max(0, g·(z − z_old)/(g·z)_old)` (robust to the changes
@@ -43,7 +43,7 @@
 
 use super::{NormalMethod, NormalSolver, REFRESH_INTERVAL};
 use crate::error::{Error, Result};
-use crate::halfspace::convolution::{FftPlan, KernelSpectrum};
+use crate::halfspace::convolution::{FftPlan, FftReal, KernelSpectrum};
 use ndarray::Array2;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -92,12 +92,12 @@ pub(super) fn rows_sum<const K: usize>(
 /// The preconditioner `M⁻¹ = E*|q|/2` on a plan (zero at `q = 0`): the exact inverse of the
 /// periodic Boussinesq compliance `2/(E*|q|)` on its range. Returns the spectrum and the
 /// diagonal of the circulant operator, `mean_q(E*|q|/2)` (Pa/m).
-pub(super) fn precond_spectrum(
-    plan: &FftPlan,
+pub(super) fn precond_spectrum<T: FftReal>(
+    plan: &FftPlan<T>,
     dx: f64,
     dy: f64,
     e_star: f64,
-) -> (KernelSpectrum, f64) {
+) -> (KernelSpectrum<T>, f64) {
     let spec = plan.spectrum_from_wavenumbers(dx, dy, |qx, qy| {
         Complex64::new(0.5 * e_star * qx.hypot(qy), 0.0)
     });
@@ -489,7 +489,7 @@ impl NormalSolver {
                 for k in 0..ny {
                     let gk = g[k] - c;
                     residual_terms(&mut s, p[k], gk);
-                    buf[k] = if p[k] > 0.0 { gk } else { 0.0 };
+                    buf[k] = if p[k] > 0.0 { gk as f32 } else { 0.0 };
                 }
                 s
             },
@@ -502,10 +502,11 @@ impl NormalSolver {
                 for k in 0..ny {
                     if p[k] > 0.0 {
                         let gk = g[k] - c;
+                        let zk = f64::from(res[k]);
                         s[2] += gk * z[k];
-                        z[k] = res[k];
-                        s[0] += res[k];
-                        s[1] += gk * res[k];
+                        z[k] = zk;
+                        s[0] += zk;
+                        s[1] += gk * zk;
                     } else {
                         z[k] = 0.0;
                     }

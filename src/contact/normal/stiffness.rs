@@ -120,7 +120,9 @@ impl NormalSolver {
                 &m.spectrum,
                 &mut m.ws,
                 |i, buf| {
-                    buf.copy_from_slice(row(g, i));
+                    for (b, &v) in buf.iter_mut().zip(row(g, i)) {
+                        *b = v as f32;
+                    }
                     []
                 },
                 |_| Some(()),
@@ -131,9 +133,10 @@ impl NormalSolver {
                     let mut s = [0.0; 2];
                     for k in 0..ny {
                         if at(i, k) {
-                            z[k] = res[k];
-                            s[0] += res[k];
-                            s[1] += g[k] * res[k];
+                            let zk = f64::from(res[k]);
+                            z[k] = zk;
+                            s[0] += zk;
+                            s[1] += g[k] * zk;
                         } else {
                             z[k] = 0.0;
                         }
