@@ -3,6 +3,7 @@
 //!     benches/peers/setup.sh                        # throwaway venv with tamaas (once)
 //!     cargo bench --bench normal                    # sections A–C below (about 1 h, 2 idle cores)
 //!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
+//!     cargo bench --bench normal -- --sizes 512,1024 # sections A–C on the grids given
 //!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²)
 //!     ASPERITY_BENCH_METHOD=preconditioned cargo bench --bench normal -- --gaussian   # method forced
 //!     cargo bench --bench normal -- --resolution    # D: grid-refinement study of the resolution
@@ -592,6 +593,14 @@ fn main() {
         println!("\nload average at end: {}", load_average());
     } else if args.iter().any(|a| a == "--quick") {
         run_all(&[512]);
+    } else if let Some(i) = args.iter().position(|a| a == "--sizes") {
+        let sizes: Vec<usize> = args
+            .get(i + 1)
+            .expect("--sizes N,N,…")
+            .split(',')
+            .map(|v| v.parse().expect("--sizes: grid sizes such as 512,1024"))
+            .collect();
+        run_all(&sizes);
     } else {
         run_all(&[512, 1024, 2048]);
     }
