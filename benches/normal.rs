@@ -5,6 +5,7 @@
 //!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
 //!     cargo bench --bench normal -- --sizes 512,1024 # sections A–C on the grids given
 //!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²)
+//!     cargo bench --bench normal -- --warm-start    # section D: warm against nested start (1024²)
 //!     ASPERITY_BENCH_METHOD=preconditioned cargo bench --bench normal -- --gaussian   # method forced
 //!     cargo bench --bench normal -- --resolution    # D: grid-refinement study of the resolution
 //!     cargo bench --bench normal -- --size 4096     # one 4096² solve (run under /usr/bin/time -v)
@@ -413,6 +414,78 @@ fn warm_and_stiffness(name: &str, s: &Grid2, e_star: f64, pressures: &[f64]) {
     });
 }
 
+/// Section D: where a warm start beats the nested coarse-to-fine start. For each base load the
+/// solution at that load warm-starts the solves at `ratio × base` (a solver whose
+/// `warm_start_load_ratio` is infinite, so that it always takes the warm start), against the
+/// nested start (no warm start) at the same loads; 1 thread, CPU time.
+fn warm_start_study(n: usize) {
+    const RATIOS: [f64; 7] = [0.5, 0.8, 0.98, 1.02, 1.1, 1.25, 2.0];
+    println!(
+        "\n### D. Warm start against the nested start ({n}², 1 thread, CPU time; load average {})\n",
+        load_average()
+    );
+    println!(
+        "Fine iterations and CPU time (s) of the solve at ratio × base load: nested start \
+         (iterations +coarse), and warm-started from the solution at the base load."
+    );
+    println!("\n| surface | base load | ratio | nested: iterations (+coarse) | nested CPU (s) | warm: iterations | warm CPU (s) | warm / nested time |");
+    println!("|---|---|---|---|---|---|---|---|");
+    // (surface name, surface, E* (Pa), base loads (label, p̄ in Pa)).
+    type Case = (&'static str, Grid2, f64, Vec<(String, f64)>);
+    let cases: [Case; 2] = [
+        (
+            "reference Gaussian",
+            gaussian_reference(n),
+            steel(),
+            vec![("0.2 MPa".into(), 2e5), ("2 MPa".into(), 2e6)],
+        ),
+        (
+            "self-affine",
+            self_affine(n),
+            SELF_AFFINE_E_STAR,
+            [0.005, 0.05, 0.21]
+                .iter()
+                .map(|l| (format!("p̄/E*h' = {l}"), l * SELF_AFFINE_E_STAR * 0.1))
+                .collect(),
+        ),
+    ];
+    pool(1).install(|| {
+        for (name, s, e_star, loads) in &cases {
+            let mut solver = solver(s, *e_star, NormalMethod::Auto);
+            let mut always_warm = NormalSolver::new(
+                &NormalProblem {
+                    surface: s,
+                    e_star_pa: *e_star,
+                },
+                NormalOptions {
+                    tolerance: TOLERANCE,
+                    warm_start_load_ratio: f64::INFINITY,
+                    ..NormalOptions::default()
+                },
+            )
+            .unwrap();
+            for (label, p) in loads {
+                let base = solver.solve_load(*p, None).unwrap();
+                for r in RATIOS {
+                    let c0 = thread_cpu_s();
+                    let nested = solver.solve_load(p * r, None).unwrap();
+                    let t_nested = thread_cpu_s() - c0;
+                    let c0 = thread_cpu_s();
+                    let warm = always_warm.solve_load(p * r, Some(&base)).unwrap();
+                    let t_warm = thread_cpu_s() - c0;
+                    println!(
+                        "| {name} | {label} | {r} | {} (+{}) | {t_nested:.3} | {} | {t_warm:.3} | {:.2} |",
+                        nested.iterations,
+                        nested.coarse_iterations,
+                        warm.iterations,
+                        t_warm / t_nested
+                    );
+                }
+            }
+        }
+    });
+}
+
 /// Section B: the reference Gaussian surface's sweep on the sizes up to 1024².
 fn gaussian_section(sizes: &[usize], dir: &Path) {
     println!("\n### B. Reference Gaussian surface, reference sweep 0.1–10 MPa (steel/steel)");
@@ -591,6 +664,8 @@ fn main() {
         );
         gaussian_section(&[512, 1024], dir.path());
         println!("\nload average at end: {}", load_average());
+    } else if args.iter().any(|a| a == "--warm-start") {
+        warm_start_study(1024);
     } else if args.iter().any(|a| a == "--quick") {
         run_all(&[512]);
     } else if let Some(i) = args.iter().position(|a| a == "--sizes") {
