@@ -322,18 +322,19 @@ pub struct ConvolutionWorkspace<T: FftReal = f64> {
     rows: Vec<Complex<T>>,
 }
 
-/// Row stride (complex values) for rows of `n` values walked across by a transpose: the
-/// smallest `m ≥ n` whose rows start an odd number of 64-byte cache lines apart, so that a
+/// Row stride (complex values of precision `T`) for rows of `n` values read down their columns:
+/// the smallest `m ≥ n` whose rows start an odd number of 64-byte cache lines apart, so that a
 /// column's elements spread over all cache sets instead of aliasing to a few (a stride of
-/// `2^k + 16` bytes, as for `n = 2^j + 1`, maps 32 consecutive rows to one or two sets).
-fn padded_row_length(n: usize) -> usize {
-    // Four 16-byte complex values per 64-byte line: m = 4·(odd).
-    let lines = n.div_ceil(4);
-    4 * (lines | 1)
+/// `2^k + 16` bytes, as for `n = 2^j + 1` double-precision values, maps 32 consecutive rows to
+/// one or two sets).
+fn padded_row_length<T: FftReal>(n: usize) -> usize {
+    let per_line = (64 / std::mem::size_of::<Complex<T>>()).max(1);
+    per_line * (n.div_ceil(per_line) | 1)
 }
 
 /// y-frequencies transformed along x together: their columns of the row transforms are gathered
-/// into one buffer (`COLUMNS` rows of `nfx` values, 128 KiB at `nfx = 1024`, in L2).
+/// into one buffer (`COLUMNS` rows of `nfx` values, 128 KiB at `nfx = 1024` in double
+/// precision: it stays in L2).
 const COLUMNS: usize = 8;
 
 impl<T: FftReal> FftPlan<T> {
@@ -341,7 +342,7 @@ impl<T: FftReal> FftPlan<T> {
     pub fn workspace(&self) -> ConvolutionWorkspace<T> {
         let nh = self.nfy / 2 + 1;
         ConvolutionWorkspace {
-            rows: vec![Complex::default(); self.nfx * padded_row_length(nh)],
+            rows: vec![Complex::default(); self.nfx * padded_row_length::<T>(nh)],
         }
     }
 }
@@ -397,9 +398,10 @@ impl<T: FftReal> FftPlan<T> {
     ///    found that the convolution is not needed after all (e.g. converged);
     /// 3. per block of [`COLUMNS`] y-frequencies (in parallel): their columns gathered into a
     ///    buffer that stays in cache, x-transform, kernel product, inverse x-transform, the `nx`
-    ///    rows that are kept scattered back (no transposed copy of the spectrum is made); then the
-    ///    inverse real transforms of those rows. Step 3 also sums the energy `E = Σ_x f·(K⊛f) = (1/N_fft) Σ_q K̃(q)|f̂(q)|²` (Parseval; the kernel
-    ///    spectrum is taken as real, as for every even kernel);
+    ///    rows that are kept scattered back (no transposed copy of the spectrum is made); then
+    ///    the inverse real transforms of those rows. Step 3 also sums the energy
+    ///    `E = Σ_x f·(K⊛f) = (1/N_fft) Σ_q K̃(q)|f̂(q)|²` (Parseval; the kernel spectrum is taken
+    ///    as real, as for every even kernel; summed in `f64`);
     /// 4. for every grid row `i`: `store(&context, E, i, result)` receives the scaled result row
     ///    and returns `B` partial sums (added in row order).
     ///
@@ -421,7 +423,7 @@ impl<T: FftReal> FftPlan<T> {
             "convolve_fused: kernel shape"
         );
         // Row strides of the row transforms and of the column buffer.
-        let (sh, sx) = (padded_row_length(nh), padded_row_length(nfx));
+        let (sh, sx) = (padded_row_length::<T>(nh), padded_row_length::<T>(nfx));
         assert_eq!(ws.rows.len(), nfx * sh, "convolve_fused: workspace shape");
         // 1. Load and real-transform the nx data rows (rows nx.. of `ws.rows` stay zero).
         let mut load_parts = vec![[0.0; A]; nx];
@@ -702,6 +704,54 @@ mod tests {
 
     /// The fused convolution: load sums, the energy Σ f·(K⊛f) from the spectrum (Parseval),
     /// the store sees the result rows, and `mid` can stop before the transforms.
+    #[test]
+    fn single_precision_plan_matches_double() {
+        // Odd, even and padded sizes; nh = 21, 4, 34: full and partial column blocks.
+        for (nx, ny, boundary) in [
+            (40, 40, Boundary::Periodic),
+            (9, 7, Boundary::Periodic),
+            (33, 34, Boundary::ZeroPadded),
+        ] {
+            let spectrum =
+                |qx: f64, qy: f64| Complex64::new(1.0 / (1.0 + qx * qx + 0.5 * qy * qy), 0.0);
+            let (dx, dy) = (0.3, 0.2);
+            let f = test_field(nx, ny);
+            let run_f64 = {
+                let plan = FftPlan::<f64>::new(nx, ny, boundary);
+                let ks = plan.spectrum_from_wavenumbers(dx, dy, spectrum);
+                let mut out = Array2::zeros((nx, ny));
+                plan.convolve_into(&ks, &f, &mut out, &mut plan.workspace());
+                out
+            };
+            let plan = FftPlan::<f32>::new(nx, ny, boundary);
+            let ks = plan.spectrum_from_wavenumbers(dx, dy, spectrum);
+            let out = std::sync::Mutex::new(Array2::<f64>::zeros((nx, ny)));
+            plan.convolve_fused::<0, 0, ()>(
+                &ks,
+                &mut plan.workspace(),
+                |i, buf| {
+                    for (b, v) in buf.iter_mut().zip(f.row(i)) {
+                        *b = *v as f32;
+                    }
+                    []
+                },
+                |_| Some(()),
+                |_, _, i, row| {
+                    let mut out = out.lock().unwrap();
+                    for (o, v) in out.row_mut(i).iter_mut().zip(row) {
+                        *o = f64::from(*v);
+                    }
+                    []
+                },
+            );
+            let out = out.into_inner().unwrap();
+            let scale = run_f64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (a, b) in out.iter().zip(run_f64.iter()) {
+                assert!((a - b).abs() < 1e-5 * scale, "{a} vs {b} ({nx}×{ny})");
+            }
+        }
+    }
+
     #[test]
     fn convolve_fused_energy_sums_and_stop() {
         for (nx, ny, boundary) in [
