@@ -702,8 +702,7 @@ mod tests {
         }
     }
 
-    /// The fused convolution: load sums, the energy Σ f·(K⊛f) from the spectrum (Parseval),
-    /// the store sees the result rows, and `mid` can stop before the transforms.
+    /// A single-precision plan (the preconditioner's) against the double-precision convolution.
     #[test]
     fn single_precision_plan_matches_double() {
         // Odd, even and padded sizes; nh = 21, 4, 34: full and partial column blocks.
@@ -752,6 +751,8 @@ mod tests {
         }
     }
 
+    /// The fused convolution: load sums, the energy Σ f·(K⊛f) from the spectrum (Parseval),
+    /// the store sees the result rows, and `mid` can stop before the transforms.
     #[test]
     fn convolve_fused_energy_sums_and_stop() {
         for (nx, ny, boundary) in [
