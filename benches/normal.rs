@@ -7,7 +7,7 @@
 //!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²)
 //!     cargo bench --bench normal -- --warm-start    # section D: warm against nested start (1024²)
 //!     ASPERITY_BENCH_METHOD=preconditioned cargo bench --bench normal -- --gaussian   # method forced
-//!     cargo bench --bench normal -- --resolution    # D: grid-refinement study of the resolution
+//!     cargo bench --bench normal -- --resolution    # R: grid-refinement study of the resolution
 //!     cargo bench --bench normal -- --size 4096     # one 4096² solve (run under /usr/bin/time -v)
 //!     cargo bench --bench normal -- --reference     # reference sweep (1024²) and kn ∝ p^β
 //!
@@ -552,7 +552,7 @@ fn run_all(sizes: &[usize]) {
     println!("\nload average at end: {}", load_average());
 }
 
-/// D. Grid-refinement study of the resolution criterion: self-affine surfaces generated on 512²
+/// R. Grid-refinement study of the resolution criterion: self-affine surfaces generated on 512²
 /// with the cut-off at L/32, sampled on 256² … 32²; area ratio, free area and kn against 512².
 fn resolution_study() {
     let e_star = SELF_AFFINE_E_STAR;

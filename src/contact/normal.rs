@@ -313,9 +313,10 @@ pub struct NormalSolver {
 /// which the projected iteration tolerates; half the cost of a padded transform pair).
 ///
 /// It runs in single precision: it only shapes the search directions, while the residual, the
-/// steps and the convergence test are computed in double precision on the operator `K⊛`; its
-/// rounding (relative 1e-7, as if `M` were perturbed by that much) costs no iterations and
-/// halves its memory traffic (BENCHMARKS.md, issue 16).
+/// steps and the convergence test are computed in double precision on the operator `K⊛`. Its
+/// rounding (relative 1e-7, as if `M` were perturbed by that much) cost no iteration on any
+/// benchmark case (self-affine and Gaussian, 512²–2048²), and it halves the preconditioner's
+/// memory traffic (BENCHMARKS.md, issue 16).
 struct Preconditioner {
     plan: FftPlan<f32>,
     spectrum: KernelSpectrum<f32>,
@@ -484,9 +485,9 @@ impl NormalSolver {
     /// Load control: solve for the imposed mean pressure `mean_pressure_pa` (Pa, over the whole
     /// patch). `warm_start` (a previous solution on the same grid) gives the initial pressure
     /// shape, scaled to the new load (the preconditioned method uses it only within a factor
-    /// [`NormalOptions::warm_start_load_ratio`] of its load); otherwise the iteration starts from uniform
-    /// pressure, or (preconditioned method) from the solution on the grid coarsened 2 × 2
-    /// (nested iteration, recursively down to [`COARSEST_GRID`] points a side).
+    /// [`NormalOptions::warm_start_load_ratio`] of its load); otherwise the iteration starts
+    /// from uniform pressure, or (preconditioned method) from the solution on the grid
+    /// coarsened 2 × 2 (nested iteration, recursively down to [`COARSEST_GRID`] points a side).
     pub fn solve_load(
         &mut self,
         mean_pressure_pa: f64,
