@@ -363,11 +363,7 @@ impl FftPlan<f64> {
         assert_eq!(out.dim(), (nx, ny), "convolve_into: output shape");
         let field = field.as_standard_layout();
         let field = field.as_slice().expect("standard layout");
-        let out = RowWriter(
-            out.as_slice_mut()
-                .expect("output in standard layout")
-                .as_mut_ptr(),
-        );
+        let out = SharedMut::new(out.as_slice_mut().expect("output in standard layout"));
         self.convolve_fused::<0, 0, ()>(
             kernel,
             ws,
@@ -452,7 +448,7 @@ impl<T: FftReal> FftPlan<T> {
         // for their mirror images too.
         let kern = kernel.values.as_slice().expect("standard layout");
         let mut energy_parts = vec![[0.0; 1]; nh];
-        let rows = SharedRows(ws.rows.as_mut_ptr());
+        let rows = SharedMut::new(&mut ws.rows);
         energy_parts
             .par_chunks_mut(COLUMNS)
             .enumerate()
@@ -538,30 +534,37 @@ impl<T: FftReal> FftPlan<T> {
     }
 }
 
-/// Raw pointer to the row transforms of a workspace, shared by the column blocks of
-/// [`FftPlan::convolve_fused`] (each block reads and writes its own columns only).
+/// Raw pointer to a buffer whose disjoint parts are written by parallel calls: rows of a field
+/// (the solvers' work arrays, [`FftPlan::convolve_into`]'s output), columns of the row
+/// transforms ([`FftPlan::convolve_fused`]'s column blocks).
 #[derive(Clone, Copy)]
-struct SharedRows<T>(*mut Complex<T>);
-unsafe impl<T> Send for SharedRows<T> {}
-unsafe impl<T> Sync for SharedRows<T> {}
-impl<T> SharedRows<T> {
-    /// The `len` values from `start`. Safety: no other call touches them meanwhile.
+pub(crate) struct SharedMut<T>(*mut T);
+unsafe impl<T: Send> Send for SharedMut<T> {}
+unsafe impl<T: Send> Sync for SharedMut<T> {}
+impl<T> SharedMut<T> {
+    pub(crate) fn new(buf: &mut [T]) -> Self {
+        Self(buf.as_mut_ptr())
+    }
+
+    /// A standard-layout array's buffer.
+    pub(crate) fn of(a: &mut Array2<T>) -> Self {
+        Self::new(
+            a.as_slice_mut()
+                .expect("work arrays are in standard layout"),
+        )
+    }
+
+    /// The `len` values from `start`. Safety: they lie in the buffer, and no other call
+    /// touches them meanwhile.
     #[allow(clippy::mut_from_ref)]
-    unsafe fn get(&self, start: usize, len: usize) -> &mut [Complex<T>] {
+    pub(crate) unsafe fn get(&self, start: usize, len: usize) -> &mut [T] {
         std::slice::from_raw_parts_mut(self.0.add(start), len)
     }
-}
 
-/// Raw row pointer of [`FftPlan::convolve_into`]'s output (rows written by disjoint calls).
-#[derive(Clone, Copy)]
-struct RowWriter(*mut f64);
-unsafe impl Send for RowWriter {}
-unsafe impl Sync for RowWriter {}
-impl RowWriter {
-    /// Row `i` of length `ny`. Safety: rows are disjoint and written by one caller at a time.
+    /// Row `i` of length `ny`. Safety: as for [`SharedMut::get`].
     #[allow(clippy::mut_from_ref)]
-    unsafe fn row(&self, i: usize, ny: usize) -> &mut [f64] {
-        std::slice::from_raw_parts_mut(self.0.add(i * ny), ny)
+    pub(crate) unsafe fn row(&self, i: usize, ny: usize) -> &mut [T] {
+        self.get(i * ny, ny)
     }
 }
 

@@ -193,8 +193,9 @@ pub fn local_iteration_cap(local_iterations: u64, dim: usize) -> u64 {
 }
 
 /// Model evaluations one Nelder–Mead fit of `dim` parameters is budgeted on the progress bar:
-/// two runs' iteration caps ([`local_iteration_cap`]), as the run's estimate at its start counts
-/// it (`Options::estimated_evaluations`); a fit that needs all its restarts overruns it.
+/// two runs' iteration caps ([`local_iteration_cap`]; the run's estimate at its start,
+/// `Options::estimated_evaluations`, counts two runs of `local_iterations` without the cap for
+/// the dimension, which it does not know yet); a fit that needs all its restarts overruns it.
 pub fn local_evaluations(local_iterations: u64, dim: usize) -> u64 {
     2 * local_iteration_cap(local_iterations, dim)
 }

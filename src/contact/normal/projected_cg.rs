@@ -43,30 +43,13 @@
 
 use super::{NormalMethod, NormalSolver, REFRESH_INTERVAL};
 use crate::error::{Error, Result};
-use crate::halfspace::convolution::{FftPlan, FftReal, KernelSpectrum};
+use crate::halfspace::convolution::{FftPlan, FftReal, KernelSpectrum, SharedMut};
 use ndarray::Array2;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
-/// Raw mutable pointer for disjoint per-row writes from parallel closures.
-#[derive(Clone, Copy)]
-pub(super) struct Ptr(*mut f64);
-unsafe impl Send for Ptr {}
-unsafe impl Sync for Ptr {}
-impl Ptr {
-    pub(super) fn of(a: &mut Array2<f64>) -> Self {
-        Ptr(a
-            .as_slice_mut()
-            .expect("work arrays are in standard layout")
-            .as_mut_ptr())
-    }
-    /// Row `i` (length `ny`). Safety: each row is accessed by one closure call at a time and
-    /// not written elsewhere during that call.
-    #[allow(clippy::mut_from_ref)]
-    pub(super) unsafe fn row(&self, i: usize, ny: usize) -> &mut [f64] {
-        std::slice::from_raw_parts_mut(self.0.add(i * ny), ny)
-    }
-}
+/// Raw pointer for disjoint per-row writes to the work arrays from parallel closures.
+pub(super) type Ptr = SharedMut<f64>;
 
 /// Row `i` of a standard-layout array.
 pub(super) fn row(a: &Array2<f64>, i: usize) -> &[f64] {
