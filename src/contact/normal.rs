@@ -308,9 +308,10 @@ pub struct NormalSolver {
 }
 
 /// The preconditioner `M⁻¹ = F⁻¹ (E*|q|/2) F`: the inverse of the periodic Boussinesq compliance.
-/// Periodic patches use the solver's own plan; zero-padded windows use a periodic plan of the
-/// window (its |q| is the inverse of the free-space compliance up to the wrap-around coupling,
-/// which the projected iteration tolerates; half the cost of a padded transform pair).
+/// Its plan is periodic on the grid: for periodic patches the grid of the solver's own plan;
+/// for zero-padded windows the window itself (its |q| is the inverse of the free-space
+/// compliance up to the wrap-around coupling, which the projected iteration tolerates; half the
+/// cost of a padded transform pair).
 ///
 /// It runs in single precision: it only shapes the search directions, while the residual, the
 /// steps and the convergence test are computed in double precision on the operator `K⊛`. Its
