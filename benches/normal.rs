@@ -4,7 +4,7 @@
 //!     cargo bench --bench normal                    # sections A–C below (about 1 h, 2 idle cores)
 //!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
 //!     cargo bench --bench normal -- --sizes 512,1024 # sections A–C on the grids given
-//!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²)
+//!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²; or --sizes)
 //!     cargo bench --bench normal -- --warm-start    # section D: warm against nested start (1024²)
 //!     ASPERITY_BENCH_METHOD=preconditioned cargo bench --bench normal -- --gaussian   # method forced
 //!     cargo bench --bench normal -- --resolution    # R: grid-refinement study of the resolution
@@ -15,7 +15,8 @@
 //!    spacings; `SelfAffineSpec::benchmark`, seed 1) on 512², 1024², 2048² at p̄/(E*h'rms) =
 //!    0.005, 0.05, 0.21, 0.53 (about 1, 10, 40 and 76 % contact), E* = 1e11 Pa on 1 mm.
 //! B. The reference Gaussian surface (Rq 0.177 µm, cl 6.6 µm, 250 µm, seed 1, mean removed),
-//!    steel on steel, the reference sweep 0.1–10 MPa, on 512² and 1024².
+//!    steel on steel, the reference sweep 0.1–10 MPa, on 512² and 1024² (`--gaussian --sizes`:
+//!    on the grids given, the same 250 µm patch).
 //! C. Warm-started sweeps and kn: the six reference pressures and the four self-affine loads on
 //!    1024², cold solves against a warm-started sweep; kn from the tangent problem against two
 //!    warm-started solves of a central difference.
@@ -489,7 +490,7 @@ fn warm_start_study(n: usize) {
 /// Section B: the reference Gaussian surface's sweep on the sizes up to 1024².
 fn gaussian_section(sizes: &[usize], dir: &Path) {
     println!("\n### B. Reference Gaussian surface, reference sweep 0.1–10 MPa (steel/steel)");
-    for &n in sizes.iter().filter(|&&n| n <= 1024) {
+    for &n in sizes {
         compare(
             "reference Gaussian",
             &gaussian_reference(n),
@@ -528,7 +529,8 @@ fn run_all(sizes: &[usize]) {
             dir.path(),
         );
     }
-    gaussian_section(sizes, dir.path());
+    let gaussian_sizes: Vec<usize> = sizes.iter().copied().filter(|&n| n <= 1024).collect();
+    gaussian_section(&gaussian_sizes, dir.path());
     let n = *sizes.iter().filter(|&&n| n <= 1024).max().unwrap_or(&512);
     println!("\n### C. Warm-started sweeps and kn ({n}², 1 thread, CPU time)\n");
     println!("| surface | loads | iterations cold | CPU cold (s) | iterations warm | CPU warm (s) | warm speed-up | kn tangent CPU (s) | kn central difference CPU (s) | kn speed-up | max |kn/kn_cd − 1| |");
@@ -647,6 +649,18 @@ fn reference() {
     );
 }
 
+/// The grid sizes of `--sizes N,N,…`, if given.
+fn sizes_arg(args: &[String]) -> Option<Vec<usize>> {
+    let i = args.iter().position(|a| a == "--sizes")?;
+    Some(
+        args.get(i + 1)
+            .expect("--sizes N,N,…")
+            .split(',')
+            .map(|v| v.parse().expect("--sizes: grid sizes such as 512,1024"))
+            .collect(),
+    )
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if let Some(i) = args.iter().position(|a| a == "--size") {
@@ -662,19 +676,13 @@ fn main() {
             "load average at start: {}; rayon pools of 1 and 2 threads; tolerance {TOLERANCE:e}",
             load_average()
         );
-        gaussian_section(&[512, 1024], dir.path());
+        gaussian_section(&sizes_arg(&args).unwrap_or(vec![512, 1024]), dir.path());
         println!("\nload average at end: {}", load_average());
     } else if args.iter().any(|a| a == "--warm-start") {
         warm_start_study(1024);
     } else if args.iter().any(|a| a == "--quick") {
         run_all(&[512]);
-    } else if let Some(i) = args.iter().position(|a| a == "--sizes") {
-        let sizes: Vec<usize> = args
-            .get(i + 1)
-            .expect("--sizes N,N,…")
-            .split(',')
-            .map(|v| v.parse().expect("--sizes: grid sizes such as 512,1024"))
-            .collect();
+    } else if let Some(sizes) = sizes_arg(&args) {
         run_all(&sizes);
     } else {
         run_all(&[512, 1024, 2048]);
