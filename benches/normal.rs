@@ -3,7 +3,7 @@
 //!     benches/peers/setup.sh                        # throwaway venv with tamaas (once)
 //!     cargo bench --bench normal                    # sections A–C below (about 1 h, 2 idle cores)
 //!     cargo bench --bench normal -- --quick         # sections A–C on 512² only
-//!     cargo bench --bench normal -- --sizes 512,1024 # sections A–C on the grids given
+//!     cargo bench --bench normal -- --sizes 512,1024 # A–C on the grids given (B: ≤ 1024² only)
 //!     cargo bench --bench normal -- --gaussian      # section B only (512², 1024²; or --sizes)
 //!     cargo bench --bench normal -- --warm-start    # section D: warm against nested start (1024²)
 //!     ASPERITY_BENCH_METHOD=preconditioned cargo bench --bench normal -- --gaussian   # method forced
@@ -487,7 +487,8 @@ fn warm_start_study(n: usize) {
     });
 }
 
-/// Section B: the reference Gaussian surface's sweep on the sizes up to 1024².
+/// Section B: the reference Gaussian surface's sweep on the given sizes (those up to 1024² in a
+/// full run, any with `--gaussian --sizes`).
 fn gaussian_section(sizes: &[usize], dir: &Path) {
     println!("\n### B. Reference Gaussian surface, reference sweep 0.1–10 MPa (steel/steel)");
     for &n in sizes {
