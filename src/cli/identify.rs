@@ -2,6 +2,7 @@
 //! single-nonlinear-mode model → errors on the levels and tests not used.
 use asperity::identify::effects::Effect;
 use asperity::identify::model::Family;
+use asperity::identify::pipeline::FitRows;
 use asperity::identify::{identify, predict, read_sweeps, Control, Options};
 use asperity::{Error, Result};
 use std::path::PathBuf;
@@ -12,6 +13,13 @@ pub enum FamilyArg {
     Jenkins,
     Valanis,
     Iwan,
+}
+
+/// Rows of the fit levels to fit.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum RowsArg {
+    All,
+    Settled,
 }
 
 /// Identify a jointed structure's nonlinear mode from stepped-sine sweeps at several excitation
@@ -69,6 +77,13 @@ pub struct IdentifyArgs {
     /// minutes (the report gives the expected time), and an explicit value runs them.
     #[arg(long)]
     pub chain_steps: Option<usize>,
+    /// Rows of the fit levels to fit: `all`, or `settled` — on a fit level whose two sides of
+    /// the resonance differ in damping at equal amplitude by more than 10 % (the report's
+    /// stationarity check: the structure changed while the level was measured), only the
+    /// resonance row and the rows after it in the file's order, i.e. the part of the test after
+    /// the structure has been through the level's largest amplitude.
+    #[arg(long, value_enum, default_value = "all", conflicts_with = "structure")]
+    pub rows: RowsArg,
     /// Multi-DOF reduced model to update instead of the single nonlinear mode: a model file of
     /// `asperity response` (linear structure, contact element tables, excitation and response
     /// DOFs, harmonics). Four factors are fitted (frequencies, damping ratios, contact stiffness,
@@ -142,6 +157,10 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
         f.seed = args.seed;
     }
     opts.response_amplitudes = args.response_amplitude.clone();
+    opts.rows = match args.rows {
+        RowsArg::All => FitRows::All,
+        RowsArg::Settled => FitRows::Settled,
+    };
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
     let sweeps = read_sweeps(&args.files)?;
     let bar = super::progress_bar("identify", opts.estimated_evaluations());

@@ -129,6 +129,19 @@ pub struct BackbonePoint {
     pub damping_ratio: f64,
 }
 
+/// A pointwise estimate with its row and the sensitivity of its damping ratio to measurement
+/// noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SidePoint {
+    /// Row (0-based, file order).
+    pub row: usize,
+    pub point: BackbonePoint,
+    /// `(peak |X| / |X|)·|R/X| / Im(R/X)`: a complex error of the response of standard deviation
+    /// `s·peak` per component gives the damping ratio a relative standard deviation of `s` times
+    /// this (the error of `R/X` is `−(R/X)·ε` with `ε = δX/X`, and `ζ ∝ Im(R/X)`).
+    pub damping_noise_gain: f64,
+}
+
 /// The backbone estimated from one sweep.
 #[derive(Debug, Clone, Serialize)]
 pub struct LevelBackbone {
@@ -140,15 +153,31 @@ pub struct LevelBackbone {
     pub peak_amplitude_m: f64,
     /// Pointwise inversion of the rows in the half-power band.
     pub points: Vec<BackbonePoint>,
+    /// Row (file order) of each of `points`.
+    #[serde(skip)]
+    pub point_rows: Vec<usize>,
+    /// Pointwise inversion of the rows down to half the peak: the band of the two sides'
+    /// comparison ([`super::stationarity`]).
+    #[serde(skip)]
+    pub side_points: Vec<SidePoint>,
+    /// Row of the largest receptance, the top of the half-power band.
+    #[serde(skip)]
+    pub resonance_row: usize,
 }
 
 /// Half-power band: indices of the rows whose `|Y|` is at least `peak/√2`, as the contiguous
 /// run around the peak.
 pub fn half_power_rows(y: &[f64]) -> (usize, usize) {
+    band_rows(y, std::f64::consts::FRAC_1_SQRT_2)
+}
+
+/// Indices of the rows whose `|Y|` is at least `fraction·peak`, as the contiguous run around
+/// the peak.
+pub fn band_rows(y: &[f64], fraction: f64) -> (usize, usize) {
     let ip = (0..y.len())
         .max_by(|&a, &b| y[a].total_cmp(&y[b]))
         .expect("non-empty");
-    let lim = y[ip] / 2f64.sqrt();
+    let lim = y[ip] * fraction;
     let (mut lo, mut hi) = (ip, ip);
     while lo > 0 && y[lo - 1] >= lim {
         lo -= 1;
@@ -158,6 +187,11 @@ pub fn half_power_rows(y: &[f64]) -> (usize, usize) {
     }
     (lo, hi)
 }
+
+/// Lower end of the band of the two sides' comparison, as a fraction of the peak `|X|` (half
+/// the peak: the imaginary part of `R/X` is then half of its magnitude, so a relative error of
+/// the response perturbs the damping ratio at most twice as much as at resonance).
+pub const SIDE_BAND: f64 = 0.5;
 
 /// Backbones of several sweeps: an equivalent linear mode per sweep and the pointwise
 /// inversion with the modal constant of the sweep of lowest mean force.
@@ -185,29 +219,56 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
             let mag: Vec<f64> = x.iter().map(|v| v.norm()).collect();
             let ip = s.peak_row();
             let (lo, hi) = half_power_rows(&mag);
-            let points = (lo..=hi)
-                .filter_map(|i| {
-                    let z = r / x[i];
-                    let wn2 = z.re + om[i] * om[i];
-                    (wn2 > 0.0).then(|| {
-                        let wn = wn2.sqrt();
-                        BackbonePoint {
-                            amplitude_m: mag[i] * s.rows[i].force_n,
-                            frequency_hz: wn / TAU,
-                            damping_ratio: z.im / (2.0 * wn * om[i]),
-                        }
+            let peak = mag.iter().copied().fold(0.0, f64::max);
+            let invert = |(lo, hi): (usize, usize)| -> Vec<SidePoint> {
+                (lo..=hi)
+                    .filter_map(|i| {
+                        let point = pointwise_mode(r, om[i], x[i], s.rows[i].force_n)?;
+                        let d = r / x[i];
+                        Some(SidePoint {
+                            row: i,
+                            point,
+                            damping_noise_gain: peak / mag[i] * d.norm() / d.im.abs(),
+                        })
                     })
-                })
-                .collect();
+                    .collect()
+            };
+            let (point_rows, points) = invert((lo, hi))
+                .into_iter()
+                .map(|p| (p.row, p.point))
+                .unzip();
+            let side_points = invert(band_rows(&mag, SIDE_BAND));
+            let resonance_row = (lo..=hi)
+                .max_by(|&a, &b| mag[a].total_cmp(&mag[b]))
+                .unwrap_or(ip);
             LevelBackbone {
                 file: s.name(),
                 mean_force_n: s.mean_force_n(),
                 linear: *lin,
                 peak_amplitude_m: mag[ip] * s.rows[ip].force_n,
                 points,
+                point_rows,
+                side_points,
+                resonance_row,
             }
         })
         .collect())
+}
+
+/// Pointwise inversion of one row (see the module documentation): the equivalent mode
+/// `R/X = ω_n² − ω² + 2iζ·ω_n·ω` of receptance `x` (m/N) at `ω` (rad/s) with modal constant
+/// `r = 1/m` (1/kg), at the drive-point amplitude `|x|·F`; `None` where `ω_n² ≤ 0`.
+pub fn pointwise_mode(r: f64, omega: f64, x: Complex64, force_n: f64) -> Option<BackbonePoint> {
+    let z = r / x;
+    let wn2 = z.re + omega * omega;
+    (wn2 > 0.0).then(|| {
+        let wn = wn2.sqrt();
+        BackbonePoint {
+            amplitude_m: x.norm() * force_n,
+            frequency_hz: wn / TAU,
+            damping_ratio: z.im / (2.0 * wn * omega),
+        }
+    })
 }
 
 /// Equivalent linear mode of a response per unit force `y` (the level's quantity, `e^{iωt}`) at

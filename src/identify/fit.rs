@@ -82,6 +82,23 @@ impl LevelData {
         }
     }
 
+    /// The level from row `first` (0-based, file order) on, as if the file held only those rows
+    /// (mean force and peak of the kept rows).
+    pub fn from_row(&self, first: usize) -> Self {
+        let first = first.min(self.drives.len().saturating_sub(1));
+        let drives = self.drives[first..].to_vec();
+        let measured = self.measured[first..].to_vec();
+        Self {
+            name: self.name.clone(),
+            quantity: self.quantity,
+            mean_force_n: drives.iter().map(|d| d.force_n).sum::<f64>() / drives.len() as f64,
+            peak: measured.iter().map(|v| v.norm()).fold(0.0, f64::max),
+            lines: self.lines[first..].to_vec(),
+            drives,
+            measured,
+        }
+    }
+
     /// Model response per unit force in the level's quantity; failed rows are NaN.
     pub fn model_frf(&self, model: &Model) -> Result<(Vec<Complex64>, usize)> {
         let (x, failures) = model.receptance_tolerant(&self.drives, self.mean_force_n, true)?;
@@ -537,7 +554,41 @@ pub fn fit_local<S: Parametrised>(
 
 #[cfg(test)]
 mod tests {
-    use super::reserve_progress;
+    use super::{reserve_progress, LevelData};
+    use crate::identify::measured::Quantity;
+    use crate::identify::model::Drive;
+    use realfft::num_complex::Complex64;
+
+    /// A level cut at a row keeps the rows from it on, and its mean force and peak are those
+    /// of the kept rows; a cut past the end keeps the last row.
+    #[test]
+    fn a_level_from_a_row_on_is_the_file_of_those_rows() {
+        let level = LevelData {
+            name: "l.csv".into(),
+            quantity: Quantity::Displacement,
+            drives: (0..5)
+                .map(|i| Drive {
+                    omega: 500.0 + i as f64,
+                    force_n: 1.0 + i as f64,
+                })
+                .collect(),
+            measured: [4.0, 9.0, 3.0, 2.0, 1.0]
+                .iter()
+                .map(|&v| Complex64::new(0.0, v))
+                .collect(),
+            lines: (2..7).collect(),
+            mean_force_n: 3.0,
+            peak: 9.0,
+        };
+        let cut = level.from_row(2);
+        assert_eq!(cut.lines, vec![4, 5, 6]);
+        assert_eq!(cut.drives.len(), 3);
+        assert_eq!(cut.drives[0].omega, 502.0);
+        assert_eq!(cut.measured[0], Complex64::new(0.0, 3.0));
+        assert_eq!(cut.mean_force_n, 4.0);
+        assert_eq!(cut.peak, 3.0);
+        assert_eq!(level.from_row(9).lines, vec![6]);
+    }
 
     #[test]
     fn progress_grows_only_where_a_fit_would_overrun_the_estimate() {

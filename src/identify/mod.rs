@@ -21,6 +21,7 @@ pub mod predict;
 pub mod reduced;
 pub mod report;
 pub mod select;
+pub mod stationarity;
 pub mod uncertainty;
 
 pub use pipeline::{identify, read_sweeps, Identification, Options, SavedModel};

@@ -30,6 +30,7 @@ use super::backbone::{self, BackbonePoint};
 use super::fit::LevelData;
 use super::measured::Sweep;
 use super::report::{level_role, LevelErrors};
+use super::stationarity;
 use crate::error::{Error, Result};
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::brent::{BrentOpt, BrentRoot};
@@ -356,6 +357,9 @@ pub struct ModelFreeCheck {
     pub modal_mass_kg: f64,
     /// The pointwise backbone points the laws are fitted to.
     pub points: Vec<BackbonePoint>,
+    /// Fit levels whose earlier side was left out as not stationary (the settled variant,
+    /// [`Rows::Settled`]); empty when every point was used.
+    pub earlier_side_left_out: Vec<String>,
     pub laws: Vec<LawPrediction>,
     pub levels: Vec<LevelSpread>,
     /// The comparison with the model on every level not used.
@@ -371,16 +375,27 @@ pub struct LevelComparison {
     pub comparison: Comparison,
 }
 
+/// Which of the fit levels' pointwise points the laws are fitted to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rows {
+    /// Every point in the half-power bands.
+    All,
+    /// On a fit level whose two sides differ ([`stationarity::compare_sides`]), only the
+    /// resonance row and the rows after it ([`stationarity::settled_points`]).
+    Settled,
+}
+
 /// Fit the laws to the pointwise backbone of the levels `fit_levels` (0-based into `sweeps`,
 /// `frfs` their responses per unit force in the crate's convention, `levels` the same sweeps as
-/// fit data), compute every level's response from each law, and compare the laws with the
-/// model's errors `model` (every level) on the levels not used.
+/// fit data; the points chosen by `rows`), compute every level's response from each law, and
+/// compare the laws with the model's errors `model` (every level) on the levels not used.
 pub fn check(
     sweeps: &[Sweep],
     frfs: &[Vec<Complex64>],
     levels: &[LevelData],
     fit_levels: &[usize],
     model: &[LevelErrors],
+    rows: Rows,
 ) -> Result<ModelFreeCheck> {
     let fit_sweeps: Vec<Sweep> = fit_levels.iter().map(|&i| sweeps[i].clone()).collect();
     let fit_frfs: Vec<Vec<Complex64>> = fit_levels.iter().map(|&i| frfs[i].clone()).collect();
@@ -390,7 +405,20 @@ pub fn check(
         .min_by(|a, b| a.mean_force_n.total_cmp(&b.mean_force_n))
         .ok_or_else(|| Error::Data("model-free check: no fit level".into()))?;
     let modal_mass_kg = lowest.linear.modal_mass_kg;
-    let points: Vec<BackbonePoint> = backbones.iter().flat_map(|b| b.points.clone()).collect();
+    let mut earlier_side_left_out = Vec::new();
+    let mut points: Vec<BackbonePoint> = Vec::new();
+    for (b, &k) in backbones.iter().zip(fit_levels) {
+        let sides = stationarity::compare_sides(b, super::select::relative_scatter(&levels[k]));
+        match rows {
+            Rows::All => points.extend(&b.points),
+            Rows::Settled => {
+                if sides.as_ref().is_some_and(|c| !c.stationary) {
+                    earlier_side_left_out.push(b.file.clone());
+                }
+                points.extend(stationarity::settled_points(b, sides.as_ref()));
+            }
+        }
+    }
     let laws = BackboneLaw::all(&points);
     if laws.is_empty() {
         return Err(Error::Data(format!(
@@ -446,6 +474,7 @@ pub fn check(
     let mut c = ModelFreeCheck {
         modal_mass_kg,
         points,
+        earlier_side_left_out,
         laws,
         levels,
         comparisons: Vec::new(),
@@ -465,10 +494,20 @@ impl ModelFreeCheck {
     /// Report section: per level the laws' spread beside the model's errors, and per level not
     /// used what the comparison says.
     pub fn text(&self, model: &[LevelErrors]) -> String {
+        let rows = if self.earlier_side_left_out.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; settled rows only: the rows before the resonance of {} left out as not \
+                 stationary",
+                self.earlier_side_left_out.join(", ")
+            )
+        };
         let mut s = format!(
-            "\nmodel-free check: the fit levels' own backbone ({} pointwise points, modal mass \
+            "\nmodel-free check{}: the fit levels' own backbone ({} pointwise points{rows}, modal mass \
              {:.4} kg) interpolated by {} smooth laws in the amplitude, each in a \
              single-nonlinear-mode response at the measured forces (no joint model, no effect):\n",
+            if self.earlier_side_left_out.is_empty() { "" } else { " (settled rows)" },
             self.points.len(),
             self.modal_mass_kg,
             self.laws.len()

@@ -15,6 +15,7 @@ use super::report::{
     write_json, write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
 use super::select::{self, refit_all_rows, Round, SelectOptions, Selection, Verdict};
+use super::stationarity::{self, SideComparison};
 use super::uncertainty::{self, Ensemble, Uncertainty};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
@@ -37,6 +38,21 @@ pub struct Options {
     pub response_amplitudes: Option<Vec<f64>>,
     /// Steps of each Metropolis chain of the prediction bands (0: no bands).
     pub chain_steps: usize,
+    /// Rows of the fit levels the model is fitted to.
+    pub rows: FitRows,
+}
+
+/// Rows of the fit levels the model is fitted to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitRows {
+    /// Every row.
+    All,
+    /// On a fit level whose two sides differ ([`stationarity::compare_sides`]: the structure
+    /// changed while it was measured), only the resonance row and the rows after it — the part
+    /// of the test after the structure has been through the level's largest amplitude; every
+    /// row of the other levels.
+    Settled,
 }
 
 impl Options {
@@ -58,6 +74,7 @@ impl Options {
             final_fit: FitOptions::default(),
             response_amplitudes: None,
             chain_steps: uncertainty::CHAIN_STEPS,
+            rows: FitRows::All,
         }
     }
 
@@ -115,6 +132,16 @@ pub struct Identification {
     /// The fit levels' own backbone interpolated in a single-nonlinear-mode response, no
     /// model: what the data alone predict for every level (or why it could not be built).
     pub model_free: std::result::Result<ModelFreeCheck, String>,
+    /// Per level: its two sides at equal amplitude ([`stationarity::compare_sides`]; `None`
+    /// where a side has too few points in the half-power band).
+    pub stationarity: Vec<Option<SideComparison>>,
+    /// When a fit level's sides differ: the model-free check on the settled rows (the earlier
+    /// side of such levels left out) — what the data predict if only the settled part of those
+    /// tests is trusted.
+    pub model_free_settled: Option<std::result::Result<ModelFreeCheck, String>>,
+    /// Per fit level (in `fit_levels` order): the first row (0-based, file order) fitted when
+    /// only its settled rows are ([`FitRows::Settled`] on a level that is not stationary).
+    pub settled_from: Vec<Option<usize>>,
     pub backbone_before: Vec<BackbonePoint>,
     pub backbone_after: Vec<BackbonePoint>,
     pub response_controlled: Vec<ResponseControlled>,
@@ -569,7 +596,17 @@ pub fn identify(
         .iter()
         .map(|s| LevelData::new(s, &convention))
         .collect();
-    let fit_data: Vec<LevelData> = fit_levels.iter().map(|&i| levels[i].clone()).collect();
+    let stationarity: Vec<Option<SideComparison>> = data_backbone
+        .iter()
+        .zip(&levels)
+        .map(|(b, l)| stationarity::compare_sides(b, select::relative_scatter(l)))
+        .collect();
+    let settled_from = settled_first_rows(&fit_levels, &stationarity, &data_backbone, opts.rows);
+    let fit_data: Vec<LevelData> = fit_levels
+        .iter()
+        .zip(&settled_from)
+        .map(|(&i, first)| first.map_or_else(|| levels[i].clone(), |r| levels[i].from_row(r)))
+        .collect();
     let baseline = ModelSpec::baseline(opts.family, scales);
     let selection = select::select(
         &baseline,
@@ -601,8 +638,29 @@ pub fn identify(
     let alternative = alternative(&selection, &fit_data, &levels, &fit_levels, opts, progress)?;
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
-    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
-        .map_err(|e| e.to_string());
+    let model_free = model_free::check(
+        &sweeps,
+        &frfs,
+        &levels,
+        &fit_levels,
+        &errors_after,
+        model_free::Rows::All,
+    )
+    .map_err(|e| e.to_string());
+    let model_free_settled = fit_levels
+        .iter()
+        .any(|&i| stationarity[i].as_ref().is_some_and(|c| !c.stationary))
+        .then(|| {
+            model_free::check(
+                &sweeps,
+                &frfs,
+                &levels,
+                &fit_levels,
+                &errors_after,
+                model_free::Rows::Settled,
+            )
+            .map_err(|e| e.to_string())
+        });
     let roles = level_roles(levels.len(), &fit_levels);
     let uncertainty = uncertainty::estimate(
         &after.model.spec,
@@ -638,12 +696,32 @@ pub fn identify(
         uncertainty,
         alternative,
         model_free,
+        stationarity,
+        settled_from,
+        model_free_settled,
         backbone_before,
         backbone_after,
         response_controlled,
         options: opts.clone(),
         wall_time_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// Per fit level: the first row to fit when only settled rows are ([`FitRows::Settled`] and
+/// the level's sides differ), else `None` (every row).
+fn settled_first_rows(
+    fit_levels: &[usize],
+    sides: &[Option<SideComparison>],
+    backbones: &[LevelBackbone],
+    rows: FitRows,
+) -> Vec<Option<usize>> {
+    fit_levels
+        .iter()
+        .map(|&i| {
+            let unsettled = sides[i].as_ref().is_some_and(|c| !c.stationary);
+            (rows == FitRows::Settled && unsettled).then_some(backbones[i].resonance_row)
+        })
+        .collect()
 }
 
 /// The saved model file (`model.json`): everything `asperity predict` needs.
@@ -844,6 +922,26 @@ pub fn verdict_text(v: &Verdict) -> String {
 }
 
 impl Identification {
+    /// Report section: every level's two sides at equal amplitude.
+    fn stationarity_text(&self) -> String {
+        let mut s = format!(
+            "\nstationarity: each level's pointwise damping after the resonance row against \
+             before it at the same amplitude (one nonlinear mode: equal; tolerance {:.0} %):\n",
+            100.0 * stationarity::DAMPING_TOLERANCE
+        );
+        for (k, c) in self.stationarity.iter().enumerate() {
+            let role = super::report::level_role(k, &self.fit_levels);
+            s += &match c {
+                Some(c) => format!("  level {} ({role}) {}\n", k + 1, c.describe()),
+                None => format!(
+                    "  level {} ({role}): too few points on one side of the resonance to compare\n",
+                    k + 1
+                ),
+            };
+        }
+        s
+    }
+
     /// Human-readable report.
     pub fn text(&self) -> String {
         let mut s = String::from(
@@ -866,6 +964,20 @@ impl Identification {
             "phase convention detected: {}\n",
             self.convention.describe()
         );
+        for (&i, first) in self.fit_levels.iter().zip(&self.settled_from) {
+            if let Some(r) = first {
+                let sw = &self.sweeps[i];
+                s += &format!(
+                    "fit rows (--rows settled): level {} is not stationary (see below); fitted \
+                     from its resonance row on, line {} ({:.2} Hz), {} of {} rows\n",
+                    i + 1,
+                    sw.rows[*r].line,
+                    sw.rows[*r].frequency_hz,
+                    sw.rows.len() - r,
+                    sw.rows.len()
+                );
+            }
+        }
         s += &format!(
             "objective: complex response per unit force, residual / each level's peak, levels \
              weighted alike; training rows = even rows of the fit levels, held-out = odd rows\n\
@@ -946,7 +1058,11 @@ impl Identification {
                 &rows,
             );
         }
+        s += &self.stationarity_text();
         s += &model_free::section(&self.model_free, &self.errors_after);
+        if let Some(settled) = &self.model_free_settled {
+            s += &model_free::section(settled, &self.errors_after);
+        }
         let rows: Vec<(&LevelErrors, Option<&LevelErrors>)> =
             self.errors_after.iter().map(|e| (e, None)).collect();
         s += &regions_text("final model, residual per region", &rows);
@@ -1054,12 +1170,23 @@ impl Identification {
         let model_free_json =
             super::report::available_or_reason(&self.model_free, serde_json::value::Serializer)
                 .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", p.display())))?;
+        let model_free_settled_json = match &self.model_free_settled {
+            None => serde_json::Value::Null,
+            Some(c) => super::report::available_or_reason(c, serde_json::value::Serializer)
+                .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", p.display())))?,
+        };
         let json = serde_json::json!({
             "tool": "asperity identify",
             "crate_version": env!("CARGO_PKG_VERSION"),
             "units": "SI: frequencies Hz, forces N, displacements m; FRFs in the unit of each file's quantity per N; errors relative to each level's measured peak",
             "inputs": self.sweeps.iter().map(InputFile::of).collect::<Vec<_>>(),
             "levels_fit": self.fit_levels.iter().map(|i| i + 1).collect::<Vec<_>>(),
+            "fit_rows": self.fit_levels.iter().zip(&self.settled_from).map(|(&i, first)| serde_json::json!({
+                "level": i + 1,
+                "first_line": self.sweeps[i].rows[first.unwrap_or(0)].line,
+                "rows": self.sweeps[i].rows.len() - first.unwrap_or(0),
+                "settled_only": first.is_some(),
+            })).collect::<Vec<_>>(),
             "phase_convention": {"value": self.convention, "description": self.convention.describe()},
             "scales": self.scales,
             "options": self.options,
@@ -1080,6 +1207,8 @@ impl Identification {
             "uncertainty": self.uncertainty,
             "alternative": self.alternative,
             "model_free": model_free_json,
+            "stationarity": {"damping_tolerance": stationarity::DAMPING_TOLERANCE, "levels": self.stationarity},
+            "model_free_settled_rows": model_free_settled_json,
             "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
                 "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz
             })).collect::<Vec<_>>(),
@@ -1097,6 +1226,60 @@ impl Identification {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Only a fit level that is not stationary is cut, at its resonance row, and only with
+    /// `--rows settled`; a level that could not be checked keeps its rows.
+    #[test]
+    fn settled_rows_cut_only_unsettled_fit_levels() {
+        let backbone = |resonance_row| LevelBackbone {
+            file: "l.csv".into(),
+            mean_force_n: 1.0,
+            linear: backbone::LinearMode {
+                frequency_hz: 80.0,
+                damping_ratio: 1e-3,
+                modal_mass_kg: 2.0,
+                relative_rms: 0.0,
+            },
+            peak_amplitude_m: 1e-4,
+            points: Vec::new(),
+            point_rows: Vec::new(),
+            side_points: Vec::new(),
+            resonance_row,
+        };
+        let sides = |stationary| SideComparison {
+            file: "l.csv".into(),
+            points_earlier: 5,
+            points_later: 5,
+            compared: 4,
+            amplitude_range_m: (1e-4, 2e-4),
+            damping_difference: if stationary {
+                (-0.02, 0.01)
+            } else {
+                (-0.3, -0.1)
+            },
+            differing: if stationary { 0 } else { 3 },
+            differing_mean: if stationary { f64::NAN } else { -0.2 },
+            noise_sd: (0.01, 0.02),
+            frequency_difference_hz: (0.0, 0.1),
+            stationary,
+        };
+        let backbones = [backbone(20), backbone(21), backbone(22), backbone(23)];
+        let checks = [
+            Some(sides(true)),
+            Some(sides(false)),
+            None,
+            Some(sides(false)),
+        ];
+        let fit = [0, 1, 2];
+        assert_eq!(
+            settled_first_rows(&fit, &checks, &backbones, FitRows::Settled),
+            vec![None, Some(21), None]
+        );
+        assert_eq!(
+            settled_first_rows(&fit, &checks, &backbones, FitRows::All),
+            vec![None, None, None]
+        );
+    }
 
     /// Amplitudes print with five significant digits whatever their unit.
     #[test]

@@ -1,0 +1,327 @@
+//! Stationarity of a stepped sine: the two sides of a level's resonance at equal amplitude.
+//!
+//! For one nonlinear mode under harmonic forcing the equivalent stiffness and damping of the
+//! joint (its describing function) depend on the vibration amplitude alone, not on the drive
+//! frequency nor on when the row was measured (Krack, Panning-von Scheidt & Wallaschek 2013,
+//! *J. Sound Vib.* 332:6798). The pointwise inversion of [`super::backbone`] therefore gives the same
+//! damping ratio for a row below the resonance and a row above it at the same drive-point
+//! amplitude. A stepped sine passes each amplitude twice — once before the resonance row and
+//! once after it, in the file's (the sweep's) order — so the two sides of every level are a
+//! check of the data that needs no model: where they differ, the structure changed while the
+//! level was measured (a joint running in, wearing or relaxing its preload, heating), and no
+//! model whose damping is a function of the amplitude can hold both sides.
+//!
+//! Compared quantity: `ζ_later(a)/ζ_earlier(a) − 1` at the amplitude `a` of every point of the
+//! later side inside the earlier side's amplitude span (the earlier side interpolated linearly
+//! in the amplitude), over the rows down to half the peak ([`super::backbone::SIDE_BAND`]), and the
+//! difference of the natural frequencies. Only the damping ratio decides: the pointwise natural
+//! frequency also moves in opposite directions on the two sides when the modal constant is off
+//! (`ω_n² = R/R_true·(ω_0² − ω²) + ω²`), while the damping ratio only scales with it.
+//!
+//! A difference counts when it exceeds both [`DAMPING_TOLERANCE`] and [`NOISE_SIGMAS`] standard
+//! deviations of the difference that the level's measurement scatter `s` alone would give
+//! (`s·gain` per point, [`super::backbone::SidePoint::damping_noise_gain`]: small near the resonance,
+//! growing towards the band's edges); a level is not stationary when at least
+//! [`MIN_DIFFERING_POINTS`] of its compared points differ.
+//!
+//! Units: SI (m, Hz).
+
+use super::backbone::{BackbonePoint, LevelBackbone, SidePoint};
+use serde::Serialize;
+
+/// Smallest damping difference that counts. The peak of a force-controlled resonance scales as
+/// `1/ζ`, so a model that splits a larger difference between the sides misses the rows of each
+/// by more than 5 % in amplitude — the identification's goal on a peak.
+pub const DAMPING_TOLERANCE: f64 = 0.10;
+/// A difference counts only beyond this many standard deviations of what the measurement
+/// scatter alone gives.
+pub const NOISE_SIGMAS: f64 = 4.0;
+/// Points that must differ for a level to be not stationary (one may be a glitch of one row).
+pub const MIN_DIFFERING_POINTS: usize = 2;
+
+/// The comparison of one level's two sides.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SideComparison {
+    pub file: String,
+    /// Points on the earlier and later side (the resonance row itself on neither).
+    pub points_earlier: usize,
+    pub points_later: usize,
+    /// Later-side points compared (inside the earlier side's amplitude span).
+    pub compared: usize,
+    /// Amplitudes compared (m).
+    pub amplitude_range_m: (f64, f64),
+    /// `ζ_later/ζ_earlier − 1` over the compared points: smallest and largest.
+    pub damping_difference: (f64, f64),
+    /// Compared points whose difference counts (beyond the tolerance and the noise).
+    pub differing: usize,
+    /// Mean of the differences that count (NaN when none does).
+    pub differing_mean: f64,
+    /// Standard deviation of the difference from the measurement scatter alone, smallest and
+    /// largest over the compared points.
+    pub noise_sd: (f64, f64),
+    /// `f_n,later − f_n,earlier` (Hz): smallest and largest.
+    pub frequency_difference_hz: (f64, f64),
+    /// Fewer than [`MIN_DIFFERING_POINTS`] points differ.
+    pub stationary: bool,
+}
+
+impl SideComparison {
+    pub fn describe(&self) -> String {
+        let (a0, a1) = self.amplitude_range_m;
+        let (d0, d1) = self.damping_difference;
+        let (f0, f1) = self.frequency_difference_hz;
+        let (n0, n1) = self.noise_sd;
+        format!(
+            "{}: {} points after the resonance against {} before, at {:.0}–{:.0} µm: ζ \
+             {:+.1}…{:+.1} % (noise sd {:.1}–{:.1} %), f_n {:+.3}…{:+.3} Hz; {} of {} differ \
+             beyond {:.0} % and {NOISE_SIGMAS} sd{} — {}",
+            self.file,
+            self.compared,
+            self.points_earlier,
+            a0 * 1e6,
+            a1 * 1e6,
+            100.0 * d0,
+            100.0 * d1,
+            100.0 * n0,
+            100.0 * n1,
+            f0,
+            f1,
+            self.differing,
+            self.compared,
+            100.0 * DAMPING_TOLERANCE,
+            if self.differing > 0 {
+                format!(" (mean {:+.1} %)", 100.0 * self.differing_mean)
+            } else {
+                String::new()
+            },
+            if self.stationary {
+                "stationary"
+            } else {
+                "NOT stationary: the structure changed during the test"
+            }
+        )
+    }
+}
+
+/// Compare the sides of one level's pointwise estimates, `scatter` the level's measurement
+/// scatter per component relative to its peak ([`super::select::relative_scatter`]); `None`
+/// when either side has too few points (two on the earlier side, one of the later side inside
+/// its amplitude span).
+pub fn compare_sides(b: &LevelBackbone, scatter: f64) -> Option<SideComparison> {
+    let side = |later: bool| -> Vec<SidePoint> {
+        b.side_points
+            .iter()
+            .filter(|p| {
+                if later {
+                    p.row > b.resonance_row
+                } else {
+                    p.row < b.resonance_row
+                }
+            })
+            .copied()
+            .collect()
+    };
+    let mut earlier = side(false);
+    let later = side(true);
+    earlier.sort_by(|p, q| p.point.amplitude_m.total_cmp(&q.point.amplitude_m));
+    if earlier.len() < 2 {
+        return None;
+    }
+    let span = (
+        earlier[0].point.amplitude_m,
+        earlier[earlier.len() - 1].point.amplitude_m,
+    );
+    // (later point, earlier side at its amplitude, sd of the relative damping difference)
+    let pairs: Vec<(BackbonePoint, BackbonePoint, f64)> = later
+        .iter()
+        .filter(|p| p.point.amplitude_m >= span.0 && p.point.amplitude_m <= span.1)
+        .map(|p| {
+            let (e, gain) = interpolate(&earlier, p.point.amplitude_m);
+            let sd = scatter * p.damping_noise_gain.hypot(gain);
+            (p.point, e, sd)
+        })
+        .collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let range = |v: &mut dyn Iterator<Item = f64>| {
+        v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        })
+    };
+    let diff = |l: &BackbonePoint, e: &BackbonePoint| l.damping_ratio / e.damping_ratio - 1.0;
+    let counting: Vec<f64> = pairs
+        .iter()
+        .map(|(l, e, sd)| (diff(l, e), sd))
+        .filter(|&(d, sd)| d.abs() > DAMPING_TOLERANCE.max(NOISE_SIGMAS * sd))
+        .map(|(d, _)| d)
+        .collect();
+    Some(SideComparison {
+        file: b.file.clone(),
+        points_earlier: earlier.len(),
+        points_later: later.len(),
+        compared: pairs.len(),
+        amplitude_range_m: range(&mut pairs.iter().map(|(l, _, _)| l.amplitude_m)),
+        damping_difference: range(&mut pairs.iter().map(|(l, e, _)| diff(l, e))),
+        differing: counting.len(),
+        differing_mean: counting.iter().sum::<f64>() / counting.len() as f64,
+        noise_sd: range(&mut pairs.iter().map(|(_, _, sd)| *sd)),
+        frequency_difference_hz: range(
+            &mut pairs
+                .iter()
+                .map(|(l, e, _)| l.frequency_hz - e.frequency_hz),
+        ),
+        stationary: counting.len() < MIN_DIFFERING_POINTS,
+    })
+}
+
+/// The point at amplitude `a` on a side sorted by amplitude, linear in the amplitude between
+/// its neighbours (`a` inside the side's span), and the larger noise gain of the two.
+fn interpolate(side: &[SidePoint], a: f64) -> (BackbonePoint, f64) {
+    let k = side
+        .partition_point(|p| p.point.amplitude_m < a)
+        .clamp(1, side.len() - 1);
+    let (p, q) = (side[k - 1].point, side[k].point);
+    let t = if q.amplitude_m > p.amplitude_m {
+        (a - p.amplitude_m) / (q.amplitude_m - p.amplitude_m)
+    } else {
+        0.5
+    };
+    let point = BackbonePoint {
+        amplitude_m: a,
+        frequency_hz: p.frequency_hz + t * (q.frequency_hz - p.frequency_hz),
+        damping_ratio: p.damping_ratio + t * (q.damping_ratio - p.damping_ratio),
+    };
+    let gain = side[k - 1]
+        .damping_noise_gain
+        .max(side[k].damping_noise_gain);
+    (point, gain)
+}
+
+/// The half-power points of a level to trust when its sides differ: the resonance row's and
+/// those after it (the later part of the test, after the structure has been through the
+/// level's largest amplitude); every point when the level is stationary or cannot be checked.
+pub fn settled_points(
+    b: &LevelBackbone,
+    comparison: Option<&SideComparison>,
+) -> Vec<BackbonePoint> {
+    let keep_all = comparison.is_none_or(|c| c.stationary);
+    b.points
+        .iter()
+        .zip(&b.point_rows)
+        .filter(|&(_, &row)| keep_all || row >= b.resonance_row)
+        .map(|(p, _)| *p)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::backbone;
+    use crate::identify::measured::{Quantity, Row, Sweep};
+    use crate::identify::model_free::{BackboneLaw, DampingLaw, Polynomial};
+    use realfft::num_complex::Complex64;
+    use std::f64::consts::TAU;
+
+    /// A softening mode whose damping grows with the amplitude, `ζ(a) = scale·(1e-3 +
+    /// 3e-3·(a/200 µm)^1.5)`, single-valued at a drive of 0.5 N and modal mass 2 kg.
+    fn law(scale: f64) -> BackboneLaw {
+        BackboneLaw {
+            name: "test".into(),
+            id: "test".into(),
+            frequency_hz: Polynomial {
+                coefficients: vec![80.3, -0.2],
+                a_ref_m: 2e-4,
+            },
+            damping: DampingLaw::PowerLaw {
+                zeta0: 1e-3 * scale,
+                c: 3e-3 * scale,
+                p: 1.5,
+                a_ref_m: 2e-4,
+            },
+            amplitude_range_m: (0.0, f64::INFINITY),
+        }
+    }
+
+    const MASS_KG: f64 = 2.0;
+
+    /// Stepped sine 79.2–81.2 Hz at 0.5 N; row `i` responds as the mode `law_of(i)`.
+    fn sweep(law_of: impl Fn(usize) -> BackboneLaw) -> (Sweep, Vec<Complex64>) {
+        let force = 0.5;
+        let (rows, x): (Vec<Row>, Vec<Complex64>) = (0..41)
+            .map(|i| {
+                let f = 79.2 + 0.05 * i as f64;
+                let x = law_of(i).receptance(1.0 / MASS_KG, &[(TAU * f, force)], 1e-2)[0];
+                let row = Row {
+                    line: i + 2,
+                    frequency_hz: f,
+                    force_n: force,
+                    response: x.norm() * force,
+                    phase_rad: x.arg(),
+                };
+                (row, x)
+            })
+            .unzip();
+        let s = Sweep {
+            path: "synthetic.csv".into(),
+            sha256: String::new(),
+            quantity: Quantity::Displacement,
+            rows,
+            header_line: 1,
+        };
+        (s, x)
+    }
+
+    fn sides(s: Sweep, x: Vec<Complex64>) -> (LevelBackbone, SideComparison) {
+        let b = backbone::from_data(&[s], &[x]).unwrap().remove(0);
+        let c = compare_sides(&b, 0.0).expect("both sides have points");
+        (b, c)
+    }
+
+    /// One nonlinear mode (the describing function depends on the amplitude alone): the two
+    /// sides agree to the linear interpolation's error.
+    #[test]
+    fn one_nonlinear_mode_is_stationary() {
+        let (s, x) = sweep(|_| law(1.0));
+        let (_, c) = sides(s, x);
+        assert!(c.stationary, "{}", c.describe());
+        assert!(c.compared >= 3, "{}", c.describe());
+        let (d0, d1) = c.damping_difference;
+        assert!(d0.abs() < 0.01 && d1.abs() < 0.01, "{}", c.describe());
+        // The natural frequencies differ by the modal constant's error (the sweep's equivalent
+        // linear fit of a nonlinear sweep): 0.003–0.016 Hz here, why only the damping decides.
+        let (f0, f1) = c.frequency_difference_hz;
+        assert!(f0.abs() < 0.03 && f1.abs() < 0.03, "{}", c.describe());
+    }
+
+    /// A test whose damping falls by a factor 1.3 at the resonance (the rows before it measured
+    /// with 30 % more damping): flagged, with the difference `1/1.3 − 1 = −23 %`, and the
+    /// settled points are the resonance row's and the later ones.
+    #[test]
+    fn a_test_whose_damping_drops_at_resonance_is_flagged() {
+        let (s0, x0) = sweep(|_| law(1.0));
+        let resonance = backbone::from_data(&[s0], &[x0]).unwrap()[0].resonance_row;
+        let (s, x) = sweep(|i| law(if i < resonance { 1.3 } else { 1.0 }));
+        let (b, c) = sides(s, x);
+        assert!(!c.stationary, "{}", c.describe());
+        let (d0, d1) = c.damping_difference;
+        let expected = 1.0 / 1.3 - 1.0;
+        assert!(
+            (d0 - expected).abs() < 0.01 && (d1 - expected).abs() < 0.01,
+            "{}",
+            c.describe()
+        );
+        let settled = settled_points(&b, Some(&c));
+        let later = b
+            .point_rows
+            .iter()
+            .filter(|&&r| r >= b.resonance_row)
+            .count();
+        assert_eq!(settled.len(), later);
+        assert!(settled.len() < b.points.len());
+        // A stationary level keeps every point.
+        let (s, x) = sweep(|_| law(1.0));
+        let (b, c) = sides(s, x);
+        assert_eq!(settled_points(&b, Some(&c)).len(), b.points.len());
+    }
+}
