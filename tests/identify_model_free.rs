@@ -10,7 +10,7 @@ use asperity::identify::effects::Effect;
 use asperity::identify::fit::LevelData;
 use asperity::identify::measured::{PhaseConvention, Sweep};
 use asperity::identify::model::{Drive, Family, Model, ModelSpec};
-use asperity::identify::model_free::{check, Comparison, ModelFreeCheck, Rows};
+use asperity::identify::model_free::{check_rows, Comparison, ModelFreeCheck, Rows};
 use asperity::identify::report::{level_role, LevelErrors};
 use asperity::identify::select::relative_scatter;
 use asperity::identify::stationarity::{compare_sides, SideComparison};
@@ -91,7 +91,7 @@ fn run_rows(sweeps: &[Sweep], model: &Model, rows: Rows) -> ModelFreeCheck {
     let conv = PhaseConvention::detect(sweeps).unwrap();
     let frfs: Vec<_> = sweeps.iter().map(|s| s.frf(&conv)).collect();
     let levels: Vec<LevelData> = sweeps.iter().map(|s| LevelData::new(s, &conv)).collect();
-    check(
+    check_rows(
         sweeps,
         &frfs,
         &levels,

@@ -78,10 +78,11 @@ pub struct IdentifyArgs {
     #[arg(long)]
     pub chain_steps: Option<usize>,
     /// Rows of the fit levels to fit: `all`, or `settled` — on a fit level whose two sides of
-    /// the resonance differ in damping at equal amplitude by more than 10 % (the report's
-    /// stationarity check: the structure changed while the level was measured), only the
-    /// resonance row and the rows after it in the file's order, i.e. the part of the test after
-    /// the structure has been through the level's largest amplitude.
+    /// the resonance differ in damping at equal amplitude (the report's stationarity check: at
+    /// least two points beyond 10 % and four noise standard deviations; the structure changed
+    /// while the level was measured), only the resonance row and the rows after it in the
+    /// file's order, i.e. the part of the test after the structure has been through the level's
+    /// largest amplitude. Errors are always scored on every row.
     #[arg(long, value_enum, default_value = "all", conflicts_with = "structure")]
     pub rows: RowsArg,
     /// Multi-DOF reduced model to update instead of the single nonlinear mode: a model file of

@@ -387,9 +387,20 @@ pub enum Rows {
 
 /// Fit the laws to the pointwise backbone of the levels `fit_levels` (0-based into `sweeps`,
 /// `frfs` their responses per unit force in the crate's convention, `levels` the same sweeps as
-/// fit data; the points chosen by `rows`), compute every level's response from each law, and
-/// compare the laws with the model's errors `model` (every level) on the levels not used.
+/// fit data), compute every level's response from each law, and compare the laws with the
+/// model's errors `model` (every level) on the levels not used.
 pub fn check(
+    sweeps: &[Sweep],
+    frfs: &[Vec<Complex64>],
+    levels: &[LevelData],
+    fit_levels: &[usize],
+    model: &[LevelErrors],
+) -> Result<ModelFreeCheck> {
+    check_rows(sweeps, frfs, levels, fit_levels, model, Rows::All)
+}
+
+/// [`check`] on the fit levels' points chosen by `rows`.
+pub fn check_rows(
     sweeps: &[Sweep],
     frfs: &[Vec<Complex64>],
     levels: &[LevelData],

@@ -133,7 +133,7 @@ pub struct Identification {
     /// model: what the data alone predict for every level (or why it could not be built).
     pub model_free: std::result::Result<ModelFreeCheck, String>,
     /// Per level: its two sides at equal amplitude ([`stationarity::compare_sides`]; `None`
-    /// where a side has too few points in the half-power band).
+    /// where the sides have too few points at common amplitudes).
     pub stationarity: Vec<Option<SideComparison>>,
     /// When a fit level's sides differ: the model-free check on the settled rows (the earlier
     /// side of such levels left out) — what the data predict if only the settled part of those
@@ -638,20 +638,13 @@ pub fn identify(
     let alternative = alternative(&selection, &fit_data, &levels, &fit_levels, opts, progress)?;
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
-    let model_free = model_free::check(
-        &sweeps,
-        &frfs,
-        &levels,
-        &fit_levels,
-        &errors_after,
-        model_free::Rows::All,
-    )
-    .map_err(|e| e.to_string());
+    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
+        .map_err(|e| e.to_string());
     let model_free_settled = fit_levels
         .iter()
         .any(|&i| stationarity[i].as_ref().is_some_and(|c| !c.stationary))
         .then(|| {
-            model_free::check(
+            model_free::check_rows(
                 &sweeps,
                 &frfs,
                 &levels,

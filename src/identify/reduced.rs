@@ -904,15 +904,8 @@ pub fn identify_reduced(
             )));
         }
     }
-    let model_free = model_free::check(
-        &sweeps,
-        &frfs,
-        &levels,
-        &fit_levels,
-        &errors_after,
-        model_free::Rows::All,
-    )
-    .map_err(|e| e.to_string());
+    let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
+        .map_err(|e| e.to_string());
     let before = ReducedModel::as_given(spec);
     let (responses_before, errors_before) = responses_and_errors(&before, &levels, &fit_levels)?;
     let scatter = fit_data
