@@ -294,6 +294,63 @@ mod tests {
         assert!(f0.abs() < 0.03 && f1.abs() < 0.03, "{}", c.describe());
     }
 
+    /// The noise gain of each point: complex white noise of `s·peak` per component on the
+    /// receptance gives the pointwise damping ratio a relative standard deviation of `s·gain`
+    /// (Monte Carlo, 4000 draws at `s` = 1e-3 on a linear mode with ζ = 0.2 %, the true modal
+    /// constant; within 5 % at every row of the band — four times the sampling error of a
+    /// standard deviation from 4000 draws, 1.1 %).
+    #[test]
+    fn noise_gain_predicts_the_scatter_of_the_pointwise_damping() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let linear = BackboneLaw {
+            frequency_hz: Polynomial {
+                coefficients: vec![80.3],
+                a_ref_m: 2e-4,
+            },
+            damping: DampingLaw::Polynomial(Polynomial {
+                coefficients: vec![2e-3],
+                a_ref_m: 2e-4,
+            }),
+            ..law(1.0)
+        };
+        let (sw, x) = sweep(|_| linear.clone());
+        let b = backbone::from_data(std::slice::from_ref(&sw), std::slice::from_ref(&x))
+            .unwrap()
+            .remove(0);
+        assert!(b.side_points.len() >= 5);
+        let peak = x.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let s = 1e-3;
+        let noise = Normal::new(0.0, s * peak).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let draws = 4000;
+        for p in &b.side_points {
+            let row = &sw.rows[p.row];
+            let z0 = p.point.damping_ratio;
+            let var = (0..draws)
+                .map(|_| {
+                    let xn =
+                        x[p.row] + Complex64::new(noise.sample(&mut rng), noise.sample(&mut rng));
+                    let z = backbone::pointwise_mode(1.0 / MASS_KG, row.omega(), xn, row.force_n)
+                        .unwrap()
+                        .damping_ratio;
+                    (z / z0 - 1.0).powi(2)
+                })
+                .sum::<f64>()
+                / draws as f64;
+            let (measured, predicted) = (var.sqrt(), s * p.damping_noise_gain);
+            eprintln!(
+                "row {}: sd {measured:.3e}, predicted {predicted:.3e}",
+                p.row
+            );
+            assert!(
+                (measured / predicted - 1.0).abs() < 0.05,
+                "row {}: sd {measured:.3e}, predicted {predicted:.3e}",
+                p.row
+            );
+        }
+    }
+
     /// A test whose damping falls by a factor 1.3 at the resonance (the rows before it measured
     /// with 30 % more damping): flagged, with the difference `1/1.3 − 1 = −23 %`, and the
     /// settled points are the resonance row's and the later ones.
