@@ -286,6 +286,25 @@ fn identify_then_predict_both_controls() {
         text.contains("model-free check") && text.contains("level 2: "),
         "{text}"
     );
+    // Exact data of one mode: every level that can be compared is stationary, so there is no
+    // settled-rows check and every row is fitted.
+    let st = &json["stationarity"]["levels"];
+    assert!(
+        st.as_array().unwrap().iter().any(|c| !c.is_null())
+            && st
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|c| c.is_null() || c["stationary"] == true),
+        "{st}"
+    );
+    assert!(json["model_free_settled_rows"].is_null());
+    assert!(json["fit_rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|r| r["settled_only"] == false));
+    assert!(text.contains("\nstationarity: "), "{text}");
     // The laws' backbones sit beside the data's and the models' in the backbone CSV.
     let backbone = std::fs::read_to_string(out.join("identify-backbone.csv")).unwrap();
     assert_eq!(
@@ -353,6 +372,12 @@ fn identify_then_predict_both_controls() {
         assert!((a / b - 1.0).abs() < 1e-6, "{a} vs {b}");
     }
     assert!(p["errors"]["rms_complex"].as_f64().unwrap() < 1e-6, "{p}");
+    // Response control holds the amplitude: no two sides to compare, and the report says why.
+    assert!(
+        json["prediction"]["stationarity"]["not_available"].is_string(),
+        "{}",
+        json["prediction"]["stationarity"]
+    );
     // Force control on a level: the same model errors as in the identification report.
     let o = run(
         "predict",
@@ -372,6 +397,12 @@ fn identify_then_predict_both_controls() {
     let pred: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(pout.join("predict.json")).unwrap()).unwrap();
     let band = &pred["prediction"]["bands"][0]["peak"];
+    // Force control: the file's two sides are compared (exact data: stationary).
+    assert_eq!(
+        pred["prediction"]["stationarity"][0]["stationary"], true,
+        "{}",
+        pred["prediction"]["stationarity"]
+    );
     for k in ["value", "lo_95", "hi_95"] {
         let (a, b) = (band[k].as_f64().unwrap(), id_band[k].as_f64().unwrap());
         assert!(

@@ -917,22 +917,16 @@ pub fn verdict_text(v: &Verdict) -> String {
 impl Identification {
     /// Report section: every level's two sides at equal amplitude.
     fn stationarity_text(&self) -> String {
-        let mut s = format!(
-            "\nstationarity: each level's pointwise damping after the resonance row against \
-             before it at the same amplitude (one nonlinear mode: equal; tolerance {:.0} %):\n",
-            100.0 * stationarity::DAMPING_TOLERANCE
-        );
-        for (k, c) in self.stationarity.iter().enumerate() {
-            let role = super::report::level_role(k, &self.fit_levels);
-            s += &match c {
-                Some(c) => format!("  level {} ({role}) {}\n", k + 1, c.describe()),
-                None => format!(
-                    "  level {} ({role}): too few points on one side of the resonance to compare\n",
-                    k + 1
-                ),
-            };
-        }
-        s
+        let levels: Vec<(String, Option<&SideComparison>)> = self
+            .stationarity
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let role = super::report::level_role(k, &self.fit_levels);
+                (format!("level {} ({role})", k + 1), c.as_ref())
+            })
+            .collect();
+        stationarity::section(&levels)
     }
 
     /// Human-readable report.

@@ -12,6 +12,7 @@
 //! from them; where they do not pass through a resonance (detection fails) the convention saved
 //! with the model is used, and the report says so.
 
+use super::backbone;
 use super::fit::LevelData;
 use super::fit::Parametrised;
 use super::measured::{PhaseConvention, Sweep};
@@ -22,6 +23,8 @@ use super::report::{
     errors_table, fine_curve, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow,
     InputFile, LevelErrors,
 };
+use super::select::relative_scatter;
+use super::stationarity::{self, SideComparison};
 use super::uncertainty::{bands_table, prediction_bands, Ensemble, PredictionBand};
 use crate::error::{Error, Result};
 use crate::output::write_string_atomic;
@@ -112,6 +115,12 @@ pub struct Prediction {
     /// (force control only; the reason where there are none).
     #[serde(serialize_with = "super::report::available_or_reason")]
     pub bands: std::result::Result<Vec<PredictionBand>, String>,
+    /// Force control: each file's two sides at equal amplitude ([`stationarity::compare_sides`];
+    /// `None` for a file with too few points to compare), or why they could not be compared
+    /// (response control holds the amplitude, so a test has no two sides; a file that is not one
+    /// lightly damped mode).
+    #[serde(serialize_with = "super::report::available_or_reason")]
+    pub stationarity: std::result::Result<Vec<Option<SideComparison>>, String>,
 }
 
 /// Predict measured files with a saved model.
@@ -197,8 +206,23 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
             prediction_bands(&m.spec, m, e, &levels, &roles).map_err(|e| e.to_string())
         }
     };
+    let stationarity = match control {
+        Control::Response => Err("response control holds the amplitude: no two sides".to_string()),
+        Control::Force => {
+            let frfs: Vec<Vec<Complex64>> = levels.iter().map(|l| l.measured.clone()).collect();
+            backbone::from_data(&sweeps, &frfs)
+                .map(|b| {
+                    b.iter()
+                        .zip(&levels)
+                        .map(|(b, l)| stationarity::compare_sides(b, relative_scatter(l)))
+                        .collect()
+                })
+                .map_err(|e| e.to_string())
+        }
+    };
     Ok(Prediction {
         bands,
+        stationarity,
         model_file: model_file.to_path_buf(),
         control,
         convention,
@@ -257,6 +281,19 @@ impl Prediction {
                     r.mean_phase_error_rad
                 );
             }
+        }
+        match &self.stationarity {
+            Ok(c) => {
+                let files: Vec<(String, Option<&SideComparison>)> = self
+                    .files
+                    .iter()
+                    .zip(c)
+                    .enumerate()
+                    .map(|(i, (_, c))| (format!("file {}", i + 1), c.as_ref()))
+                    .collect();
+                s += &stationarity::section(&files);
+            }
+            Err(why) => s += &format!("\nstationarity not checked: {why}\n"),
         }
         s
     }

@@ -103,6 +103,23 @@ impl SideComparison {
     }
 }
 
+/// Report section: one line per level, `label` naming it (the comparison's own line names the
+/// file).
+pub fn section(levels: &[(String, Option<&SideComparison>)]) -> String {
+    let mut s = format!(
+        "\nstationarity: each level's pointwise damping after the resonance row against before it \
+         at the same amplitude (one nonlinear mode: equal; tolerance {:.0} %):\n",
+        100.0 * DAMPING_TOLERANCE
+    );
+    for (label, c) in levels {
+        s += &match c {
+            Some(c) => format!("  {label} {}\n", c.describe()),
+            None => format!("  {label}: too few points on one side of the resonance to compare\n"),
+        };
+    }
+    s
+}
+
 /// Compare the sides of one level's pointwise estimates, `scatter` the level's measurement
 /// scatter per component relative to its peak ([`super::select::relative_scatter`]); `None`
 /// when either side has too few points (two on the earlier side, one of the later side inside
