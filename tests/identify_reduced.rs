@@ -320,6 +320,15 @@ fn cli_updates_the_reduced_model_and_refuses_bad_input() {
         "{}",
         report["data_backbone"]
     );
+    // The stationarity check, as a value too: the model's own sweeps are stationary.
+    let st = report["stationarity"]
+        .as_array()
+        .expect("stationarity array");
+    assert!(
+        st.iter().all(|c| c.is_null() || c["stationary"] == true),
+        "{}",
+        report["stationarity"]
+    );
     // Two response amplitudes asked for, 81 frequencies each, after two header lines.
     let rc = std::fs::read_to_string(out.join("identify-response-controlled.csv")).unwrap();
     assert_eq!(rc.lines().count(), 2 + 2 * 81);

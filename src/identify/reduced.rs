@@ -85,6 +85,7 @@ use super::report::{
     write_rows_csv, CurveRow, InputFile, LevelErrors,
 };
 use super::select::{Extensible, SelectOptions, Selection};
+use super::stationarity::{self, SideComparison};
 use super::uncertainty::{self, Ensemble, Uncertainty};
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::contact::element_for;
@@ -574,6 +575,10 @@ pub struct ReducedIdentification {
     /// ([`super::model_free`]): what the data alone predict for every level, or why not.
     #[serde(serialize_with = "super::report::available_or_reason")]
     pub model_free: std::result::Result<ModelFreeCheck, String>,
+    /// Per level: its two sides at equal amplitude ([`super::stationarity`]; `None` where they
+    /// have too few points at common amplitudes), or why the data's backbone is not available.
+    #[serde(serialize_with = "super::report::available_or_reason")]
+    pub stationarity: std::result::Result<Vec<Option<SideComparison>>, String>,
     /// Per level: the equivalent linear mode of the model's response at the level's rows, as
     /// given and updated (`None`: no resonance inside the measured band).
     pub backbone_before: Vec<Option<BackbonePoint>>,
@@ -841,6 +846,12 @@ pub fn identify_reduced(
     let scatter_floor = super::select::scatter_floor(&fit_data);
     let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
     let data_backbone = backbone::from_data(&sweeps, &frfs).map_err(|e| e.to_string());
+    let stationarity = data_backbone.as_ref().map_err(Clone::clone).map(|b| {
+        b.iter()
+            .zip(&levels)
+            .map(|(b, l)| stationarity::compare_sides(b, super::select::relative_scatter(l)))
+            .collect::<Vec<_>>()
+    });
     // The effect search, when the four factors leave a residual above the scatter: the
     // single mode's search ([`super::select`]) on the family of this file's model with the
     // reference scales of the data.
@@ -963,6 +974,7 @@ pub fn identify_reduced(
         scatter_floor,
         at_scatter,
         uncertainty,
+        stationarity,
         data_backbone,
         model_free,
         backbone_before,
@@ -1143,6 +1155,20 @@ impl ReducedIdentification {
             );
         }
         s += &model_free::section(&self.model_free, &self.errors_after);
+        match &self.stationarity {
+            Ok(c) => {
+                let levels: Vec<(String, Option<&SideComparison>)> = c
+                    .iter()
+                    .enumerate()
+                    .map(|(k, c)| {
+                        let role = super::report::level_role(k, &self.fit_levels);
+                        (format!("level {} ({role})", k + 1), c.as_ref())
+                    })
+                    .collect();
+                s += &stationarity::section(&levels);
+            }
+            Err(why) => s += &format!("\nstationarity not checked: {why}\n"),
+        }
         s += &format!(
             "\nmeasurement scatter per component (third differences) of the fit levels: {} of \
              their peaks; objective J = {:.3e} against the {:.3e} the scatter alone leaves: {}\n",
