@@ -915,20 +915,6 @@ pub fn verdict_text(v: &Verdict) -> String {
 }
 
 impl Identification {
-    /// Report section: every level's two sides at equal amplitude.
-    fn stationarity_text(&self) -> String {
-        let levels: Vec<(String, Option<&SideComparison>)> = self
-            .stationarity
-            .iter()
-            .enumerate()
-            .map(|(k, c)| {
-                let role = super::report::level_role(k, &self.fit_levels);
-                (format!("level {} ({role})", k + 1), c.as_ref())
-            })
-            .collect();
-        stationarity::section(&levels)
-    }
-
     /// Human-readable report.
     pub fn text(&self) -> String {
         let mut s = String::from(
@@ -1045,7 +1031,7 @@ impl Identification {
                 &rows,
             );
         }
-        s += &self.stationarity_text();
+        s += &stationarity::levels_section(&self.stationarity, &self.fit_levels);
         s += &model_free::section(&self.model_free, &self.errors_after);
         if let Some(settled) = &self.model_free_settled {
             s += &model_free::section(settled, &self.errors_after);

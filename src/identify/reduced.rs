@@ -1156,17 +1156,7 @@ impl ReducedIdentification {
         }
         s += &model_free::section(&self.model_free, &self.errors_after);
         match &self.stationarity {
-            Ok(c) => {
-                let levels: Vec<(String, Option<&SideComparison>)> = c
-                    .iter()
-                    .enumerate()
-                    .map(|(k, c)| {
-                        let role = super::report::level_role(k, &self.fit_levels);
-                        (format!("level {} ({role})", k + 1), c.as_ref())
-                    })
-                    .collect();
-                s += &stationarity::section(&levels);
-            }
+            Ok(c) => s += &stationarity::levels_section(c, &self.fit_levels),
             Err(why) => s += &format!("\nstationarity not checked: {why}\n"),
         }
         s += &format!(

@@ -120,6 +120,20 @@ pub fn section(levels: &[(String, Option<&SideComparison>)]) -> String {
     s
 }
 
+/// Report section of an identification: one line per level, labelled by its number and role
+/// (`fit_levels` 0-based).
+pub fn levels_section(comparisons: &[Option<SideComparison>], fit_levels: &[usize]) -> String {
+    let levels: Vec<(String, Option<&SideComparison>)> = comparisons
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let role = super::report::level_role(k, fit_levels);
+            (format!("level {} ({role})", k + 1), c.as_ref())
+        })
+        .collect();
+    section(&levels)
+}
+
 /// Compare the sides of one level's pointwise estimates, `scatter` the level's measurement
 /// scatter per component relative to its peak ([`super::select::relative_scatter`]); `None`
 /// when either side has too few points (two on the earlier side, one of the later side inside
