@@ -238,9 +238,10 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
                 .map(|p| (p.row, p.point))
                 .unzip();
             let side_points = invert(band_rows(&mag, SIDE_BAND));
+            // The top of the band (`band_rows` grows it around the largest |X|).
             let resonance_row = (lo..=hi)
                 .max_by(|&a, &b| mag[a].total_cmp(&mag[b]))
-                .unwrap_or(ip);
+                .expect("the band holds its peak row");
             LevelBackbone {
                 file: s.name(),
                 mean_force_n: s.mean_force_n(),

@@ -376,13 +376,14 @@ pub struct LevelComparison {
 }
 
 /// Which of the fit levels' pointwise points the laws are fitted to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Rows {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rows<'a> {
     /// Every point in the half-power bands.
     All,
-    /// On a fit level whose two sides differ ([`stationarity::compare_sides`]), only the
-    /// resonance row and the rows after it ([`stationarity::settled_points`]).
-    Settled,
+    /// Given the fit levels' side comparisons (in `fit_levels` order, as the caller judged
+    /// them): on a level whose two sides differ, only the resonance row and the rows after it
+    /// ([`stationarity::settled_points`]).
+    Settled(&'a [Option<stationarity::SideComparison>]),
 }
 
 /// Fit the laws to the pointwise backbone of the levels `fit_levels` (0-based into `sweeps`,
@@ -406,7 +407,7 @@ pub fn check_rows(
     levels: &[LevelData],
     fit_levels: &[usize],
     model: &[LevelErrors],
-    rows: Rows,
+    rows: Rows<'_>,
 ) -> Result<ModelFreeCheck> {
     let fit_sweeps: Vec<Sweep> = fit_levels.iter().map(|&i| sweeps[i].clone()).collect();
     let fit_frfs: Vec<Vec<Complex64>> = fit_levels.iter().map(|&i| frfs[i].clone()).collect();
@@ -418,15 +419,15 @@ pub fn check_rows(
     let modal_mass_kg = lowest.linear.modal_mass_kg;
     let mut earlier_side_left_out = Vec::new();
     let mut points: Vec<BackbonePoint> = Vec::new();
-    for (b, &k) in backbones.iter().zip(fit_levels) {
-        let sides = stationarity::compare_sides(b, super::select::relative_scatter(&levels[k]));
+    for (j, b) in backbones.iter().enumerate() {
         match rows {
             Rows::All => points.extend(&b.points),
-            Rows::Settled => {
-                if sides.as_ref().is_some_and(|c| !c.stationary) {
+            Rows::Settled(sides) => {
+                let sides = sides[j].as_ref();
+                if sides.is_some_and(|c| !c.stationary) {
                     earlier_side_left_out.push(b.file.clone());
                 }
-                points.extend(stationarity::settled_points(b, sides.as_ref()));
+                points.extend(stationarity::settled_points(b, sides));
             }
         }
     }

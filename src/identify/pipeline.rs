@@ -596,11 +596,7 @@ pub fn identify(
         .iter()
         .map(|s| LevelData::new(s, &convention))
         .collect();
-    let stationarity: Vec<Option<SideComparison>> = data_backbone
-        .iter()
-        .zip(&levels)
-        .map(|(b, l)| stationarity::compare_sides(b, select::relative_scatter(l)))
-        .collect();
+    let stationarity = stationarity::compare_levels(&data_backbone, &levels);
     let settled_from = settled_first_rows(&fit_levels, &stationarity, &data_backbone, opts.rows);
     let fit_data: Vec<LevelData> = fit_levels
         .iter()
@@ -640,9 +636,13 @@ pub fn identify(
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
     let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
         .map_err(|e| e.to_string());
-    let model_free_settled = fit_levels
+    let fit_sides: Vec<Option<SideComparison>> = fit_levels
         .iter()
-        .any(|&i| stationarity[i].as_ref().is_some_and(|c| !c.stationary))
+        .map(|&i| stationarity[i].clone())
+        .collect();
+    let model_free_settled = fit_sides
+        .iter()
+        .any(|c| c.as_ref().is_some_and(|c| !c.stationary))
         .then(|| {
             model_free::check_rows(
                 &sweeps,
@@ -650,7 +650,7 @@ pub fn identify(
                 &levels,
                 &fit_levels,
                 &errors_after,
-                model_free::Rows::Settled,
+                model_free::Rows::Settled(&fit_sides),
             )
             .map_err(|e| e.to_string())
         });

@@ -23,7 +23,6 @@ use super::report::{
     errors_table, fine_curve, fine_curve_with, plot_level, write_json, write_rows_csv, CurveRow,
     InputFile, LevelErrors,
 };
-use super::select::relative_scatter;
 use super::stationarity::{self, SideComparison};
 use super::uncertainty::{bands_table, prediction_bands, Ensemble, PredictionBand};
 use crate::error::{Error, Result};
@@ -211,12 +210,7 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
         Control::Force => {
             let frfs: Vec<Vec<Complex64>> = levels.iter().map(|l| l.measured.clone()).collect();
             backbone::from_data(&sweeps, &frfs)
-                .map(|b| {
-                    b.iter()
-                        .zip(&levels)
-                        .map(|(b, l)| stationarity::compare_sides(b, relative_scatter(l)))
-                        .collect()
-                })
+                .map(|b| stationarity::compare_levels(&b, &levels))
                 .map_err(|e| e.to_string())
         }
     };
@@ -284,12 +278,10 @@ impl Prediction {
         }
         match &self.stationarity {
             Ok(c) => {
-                let files: Vec<(String, Option<&SideComparison>)> = self
-                    .files
+                let files: Vec<(String, Option<&SideComparison>)> = c
                     .iter()
-                    .zip(c)
                     .enumerate()
-                    .map(|(i, (_, c))| (format!("file {}", i + 1), c.as_ref()))
+                    .map(|(i, c)| (format!("file {}", i + 1), c.as_ref()))
                     .collect();
                 s += &stationarity::section(&files);
             }

@@ -846,12 +846,10 @@ pub fn identify_reduced(
     let scatter_floor = super::select::scatter_floor(&fit_data);
     let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
     let data_backbone = backbone::from_data(&sweeps, &frfs).map_err(|e| e.to_string());
-    let stationarity = data_backbone.as_ref().map_err(Clone::clone).map(|b| {
-        b.iter()
-            .zip(&levels)
-            .map(|(b, l)| stationarity::compare_sides(b, super::select::relative_scatter(l)))
-            .collect::<Vec<_>>()
-    });
+    let stationarity = data_backbone
+        .as_ref()
+        .map(|b| stationarity::compare_levels(b, &levels))
+        .map_err(Clone::clone);
     // The effect search, when the four factors leave a residual above the scatter: the
     // single mode's search ([`super::select`]) on the family of this file's model with the
     // reference scales of the data.

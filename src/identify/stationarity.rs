@@ -134,6 +134,19 @@ pub fn levels_section(comparisons: &[Option<SideComparison>], fit_levels: &[usiz
     section(&levels)
 }
 
+/// Every level's two sides: [`compare_sides`] of each backbone with its level's measured
+/// scatter ([`super::select::relative_scatter`]).
+pub fn compare_levels(
+    backbones: &[LevelBackbone],
+    levels: &[super::fit::LevelData],
+) -> Vec<Option<SideComparison>> {
+    backbones
+        .iter()
+        .zip(levels)
+        .map(|(b, l)| compare_sides(b, super::select::relative_scatter(l)))
+        .collect()
+}
+
 /// Compare the sides of one level's pointwise estimates, `scatter` the level's measurement
 /// scatter per component relative to its peak ([`super::select::relative_scatter`]); `None`
 /// when either side has too few points (two on the earlier side, one of the later side inside
