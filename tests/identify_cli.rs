@@ -298,6 +298,12 @@ fn identify_then_predict_both_controls() {
                 .all(|c| c.is_null() || c["stationary"] == true),
         "{st}"
     );
+    // The criterion's constants travel with the verdicts.
+    let crit = &json["stationarity"]["criterion"];
+    assert_eq!(crit["damping_tolerance"], 0.1, "{crit}");
+    assert_eq!(crit["noise_sigmas"], 4.0, "{crit}");
+    assert_eq!(crit["min_differing_points"], 2, "{crit}");
+    assert_eq!(crit["band_fraction_of_peak"], 0.5, "{crit}");
     assert!(json["model_free_settled_rows"].is_null());
     assert!(json["fit_rows"]
         .as_array()
@@ -402,6 +408,10 @@ fn identify_then_predict_both_controls() {
         pred["prediction"]["stationarity"][0]["stationary"], true,
         "{}",
         pred["prediction"]["stationarity"]
+    );
+    assert_eq!(
+        pred["stationarity_criterion"],
+        json_id["stationarity"]["criterion"]
     );
     for k in ["value", "lo_95", "hi_95"] {
         let (a, b) = (band[k].as_f64().unwrap(), id_band[k].as_f64().unwrap());

@@ -1180,7 +1180,7 @@ impl Identification {
             "uncertainty": self.uncertainty,
             "alternative": self.alternative,
             "model_free": model_free_json,
-            "stationarity": {"damping_tolerance": stationarity::DAMPING_TOLERANCE, "levels": self.stationarity},
+            "stationarity": {"criterion": stationarity::criterion_json(), "levels": self.stationarity},
             "model_free_settled_rows": model_free_settled_json,
             "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
                 "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz

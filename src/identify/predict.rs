@@ -348,6 +348,7 @@ impl Prediction {
                 "model_file_sha256": super::measured::sha256_hex(
                     &std::fs::read(&self.model_file).map_err(|e| Error::io(&self.model_file, e))?),
                 "prediction": self,
+                "stationarity_criterion": super::stationarity::criterion_json(),
             }),
         )?;
         written.push(p);

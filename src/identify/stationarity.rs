@@ -39,6 +39,17 @@ pub const NOISE_SIGMAS: f64 = 4.0;
 /// Points that must differ for a level to be not stationary (one may be a glitch of one row).
 pub const MIN_DIFFERING_POINTS: usize = 2;
 
+/// The check's constants for machine-readable reports (JSON): the tolerance, the noise bound,
+/// the points that must differ and the band compared (fraction of the level's peak).
+pub fn criterion_json() -> serde_json::Value {
+    serde_json::json!({
+        "damping_tolerance": DAMPING_TOLERANCE,
+        "noise_sigmas": NOISE_SIGMAS,
+        "min_differing_points": MIN_DIFFERING_POINTS,
+        "band_fraction_of_peak": super::backbone::SIDE_BAND,
+    })
+}
+
 /// The comparison of one level's two sides.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SideComparison {
