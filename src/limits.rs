@@ -11,6 +11,9 @@
 //! | film image | [`MAX_IMAGE_PIXELS`] = 2²⁸ pixels | `film::regions::FilmMap::read_image` |
 //! | load steps of one loading history | [`MAX_STEPS`] = 100 000 in all, [`MAX_STEPS_PER_CYCLE`] = 10 000 per cycle, [`MAX_CYCLES`] = 1000 | [`check_steps`] |
 //! | nominal pressures of a sweep | [`MAX_PRESSURES`] = 1000 | [`check_count`] |
+//! | harmonics and time samples of a harmonic-balance model | [`MAX_HARMONICS`] = 256, [`MAX_TIME_SAMPLES`] = 65 536 | `dynamics::aft::Harmonics::new`, model-file validation |
+//! | unknowns of a harmonic-balance Jacobian | its dense matrices within the available memory | `dynamics::hbm::HbmSystem::new` ([`check_memory`]) |
+//! | identification search: starts, particles, swarm iterations, local iterations, chain steps | [`MAX_FIT_STARTS`], [`MAX_PARTICLES`], [`MAX_SWARM_ITERATIONS`], [`MAX_LOCAL_ITERATIONS`], [`MAX_CHAIN_STEPS`] | `asperity identify` ([`check_count`]) |
 //!
 //! Binary files are checked against their own headers first: a `.npy` whose header promises
 //! more values than the file holds, or an x3p whose `main.xml` declares more points than its
@@ -49,6 +52,31 @@ pub const MAX_CYCLES: usize = 1_000;
 
 /// Largest number of nominal pressures of one sweep.
 pub const MAX_PRESSURES: usize = 1_000;
+
+/// Highest harmonic of a harmonic-balance model. Microslip joints are resolved with a few tens
+/// (the underplatform-damper and bolted-joint studies use 5–15); the dense synthesis and analysis
+/// matrices and the Jacobian grow with the square of the unknowns.
+pub const MAX_HARMONICS: usize = 256;
+
+/// Most time samples per period of the alternating frequency–time method (2¹⁶ ≥ 256 samples per
+/// retained harmonic at [`MAX_HARMONICS`]).
+pub const MAX_TIME_SAMPLES: usize = 1 << 16;
+
+/// Most particle-swarm starts of one identification fit.
+pub const MAX_FIT_STARTS: usize = 100;
+
+/// Most particles of one swarm.
+pub const MAX_PARTICLES: usize = 10_000;
+
+/// Most swarm iterations per start.
+pub const MAX_SWARM_ITERATIONS: u64 = 100_000;
+
+/// Most Nelder–Mead iterations per local run.
+pub const MAX_LOCAL_ITERATIONS: u64 = 10_000_000;
+
+/// Most steps of one Metropolis chain of the prediction bands (each step's model is kept in
+/// memory for the chain's diagnostics).
+pub const MAX_CHAIN_STEPS: usize = 1_000_000;
 
 /// Largest `main.xml` of an x3p archive (16 MiB; real ones are a few kB).
 pub const MAX_XML_BYTES: u64 = 16 << 20;

@@ -197,6 +197,103 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
         "{err}"
     );
     assert!(!out.exists());
+    // Resource limits and impossible amplitudes are refused before any work.
+    for (flag, value) in [
+        ("--chain-steps", "1000000000000"),
+        ("--particles", "1000000000"),
+        ("--swarm-iterations", "1000000000000000"),
+        ("--response-amplitude", "-5"),
+    ] {
+        let o = run(
+            "identify",
+            &[
+                s(&good1),
+                s(&good2),
+                &format!("{flag}={value}"),
+                "--out-dir",
+                s(&out),
+            ],
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(flag), "{flag}: {err}");
+        assert!(!out.exists());
+    }
+    // The same measurement twice is not two levels.
+    let copy = dir.path().join("copy.csv");
+    std::fs::copy(&good1, &copy).unwrap();
+    let o = run("identify", &[s(&good1), s(&copy), "--out-dir", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("copy.csv") && err.contains("given twice"),
+        "{err}"
+    );
+    // Frequencies in kHz under a `frequency_Hz` header: a mode 1000× lower than the others.
+    let khz = dir.path().join("khz.csv");
+    let mut lines: Vec<String> = std::fs::read_to_string(&good2)
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    for l in lines.iter_mut().skip(2) {
+        let (f, rest) = l.split_once(',').unwrap();
+        *l = format!("{},{rest}", f.parse::<f64>().unwrap() / 1000.0);
+    }
+    std::fs::write(&khz, lines.join("\n") + "\n").unwrap();
+    let o = run("identify", &[s(&good1), s(&khz), "--out-dir", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("khz.csv") && err.contains("kHz"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // An output that cannot be written (a directory in the way of model.json) fails after the
+    // fit with nothing else written: the outputs appear together or not at all.
+    std::fs::create_dir_all(out.join("model.json")).unwrap();
+    let o = run(
+        "identify",
+        &[
+            s(&good1),
+            s(&good2),
+            "--max-effects",
+            "0",
+            "--starts",
+            "1",
+            "--particles",
+            "4",
+            "--swarm-iterations",
+            "2",
+            "--chain-steps",
+            "0",
+            "--out-dir",
+            s(&out),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("model.json"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        left,
+        vec![std::ffi::OsString::from("model.json")],
+        "{left:?}"
+    );
+    let parent_left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(".asperity"))
+        .collect();
+    assert!(parent_left.is_empty(), "{parent_left:?}");
+    // An --out-dir that is a file is refused before any work, naming the flag.
+    let file = dir.path().join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let o = run("identify", &[s(&good1), s(&good2), "--out-dir", s(&file)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--out-dir") && err.contains("not a directory"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -346,6 +443,36 @@ fn identify_then_predict_both_controls() {
     }
     let rc = dir.path().join("response-controlled.csv");
     std::fs::write(&rc, text).unwrap();
+    // A file in kHz under a `frequency_Hz` header lies 1000× below the model's mode: refused,
+    // nothing written.
+    let khz = dir.path().join("khz.csv");
+    let mut lines: Vec<String> = std::fs::read_to_string(&files[1])
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    for l in lines.iter_mut().skip(2) {
+        let (f, rest) = l.split_once(',').unwrap();
+        *l = format!("{},{rest}", f.parse::<f64>().unwrap() / 1000.0);
+    }
+    std::fs::write(&khz, lines.join("\n") + "\n").unwrap();
+    let kout = dir.path().join("pred-khz");
+    let o = run(
+        "predict",
+        &[
+            "--model",
+            s(&out.join("model.json")),
+            s(&khz),
+            "--out-dir",
+            s(&kout),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("khz.csv") && err.contains("natural frequency"),
+        "{err}"
+    );
+    assert!(!kout.exists());
     let pout = dir.path().join("pred");
     let o = run(
         "predict",

@@ -4,6 +4,7 @@ use asperity::identify::effects::Effect;
 use asperity::identify::model::Family;
 use asperity::identify::pipeline::FitRows;
 use asperity::identify::{identify, predict, read_sweeps, Control, Options};
+use asperity::output::OutputSet;
 use asperity::{Error, Result};
 use std::path::PathBuf;
 
@@ -99,6 +100,17 @@ pub struct IdentifyArgs {
     pub out_dir: PathBuf,
 }
 
+/// Write a result's files through the output set (all appear or none) and return their final
+/// paths.
+fn write_all(
+    mut out: OutputSet,
+    write: impl FnOnce(&std::path::Path) -> Result<Vec<PathBuf>>,
+) -> Result<Vec<PathBuf>> {
+    let staged = out.staging_dir()?;
+    write(&staged)?;
+    out.commit()
+}
+
 /// Print the report and the files written.
 fn report(text: &str, written: &[PathBuf]) {
     print!("{text}");
@@ -119,6 +131,37 @@ fn chain_steps(args: &IdentifyArgs) -> Result<Option<usize>> {
     }
 }
 
+/// The search settings within the resource limits (before anything is read or fitted).
+fn check_limits(args: &IdentifyArgs) -> Result<()> {
+    use asperity::limits::*;
+    check_count("--starts", args.starts, MAX_FIT_STARTS)?;
+    check_count("--particles", args.particles, MAX_PARTICLES)?;
+    check_count(
+        "--swarm-iterations",
+        args.swarm_iterations as usize,
+        MAX_SWARM_ITERATIONS as usize,
+    )?;
+    check_count(
+        "--local-iterations",
+        args.local_iterations as usize,
+        MAX_LOCAL_ITERATIONS as usize,
+    )?;
+    check_count(
+        "--chain-steps",
+        args.chain_steps.unwrap_or(0),
+        MAX_CHAIN_STEPS,
+    )?;
+    if let Some(a) = &args.response_amplitude {
+        if let Some(v) = a.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(Error::param(
+                "--response-amplitude",
+                format!("amplitudes must be finite and > 0, got {v}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The search settings must allow a swarm.
 fn check_search(args: &IdentifyArgs) -> Result<()> {
     if args.starts == 0 || args.particles < 2 {
@@ -131,6 +174,7 @@ fn check_search(args: &IdentifyArgs) -> Result<()> {
 }
 
 pub fn run_identify(args: IdentifyArgs) -> Result<()> {
+    check_limits(&args)?;
     if let Some(structure) = &args.structure {
         return run_identify_reduced(structure, &args);
     }
@@ -163,13 +207,14 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
         RowsArg::Settled => FitRows::Settled,
     };
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
+    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let sweeps = read_sweeps(&args.files)?;
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
     let result = identify(sweeps, &opts, Some(&bar));
     bar.finish_and_clear();
     let id = result?;
-    report(&id.text(), &id.write(&args.out_dir)?);
+    report(&id.text(), &write_all(out, |d| id.write(d))?);
     Ok(())
 }
 
@@ -208,6 +253,7 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     if args.starts > 0 {
         check_search(args)?;
     }
+    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let spec = ReducedSpec::load(structure)?;
     let sweeps = read_sweeps(&args.files)?;
     let fit_levels =
@@ -239,7 +285,7 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     let result = identify_reduced(&spec, sweeps, fit_levels, &options, Some(&bar));
     bar.finish_and_clear();
     let id = result?;
-    report(&id.text(), &id.write(&args.out_dir)?);
+    report(&id.text(), &write_all(out, |d| id.write(d))?);
     Ok(())
 }
 
@@ -276,9 +322,10 @@ pub fn run_predict(args: PredictArgs) -> Result<()> {
         ControlArg::Force => Control::Force,
         ControlArg::Response => Control::Response,
     };
+    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let sweeps = read_sweeps(&args.files)?;
     let p = predict(&args.model, sweeps, control)?;
-    let written = p.write(&args.out_dir)?;
+    let written = write_all(out, |d| p.write(d))?;
     print!("{}", p.text());
     println!("\nwrote:");
     for w in written {

@@ -79,7 +79,9 @@ impl Harmonics {
         } else {
             (0..=h_max).collect()
         };
+        crate::limits::check_count("harmonics", h_max, crate::limits::MAX_HARMONICS)?;
         let n = n_time.unwrap_or_else(|| (16 * h_max).max(64).next_power_of_two());
+        crate::limits::check_count("time_samples", n, crate::limits::MAX_TIME_SAMPLES)?;
         if n <= 2 * h_max {
             return Err(Error::param(
                 "time_samples",
@@ -839,6 +841,20 @@ pub fn cycle_summary(
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn harmonics_beyond_the_limits_are_refused_before_allocating() {
+        let e = Harmonics::new(100_000, false, None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("harmonics") && e.contains("limit"), "{e}");
+        let e = Harmonics::new(5, false, Some(100_000_000))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("time_samples") && e.contains("limit"), "{e}");
+        assert!(Harmonics::new(crate::limits::MAX_HARMONICS, true, None).is_ok());
+    }
+
     use super::*;
     use crate::dynamics::nonlinear::{
         CubicSpring, GaulLenz, Jenkins, JenkinsContact, MicroslipContact, QuadraticSpring,

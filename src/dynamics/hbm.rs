@@ -200,6 +200,17 @@ impl<'a> HbmSystem<'a> {
                 }
             }
         };
+        // The Newton iteration holds the dense Jacobian, its LU factors and a copy.
+        let unknowns = harmonics.len()
+            * match formulation {
+                Formulation::Coordinates => n,
+                Formulation::Receptance => nc,
+            };
+        crate::limits::check_memory(
+            "sweep.harmonics",
+            (unknowns as u64).pow(2).saturating_mul(8 * 3),
+            &format!("a harmonic-balance Jacobian of {unknowns} unknowns"),
+        )?;
         Ok(Self {
             structure,
             harmonics,

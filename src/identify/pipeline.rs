@@ -155,8 +155,58 @@ pub fn read_sweeps(paths: &[PathBuf]) -> Result<Vec<Sweep>> {
         .iter()
         .map(|p| Sweep::read_csv(p))
         .collect::<Result<Vec<_>>>()?;
+    // The same measurement given twice would count as two levels (and as its own held-out
+    // evidence): refuse it, naming both files.
+    for (i, a) in sweeps.iter().enumerate() {
+        if let Some(b) = sweeps[..i].iter().find(|b| b.sha256 == a.sha256) {
+            return Err(Error::Data(format!(
+                "{} and {}: the same measurement (identical content) given twice; give each \
+                 level's file once",
+                b.path.display(),
+                a.path.display()
+            )));
+        }
+    }
+    check_common_band(&sweeps)?;
     sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
     Ok(sweeps)
+}
+
+/// Frequency span `(lowest, highest)` of a sweep's rows (Hz).
+pub fn frequency_span(s: &Sweep) -> (f64, f64) {
+    s.rows.iter().fold((f64::INFINITY, 0.0), |(lo, hi), r| {
+        (lo.min(r.frequency_hz), hi.max(r.frequency_hz))
+    })
+}
+
+/// Sweeps of one mode at several levels surround the same resonance: a file whose frequency
+/// span lies more than a factor 2 away from the others' (the centre of its span against the
+/// median centre) is another mode, or its frequencies are in another unit (kHz under a
+/// `frequency_Hz` header reads as a mode 1000 times lower). Refused, naming the file.
+fn check_common_band(sweeps: &[Sweep]) -> Result<()> {
+    if sweeps.len() < 2 {
+        return Ok(());
+    }
+    let centre = |s: &Sweep| {
+        let (lo, hi) = frequency_span(s);
+        (lo * hi).sqrt()
+    };
+    let mut centres: Vec<f64> = sweeps.iter().map(centre).collect();
+    centres.sort_by(f64::total_cmp);
+    let median = centres[centres.len() / 2];
+    for s in sweeps {
+        let c = centre(s);
+        if c > 2.0 * median || c < 0.5 * median {
+            let (lo, hi) = frequency_span(s);
+            return Err(Error::Data(format!(
+                "{}: its frequencies ({lo:.6}–{hi:.6} Hz) lie more than a factor 2 from the other \
+                 files' (around {median:.6} Hz): not the same mode, or frequencies in another unit \
+                 (e.g. kHz in a `frequency_Hz` column)",
+                s.path.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn names(sweeps: &[Sweep]) -> String {

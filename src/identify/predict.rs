@@ -141,6 +141,23 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
         Ok(c) => (c, "detected from the files".to_string()),
         Err(e) => (saved_convention, format!("saved with the model ({e})")),
     };
+    // A single-mode model describes the response near its natural frequency only: a file more
+    // than a factor 2 away from it is another mode, or in another frequency unit.
+    if let Predictor::Mode(m, _) = &model {
+        let f_s = m.physical().omega_s / std::f64::consts::TAU;
+        for s in &sweeps {
+            let (lo, hi) = super::pipeline::frequency_span(s);
+            if f_s < 0.5 * lo || f_s > 2.0 * hi {
+                return Err(Error::Data(format!(
+                    "{}: its frequencies ({lo:.6}–{hi:.6} Hz) lie more than a factor 2 from the \
+                     model's natural frequency ({f_s:.6} Hz): not the mode the model was \
+                     identified on, or frequencies in another unit (e.g. kHz in a \
+                     `frequency_Hz` column)",
+                    s.path.display()
+                )));
+            }
+        }
+    }
     let mut files = Vec::new();
     let mut levels = Vec::new();
     for s in &sweeps {
