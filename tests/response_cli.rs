@@ -137,6 +137,54 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
     edit("model.toml", "dofs = [\"m1.x\"]", "dofs = [\"m7.x\"]");
     assert_fails(p, &["model.toml", "m7.x"]);
     reset();
+    // Resource limits before anything is allocated (these once aborted out of memory).
+    edit("model.toml", "harmonics = 3", "harmonics = 100000");
+    assert_fails(p, &["model.toml:24", "sweep.harmonics", "limit"]);
+    reset();
+    edit(
+        "model.toml",
+        "odd_only = true",
+        "odd_only = true\ntime_samples = 100000000",
+    );
+    assert_fails(p, &["model.toml:26", "sweep.time_samples", "limit"]);
+    reset();
+    // No excitation: weights that cancel on one DOF listed twice, or cancelling DOFs.
+    edit(
+        "model.toml",
+        "dofs = [\"m1.x\"]",
+        "dofs = [\"m1.x\", \"m1.x\"]\nweights = [1.0, -1.0]",
+    );
+    assert_fails(p, &["model.toml", "m1.x", "listed twice"]);
+    reset();
+    edit(
+        "model.toml",
+        "dofs = [\"m1.x\"]",
+        "dofs = [\"m1.x\"]\nweights = [0.0]",
+    );
+    assert_fails(
+        p,
+        &["model.toml", "excitation force on the structure is zero"],
+    );
+    reset();
+    // A contact between a node and itself does nothing.
+    edit("pairs.csv", "11,m2,ground", "11,m2,m2");
+    assert_fails(p, &["pairs.csv:3", "same node"]);
+    reset();
+    // A directory where an output file should go: the run fails and writes nothing else.
+    let out = p.join("out-bad");
+    std::fs::create_dir_all(out.join("response.json")).unwrap();
+    let o = run(&["response", s(&p.join("model.toml")), "--out-dir", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("response.json"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_dir(&out).unwrap().count(),
+        1,
+        "other outputs written"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
     // A modal model whose contact node has no mode shape.
     std::fs::write(
         p.join("modes.csv"),

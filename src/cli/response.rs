@@ -6,7 +6,7 @@ use asperity::dynamics::hbm::{Excitation, HbmSystem};
 use asperity::dynamics::model_file;
 use asperity::dynamics::report::{self, LevelResult};
 use asperity::elements::{provenance_json, InputFile};
-use asperity::output::write_string_atomic;
+use asperity::output::{write_string_atomic, OutputSet};
 use asperity::{Error, Result};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -25,6 +25,8 @@ pub struct ResponseArgs {
 }
 
 pub fn run(args: ResponseArgs) -> Result<()> {
+    // Every output appears together or not at all; an unusable --out-dir is refused now.
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let model = model_file::load(&args.model)?;
     let f = &model.file;
     let harmonics = Harmonics::new(f.sweep.harmonics, f.sweep.odd_only, f.sweep.time_samples)
@@ -96,9 +98,9 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     );
     let mut level_summaries = Vec::new();
     for (i, r) in results.iter().enumerate() {
-        let csv = args.out_dir.join(format!("response_level_{}.csv", i + 1));
+        let csv = out.path(&format!("response_level_{}.csv", i + 1))?;
         report::write_level_csv(&csv, &system, &model.responses, r, &header)?;
-        let el = args.out_dir.join(format!("elements_level_{}.csv", i + 1));
+        let el = out.path(&format!("elements_level_{}.csv", i + 1))?;
         report::write_elements_csv(&el, &system, r)?;
         let p = &r.branch.points[r.peak];
         let x = system.coordinates(p);
@@ -121,8 +123,8 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         );
         level_summaries.push(serde_json::json!({
             "level_N": r.level_n,
-            "csv": csv.display().to_string(),
-            "elements_csv": el.display().to_string(),
+            "csv": out.final_path(&csv).display().to_string(),
+            "elements_csv": out.final_path(&el).display().to_string(),
             "points": r.branch.points.len(),
             "peak_frequency_Hz": fpk,
             "peak_amplitude_m": amp,
@@ -148,7 +150,7 @@ pub fn run(args: ResponseArgs) -> Result<()> {
                 }
             })
             .collect();
-        let png = args.out_dir.join(format!("frf_{safe}.png"));
+        let png = out.path(&format!("frf_{safe}.png"))?;
         report::plot_frf_family(&png, &system, label, row, &results)?;
     }
     let inputs: Vec<InputFile> = model
@@ -177,9 +179,10 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         }),
     );
     write_string_atomic(
-        &args.out_dir.join("response.json"),
+        &out.path("response.json")?,
         &serde_json::to_string_pretty(&json).map_err(|e| Error::Data(e.to_string()))?,
     )?;
+    out.commit()?;
     println!("wrote {}", args.out_dir.display());
     Ok(())
 }

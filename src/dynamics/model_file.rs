@@ -220,6 +220,17 @@ impl ModelFile {
         if e.dofs.is_empty() {
             return Err(Error::param("excitation.dofs", "give at least one DOF"));
         }
+        if let Some(d) = e
+            .dofs
+            .iter()
+            .enumerate()
+            .find_map(|(i, d)| e.dofs[..i].contains(d).then_some(d))
+        {
+            return Err(Error::param(
+                "excitation.dofs",
+                format!("`{d}` is listed twice (give each DOF once, with its weight)"),
+            ));
+        }
         if let Some(w) = &e.weights {
             if w.len() != e.dofs.len() || w.iter().any(|v| !v.is_finite()) {
                 return Err(Error::param(
@@ -249,6 +260,28 @@ impl ModelFile {
         }
         if s.harmonics == 0 {
             return Err(Error::param("sweep.harmonics", "must be ≥ 1"));
+        }
+        if s.harmonics > crate::limits::MAX_HARMONICS {
+            return Err(Error::param(
+                "sweep.harmonics",
+                format!(
+                    "{} is more than the limit of {}",
+                    s.harmonics,
+                    crate::limits::MAX_HARMONICS
+                ),
+            ));
+        }
+        if let Some(n) = s
+            .time_samples
+            .filter(|&n| n > crate::limits::MAX_TIME_SAMPLES)
+        {
+            return Err(Error::param(
+                "sweep.time_samples",
+                format!(
+                    "{n} is more than the limit of {}",
+                    crate::limits::MAX_TIME_SAMPLES
+                ),
+            ));
         }
         if s.points < 2 {
             return Err(Error::param("sweep.points", "must be ≥ 2"));
@@ -627,6 +660,22 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
                     Error::parse(&ep, e.line, ""),
                 ),
             };
+            if a == b {
+                // The element acts on the relative displacement of its two nodes: with one node
+                // it never moves and the contact does nothing.
+                return Err(match &where_ {
+                    Error::Parse { path, line, .. } => Error::parse(
+                        path,
+                        *line,
+                        format!(
+                            "element {}: node_a and node_b are the same node `{a}` (a contact \
+                             needs two nodes, or `ground` for one side)",
+                            e.id
+                        ),
+                    ),
+                    _ => unreachable!(),
+                });
+            }
             let map = kin.pair_map(&a, &b, &frame).map_err(|node| {
                 let what = if structure.is_modal() {
                     "has no mode shape"
@@ -665,6 +714,16 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             .map(|w| w[i])
             .unwrap_or(1.0);
         force += DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?) * w;
+    }
+    if force.amax() == 0.0 {
+        // Weights that cancel, or mode shapes that vanish at every excitation DOF: the
+        // structure would not be excited and every response would be zero.
+        return Err(Error::parse(
+            path,
+            key_line(&text, "dofs"),
+            "`excitation.dofs`: the excitation force on the structure is zero (weights that \
+             cancel, or mode shapes that are zero at every excitation DOF)",
+        ));
     }
     let mut responses = Vec::new();
     for d in &file.response.dofs {
