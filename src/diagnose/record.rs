@@ -164,6 +164,28 @@ impl Record {
         let ix = find(&columns.displacement)?;
         let iff = find(&columns.force)?;
         let inf = columns.normal_force.as_deref().map(find).transpose()?;
+        let roles = [
+            (Some(&columns.time), "--time-column", "s"),
+            (Some(&columns.displacement), "--displacement-column", "m"),
+            (Some(&columns.force), "--force-column", "N"),
+            (columns.normal_force.as_ref(), "--normal-force-column", "N"),
+        ];
+        for (k, (name, flag, unit)) in roles.iter().enumerate() {
+            let Some(name) = name else { continue };
+            check_column_unit(path, name, flag, unit)?;
+            if let Some((_, other, _)) = roles[..k]
+                .iter()
+                .find(|(n, _, _)| n.is_some_and(|n| n == *name))
+            {
+                return Err(Error::param(
+                    *flag,
+                    format!(
+                        "{}: column `{name}` is already read by {other}",
+                        path.display()
+                    ),
+                ));
+            }
+        }
         let (mut t, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new());
         let mut nf = inf.map(|_| Vec::new());
         let mut lines: Vec<usize> = Vec::new();
@@ -257,9 +279,76 @@ impl Record {
     }
 }
 
+/// A column named with a unit suffix (`_s`, `_ms`, `_m`, `_mm`, `_um`, `_N`, `_kN`, …) must carry
+/// the unit its role reads in (SI, no scaling is applied): a displacement column given as the
+/// force would otherwise be read as newtons. Names without a recognised suffix are taken as
+/// given.
+fn check_column_unit(path: &Path, name: &str, flag: &str, unit: &str) -> Result<()> {
+    const SUFFIXES: [&str; 12] = [
+        "s", "ms", "us", "m", "mm", "um", "µm", "nm", "N", "kN", "mN", "lbf",
+    ];
+    if let Some((quantity, per)) = name.split_once("_per_") {
+        // A rate (velocity `m_per_s`, …): no role of a record is one.
+        let unit_from = quantity.rsplit_once('_').map_or(quantity, |(_, u)| u);
+        return Err(Error::param(
+            flag,
+            format!(
+                "{}: column `{name}` is in {unit_from}/{per}, this column must be in {unit}",
+                path.display()
+            ),
+        ));
+    }
+    let Some((_, suffix)) = name.rsplit_once('_') else {
+        return Ok(());
+    };
+    if SUFFIXES.contains(&suffix) && suffix != unit {
+        return Err(Error::param(
+            flag,
+            format!(
+                "{}: column `{name}` is in {suffix}, this column must be in {unit}",
+                path.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_column_in_the_wrong_unit_or_read_twice_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("r.csv");
+        let mut s = String::from("time_s,displacement_m,friction_force_N,velocity_m_per_s\n");
+        for i in 0..10 {
+            s += &format!("{},{},{},0.0\n", 0.1 * i as f64, 1e-6 * i as f64, i as f64);
+        }
+        std::fs::write(&p, s).unwrap();
+        let read = |force: &str, displacement: &str| {
+            Record::read_csv(
+                &p,
+                &Columns {
+                    force: force.into(),
+                    displacement: displacement.into(),
+                    ..Columns::default()
+                },
+            )
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+        };
+        assert!(read("friction_force_N", "displacement_m").is_ok());
+        let e = read("displacement_m", "displacement_m").unwrap_err();
+        assert!(e.contains("--force-column") && e.contains("in m"), "{e}");
+        let e = read("friction_force_N", "velocity_m_per_s").unwrap_err();
+        assert!(
+            e.contains("--displacement-column") && e.contains("m/s") && e.contains("r.csv"),
+            "{e}"
+        );
+        let e = read("friction_force_N", "friction_force_N").unwrap_err();
+        assert!(e.contains("in N, this column must be in m"), "{e}");
+    }
 
     #[test]
     fn reads_named_columns_in_any_order() {
