@@ -307,6 +307,79 @@ fn measured_surfaces_go_through_the_chain() {
         csv.contains("periodic = false") && csv.contains("b1.npy"),
         "{csv}"
     );
+    // The same body twice is a flat equivalent surface: refused before the sweep, naming it.
+    let out = dir.path().join("out-same");
+    let o = asperity(&[
+        "calibrate",
+        cfg.to_str().unwrap(),
+        "--surface",
+        f1.to_str().unwrap(),
+        "--surface",
+        f1.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("b1.npy") && err.contains("flat"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // Missing points: refused with the --fill flag named, and filled when it is given (calibrate
+    // and contact tangential take it as contact normal does).
+    let mut holed = w1.heights.clone();
+    holed[[10, 10]] = f64::NAN;
+    let fh = dir.path().join("holed.npy");
+    let topo = asperity::surface::topography::Topography::from_heights(holed, w1.dx, w1.dy, false)
+        .unwrap();
+    asperity::surface::io::write_topography(&fh, &topo).unwrap();
+    let out = dir.path().join("out-holed");
+    let calibrate = |fill: &[&str]| {
+        let mut a = vec![
+            "calibrate",
+            cfg.to_str().unwrap(),
+            "--surface",
+            fh.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(fill);
+        asperity(&a)
+    };
+    let o = calibrate(&[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("holed.npy") && err.contains("--fill"),
+        "{err}"
+    );
+    let o = calibrate(&["--fill", "harmonic"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+    assert!(
+        json.contains("1 of 2304 missing points filled, harmonic fill"),
+        "{json}"
+    );
+    let out_t = dir.path().join("tangential-holed");
+    let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args([
+            "contact",
+            "tangential",
+            "--surface",
+            fh.to_str().unwrap(),
+            "--fill",
+            "nearest",
+            "--pressures-pa",
+            "1e7",
+            "--cycles",
+            "1",
+            "--steps-per-cycle",
+            "8",
+            "--out-dir",
+            out_t.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 #[test]

@@ -35,6 +35,10 @@ pub struct CalibrateArgs {
     /// kernels. One surface is one realisation: no interval, no convergence checks.
     #[arg(long, num_args = 1)]
     surface: Vec<PathBuf>,
+    /// Fill missing points of the --surface files first: `harmonic` (Laplace interpolation) or
+    /// `nearest`. Without it a surface with missing points is refused.
+    #[arg(long, requires = "surface")]
+    fill: Option<asperity::surface::missing::Fill>,
     /// Output directory.
     #[arg(long, default_value = "calib")]
     out_dir: PathBuf,
@@ -99,8 +103,12 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
     let surfaces = if args.surface.is_empty() {
         SurfaceSource::Generated
     } else {
-        let (surface, description) = asperity::surface::io::read_equivalent_surface(&args.surface)
-            .map_err(|e| super::rename_param(e, "--surface"))?;
+        let (surface, description) =
+            asperity::surface::io::read_equivalent_surface(&args.surface, args.fill)
+                .map_err(|e| super::rename_param(e, "--surface"))?;
+        // A flat (or identical-bodies) surface has no rough contact: say so now, not as a
+        // failed loop fit after the sweep.
+        asperity::sanity::contact_surface(&surface, &description)?;
         config.realisations.count = 1;
         SurfaceSource::Given {
             surface,

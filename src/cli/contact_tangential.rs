@@ -52,6 +52,10 @@ pub struct TangentialArgs {
     /// used. Non-periodic files use the zero-padded kernels (normal and tangential).
     #[arg(long, num_args = 1)]
     surface: Vec<PathBuf>,
+    /// Fill missing points of the --surface files first: `harmonic` (Laplace interpolation) or
+    /// `nearest`. Without it a surface with missing points is refused.
+    #[arg(long, requires = "surface")]
+    fill: Option<asperity::surface::missing::Fill>,
     /// Young's modulus of both bodies (Pa).
     #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
     youngs_modulus_pa: f64,
@@ -131,6 +135,9 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         operator,
     };
     asperity::sanity::tolerance("--tolerance", args.tolerance)?;
+    if args.max_iterations == 0 {
+        return Err(Error::param("--max-iterations", "must be at least 1"));
+    }
     let started = std::time::Instant::now();
     let (surface, source) = if args.surface.is_empty() {
         let mut spec = GaussianSurfaceSpec::reference();
@@ -166,7 +173,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 "applies to the generated surface, not to a --surface file",
             ));
         }
-        asperity::surface::io::read_equivalent_surface(&args.surface)
+        asperity::surface::io::read_equivalent_surface(&args.surface, args.fill)
             .map_err(|e| super::rename_param(e, "--surface"))?
     };
     asperity::limits::check_grid(

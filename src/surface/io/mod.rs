@@ -147,22 +147,40 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
 /// body 1 and body 2 on the same grid, body 2's heights in the common frame (`z` from body 1
 /// towards body 2, as `asperity surface combine` takes them), reduced to `h1 − h2` by
 /// [`crate::surface::combine::equivalent_surface`] (periodic only when both are). Returns the
-/// surface and a description naming the files.
-pub fn read_equivalent_surface(paths: &[std::path::PathBuf]) -> Result<(Grid2, String)> {
-    let area = |p: &Path| read(p)?.into_area(&p.display().to_string());
+/// surface and a description naming the files. Missing points are filled by `fill` (refused
+/// without it, naming the file and the `--fill` flag); the description says how many were.
+pub fn read_equivalent_surface(
+    paths: &[std::path::PathBuf],
+    fill: Option<crate::surface::missing::Fill>,
+) -> Result<(Grid2, String)> {
+    let area = |p: &Path| -> Result<(Grid2, String)> {
+        let name = p.display().to_string();
+        let (g, report) = crate::surface::missing::complete_area(read(p)?, &name, fill)?;
+        Ok(match report {
+            Some(r) => (
+                g,
+                format!(
+                    "{name} ({} of {} missing points filled, {} fill)",
+                    r.filled_points,
+                    r.total_points,
+                    format!("{:?}", r.method).to_lowercase()
+                ),
+            ),
+            None => (g, name),
+        })
+    };
     match paths {
-        [one] => Ok((area(one)?, format!("measured surface {}", one.display()))),
+        [one] => {
+            let (g, name) = area(one)?;
+            Ok((g, format!("measured surface {name}")))
+        }
         [a, b] => {
-            let (g1, g2) = (area(a)?, area(b)?);
+            let ((g1, n1), (g2, n2)) = (area(a)?, area(b)?);
             let h = crate::surface::combine::equivalent_surface(&g1, &g2)
                 .map_err(|e| Error::Data(format!("{} and {}: {e}", a.display(), b.display())))?;
             Ok((
                 h,
-                format!(
-                    "equivalent surface h1 - h2 of {} (body 1) and {} (body 2)",
-                    a.display(),
-                    b.display()
-                ),
+                format!("equivalent surface h1 - h2 of {n1} (body 1) and {n2} (body 2)"),
             ))
         }
         _ => Err(Error::param(
