@@ -312,7 +312,8 @@ impl OutputSet {
             return Err(Error::param(
                 flag,
                 format!(
-                    "`{}` would be written twice (also as {other}): one output would overwrite                      another",
+                    "`{}` would be written twice (also as {other}): one output would overwrite \
+                     another",
                     target.display()
                 ),
             ));
