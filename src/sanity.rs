@@ -32,6 +32,26 @@ pub const MAX_STRAIN: f64 = 1e-2;
 /// precision resolves in the gap `h0 − δ + u` (10⁻¹² ≫ the 2.2 × 10⁻¹⁶ round-off).
 pub const RESOLVABLE_FRACTION: f64 = 1e-12;
 
+/// Largest Coulomb friction coefficient accepted. Dry metal pairs measure 0.1–1.5 in air and
+/// clean surfaces in vacuum a few; a value of ten or more is a typing or unit error.
+pub const MAX_FRICTION_COEFFICIENT: f64 = 10.0;
+
+/// A Coulomb friction coefficient: `0 < μ ≤` [`MAX_FRICTION_COEFFICIENT`].
+pub fn friction_coefficient(name: &str, mu: f64) -> Result<f64> {
+    if mu.is_finite() && mu > 0.0 && mu <= MAX_FRICTION_COEFFICIENT {
+        Ok(mu)
+    } else {
+        Err(Error::param(
+            name,
+            format!(
+                "a friction coefficient must satisfy 0 < μ ≤ {} (dry metal pairs: 0.1–1.5), got {}",
+                num(MAX_FRICTION_COEFFICIENT),
+                num(mu)
+            ),
+        ))
+    }
+}
+
 /// A relative solver tolerance: `0 < value < 1`.
 pub fn tolerance(name: &str, value: f64) -> Result<f64> {
     if value.is_finite() && value > 0.0 && value < 1.0 {

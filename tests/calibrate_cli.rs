@@ -418,7 +418,7 @@ fn config_file_run_records_the_file_hash() {
 fn invalid_configs_are_refused_naming_the_key_without_output() {
     let dir = tempfile::tempdir().unwrap();
     let base = reference_config();
-    let cases: [(&str, &str, &str); 8] = [
+    let cases: [(&str, &str, &str); 9] = [
         (
             "amplitude_factors = [0.2, 0.4,",
             "amplitude_factors = [0.4, 0.2,",
@@ -432,6 +432,7 @@ fn invalid_configs_are_refused_naming_the_key_without_output() {
             "fit.k_starts",
         ),
         ("mu = 0.6 ", "mu = -0.6 ", "contact.mu"),
+        ("mu = 0.6 ", "mu = 1e9 ", "contact.mu"),
         (
             "pressures_pa = [1e5, 2e5,",
             "pressures_pa = [2e5, 1e5,",

@@ -268,10 +268,16 @@ fn cli_rejects_bad_parameters() {
             "--friction-coefficient",
         ),
         (vec!["--amplitude-m", "0"], "--amplitude-m"),
+        (
+            vec!["--friction-coefficient", "1e9"],
+            "--friction-coefficient",
+        ),
+        (vec!["--amplitude-m", "1"], "larger than the patch"),
+        (vec!["--max-iterations", "0"], "--max-iterations"),
         (vec!["--pressures-pa", "1e6,-2"], "--pressures-pa"),
     ] {
         let mut a = args.clone();
-        a.extend(["--grid", "64", "--out-dir", out_s]);
+        a.extend(["--grid", "128", "--out-dir", out_s]);
         let o = run_cli(&a);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?} succeeded");

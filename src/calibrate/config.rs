@@ -213,12 +213,7 @@ impl CalibrationConfig {
         }
         .validated("material")?;
         let c = &self.contact;
-        if !(c.mu.is_finite() && c.mu > 0.0) {
-            return Err(Error::param(
-                "contact.mu",
-                format!("friction coefficient must be finite and > 0, got {}", c.mu),
-            ));
-        }
+        crate::sanity::friction_coefficient("contact.mu", c.mu)?;
         crate::sanity::tolerance("contact.normal_tolerance", c.normal_tolerance)?;
         crate::sanity::tolerance("contact.tangential_tolerance", c.tangential_tolerance)?;
         // Resource limits (before anything is allocated) and pressures the model resolves.

@@ -89,13 +89,10 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     if let Some(p) = &args.pressures_pa {
         asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
     }
-    let mu = args.friction_coefficient;
-    if !(mu.is_finite() && mu > 0.0) {
-        return Err(Error::param(
-            "--friction-coefficient",
-            format!("μ must be finite and > 0, got {mu}"),
-        ));
-    }
+    let mu = asperity::sanity::friction_coefficient(
+        "--friction-coefficient",
+        args.friction_coefficient,
+    )?;
     if let Some(a) = args.amplitude_m {
         if !(a.is_finite() && a != 0.0) {
             return Err(Error::param(
@@ -184,6 +181,17 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     )?;
     asperity::sanity::contact_surface(&surface, &source)?;
     asperity::sanity::contact_pressures("--pressures-pa", &pressures, e_star, &surface)?;
+    if let Some(a) = args.amplitude_m {
+        // Gross slip sets in at displacements of the order of μ·p/E*·(patch size); an amplitude
+        // beyond the patch itself is a unit error (µm written as m).
+        let l = surface.lx().max(surface.ly());
+        if a.abs() > l {
+            return Err(Error::param(
+                "--amplitude-m",
+                format!("{a} m is larger than the patch ({l:e} m): µm written as m?"),
+            ));
+        }
+    }
     let boundary = if surface.periodic {
         Boundary::Periodic
     } else {
