@@ -41,6 +41,13 @@ use sha2::{Digest, Sha256};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::{Path, PathBuf};
 
+/// Largest displacement amplitude a measured row may imply (m): no vibration test of a
+/// structure reaches a metre at its resonance; more is a unit error.
+pub const MAX_VIBRATION_AMPLITUDE_M: f64 = 1.0;
+
+/// Largest force amplitude of a measured row (N): beyond any shaker or hammer.
+pub const MAX_FORCE_AMPLITUDE_N: f64 = 1e6;
+
 /// Which response quantity a file holds (named by its column).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -264,6 +271,31 @@ impl Sweep {
                     format!(
                         "response amplitude {response} {} must be > 0",
                         quantity.unit()
+                    ),
+                ));
+            }
+            // A displacement amplitude of a metre or more, or a force of a meganewton, is no
+            // vibration test's: a unit or column error (kHz as Hz, mm/s² as m/s², …).
+            let displacement_m = response / quantity.from_displacement(TAU * frequency_hz).norm();
+            if displacement_m > MAX_VIBRATION_AMPLITUDE_M {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "response amplitude {response} {} at {frequency_hz} Hz is a vibration of \
+                         {displacement_m:.3e} m (more than {MAX_VIBRATION_AMPLITUDE_M} m): check \
+                         the units of the frequency and response columns",
+                        quantity.unit()
+                    ),
+                ));
+            }
+            if force_n > MAX_FORCE_AMPLITUDE_N {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "force amplitude {force_n} N is more than {MAX_FORCE_AMPLITUDE_N:e} N: \
+                         check the unit of the force column"
                     ),
                 ));
             }
@@ -577,6 +609,17 @@ mod tests {
                 "not finite",
             ),
             (&["10,1,1,0", "11,1,1,0"], "b.csv", "at least 5"),
+            (
+                // 1e9 m/s² at 11 Hz: a vibration of 2e5 m.
+                &["10,1,1,0", "11,1,1e9,0", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
+                ":4:",
+                "check the units",
+            ),
+            (
+                &["10,1,1,0", "11,1,1,0", "12,1,1,0", "13,2e6,1,0", "14,1,1,0"],
+                ":6:",
+                "unit of the force",
+            ),
         ];
         for (lines, at, msg) in cases {
             let p = write(d.path(), "b.csv", &rows(lines));
@@ -605,7 +648,7 @@ mod tests {
             d.path(),
             "deg.csv",
             "frequency_Hz,force_amplitude_N,displacement_amplitude_m,phase_deg\n\
-             14,1,1,-175\n13,1,2,-160\n12,1,5,-90\n11,1,2,-20\n10,1,1,-5\n",
+             14,1,1e-3,-175\n13,1,2e-3,-160\n12,1,5e-3,-90\n11,1,2e-3,-20\n10,1,1e-3,-5\n",
         );
         let s = Sweep::read_csv(&p).unwrap();
         assert_eq!(s.quantity, Quantity::Displacement);
