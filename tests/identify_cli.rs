@@ -227,25 +227,52 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
         !o.status.success() && err.contains("copy.csv") && err.contains("given twice"),
         "{err}"
     );
-    // Frequencies in kHz under a `frequency_Hz` header: a mode 1000× lower than the others.
-    let khz = dir.path().join("khz.csv");
-    let mut lines: Vec<String> = std::fs::read_to_string(&good2)
-        .unwrap()
-        .lines()
-        .map(str::to_string)
-        .collect();
-    for l in lines.iter_mut().skip(2) {
-        let (f, rest) = l.split_once(',').unwrap();
-        *l = format!("{},{rest}", f.parse::<f64>().unwrap() / 1000.0);
+    // Frequencies scaled by 1000 (a unit mistake): at 1/1000 the rows imply a vibration of
+    // tens of metres (refused row by row); at ×1000 the file lies 1000× above the other
+    // level, which is not the same mode (refused by the band check).
+    let scaled = |factor: f64, name: &str| {
+        let p = dir.path().join(name);
+        let mut lines: Vec<String> = std::fs::read_to_string(&good2)
+            .unwrap()
+            .lines()
+            .map(str::to_string)
+            .collect();
+        for l in lines.iter_mut().skip(2) {
+            let (f, rest) = l.split_once(',').unwrap();
+            *l = format!("{},{rest}", f.parse::<f64>().unwrap() * factor);
+        }
+        std::fs::write(&p, lines.join("\n") + "\n").unwrap();
+        p
+    };
+    for (file, needle) in [
+        (scaled(1e-3, "khz.csv"), "check the units"),
+        (scaled(1e3, "mhz.csv"), "more than a factor 2 apart"),
+    ] {
+        let o = run("identify", &[s(&good1), s(&file), "--out-dir", s(&out)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success()
+                && err.contains(file.file_name().unwrap().to_str().unwrap())
+                && err.contains(needle),
+            "{err}"
+        );
+        assert!(!out.exists());
     }
-    std::fs::write(&khz, lines.join("\n") + "\n").unwrap();
-    let o = run("identify", &[s(&good1), s(&khz), "--out-dir", s(&out)]);
+    // With three files the odd one out is named.
+    let mhz = dir.path().join("mhz.csv");
+    let good3 = write_sweep(dir.path(), "good3.csv", &m, 0.3);
+    let o = run(
+        "identify",
+        &[s(&good1), s(&mhz), s(&good3), "--out-dir", s(&out)],
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && err.contains("khz.csv") && err.contains("kHz"),
+        !o.status.success()
+            && err.contains("mhz.csv (")
+            && !err.contains("good1.csv")
+            && err.contains("far from the other files'"),
         "{err}"
     );
-    assert!(!out.exists());
     // An output that cannot be written (a directory in the way of model.json) fails after the
     // fit with nothing else written: the outputs appear together or not at all.
     std::fs::create_dir_all(out.join("model.json")).unwrap();
@@ -443,7 +470,7 @@ fn identify_then_predict_both_controls() {
     }
     let rc = dir.path().join("response-controlled.csv");
     std::fs::write(&rc, text).unwrap();
-    // A file in kHz under a `frequency_Hz` header lies 1000× below the model's mode: refused,
+    // A file whose frequencies are scaled by 1000 lies 1000× above the model's mode: refused,
     // nothing written.
     let khz = dir.path().join("khz.csv");
     let mut lines: Vec<String> = std::fs::read_to_string(&files[1])
@@ -453,7 +480,7 @@ fn identify_then_predict_both_controls() {
         .collect();
     for l in lines.iter_mut().skip(2) {
         let (f, rest) = l.split_once(',').unwrap();
-        *l = format!("{},{rest}", f.parse::<f64>().unwrap() / 1000.0);
+        *l = format!("{},{rest}", f.parse::<f64>().unwrap() * 1000.0);
     }
     std::fs::write(&khz, lines.join("\n") + "\n").unwrap();
     let kout = dir.path().join("pred-khz");

@@ -179,10 +179,10 @@ pub fn frequency_span(s: &Sweep) -> (f64, f64) {
     })
 }
 
-/// Sweeps of one mode at several levels surround the same resonance: a file whose frequency
-/// span lies more than a factor 2 away from the others' (the centre of its span against the
-/// median centre) is another mode, or its frequencies are in another unit (kHz under a
-/// `frequency_Hz` header reads as a mode 1000 times lower). Refused, naming the file.
+/// Sweeps of one mode at several levels surround the same resonance: when the centres of the
+/// files' frequency spans lie more than a factor 2 apart, one file is another mode or has its
+/// frequencies in another unit. Refused, naming the file farthest from the median (both files
+/// when there are two).
 fn check_common_band(sweeps: &[Sweep]) -> Result<()> {
     if sweeps.len() < 2 {
         return Ok(());
@@ -191,22 +191,40 @@ fn check_common_band(sweeps: &[Sweep]) -> Result<()> {
         let (lo, hi) = frequency_span(s);
         (lo * hi).sqrt()
     };
+    let span = |s: &Sweep| {
+        let (lo, hi) = frequency_span(s);
+        format!("{} ({lo:.6}–{hi:.6} Hz)", s.path.display())
+    };
+    let why = "not the same mode, or frequencies in another unit (e.g. kHz in a `frequency_Hz` \
+               column)";
     let mut centres: Vec<f64> = sweeps.iter().map(centre).collect();
     centres.sort_by(f64::total_cmp);
-    let median = centres[centres.len() / 2];
-    for s in sweeps {
-        let c = centre(s);
-        if c > 2.0 * median || c < 0.5 * median {
-            let (lo, hi) = frequency_span(s);
-            return Err(Error::Data(format!(
-                "{}: its frequencies ({lo:.6}–{hi:.6} Hz) lie more than a factor 2 from the other \
-                 files' (around {median:.6} Hz): not the same mode, or frequencies in another unit \
-                 (e.g. kHz in a `frequency_Hz` column)",
-                s.path.display()
-            )));
-        }
+    if centres[centres.len() - 1] <= 2.0 * centres[0] {
+        return Ok(());
     }
-    Ok(())
+    if sweeps.len() == 2 {
+        // Two files: no majority to say which one is off.
+        return Err(Error::Data(format!(
+            "{} and {}: frequency spans more than a factor 2 apart: {why}",
+            span(&sweeps[0]),
+            span(&sweeps[1])
+        )));
+    }
+    let median = centres[centres.len() / 2];
+    let worst = sweeps
+        .iter()
+        .max_by(|a, b| {
+            (centre(a) / median)
+                .ln()
+                .abs()
+                .total_cmp(&(centre(b) / median).ln().abs())
+        })
+        .expect("at least two sweeps");
+    Err(Error::Data(format!(
+        "{}: far from the other files' frequencies (around {median:.6} Hz; the spans lie more \
+         than a factor 2 apart): {why}",
+        span(worst)
+    )))
 }
 
 fn names(sweeps: &[Sweep]) -> String {
