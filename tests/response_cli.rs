@@ -166,6 +166,13 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
         &["model.toml", "excitation force on the structure is zero"],
     );
     reset();
+    edit(
+        "model.toml",
+        "levels_n = [0.02, 0.5]",
+        "levels_n = [0.02, 1e30]",
+    );
+    assert_fails(p, &["model.toml:15", "beyond any exciter"]);
+    reset();
     // A contact between a node and itself does nothing.
     edit("pairs.csv", "11,m2,ground", "11,m2,m2");
     assert_fails(p, &["pairs.csv:3", "same node"]);

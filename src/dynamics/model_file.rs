@@ -217,6 +217,13 @@ impl ModelFile {
                 format!("levels must be finite and > 0, got {v}"),
             ));
         }
+        let max = crate::identify::measured::MAX_FORCE_AMPLITUDE_N;
+        if let Some(v) = e.levels_n.iter().find(|v| **v > max) {
+            return Err(Error::param(
+                "excitation.levels_n",
+                format!("{v} N is more than {max:e} N, beyond any exciter (a unit error?)"),
+            ));
+        }
         if e.dofs.is_empty() {
             return Err(Error::param("excitation.dofs", "give at least one DOF"));
         }
