@@ -167,7 +167,6 @@ pub fn read_sweeps(paths: &[PathBuf]) -> Result<Vec<Sweep>> {
             )));
         }
     }
-    check_common_band(&sweeps)?;
     sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
     Ok(sweeps)
 }
@@ -179,7 +178,8 @@ pub fn frequency_span(s: &Sweep) -> (f64, f64) {
     })
 }
 
-/// Sweeps of one mode at several levels surround the same resonance: when the centres of the
+/// Levels of one identification are sweeps of one mode surrounding the same resonance (files
+/// of other modes are for `predict` with a reduced model, not for one identification): when the centres of the
 /// files' frequency spans lie more than a factor 2 apart, one file is another mode or has its
 /// frequencies in another unit. Refused, naming the file farthest from the median (both files
 /// when there are two).
@@ -245,6 +245,7 @@ pub fn choose_fit_levels(sweeps: &[Sweep], fit_levels: Option<&[usize]>) -> Resu
             names(sweeps)
         )));
     }
+    check_common_band(sweeps)?;
     let levels = match fit_levels {
         None => vec![0, sweeps.len() - 1],
         Some(v) => {
