@@ -179,8 +179,8 @@ pub fn frequency_span(s: &Sweep) -> (f64, f64) {
 }
 
 /// Levels of one identification are sweeps of one mode surrounding the same resonance (files
-/// of other modes are for `predict` with a reduced model, not for one identification): when the centres of the
-/// files' frequency spans lie more than a factor 2 apart, one file is another mode or has its
+/// of other modes are for `predict` with a reduced model): when the centres of the files'
+/// frequency spans lie more than a factor 2 apart, one file is another mode or has its
 /// frequencies in another unit. Refused, naming the file farthest from the median (both files
 /// when there are two).
 fn check_common_band(sweeps: &[Sweep]) -> Result<()> {
