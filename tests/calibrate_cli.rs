@@ -13,6 +13,37 @@ fn asperity(args: &[&str]) -> Output {
         .expect("run asperity")
 }
 
+/// `asperity calibrate <cfg> --surface <each file> --out-dir <out> <extra>`.
+fn calibrate_surfaces(cfg: &Path, surfaces: &[&Path], out: &Path, extra: &[&str]) -> Output {
+    let mut a = vec!["calibrate", cfg.to_str().unwrap()];
+    for f in surfaces {
+        a.extend(["--surface", f.to_str().unwrap()]);
+    }
+    a.extend(["--out-dir", out.to_str().unwrap()]);
+    a.extend_from_slice(extra);
+    asperity(&a)
+}
+
+/// `asperity contact tangential --surface <file> <extra>` at 10 MPa, one cycle of 8 steps.
+fn tangential_on(surface: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut a = vec![
+        "contact",
+        "tangential",
+        "--surface",
+        surface.to_str().unwrap(),
+        "--pressures-pa",
+        "1e7",
+        "--cycles",
+        "1",
+        "--steps-per-cycle",
+        "8",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ];
+    a.extend_from_slice(extra);
+    asperity(&a)
+}
+
 fn reference_config() -> String {
     std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("calib/reference.toml"))
         .unwrap()
@@ -200,14 +231,7 @@ fn measured_surfaces_go_through_the_chain() {
         let f = dir.path().join(format!("w1.{ext}"));
         asperity::surface::io::write(&f, &w1).unwrap();
         let out = dir.path().join(format!("out-{ext}"));
-        let o = asperity(&[
-            "calibrate",
-            cfg.to_str().unwrap(),
-            "--surface",
-            f.to_str().unwrap(),
-            "--out-dir",
-            out.to_str().unwrap(),
-        ]);
+        let o = calibrate_surfaces(&cfg, &[&f], &out, &[]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success(), "{ext}: {stderr}");
         assert!(
@@ -239,16 +263,7 @@ fn measured_surfaces_go_through_the_chain() {
     asperity::surface::io::write(&f1, &w1).unwrap();
     asperity::surface::io::write(&f2, &w2).unwrap();
     let out = dir.path().join("out-two");
-    let o = asperity(&[
-        "calibrate",
-        cfg.to_str().unwrap(),
-        "--surface",
-        f1.to_str().unwrap(),
-        "--surface",
-        f2.to_str().unwrap(),
-        "--out-dir",
-        out.to_str().unwrap(),
-    ]);
+    let o = calibrate_surfaces(&cfg, &[&f1, &f2], &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(stderr.contains("equivalent surface h1 - h2"), "{stderr}");
@@ -282,23 +297,7 @@ fn measured_surfaces_go_through_the_chain() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--grid"));
     // contact tangential on the same measured file.
     let out = dir.path().join("tangential");
-    let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
-        .args([
-            "contact",
-            "tangential",
-            "--surface",
-            f1.to_str().unwrap(),
-            "--pressures-pa",
-            "1e7",
-            "--cycles",
-            "1",
-            "--steps-per-cycle",
-            "8",
-            "--out-dir",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = tangential_on(&f1, &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("zero-padded"), "{err}");
@@ -309,16 +308,7 @@ fn measured_surfaces_go_through_the_chain() {
     );
     // The same body twice is a flat equivalent surface: refused before the sweep, naming it.
     let out = dir.path().join("out-same");
-    let o = asperity(&[
-        "calibrate",
-        cfg.to_str().unwrap(),
-        "--surface",
-        f1.to_str().unwrap(),
-        "--surface",
-        f1.to_str().unwrap(),
-        "--out-dir",
-        out.to_str().unwrap(),
-    ]);
+    let o = calibrate_surfaces(&cfg, &[&f1, &f1], &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("b1.npy") && err.contains("flat"),
@@ -334,25 +324,13 @@ fn measured_surfaces_go_through_the_chain() {
         .unwrap();
     asperity::surface::io::write_topography(&fh, &topo).unwrap();
     let out = dir.path().join("out-holed");
-    let calibrate = |fill: &[&str]| {
-        let mut a = vec![
-            "calibrate",
-            cfg.to_str().unwrap(),
-            "--surface",
-            fh.to_str().unwrap(),
-            "--out-dir",
-            out.to_str().unwrap(),
-        ];
-        a.extend_from_slice(fill);
-        asperity(&a)
-    };
-    let o = calibrate(&[]);
+    let o = calibrate_surfaces(&cfg, &[&fh], &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("holed.npy") && err.contains("--fill"),
         "{err}"
     );
-    let o = calibrate(&["--fill", "harmonic"]);
+    let o = calibrate_surfaces(&cfg, &[&fh], &out, &["--fill", "harmonic"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
     assert!(
@@ -360,25 +338,7 @@ fn measured_surfaces_go_through_the_chain() {
         "{json}"
     );
     let out_t = dir.path().join("tangential-holed");
-    let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
-        .args([
-            "contact",
-            "tangential",
-            "--surface",
-            fh.to_str().unwrap(),
-            "--fill",
-            "nearest",
-            "--pressures-pa",
-            "1e7",
-            "--cycles",
-            "1",
-            "--steps-per-cycle",
-            "8",
-            "--out-dir",
-            out_t.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = tangential_on(&fh, &out_t, &["--fill", "nearest"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 

@@ -61,6 +61,10 @@ fn write_sweep(dir: &Path, name: &str, model: &Model, force: f64) -> PathBuf {
     p
 }
 
+/// A fit small enough for a test of the command's plumbing: no effect search, one start of a
+/// four-particle swarm.
+const QUICK_FIT: &[&str] = &["--max-effects", "0", "--starts", "1", "--particles", "4"];
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -147,21 +151,18 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
     let o = run(
         "identify",
         &[
-            s(&good1),
-            s(&good2),
-            "--max-effects",
-            "0",
-            "--starts",
-            "1",
-            "--particles",
-            "4",
-            "--swarm-iterations",
-            "1",
-            "--local-iterations",
-            "3",
-            "--out-dir",
-            s(&out),
-        ],
+            &[s(&good1), s(&good2)][..],
+            QUICK_FIT,
+            &[
+                "--swarm-iterations",
+                "1",
+                "--local-iterations",
+                "3",
+                "--out-dir",
+                s(&out),
+            ],
+        ]
+        .concat(),
     );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -279,21 +280,18 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
     let o = run(
         "identify",
         &[
-            s(&good1),
-            s(&good2),
-            "--max-effects",
-            "0",
-            "--starts",
-            "1",
-            "--particles",
-            "4",
-            "--swarm-iterations",
-            "2",
-            "--chain-steps",
-            "0",
-            "--out-dir",
-            s(&out),
-        ],
+            &[s(&good1), s(&good2)][..],
+            QUICK_FIT,
+            &[
+                "--swarm-iterations",
+                "2",
+                "--chain-steps",
+                "0",
+                "--out-dir",
+                s(&out),
+            ],
+        ]
+        .concat(),
     );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("model.json"), "{err}");
