@@ -61,6 +61,22 @@ fn write_sweep(dir: &Path, name: &str, model: &Model, force: f64) -> PathBuf {
     p
 }
 
+/// A copy of the sweep `src` at `dst` with every frequency multiplied by `factor` (a unit
+/// mistake).
+fn frequencies_scaled(src: &Path, dst: &Path, factor: f64) -> PathBuf {
+    let mut lines: Vec<String> = std::fs::read_to_string(src)
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    for l in lines.iter_mut().skip(2) {
+        let (f, rest) = l.split_once(',').unwrap();
+        *l = format!("{},{rest}", f.parse::<f64>().unwrap() * factor);
+    }
+    std::fs::write(dst, lines.join("\n") + "\n").unwrap();
+    dst.to_path_buf()
+}
+
 /// A fit small enough for a test of the command's plumbing: no effect search, one start of a
 /// four-particle swarm.
 const QUICK_FIT: &[&str] = &["--max-effects", "0", "--starts", "1", "--particles", "4"];
@@ -231,20 +247,8 @@ fn bad_input_names_file_and_line_and_writes_nothing() {
     // Frequencies scaled by 1000 (a unit mistake): at 1/1000 the rows imply a vibration of
     // tens of metres (refused row by row); at ×1000 the file lies 1000× above the other
     // level, which is not the same mode (refused by the band check).
-    let scaled = |factor: f64, name: &str| {
-        let p = dir.path().join(name);
-        let mut lines: Vec<String> = std::fs::read_to_string(&good2)
-            .unwrap()
-            .lines()
-            .map(str::to_string)
-            .collect();
-        for l in lines.iter_mut().skip(2) {
-            let (f, rest) = l.split_once(',').unwrap();
-            *l = format!("{},{rest}", f.parse::<f64>().unwrap() * factor);
-        }
-        std::fs::write(&p, lines.join("\n") + "\n").unwrap();
-        p
-    };
+    let scaled =
+        |factor: f64, name: &str| frequencies_scaled(&good2, &dir.path().join(name), factor);
     for (file, needle) in [
         (scaled(1e-3, "khz.csv"), "check the units"),
         (scaled(1e3, "mhz.csv"), "more than a factor 2 apart"),
@@ -470,17 +474,7 @@ fn identify_then_predict_both_controls() {
     std::fs::write(&rc, text).unwrap();
     // A file whose frequencies are scaled by 1000 lies 1000× above the model's mode: refused,
     // nothing written.
-    let khz = dir.path().join("khz.csv");
-    let mut lines: Vec<String> = std::fs::read_to_string(&files[1])
-        .unwrap()
-        .lines()
-        .map(str::to_string)
-        .collect();
-    for l in lines.iter_mut().skip(2) {
-        let (f, rest) = l.split_once(',').unwrap();
-        *l = format!("{},{rest}", f.parse::<f64>().unwrap() * 1000.0);
-    }
-    std::fs::write(&khz, lines.join("\n") + "\n").unwrap();
+    let khz = frequencies_scaled(&files[1], &dir.path().join("khz.csv"), 1000.0);
     let kout = dir.path().join("pred-khz");
     let o = run(
         "predict",
