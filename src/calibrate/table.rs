@@ -202,6 +202,14 @@ impl CalibrationRow {
                 self.e0_n_per_m3, self.et_n_per_m3
             ));
         }
+        // R² = 1 − SS_res/SS_tot with SS_res ≥ 0: a coefficient of determination above 1 is
+        // not the result of any fit (a hand-edited or corrupted table).
+        if self.fit_r2 > 1.0 {
+            return Err(format!(
+                "`fit_R2` must be <= 1 (a coefficient of determination), got {}",
+                self.fit_r2
+            ));
+        }
         if self.energy_per_cycle_j_per_m2 < 0.0 {
             return Err(format!(
                 "`energy_per_cycle_J_per_m2` must be >= 0, got {}",

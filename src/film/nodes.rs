@@ -9,7 +9,7 @@
 //! total normal load `F` is given, every preload (and pressure) is scaled by `F / Σ N0`, so the
 //! preloads sum to `F`.
 
-use crate::error::{Error, Result};
+use crate::error::{num, Error, Result};
 use std::path::Path;
 
 /// A contact node in the mesh frame.
@@ -314,8 +314,19 @@ pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Resul
     })
 }
 
-/// Read a preload CSV written by [`write_preloads_csv`]. Errors name the file and line:
-/// missing columns, unparsable or non-finite values, area ≤ 0, negative pressure, a duplicate
+/// Largest relative difference between a preload `N0_N` and `pressure_Pa × area_m2` accepted
+/// by [`read_preloads_csv`]. `N0 = σ·A` by definition of the preload (and `ΣN0/ΣA` is the
+/// pressure of a reduced node, so that holds after a reduction too); the film command writes
+/// 13–16 significant digits, so its files agree to about 1e-12, and a file re-saved by a
+/// spreadsheet (15 digits) passes too. A larger difference means an edited column or a column
+/// in another unit (N0 in kN, area in mm²): the element's stiffness (from σ and A) and its
+/// preload (N0) would describe two different contacts.
+pub const PRELOAD_CONSISTENCY_TOLERANCE: f64 = 1e-6;
+
+/// Read a preload CSV written by [`write_preloads_csv`]. Errors name the file, line and column:
+/// missing columns, unparsable or non-finite values, area ≤ 0, a negative pressure or preload
+/// (a contact node is pressed, never pulled: a tensile "preload" is no contact), `N0_N` not
+/// equal to `pressure_Pa × area_m2` (within [`PRELOAD_CONSISTENCY_TOLERANCE`]), a duplicate
 /// node id.
 pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
     crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
@@ -335,18 +346,57 @@ pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
                 format!("expected columns id,x_m,y_m,area_m2,pressure_Pa,N0_N: {e}"),
             )
         })?;
-        let ok = [p.x_m, p.y_m, p.area_m2, p.pressure_pa, p.n0_n]
-            .iter()
-            .all(|v| v.is_finite())
-            && p.area_m2 > 0.0
-            && p.pressure_pa >= 0.0;
-        if !ok {
-            return Err(Error::parse(
-                path,
-                line,
+        let bad = |column: &str, why: String| {
+            Error::parse(path, line, format!("node {}: column {column}: {why}", p.id))
+        };
+        for (column, v) in [
+            ("x_m", p.x_m),
+            ("y_m", p.y_m),
+            ("area_m2", p.area_m2),
+            ("pressure_Pa", p.pressure_pa),
+            ("N0_N", p.n0_n),
+        ] {
+            if !v.is_finite() {
+                return Err(bad(column, format!("{} is not finite", num(v))));
+            }
+        }
+        if p.area_m2 <= 0.0 {
+            return Err(bad(
+                "area_m2",
+                format!("must be > 0, got {}", num(p.area_m2)),
+            ));
+        }
+        if p.pressure_pa < 0.0 {
+            return Err(bad(
+                "pressure_Pa",
                 format!(
-                    "node {}: values must be finite, area > 0 and pressure ≥ 0",
-                    p.id
+                    "must be ≥ 0 (a contact pressure is compressive), got {}",
+                    num(p.pressure_pa)
+                ),
+            ));
+        }
+        if p.n0_n < 0.0 {
+            return Err(bad(
+                "N0_N",
+                format!(
+                    "must be ≥ 0 (a normal preload presses the contact; a pulled node is not in \
+                     contact), got {}",
+                    num(p.n0_n)
+                ),
+            ));
+        }
+        let load = p.pressure_pa * p.area_m2;
+        if (p.n0_n - load).abs() > PRELOAD_CONSISTENCY_TOLERANCE * p.n0_n.max(load) {
+            return Err(bad(
+                "N0_N",
+                format!(
+                    "{} N is not pressure_Pa × area_m2 = {} Pa × {} m² = {} N (relative \
+                     tolerance {}): an edited column, or a column in another unit?",
+                    num(p.n0_n),
+                    num(p.pressure_pa),
+                    num(p.area_m2),
+                    num(load),
+                    num(PRELOAD_CONSISTENCY_TOLERANCE)
                 ),
             ));
         }
@@ -413,6 +463,53 @@ mod tests {
         let total: f64 = p.iter().map(|q| q.n0_n).sum();
         assert!((total - 123.0).abs() <= 1e-9 * 123.0);
         assert!((s.total_load_n - 123.0).abs() <= 1e-9 * 123.0);
+    }
+
+    /// Preload files as `film` writes them read back; a negative preload, a preload that is not
+    /// pressure × area, and the errors name file, line and column.
+    #[test]
+    fn preload_files_are_checked_row_by_row() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("pl.csv");
+        let rows = vec![
+            Preload {
+                id: 7,
+                x_m: 0.01,
+                y_m: 0.02,
+                area_m2: 2.8125e-7,
+                pressure_pa: 2.049197055422e6,
+                n0_n: 2.049197055422e6 * 2.8125e-7,
+            },
+            Preload {
+                id: 8,
+                x_m: 0.011,
+                y_m: 0.02,
+                area_m2: 1.0 / 3.0 * 1e-6,
+                pressure_pa: 0.0,
+                n0_n: 0.0,
+            },
+        ];
+        write_preloads_csv(&path, &rows, "test").unwrap();
+        assert_eq!(read_preloads_csv(&path).unwrap().len(), 2);
+        let header = "id,x_m,y_m,area_m2,pressure_Pa,N0_N\n";
+        let bad = |row: &str| {
+            std::fs::write(&path, format!("# comment\n{header}{row}\n")).unwrap();
+            read_preloads_csv(&path).unwrap_err().to_string()
+        };
+        let e = bad("7,0.048637,0.222796,2.8125e-7,2e6,-0.576");
+        assert!(
+            e.contains("pl.csv:3") && e.contains("N0_N") && e.contains("≥ 0"),
+            "{e}"
+        );
+        let e = bad("7,0.048637,0.222796,2.8125e-7,2e6,5000");
+        assert!(
+            e.contains("pl.csv:3") && e.contains("N0_N") && e.contains("0.5625"),
+            "{e}"
+        );
+        let e = bad("7,0.048637,0.222796,2.8125e-7,-2e6,0");
+        assert!(e.contains("pl.csv:3") && e.contains("pressure_Pa"), "{e}");
+        let e = bad("7,0.048637,0.222796,0,2e6,0");
+        assert!(e.contains("pl.csv:3") && e.contains("area_m2"), "{e}");
     }
 
     #[test]
