@@ -514,6 +514,92 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
     assert!(!st.root.join("e.csv").exists());
 }
 
+/// `elements` refuses an --out that is one of its inputs (it would overwrite it), a preload
+/// that pulls a node or is not pressure × area, and a table whose fit_R2 exceeds 1; each error
+/// names the flag or the file, line and column, and no output is left.
+#[test]
+fn elements_refuses_overwriting_inputs_and_unphysical_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("calib/calibration_table.csv");
+    let table = root.join("table.csv");
+    std::fs::copy(&reference, &table).unwrap();
+    let preload = root.join("preload.csv");
+    let header = "id,x_m,y_m,area_m2,pressure_Pa,N0_N\n";
+    std::fs::write(
+        &preload,
+        format!("{header}1,0,0,1e-6,2e6,2\n2,1e-3,0,1e-6,3e6,3\n"),
+    )
+    .unwrap();
+    let elements = |pre: &Path, tab: &Path, out: &Path| {
+        run(&[
+            "elements",
+            "--preload",
+            s(pre),
+            "--table",
+            s(tab),
+            "--out",
+            s(out),
+        ])
+    };
+    let ok = elements(&preload, &table, &root.join("e.csv"));
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+
+    // The output is an input: refused, the input unchanged (also through `..`).
+    let before = std::fs::read(&table).unwrap();
+    assert_fails(&elements(&preload, &table, &table), &["--out", "--table"]);
+    std::fs::create_dir(root.join("sub")).unwrap();
+    assert_fails(
+        &elements(&preload, &table, &root.join("sub/../preload.csv")),
+        &["--out", "--preload"],
+    );
+    assert_eq!(std::fs::read(&table).unwrap(), before);
+    // The sidecar of --out (same stem, .json) would overwrite an input.
+    let pre_json = root.join("pre.json");
+    std::fs::copy(&preload, &pre_json).unwrap();
+    assert_fails(
+        &elements(&pre_json, &table, &root.join("pre.csv")),
+        &["--out", "sidecar", "pre.json"],
+    );
+    assert!(!root.join("pre.csv").exists());
+
+    // A negative preload, and one that is not pressure × area (5000 N for 2 MPa × 0.28 mm²).
+    let bad = root.join("pl-bad.csv");
+    let out = root.join("e-bad.csv");
+    std::fs::write(
+        &bad,
+        format!("{header}1,0,0,1e-6,2e6,2\n7,0,0,2.8125e-7,2e6,-0.576\n"),
+    )
+    .unwrap();
+    assert_fails(
+        &elements(&bad, &table, &out),
+        &["pl-bad.csv:3", "N0_N", "≥ 0"],
+    );
+    std::fs::write(&bad, format!("{header}7,0,0,2.8125e-7,2e6,5000\n")).unwrap();
+    assert_fails(
+        &elements(&bad, &table, &out),
+        &["pl-bad.csv:2", "N0_N", "0.5625"],
+    );
+
+    // fit_R2 = 5 in the table's fourth line.
+    let text = std::fs::read_to_string(&table).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut fields: Vec<&str> = lines[3].split(',').collect();
+    fields[7] = "5.0";
+    lines[3] = fields.join(",");
+    let bad_table = root.join("tb-R2bad.csv");
+    std::fs::write(&bad_table, lines.join("\n") + "\n").unwrap();
+    assert_fails(
+        &elements(&preload, &bad_table, &out),
+        &["tb-R2bad.csv:4", "fit_R2", "<= 1"],
+    );
+    assert!(!out.exists() && !out.with_extension("json").exists());
+}
+
 #[test]
 fn raw_grey_scan_with_density_calibration() {
     let dir = tempfile::tempdir().unwrap();
