@@ -44,6 +44,32 @@ const END_TOLERANCE: f64 = 1e-6;
 /// the Prescale LW pink scale (whose steps are ≈ 40 units long).
 pub const DEFAULT_MAX_COLOUR_DISTANCE: f64 = 20.0;
 
+/// Smallest plausible largest pressure of a film calibration (Pa). Pressure films measure from
+/// about 0.005 MPa (the most sensitive grades) to 300 MPa; a colour table or density
+/// calibration whose pressures all lie below 1 kPa was written in another unit than its header
+/// says (MPa values under a `pressure_Pa` header), and would read every patch as ≈ 0 MPa.
+pub const MIN_PLAUSIBLE_CALIBRATION_PA: f64 = 1e3;
+
+/// Refuse a calibration file whose largest pressure (Pa) is below
+/// [`MIN_PLAUSIBLE_CALIBRATION_PA`]; `unit_line` is the line declaring the unit (0: none).
+fn check_plausible_pressures(path: &Path, max_pa: f64, unit: f64, unit_line: usize) -> Result<()> {
+    if max_pa < MIN_PLAUSIBLE_CALIBRATION_PA {
+        let unit_name = if unit == 1.0 { "Pa" } else { "MPa" };
+        return Err(Error::parse(
+            path,
+            unit_line,
+            format!(
+                "every pressure is below 1 kPa (largest {} {unit_name} = {} Pa), but pressure \
+                 films measure about 0.005–300 MPa: are the values in MPa under a {unit_name} \
+                 header? Name the column pressure_MPa",
+                crate::error::num(max_pa / unit),
+                crate::error::num(max_pa)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// What a pixel's colour says about the pressure there.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PixelClass {
@@ -178,6 +204,7 @@ impl ColourTable {
         let mut unit = 1e6; // vendor convention: MPa
         let mut rows = Vec::new();
         let mut seen_header = false;
+        let mut unit_line = 0;
         for (k, raw) in text.lines().enumerate() {
             let line_no = k + 1;
             let line = raw.trim();
@@ -212,6 +239,7 @@ impl ColourTable {
                     ));
                 };
                 seen_header = true;
+                unit_line = line_no;
                 continue;
             }
             let mut v = [0.0; 4];
@@ -257,6 +285,9 @@ impl ColourTable {
                 },
                 line_no,
             ));
+        }
+        if let Some((last, _)) = rows.last() {
+            check_plausible_pressures(path, last.pressure_pa, unit, unit_line)?;
         }
         let source = path.display().to_string();
         Self::from_rows(
@@ -486,6 +517,7 @@ impl DensityCalibration {
         crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let mut unit = None;
+        let mut unit_line = 0;
         let mut pts = Vec::new();
         for (k, raw) in text.lines().enumerate() {
             let line = raw.trim();
@@ -513,6 +545,7 @@ impl DensityCalibration {
                         "header must be `density,pressure_MPa` or `density,pressure_Pa`",
                     ));
                 });
+                unit_line = k + 1;
                 continue;
             }
             let d: f64 = f[0]
@@ -528,7 +561,24 @@ impl DensityCalibration {
                     "density and pressure must be finite, pressure ≥ 0",
                 ));
             }
+            // D = log10(I_paper / I): a film never transmits or reflects more light than
+            // unstained paper, so a negative density is no reading of a film.
+            if d < 0.0 {
+                return Err(Error::parse(
+                    path,
+                    k + 1,
+                    format!(
+                        "density {} is negative: an optical density (log10 of paper over stain \
+                         brightness) is ≥ 0",
+                        crate::error::num(d)
+                    ),
+                ));
+            }
             pts.push((d, p * unit.unwrap_or(1e6)));
+        }
+        if !pts.is_empty() {
+            let max = pts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+            check_plausible_pressures(path, max, unit.unwrap_or(1e6), unit_line)?;
         }
         Self::new(pts, &path.display().to_string())
     }
@@ -688,6 +738,46 @@ mod tests {
         let e = ColourTable::read_csv(&p, 20.0).unwrap_err();
         assert!(e.to_string().contains("t.csv:4"), "{e}");
         assert!(e.to_string().contains("not monotone"), "{e}");
+    }
+
+    /// MPa values under a `pressure_Pa` header (every pressure below 1 kPa) and a negative
+    /// optical density are refused, naming the file and line.
+    #[test]
+    fn implausible_calibration_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ct.csv");
+        std::fs::write(
+            &p,
+            "pressure_Pa,R,G,B\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
+        )
+        .unwrap();
+        let e = ColourTable::read_csv(&p, 20.0).unwrap_err().to_string();
+        assert!(e.contains("ct.csv:1") && e.contains("pressure_MPa"), "{e}");
+        // The same values in MPa, and in Pa, are fine.
+        std::fs::write(
+            &p,
+            "pressure_MPa,R,G,B\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
+        )
+        .unwrap();
+        assert_eq!(
+            ColourTable::read_csv(&p, 20.0).unwrap().range_pa(),
+            (2.5e6, 1e7)
+        );
+        std::fs::write(
+            &p,
+            "pressure_Pa,R,G,B\n2.5e6,255,227,227\n5e6,255,100,100\n1e7,255,0,0\n",
+        )
+        .unwrap();
+        assert!(ColourTable::read_csv(&p, 20.0).is_ok());
+        let d = dir.path().join("dc.csv");
+        std::fs::write(&d, "density,pressure_MPa\n-0.3,2.5\n1,10\n").unwrap();
+        let e = DensityCalibration::read_csv(&d).unwrap_err().to_string();
+        assert!(e.contains("dc.csv:2") && e.contains("negative"), "{e}");
+        std::fs::write(&d, "density,pressure_Pa\n0.3,2.5\n1,10\n").unwrap();
+        let e = DensityCalibration::read_csv(&d).unwrap_err().to_string();
+        assert!(e.contains("dc.csv:1") && e.contains("1 kPa"), "{e}");
+        std::fs::write(&d, "density,pressure_MPa\n0.3,2.5\n1,10\n").unwrap();
+        assert!(DensityCalibration::read_csv(&d).is_ok());
     }
 
     #[test]
