@@ -75,7 +75,8 @@ pub struct PolyFit2 {
     pub exponents: Vec<(usize, usize)>,
     /// Coefficients `c_ab` in Pa, in the scaled basis.
     pub coefficients_pa: Vec<f64>,
-    /// Coefficient of determination over the fitted points.
+    /// Coefficient of determination over the fitted points; NaN (undefined) when every point
+    /// has the same pressure ([`PolyFit2::r_squared_text`] writes it as an empty field).
     pub r_squared: f64,
     /// Root-mean-square residual (Pa).
     pub rms_residual_pa: f64,
@@ -84,6 +85,16 @@ pub struct PolyFit2 {
 }
 
 impl PolyFit2 {
+    /// R² with `digits` decimals for tables, or an empty field when it is undefined (uniform
+    /// points): a reader of the table sees "no value", never `NaN` in a number column.
+    pub fn r_squared_text(&self, digits: usize) -> String {
+        if self.r_squared.is_finite() {
+            format!("{:.*}", digits, self.r_squared)
+        } else {
+            String::new()
+        }
+    }
+
     /// Evaluate the fitted pressure (Pa) at a film point (m).
     pub fn eval(&self, x: f64, y: f64) -> f64 {
         let (u, v) = self.frame.scaled(x, y);
@@ -150,10 +161,19 @@ pub fn fit(points: &[(f64, f64, f64)], order: usize, frame: Option<FitFrame>) ->
         ss_res += e * e;
         ss_tot += (p.2 - mean).powi(2);
     }
-    result.r_squared = if ss_tot > 0.0 {
-        1.0 - ss_res / ss_tot
-    } else {
+    // Uniform points (one flat colour, e.g. a grey disc read with order 0) are fitted exactly
+    // by the constant, but leave no variance to explain: R² = 0/0 is undefined, not a number
+    // to report (rounding can leave a tiny SS_tot, so spread is tested, not SS_tot > 0).
+    let (lo, hi) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.2), b.max(p.2))
+        });
+    let uniform = hi - lo <= 1e-12 * hi.abs().max(lo.abs());
+    result.r_squared = if uniform {
         f64::NAN
+    } else {
+        1.0 - ss_res / ss_tot
     };
     result.rms_residual_pa = (ss_res / n as f64).sqrt();
     Ok(result)
@@ -272,6 +292,25 @@ mod tests {
         for (k, &(a, b)) in e.iter().enumerate() {
             assert!((f.coefficients_pa[k] - want(a, b)).abs() < 1e-10, "{a},{b}");
         }
+    }
+
+    /// Uniform points are fitted exactly by the constant; their R² is undefined and written
+    /// as an empty field, never as `NaN`.
+    #[test]
+    fn uniform_pressure_has_no_r_squared() {
+        let mut pts = Vec::new();
+        for i in 0..10 {
+            for j in 0..10 {
+                pts.push((i as f64 * 1e-4, j as f64 * 1e-4, 5.78e6));
+            }
+        }
+        let f = fit(&pts, 4, None).unwrap();
+        assert!((f.eval(3e-4, 4e-4) - 5.78e6).abs() < 1e-3);
+        assert_eq!(f.r_squared_text(9), "");
+        pts[0].2 = 5.7e6;
+        let f = fit(&pts, 4, None).unwrap();
+        assert!(f.r_squared.is_finite());
+        assert!(!f.r_squared_text(9).is_empty());
     }
 
     #[test]

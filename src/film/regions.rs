@@ -731,7 +731,7 @@ pub fn write_summary_csv(
             let (fo, fr, fe) = match f {
                 Some(f) => (
                     f.order.to_string(),
-                    format!("{:.9}", f.r_squared),
+                    f.r_squared_text(9),
                     format!("{:.6e}", f.rms_residual_pa),
                 ),
                 None => Default::default(),
