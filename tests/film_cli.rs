@@ -514,6 +514,120 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
     assert!(!st.root.join("e.csv").exists());
 }
 
+/// Flags are named as the user types them, calibration files in the wrong unit and nodes that
+/// cannot be triangulated are refused naming the file, and a patch of one flat colour (fitted
+/// exactly by a constant) has an empty R² field instead of NaN.
+#[test]
+fn film_flags_units_nodes_and_uniform_patches() {
+    let st = setup();
+    let out = st.root.join("out-flags");
+    let base = |extra: &[&str]| -> Output {
+        let mut a = vec![
+            "film",
+            "--image",
+            s(&st.image),
+            "--colour-table",
+            s(&st.table),
+            "--pixel-size-mm",
+            "0.1",
+            "--out-dir",
+            s(&out),
+        ];
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    assert_fails(
+        &base(&["--max-colour-distance", "1000"]),
+        &["--max-colour-distance", "441.7"],
+    );
+    let nodes = s(&st.nodes);
+    for (flag, value) in [("--total-load-n", "0"), ("--node-scale", "0")] {
+        let o = base(&["--nodes", nodes, "--node-offset-mm", "10,10", flag, value]);
+        assert_fails(&o, &[flag]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !err.contains("total_load_n") && !err.contains("node scale"),
+            "{err}"
+        );
+    }
+
+    // MPa values under a pressure_Pa header.
+    let mpa = st.root.join("ct-pa-but-mpa.csv");
+    std::fs::write(
+        &mpa,
+        "pressure_Pa,R,G,B\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&mpa),
+        "--pixel-size-mm",
+        "0.1",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert_fails(&o, &["ct-pa-but-mpa.csv:1", "pressure_MPa"]);
+
+    // Two nodes at one position, and collinear nodes: the nodes file is named.
+    let same = st.root.join("nodes-samepos.csv");
+    std::fs::write(&same, "id,x_m,y_m\n1,0,0\n2,0,0\n3,1e-3,0\n4,0,1e-3\n").unwrap();
+    assert_fails(
+        &base(&["--nodes", s(&same), "--node-offset-mm", "10,10"]),
+        &[
+            "nodes-samepos.csv",
+            "node 1 (line 2)",
+            "node 2 (line 3)",
+            "same position",
+        ],
+    );
+    let line = st.root.join("nodes-collinear.csv");
+    std::fs::write(&line, "id,x_m,y_m\n1,0,0\n2,1e-3,0\n3,2e-3,0\n").unwrap();
+    assert_fails(
+        &base(&["--nodes", s(&line), "--node-offset-mm", "10,10"]),
+        &["nodes-collinear.csv", "collinear"],
+    );
+    assert!(!out.exists());
+
+    // A second patch of one flat colour (the 5.31 MPa row): R² undefined, no NaN anywhere.
+    let mut img = image::open(&st.image).unwrap().to_rgb8();
+    for (c, r, px) in img.enumerate_pixels_mut() {
+        let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - r) as f64 * PIXEL_MM);
+        if (x - 16.5).hypot(y - 4.5) <= 1.5 {
+            *px = image::Rgb([255, 142, 142]);
+        }
+    }
+    let flat = st.root.join("flat.png");
+    img.save(&flat).unwrap();
+    let o = run(&[
+        "film",
+        "--image",
+        s(&flat),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "0.1",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("same pressure") && err.contains("R² undefined"),
+        "{err}"
+    );
+    let regions = read_rows(&out.join("regions.csv"));
+    assert_eq!(regions.len(), 2);
+    assert_eq!(regions.iter().filter(|r| r["fit_R2"].is_empty()).count(), 1);
+    for f in ["regions.csv", "film.json"] {
+        let text = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(!text.contains("NaN"), "{f}: {text}");
+    }
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("NaN"));
+}
+
 /// `elements` refuses an --out that is one of its inputs (it would overwrite it), a preload
 /// that pulls a node or is not pressure × area, and a table whose fit_R2 exceeds 1; each error
 /// names the flag or the file, line and column, and no output is left.

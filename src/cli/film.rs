@@ -220,8 +220,48 @@ fn channel_from_flags(name: &str, stain: Option<&[f64]>) -> Result<Channel> {
     })
 }
 
+/// Largest Euclidean distance between two colours of the 0–255 RGB cube, black to white
+/// (255·√3): a larger --max-colour-distance would reject nothing, so pen marks, tape and dirt
+/// would all be read as pressure.
+const MAX_RGB_DISTANCE: f64 = 441.672_955_930_063_7;
+
+/// The numeric flags, checked before any work so that errors name the flag (the library
+/// functions check them again under their own names).
+fn check_flags(a: &FilmOptions) -> Result<()> {
+    let d = a.max_colour_distance;
+    if !(d.is_finite() && d > 0.0 && d <= MAX_RGB_DISTANCE) {
+        return Err(Error::param(
+            "--max-colour-distance",
+            format!(
+                "must be > 0 and at most 255·√3 ≈ 441.7 RGB units (black to white), got {}",
+                asperity::error::num(d)
+            ),
+        ));
+    }
+    // A preload rescaled to a non-positive total would pull the joint apart.
+    if let Some(f) = a.total_load_n {
+        asperity::error::require_positive("--total-load-n", f)?;
+    }
+    // Mesh lengths map onto film lengths: a zero or negative scale mirrors or collapses the mesh.
+    asperity::error::require_positive("--node-scale", a.node_scale)?;
+    asperity::error::require_finite("--node-rotation-deg", a.node_rotation_deg)?;
+    if let Some(off) = &a.node_offset_mm {
+        if off.len() != 2 {
+            return Err(Error::param(
+                "--node-offset-mm",
+                format!("needs 2 values x,y, got {}", off.len()),
+            ));
+        }
+        for v in off {
+            asperity::error::require_finite("--node-offset-mm", *v)?;
+        }
+    }
+    Ok(())
+}
+
 pub fn run(args: FilmArgs) -> Result<()> {
     let args = *args.opts;
+    check_flags(&args)?;
     // Refused now, before any work: an --out-dir that is a file or not writable.
     let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let (mut reader, table_path) = match (&args.colour_table, &args.density_calibration) {
@@ -500,7 +540,19 @@ pub fn run(args: FilmArgs) -> Result<()> {
             polyfit::fit(&pts, args.fit_order, None).map_err(|e| e.to_string())
         };
         match fit {
-            Ok(f) => fits.push(Some(f)),
+            Ok(f) => {
+                if !f.r_squared.is_finite() {
+                    eprintln!(
+                        "note: region {}: all {} in-range pixels read the same pressure ({:.4} MPa): \
+                         fitted by that constant, R² undefined (empty in regions.csv); one flat \
+                         colour is more often a mark or a saturated blot than a real contact",
+                        r.id,
+                        pts.len(),
+                        pts[0].2 / 1e6
+                    );
+                }
+                fits.push(Some(f))
+            }
             Err(why) => {
                 eprintln!("warning: region {} skipped, not fitted: {why}", r.id);
                 skipped.push(serde_json::json!({ "region": r.id, "reason": why }));
@@ -557,12 +609,6 @@ pub fn run(args: FilmArgs) -> Result<()> {
         })?;
         let nodes = read_nodes_csv(nodes_path)?;
         let off = args.node_offset_mm.clone().unwrap_or(vec![0.0, 0.0]);
-        if off.len() != 2 {
-            return Err(Error::param(
-                "--node-offset-mm",
-                format!("needs 2 values x,y, got {}", off.len()),
-            ));
-        }
         let placement = Placement {
             offset_x_m: off[0] * 1e-3,
             offset_y_m: off[1] * 1e-3,
@@ -570,7 +616,9 @@ pub fn run(args: FilmArgs) -> Result<()> {
             scale: args.node_scale,
         };
         let pressure_at = |x: f64, y: f64| fitted_pressure_at(&map, region, fit, x, y);
-        let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)?;
+        // Errors about the nodes (their positions, their triangulation) name the nodes file.
+        let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)
+            .map_err(|e| e.in_file(nodes_path))?;
         let pre_comment = format!(
             "asperity {} node preloads N0 = sigma_fit(x, y) * area from {} (region {}, order-{} fit)",
             env!("CARGO_PKG_VERSION"),
@@ -674,8 +722,13 @@ pub fn run(args: FilmArgs) -> Result<()> {
                 f.eval(x, y)
             },
             &format!(
-                "region {}: order-{} fit, R² = {:.3}",
-                r.id, f.order, f.r_squared
+                "region {}: order-{} fit, R² = {}",
+                r.id,
+                f.order,
+                match f.r_squared_text(3).as_str() {
+                    "" => "undefined (uniform)",
+                    t => t,
+                }
             ),
             "fitted pressure (MPa)",
         )?;
@@ -707,7 +760,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
             s.counts.below_range,
             s.counts.above_range,
             s.counts.off_curve,
-            f.map(|f| format!("{:.4}", f.r_squared)).unwrap_or_default()
+            f.map(|f| f.r_squared_text(4)).unwrap_or_default()
         );
     }
 

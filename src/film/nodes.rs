@@ -20,6 +20,19 @@ pub struct Node {
     pub y_m: f64,
     /// Tributary area (m²), if the mesh provides it.
     pub area_m2: Option<f64>,
+    /// 1-based line of the node in its nodes file (0 when not read from a file), for messages.
+    pub line: usize,
+}
+
+impl Node {
+    /// `node <id> (line <n>)` for messages.
+    fn name(&self) -> String {
+        if self.line > 0 {
+            format!("node {} (line {})", self.id, self.line)
+        } else {
+            format!("node {}", self.id)
+        }
+    }
 }
 
 /// Mesh frame → film frame: `p_film = offset + scale · R(rotation) · p_mesh`.
@@ -131,6 +144,7 @@ pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
             x_m: field(cx, "x_m")?,
             y_m: field(cy, "y_m")?,
             area_m2: area,
+            line,
         });
     }
     if nodes.is_empty() {
@@ -153,6 +167,17 @@ pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
 /// Lumped tributary areas from the Delaunay triangulation of the points: each node receives a
 /// third of the area of each triangle it is a vertex of. The areas sum to the convex hull's area.
 pub fn tributary_areas(points: &[(f64, f64)]) -> Result<Vec<f64>> {
+    let area = triangulated_areas(points)?;
+    if let Some(k) = area.iter().position(|a| *a <= 0.0) {
+        return Err(Error::Data(format!(
+            "point {k} belongs to no triangle (duplicate position?): give area_m2 in the nodes file"
+        )));
+    }
+    Ok(area)
+}
+
+/// The lumped areas of [`tributary_areas`], zero for a point in no triangle.
+fn triangulated_areas(points: &[(f64, f64)]) -> Result<Vec<f64>> {
     let pts: Vec<delaunator::Point> = points
         .iter()
         .map(|&(x, y)| delaunator::Point { x, y })
@@ -172,9 +197,32 @@ pub fn tributary_areas(points: &[(f64, f64)]) -> Result<Vec<f64>> {
             area[k] += at / 3.0;
         }
     }
+    Ok(area)
+}
+
+/// Tributary areas of `nodes` (at their film positions `film`) by triangulation. Two nodes at
+/// one position would share a point of the mesh: one of them gets no area and no load, so the
+/// load it carries in the real joint would be lost; both are named instead.
+fn node_areas(nodes: &[Node], film: &[(f64, f64)]) -> Result<Vec<f64>> {
+    let mut at = std::collections::HashMap::new();
+    for n in nodes {
+        // `+ 0.0` makes −0 and +0 one position.
+        if let Some(other) = at.insert(((n.x_m + 0.0).to_bits(), (n.y_m + 0.0).to_bits()), n) {
+            return Err(Error::Data(format!(
+                "{} and {} lie at the same position ({}, {}) m: remove the duplicate, or give \
+                 area_m2 for every node",
+                other.name(),
+                n.name(),
+                num(n.x_m),
+                num(n.y_m)
+            )));
+        }
+    }
+    let area = triangulated_areas(film)?;
     if let Some(k) = area.iter().position(|a| *a <= 0.0) {
         return Err(Error::Data(format!(
-            "node {k} belongs to no triangle (duplicate position?): give area_m2 in the nodes file"
+            "{} belongs to no triangle of the nodes' triangulation: give area_m2 in the nodes file",
+            nodes[k].name()
         )));
     }
     Ok(area)
@@ -232,7 +280,7 @@ pub fn preloads(
         .collect();
     let from_tri = nodes.iter().any(|n| n.area_m2.is_none());
     let areas: Vec<f64> = if from_tri {
-        tributary_areas(&film)?
+        node_areas(nodes, &film)?
     } else {
         // Given areas are in the mesh frame: scale² maps them onto the film.
         nodes
@@ -244,7 +292,7 @@ pub fn preloads(
     let mut out = Vec::with_capacity(nodes.len());
     for ((n, &(x, y)), &a) in nodes.iter().zip(&film).zip(&areas) {
         let mut p = pressure_at(x, y).map_err(|e| match e {
-            Error::Data(m) => Error::Data(format!("node {}: {m}", n.id)),
+            Error::Data(m) => Error::Data(format!("{}: {m}", n.name())),
             other => other,
         })?;
         if p < 0.0 {
@@ -428,6 +476,7 @@ mod tests {
                     x_m: i as f64 * h,
                     y_m: j as f64 * h,
                     area_m2: None,
+                    line: 0,
                 });
             }
         }
