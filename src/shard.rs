@@ -282,6 +282,17 @@ pub struct Merged<S: ShardedSweep> {
 /// Read and check the shard files of one sweep (see the module documentation for the checks)
 /// and return every unit in order. Errors name the files concerned.
 pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
+    merge_checked(paths, |_: &S, _| Ok(()))
+}
+
+/// [`merge`], and `check(config, unit)` on every unit read: the configuration is protected by
+/// its hash, the results are not, so an edited result (a negative stiffness, an area ratio
+/// above 1) would otherwise be merged as if computed. A refusal names the shard file, the unit
+/// and `check`'s message (which names the field).
+pub fn merge_checked<S: ShardedSweep>(
+    paths: &[PathBuf],
+    check: impl Fn(&S, &UnitRecord<S::Unit>) -> std::result::Result<(), String>,
+) -> Result<Merged<S>> {
     if paths.is_empty() {
         return Err(Error::param("shards", "no shard file given"));
     }
@@ -348,9 +359,21 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
             )));
         }
         *slot = Some(f);
+        if file.units_total != labels.len() {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "records units_total = {}, but its configuration has {} units: the file \
+                     was edited",
+                    file.units_total,
+                    labels.len()
+                ),
+            ));
+        }
         let expected: Vec<usize> = file.shard.units(labels.len()).collect();
         let got: Vec<usize> = file.units.iter().map(|u| u.id).collect();
-        if file.units_total != labels.len() || got != expected {
+        if got != expected {
             return Err(Error::parse(
                 path,
                 0,
@@ -370,6 +393,11 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
                     u.id, u.label, labels[u.id]
                 ),
             ));
+        }
+        for u in &file.units {
+            check(&file.config, u).map_err(|m| {
+                Error::parse(path, 0, format!("unit {} (`{}`): {m}", u.id, u.label))
+            })?;
         }
     }
     let missing: Vec<String> = by_index
@@ -544,6 +572,43 @@ mod tests {
         let e = merge::<Squares>(&[junk]).unwrap_err().to_string();
         assert!(
             e.contains("junk.json") && e.contains("not an asperity shard"),
+            "{e}"
+        );
+    }
+
+    /// An edited result is refused by the unit check, and an edited units_total says so.
+    #[test]
+    fn edited_results_are_refused_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let sweep = Squares {
+            values: vec![1.0, 2.0, 3.0, 4.0],
+        };
+        let p: Vec<PathBuf> = (1..=2)
+            .map(|i| run_shard(dir.path(), &sweep, Shard::new(i, 2).unwrap()))
+            .collect();
+        let square = |_: &Squares, u: &UnitRecord<f64>| {
+            if u.result >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("`result` = {} is a negative square", u.result))
+            }
+        };
+        assert!(merge_checked(&p, square).is_ok());
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&p[1]).unwrap()).unwrap();
+        json["units"][1]["result"] = serde_json::json!(-16.0);
+        std::fs::write(&p[1], json.to_string()).unwrap();
+        let e = merge_checked(&p, square).unwrap_err().to_string();
+        assert!(
+            e.contains("squares.shard-2-of-2.json") && e.contains("unit 3 (`v3`)"),
+            "{e}"
+        );
+        json["units"][1]["result"] = serde_json::json!(16.0);
+        json["units_total"] = serde_json::json!(5);
+        std::fs::write(&p[1], json.to_string()).unwrap();
+        let e = merge::<Squares>(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("units_total = 5") && e.contains("4 units") && !e.contains("holds"),
             "{e}"
         );
     }
