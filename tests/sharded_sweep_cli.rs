@@ -434,6 +434,18 @@ fn missing_duplicated_or_foreign_calibration_shards_are_refused() {
         &["different configurations", "other"],
         &out,
     );
+    // An edited result (k = 1.7 is no Valanis element): the shard file and the field named.
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&paths[1]).unwrap()).unwrap();
+    json["units"][0]["result"]["main"]["pressures"][0]["fit"]["params"]["k"] =
+        serde_json::json!(1.7);
+    let edited = tmp.path().join("edited-calibrate.json");
+    std::fs::write(&edited, json.to_string()).unwrap();
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), edited, paths[2].clone()], &out),
+        &["edited-calibrate.json", "main chain", "k", "1.7"],
+        &out,
+    );
     // A normal-sweep shard is another kind.
     let (ok, _, err) = asperity(
         &[
@@ -495,4 +507,75 @@ fn missing_duplicated_or_foreign_calibration_shards_are_refused() {
         args.extend(extra);
         assert_fails_without_output(asperity(&args, 1), &[needle], &out);
     }
+}
+
+/// Results edited in a shard file (the configuration hash does not cover them) are refused
+/// naming the file and the field; an --out-dir that is a file is refused before any shard is
+/// read; and when one output cannot be written, none is left behind.
+#[test]
+fn edited_shard_results_and_blocked_outputs_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let paths = shards(&tmp.path().join("shards"), 2);
+    let out = tmp.path().join("merged");
+    let edit = |name: &str, change: &dyn Fn(&mut serde_json::Value)| -> Vec<PathBuf> {
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&paths[1]).unwrap()).unwrap();
+        change(&mut json);
+        let path = tmp.path().join(name);
+        std::fs::write(&path, json.to_string()).unwrap();
+        vec![paths[0].clone(), path]
+    };
+    let point = |j: &mut serde_json::Value, field: &str, v: serde_json::Value| {
+        j["units"][0]["result"]["points"][0][field] = v;
+    };
+    let cases: Vec<(Vec<PathBuf>, Vec<&str>)> = vec![
+        (
+            edit("negkn.json", &|j| point(j, "kn_n_per_m3", (-1e13).into())),
+            vec!["negkn.json", "kn_n_per_m3", "-1e13"],
+        ),
+        (
+            edit("area2.json", &|j| {
+                point(j, "contact_area_ratio", 2.0.into())
+            }),
+            vec!["area2.json", "contact_area_ratio", "(0, 1]"],
+        ),
+        (
+            edit("pressure.json", &|j| point(j, "pressure_pa", 3e6.into())),
+            vec!["pressure.json", "3e6", "1e6, 8e6"],
+        ),
+        (
+            edit("grid.json", &|j| {
+                j["units"][0]["result"]["grid"]["nx"] = 64.into();
+            }),
+            vec!["grid.json", "64 x 128", "128 x 128"],
+        ),
+        (
+            edit("total.json", &|j| j["units_total"] = 6.into()),
+            vec!["total.json", "units_total = 6", "5 units"],
+        ),
+    ];
+    for (files, needles) in cases {
+        assert_fails_without_output(merge(&files, &out), &needles, &out);
+    }
+
+    // --out-dir is a file: refused first (the missing shard is not even read).
+    let file = tmp.path().join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let (ok, _, err) = merge(&[tmp.path().join("absent.json")], &file);
+    assert!(
+        !ok && err.contains("--out-dir") && !err.contains("absent.json"),
+        "{err}"
+    );
+
+    // One output blocked by a directory: the merge fails and writes no other file.
+    let blocked = tmp.path().join("blocked");
+    std::fs::create_dir_all(blocked.join("kn.png")).unwrap();
+    let (ok, _, err) = merge(&paths, &blocked);
+    assert!(!ok, "should fail");
+    assert!(err.contains("kn.png"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&blocked)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, vec!["kn.png"], "files left behind");
 }
