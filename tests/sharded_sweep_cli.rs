@@ -446,6 +446,23 @@ fn missing_duplicated_or_foreign_calibration_shards_are_refused() {
         &["edited-calibrate.json", "main chain", "k", "1.7"],
         &out,
     );
+    // A result moved to another pressure than the configuration's (1e6 Pa): named, not merged.
+    json["units"][0]["result"]["main"]["pressures"][0]["fit"]["params"]["k"] =
+        serde_json::json!(0.5);
+    json["units"][0]["result"]["main"]["pressures"][0]["sweep"]["pressure_pa"] =
+        serde_json::json!(3e6);
+    let moved = tmp.path().join("moved-calibrate.json");
+    std::fs::write(&moved, json.to_string()).unwrap();
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), moved, paths[2].clone()], &out),
+        &[
+            "moved-calibrate.json",
+            "main chain at 1e6 Pa",
+            "pressure_pa",
+            "3e6",
+        ],
+        &out,
+    );
     // A normal-sweep shard is another kind.
     let (ok, _, err) = asperity(
         &[

@@ -102,9 +102,9 @@ fn check_surface(
     Ok(())
 }
 
-/// One realisation of a calibrate shard: every chain holds the configuration's pressures, each
-/// with a physical normal contact ([`check_point`]), an admissible Valanis element
-/// (`E0 > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, `μ > 0`) and a fit `r2` ≤ 1.
+/// One realisation of a calibrate shard: every chain holds the configuration's pressures (in
+/// order), each with a physical normal contact ([`check_point`]), an admissible Valanis
+/// element (`E0 > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, `μ > 0`) and a fit `r2` ≤ 1.
 fn check_realisation(
     sweep: &CalibrationSweep,
     u: &UnitRecord<RealisationChains>,
@@ -126,6 +126,14 @@ fn check_realisation(
         }
         for (pc, &p) in r.pressures.iter().zip(pressures) {
             let at = |m: String| format!("{chain} chain at {} Pa: {m}", num(p));
+            // The table is indexed by the configuration's pressures: a result solved (or
+            // edited) at another pressure would be reported as the configured one's.
+            if pc.sweep.pressure_pa != p {
+                return Err(at(format!(
+                    "`pressure_pa` = {} Pa is not the configuration's pressure",
+                    num(pc.sweep.pressure_pa)
+                )));
+            }
             check_point(&pc.sweep).map_err(at)?;
             let v = pc.fit.params;
             ValanisParams::new(v.e0, v.k, v.et, v.mu).map_err(|e| at(format!("fit: {e}")))?;
