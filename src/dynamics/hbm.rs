@@ -148,6 +148,10 @@ pub struct HbmSystem<'a> {
     offsets: Vec<usize>,
 }
 
+/// Jacobian storage (bytes) below which [`HbmSystem::new`] does not consult the available
+/// memory (64 MiB: about 1500 unknowns).
+const JACOBIAN_BYTES_ALWAYS_AVAILABLE: u64 = 64 << 20;
+
 impl<'a> HbmSystem<'a> {
     /// Set up the harmonic-balance problem. The excitation harmonic must be retained; with the
     /// receptance formulation the structure needs a non-singular dynamic stiffness.
@@ -200,17 +204,22 @@ impl<'a> HbmSystem<'a> {
                 }
             }
         };
-        // The Newton iteration holds the dense Jacobian, its LU factors and a copy.
+        // The Newton iteration holds the dense Jacobian, its LU factors and a copy. Checked
+        // against the available memory only when large: the identification builds a system per
+        // row and evaluation, and reading the available memory would then dominate.
         let unknowns = harmonics.len()
             * match formulation {
                 Formulation::Coordinates => n,
                 Formulation::Receptance => nc,
             };
-        crate::limits::check_memory(
-            "sweep.harmonics",
-            (unknowns as u64).pow(2).saturating_mul(8 * 3),
-            &format!("a harmonic-balance Jacobian of {unknowns} unknowns"),
-        )?;
+        let jacobian_bytes = (unknowns as u64).pow(2).saturating_mul(8 * 3);
+        if jacobian_bytes > JACOBIAN_BYTES_ALWAYS_AVAILABLE {
+            crate::limits::check_memory(
+                "sweep.harmonics",
+                jacobian_bytes,
+                &format!("a harmonic-balance Jacobian of {unknowns} unknowns"),
+            )?;
+        }
         Ok(Self {
             structure,
             harmonics,
