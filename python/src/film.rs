@@ -391,6 +391,8 @@ fn nodes_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Node>> {
             x_m: x[i],
             y_m: y[i],
             area_m2: area.as_ref().map(|a| a[i]).filter(|a| !a.is_nan()),
+            // Arrays from Python have no file lines: messages name the node id alone.
+            line: 0,
         })
         .collect())
 }
