@@ -83,6 +83,23 @@ fn run(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// `asperity film --image <image> --colour-table <table> --pixel-size-mm 0.1 <extra>
+/// --out-dir <out>` (the synthetic films' pixel size).
+fn film_at_0_1_mm(image: &Path, table: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut a = vec![
+        "film",
+        "--image",
+        s(image),
+        "--colour-table",
+        s(table),
+        "--pixel-size-mm",
+        "0.1",
+    ];
+    a.extend_from_slice(extra);
+    a.extend(["--out-dir", s(out)]);
+    run(&a)
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -137,27 +154,23 @@ fn num(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
 /// rescaled to a total load of 150 N and reduced on a 1 mm coarse mesh; returns the output dir.
 fn film_reduced(st: &Setup, name: &str) -> PathBuf {
     let out = st.root.join(name);
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--nodes",
-        s(&st.nodes),
-        "--node-offset-mm",
-        "10,10",
-        "--node-rotation-deg",
-        "30",
-        "--total-load-n",
-        "150",
-        "--reduce-mesh-size-mm",
-        "1.0",
-        "--out-dir",
-        s(&out),
-    ]);
+    let o = film_at_0_1_mm(
+        &st.image,
+        &st.table,
+        &out,
+        &[
+            "--nodes",
+            s(&st.nodes),
+            "--node-offset-mm",
+            "10,10",
+            "--node-rotation-deg",
+            "30",
+            "--total-load-n",
+            "150",
+            "--reduce-mesh-size-mm",
+            "1.0",
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     out
 }
@@ -166,25 +179,21 @@ fn film_reduced(st: &Setup, name: &str) -> PathBuf {
 fn film_to_preloads_to_reduced_nodes_to_elements() {
     let st = setup();
     let out = st.root.join("out");
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--fit-order",
-        "4",
-        "--nodes",
-        s(&st.nodes),
-        "--node-offset-mm",
-        "10,10",
-        "--node-rotation-deg",
-        "30",
-        "--out-dir",
-        s(&out),
-    ]);
+    let o = film_at_0_1_mm(
+        &st.image,
+        &st.table,
+        &out,
+        &[
+            "--fit-order",
+            "4",
+            "--nodes",
+            s(&st.nodes),
+            "--node-offset-mm",
+            "10,10",
+            "--node-rotation-deg",
+            "30",
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // One patch (the pen stroke and the ink blot are not patches), of radius 4 mm.
     let regions = read_rows(&out.join("regions.csv"));
@@ -376,23 +385,19 @@ fn given_areas_are_used_and_scaled_by_the_placement() {
     let nodes = st.root.join("nodes_area.csv");
     write_nodes(&nodes, true);
     let out = st.root.join("out");
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--nodes",
-        s(&nodes),
-        "--node-offset-mm",
-        "10,10",
-        "--node-scale",
-        "1.0",
-        "--out-dir",
-        s(&out),
-    ]);
+    let o = film_at_0_1_mm(
+        &st.image,
+        &st.table,
+        &out,
+        &[
+            "--nodes",
+            s(&nodes),
+            "--node-offset-mm",
+            "10,10",
+            "--node-scale",
+            "1.0",
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let pre = read_rows(&out.join("preload.csv"));
     assert!(pre
@@ -558,17 +563,7 @@ fn film_flags_units_nodes_and_uniform_patches() {
         "pressure_Pa,R,G,B\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
     )
     .unwrap();
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&mpa),
-        "--pixel-size-mm",
-        "0.1",
-        "--out-dir",
-        s(&out),
-    ]);
+    let o = film_at_0_1_mm(&st.image, &mpa, &out, &[]);
     assert_fails(&o, &["ct-pa-but-mpa.csv:1", "pressure_MPa"]);
 
     // Two nodes at one position, and collinear nodes: the nodes file is named.
@@ -601,17 +596,7 @@ fn film_flags_units_nodes_and_uniform_patches() {
     }
     let flat = st.root.join("flat.png");
     img.save(&flat).unwrap();
-    let o = run(&[
-        "film",
-        "--image",
-        s(&flat),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--out-dir",
-        s(&out),
-    ]);
+    let o = film_at_0_1_mm(&flat, &st.table, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -768,19 +753,12 @@ fn polygon_roi_and_jpeg_input() {
         })
         .collect();
     let out = st.root.join("poly");
-    let o = run(&[
-        "film",
-        "--image",
-        s(&st.image),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--roi-polygon-mm",
-        &poly.join(";"),
-        "--out-dir",
-        s(&out),
-    ]);
+    let o = film_at_0_1_mm(
+        &st.image,
+        &st.table,
+        &out,
+        &["--roi-polygon-mm", &poly.join(";")],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let r = read_rows(&out.join("regions.csv"));
     assert_eq!(r.len(), 1);
@@ -807,17 +785,7 @@ fn polygon_roi_and_jpeg_input() {
         .save_with_format(&jpg, image::ImageFormat::Jpeg)
         .unwrap();
     let out_j = st.root.join("jpg");
-    let o = run(&[
-        "film",
-        "--image",
-        s(&jpg),
-        "--colour-table",
-        s(&st.table),
-        "--pixel-size-mm",
-        "0.1",
-        "--out-dir",
-        s(&out_j),
-    ]);
+    let o = film_at_0_1_mm(&jpg, &st.table, &out_j, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let j = read_rows(&out_j.join("regions.csv"));
     assert_eq!(j.len(), 1, "{j:?}");
