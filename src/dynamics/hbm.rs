@@ -204,23 +204,7 @@ impl<'a> HbmSystem<'a> {
                 }
             }
         };
-        // The Newton iteration holds the dense Jacobian, its LU factors and a copy. Checked
-        // against the available memory only when large: the identification builds a system per
-        // row and evaluation, and reading the available memory would then dominate.
-        let unknowns = harmonics.len()
-            * match formulation {
-                Formulation::Coordinates => n,
-                Formulation::Receptance => nc,
-            };
-        let jacobian_bytes = (unknowns as u64).pow(2).saturating_mul(8 * 3);
-        if jacobian_bytes > JACOBIAN_BYTES_ALWAYS_AVAILABLE {
-            crate::limits::check_memory(
-                "sweep.harmonics",
-                jacobian_bytes,
-                &format!("a harmonic-balance Jacobian of {unknowns} unknowns"),
-            )?;
-        }
-        Ok(Self {
+        let system = Self {
             structure,
             harmonics,
             excitation,
@@ -229,7 +213,20 @@ impl<'a> HbmSystem<'a> {
             formulation,
             stacked_map,
             offsets,
-        })
+        };
+        // The Newton iteration holds the dense Jacobian, its LU factors and a copy. Checked
+        // against the available memory only when large: the identification builds a system per
+        // row and evaluation, and reading the available memory would then dominate.
+        let unknowns = system.unknowns();
+        let jacobian_bytes = (unknowns as u64).pow(2).saturating_mul(8 * 3);
+        if jacobian_bytes > JACOBIAN_BYTES_ALWAYS_AVAILABLE {
+            crate::limits::check_memory(
+                "sweep.harmonics",
+                jacobian_bytes,
+                &format!("a harmonic-balance Jacobian of {unknowns} unknowns"),
+            )?;
+        }
+        Ok(system)
     }
 
     /// The formulation in use.
