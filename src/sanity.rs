@@ -32,6 +32,14 @@ pub const MAX_STRAIN: f64 = 1e-2;
 /// precision resolves in the gap `h0 − δ + u` (10⁻¹² ≫ the 2.2 × 10⁻¹⁶ round-off).
 pub const RESOLVABLE_FRACTION: f64 = 1e-12;
 
+/// Largest displacement amplitude a measured vibration row may imply (m): no vibration test of
+/// a structure reaches a metre at its resonance; more is a unit error.
+pub const MAX_VIBRATION_AMPLITUDE_M: f64 = 1.0;
+
+/// Largest harmonic force amplitude (N) of a measured row or a model's excitation level: beyond
+/// any shaker or hammer.
+pub const MAX_FORCE_AMPLITUDE_N: f64 = 1e6;
+
 /// Largest Coulomb friction coefficient accepted. Dry metal pairs measure 0.1–1.5 in air and
 /// clean surfaces in vacuum a few; a value of ten or more is a typing or unit error.
 pub const MAX_FRICTION_COEFFICIENT: f64 = 10.0;

@@ -217,7 +217,7 @@ impl ModelFile {
                 format!("levels must be finite and > 0, got {v}"),
             ));
         }
-        let max = crate::identify::measured::MAX_FORCE_AMPLITUDE_N;
+        let max = crate::sanity::MAX_FORCE_AMPLITUDE_N;
         if let Some(v) = e.levels_n.iter().find(|v| **v > max) {
             return Err(Error::param(
                 "excitation.levels_n",

@@ -35,18 +35,12 @@
 
 use crate::error::{Error, Result};
 use crate::input::{csv_reader, csv_record};
+use crate::sanity::{MAX_FORCE_AMPLITUDE_N, MAX_VIBRATION_AMPLITUDE_M};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::{Path, PathBuf};
-
-/// Largest displacement amplitude a measured row may imply (m): no vibration test of a
-/// structure reaches a metre at its resonance; more is a unit error.
-pub const MAX_VIBRATION_AMPLITUDE_M: f64 = 1.0;
-
-/// Largest force amplitude of a measured row (N): beyond any shaker or hammer.
-pub const MAX_FORCE_AMPLITUDE_N: f64 = 1e6;
 
 /// Which response quantity a file holds (named by its column).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
