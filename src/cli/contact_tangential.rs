@@ -131,10 +131,13 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         max_iterations: args.max_iterations,
         operator,
     };
-    asperity::sanity::tolerance("--tolerance", args.tolerance)?;
-    if args.max_iterations == 0 {
-        return Err(Error::param("--max-iterations", "must be at least 1"));
-    }
+    // Checked now, under the flags' names, not after the normal solves.
+    let options = options.validated().map_err(|e| match e {
+        Error::InvalidParameter { name, message } => {
+            Error::param(format!("--{}", name.replace('_', "-")), message)
+        }
+        other => other,
+    })?;
     let started = std::time::Instant::now();
     let (surface, source) = if args.surface.is_empty() {
         let mut spec = GaussianSurfaceSpec::reference();

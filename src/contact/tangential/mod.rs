@@ -134,6 +134,17 @@ impl Default for TangentialOptions {
     }
 }
 
+impl TangentialOptions {
+    /// The options, checked: a relative tolerance in (0, 1) and at least one iteration.
+    pub fn validated(self) -> Result<Self> {
+        crate::sanity::tolerance("tolerance", self.tolerance)?;
+        if self.max_iterations == 0 {
+            return Err(Error::param("max_iterations", "must be at least 1"));
+        }
+        Ok(self)
+    }
+}
+
 /// What is imposed in a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Control {
@@ -251,19 +262,13 @@ impl TangentialSolver {
     /// ([`Error::Data`]).
     pub fn new(problem: &TangentialProblem<'_>, options: TangentialOptions) -> Result<Self> {
         let start = Instant::now();
-        let mu = problem.friction_coefficient;
-        if !(mu.is_finite() && mu > 0.0) {
-            return Err(Error::param(
-                "friction_coefficient",
-                format!("μ must be finite and > 0, got {mu}"),
-            ));
-        }
+        let mu = crate::sanity::friction_coefficient(
+            "friction_coefficient",
+            problem.friction_coefficient,
+        )?;
         let dx = require_positive("dx", problem.dx)?;
         let dy = require_positive("dy", problem.dy)?;
-        crate::sanity::tolerance("tolerance", options.tolerance)?;
-        if options.max_iterations == 0 {
-            return Err(Error::param("max_iterations", "must be at least 1"));
-        }
+        let options = options.validated()?;
         let body1 = problem.body1.validated("body1")?;
         let body2 = problem.body2.validated("body2")?;
         let (nx, ny) = problem.pressure.dim();
