@@ -30,12 +30,13 @@
 //! Every file must parse, be of the expected kind and format, carry a configuration whose
 //! SHA-256 matches the one it records, share that hash with every other file (same inputs,
 //! same crate version), agree on `n`, and hold exactly its block of units with the expected
-//! labels; every shard `1..=n` must be present exactly once. Each failure names the files.
+//! labels; every shard `1..=n` must be present exactly once; every unit's result must pass the
+//! sweep's own physical check ([`ShardedSweep::check_unit`]). Each failure names the files.
 //! Nothing is written unless all checks pass.
 //!
 //! # Adding a sharded sweep
 //! Implement [`ShardedSweep`] for the sweep's configuration (serialisable, with one label per
-//! unit), give the CLI command a `--shard` flag that runs [`run_units`] on the shard's block
+//! unit and a check of one unit's result), give the CLI command a `--shard` flag that runs [`run_units`] on the shard's block
 //! and [`write_shard`]s it (the single run calls [`run_units`] with [`Shard::WHOLE`] and its
 //! output writer), and add the kind to `asperity merge`, which calls [`merge`] and the same
 //! output writer.
@@ -58,6 +59,11 @@ pub trait ShardedSweep: Serialize + DeserializeOwned {
     type Unit: Serialize + DeserializeOwned;
     /// One label per unit, in unit order (e.g. `seed-3`); unique.
     fn unit_labels(&self) -> Vec<String>;
+    /// Check one unit's result as read back from a shard file: the configuration is protected
+    /// by its hash, the results are not, so an edited result (a negative stiffness, an area
+    /// ratio above 1) would otherwise be merged as if computed. The message names the field;
+    /// [`merge`] adds the file and the unit.
+    fn check_unit(&self, unit: &UnitRecord<Self::Unit>) -> std::result::Result<(), String>;
 }
 
 /// Shard `index` of `count` (1-based), as given by `--shard index/count`.
@@ -279,20 +285,10 @@ pub struct Merged<S: ShardedSweep> {
     pub units: Vec<UnitRecord<S::Unit>>,
 }
 
-/// Read and check the shard files of one sweep (see the module documentation for the checks)
-/// and return every unit in order. Errors name the files concerned.
+/// Read and check the shard files of one sweep (see the module documentation for the checks,
+/// and [`ShardedSweep::check_unit`] on every unit read) and return every unit in order. Errors
+/// name the files concerned and, for a result, the unit.
 pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
-    merge_checked(paths, |_: &S, _| Ok(()))
-}
-
-/// [`merge`], and `check(config, unit)` on every unit read: the configuration is protected by
-/// its hash, the results are not, so an edited result (a negative stiffness, an area ratio
-/// above 1) would otherwise be merged as if computed. A refusal names the shard file, the unit
-/// and `check`'s message (which names the field).
-pub fn merge_checked<S: ShardedSweep>(
-    paths: &[PathBuf],
-    check: impl Fn(&S, &UnitRecord<S::Unit>) -> std::result::Result<(), String>,
-) -> Result<Merged<S>> {
     if paths.is_empty() {
         return Err(Error::param("shards", "no shard file given"));
     }
@@ -395,7 +391,7 @@ pub fn merge_checked<S: ShardedSweep>(
             ));
         }
         for u in &file.units {
-            check(&file.config, u).map_err(|m| {
+            file.config.check_unit(u).map_err(|m| {
                 Error::parse(path, 0, format!("unit {} (`{}`): {m}", u.id, u.label))
             })?;
         }
@@ -455,6 +451,13 @@ mod tests {
         type Unit = f64;
         fn unit_labels(&self) -> Vec<String> {
             (0..self.values.len()).map(|k| format!("v{k}")).collect()
+        }
+        fn check_unit(&self, u: &UnitRecord<f64>) -> std::result::Result<(), String> {
+            if u.result >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("`result` = {} is a negative square", u.result))
+            }
         }
     }
 
@@ -586,19 +589,12 @@ mod tests {
         let p: Vec<PathBuf> = (1..=2)
             .map(|i| run_shard(dir.path(), &sweep, Shard::new(i, 2).unwrap()))
             .collect();
-        let square = |_: &Squares, u: &UnitRecord<f64>| {
-            if u.result >= 0.0 {
-                Ok(())
-            } else {
-                Err(format!("`result` = {} is a negative square", u.result))
-            }
-        };
-        assert!(merge_checked(&p, square).is_ok());
+        assert!(merge::<Squares>(&p).is_ok());
         let mut json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&p[1]).unwrap()).unwrap();
         json["units"][1]["result"] = serde_json::json!(-16.0);
         std::fs::write(&p[1], json.to_string()).unwrap();
-        let e = merge_checked(&p, square).unwrap_err().to_string();
+        let e = merge::<Squares>(&p).unwrap_err().to_string();
         assert!(
             e.contains("squares.shard-2-of-2.json") && e.contains("unit 3 (`v3`)"),
             "{e}"

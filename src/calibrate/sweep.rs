@@ -11,7 +11,8 @@
 use crate::calibrate::config::CalibrationConfig;
 use crate::calibrate::output::ConfigSource;
 use crate::calibrate::pipeline::{self, CalibrationRun, RealisationChains, SurfaceSource};
-use crate::error::Result;
+use crate::element::valanis::ValanisParams;
+use crate::error::{num, Result};
 use crate::shard::{ShardedSweep, UnitRecord};
 use serde::{Deserialize, Serialize};
 
@@ -34,6 +35,52 @@ impl ShardedSweep for CalibrationSweep {
         (0..self.config.realisations.count)
             .map(|r| format!("seed-{}", s.seed.wrapping_add(r as u64)))
             .collect()
+    }
+
+    /// One realisation read back from a shard: every chain holds the configuration's
+    /// pressures (in order), each with a physical normal contact
+    /// ([`crate::contact::sweep::SweepPoint::check_physical`]), an admissible Valanis element
+    /// (`E0 > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, `μ > 0`, [`ValanisParams::new`]) and a fit `r2`
+    /// ≤ 1.
+    fn check_unit(&self, u: &UnitRecord<RealisationChains>) -> std::result::Result<(), String> {
+        let pressures = &self.config.loading.pressures_pa;
+        let chains = [
+            ("main", Some(&u.result.main)),
+            ("grid check", u.result.grid_check.as_ref()),
+            ("patch check", u.result.patch_check.as_ref()),
+        ];
+        for (chain, r) in chains {
+            let Some(r) = r else { continue };
+            if r.pressures.len() != pressures.len() {
+                return Err(format!(
+                    "{chain} chain: `pressures` holds {} entries, the configuration has {} \
+                     pressures",
+                    r.pressures.len(),
+                    pressures.len()
+                ));
+            }
+            for (pc, &p) in r.pressures.iter().zip(pressures) {
+                let at = |m: String| format!("{chain} chain at {} Pa: {m}", num(p));
+                // The table is indexed by the configuration's pressures: a result solved (or
+                // edited) at another pressure would be reported as the configured one's.
+                if pc.sweep.pressure_pa != p {
+                    return Err(at(format!(
+                        "`pressure_pa` = {} Pa is not the configuration's pressure",
+                        num(pc.sweep.pressure_pa)
+                    )));
+                }
+                pc.sweep.check_physical().map_err(at)?;
+                let v = pc.fit.params;
+                ValanisParams::new(v.e0, v.k, v.et, v.mu).map_err(|e| at(format!("fit: {e}")))?;
+                if pc.fit.r2.is_nan() || pc.fit.r2 > 1.0 {
+                    return Err(at(format!(
+                        "fit `r2` = {} must be <= 1 (a coefficient of determination)",
+                        num(pc.fit.r2)
+                    )));
+                }
+            }
+        }
+        Ok(())
     }
 }
 

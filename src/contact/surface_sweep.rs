@@ -12,9 +12,9 @@
 
 use super::normal::{NormalOptions, NormalProblem, NormalSolution, NormalSolver};
 use super::sweep::{self, checked_pressures, SweepOptions, SweepPoint};
-use crate::error::{Error, Result};
+use crate::error::{num, Error, Result};
 use crate::grid::Grid2;
-use crate::shard::ShardedSweep;
+use crate::shard::{ShardedSweep, UnitRecord};
 use crate::surface::combine::{composite_modulus, Material};
 use crate::surface::generate::{generate, GaussianSurfaceSpec};
 use serde::{Deserialize, Serialize};
@@ -134,6 +134,57 @@ impl ShardedSweep for SurfaceSweep {
     type Unit = SurfaceResult;
     fn unit_labels(&self) -> Vec<String> {
         self.surfaces.iter().map(SurfaceSource::label).collect()
+    }
+
+    /// One surface read back from a shard: its grid is the one its configuration generates
+    /// (every shard of a sweep shares the configuration, so the grids agree across shards; a
+    /// measured file's grid is not re-read here), it holds exactly the configuration's
+    /// pressures, and every point is physical ([`SweepPoint::check_physical`]).
+    fn check_unit(&self, u: &UnitRecord<SurfaceResult>) -> std::result::Result<(), String> {
+        let g = u.result.grid;
+        if g.nx == 0
+            || g.ny == 0
+            || !(g.dx_m > 0.0 && g.dx_m.is_finite())
+            || !(g.dy_m > 0.0 && g.dy_m.is_finite())
+        {
+            return Err(format!(
+                "`grid` {} x {} points of {} x {} m is no grid",
+                g.nx,
+                g.ny,
+                num(g.dx_m),
+                num(g.dy_m)
+            ));
+        }
+        if let Some(SurfaceSource::Generated { spec }) = self.surfaces.get(u.id) {
+            if (g.nx, g.ny, g.dx_m, g.dy_m) != (spec.nx, spec.ny, spec.dx(), spec.dy()) {
+                return Err(format!(
+                    "`grid` is {} x {} points of {} x {} m, but the configuration generates \
+                     {} x {} points of {} x {} m",
+                    g.nx,
+                    g.ny,
+                    num(g.dx_m),
+                    num(g.dy_m),
+                    spec.nx,
+                    spec.ny,
+                    num(spec.dx()),
+                    num(spec.dy())
+                ));
+            }
+        }
+        let got: Vec<f64> = u.result.points.iter().map(|p| p.pressure_pa).collect();
+        if got != self.pressures_pa {
+            let list = |v: &[f64]| v.iter().map(|&p| num(p)).collect::<Vec<_>>().join(", ");
+            return Err(format!(
+                "`points` hold the pressures [{}] Pa, the configuration's are [{}] Pa",
+                list(&got),
+                list(&self.pressures_pa)
+            ));
+        }
+        for p in &u.result.points {
+            p.check_physical()
+                .map_err(|m| format!("at {} Pa: {m}", num(p.pressure_pa)))?;
+        }
+        Ok(())
     }
 }
 

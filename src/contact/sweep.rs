@@ -23,7 +23,7 @@
 
 use super::normal::{NormalMethod, NormalSolution, NormalSolver};
 use super::resolution::ContactResolution;
-use crate::error::{require_positive, Error, Result};
+use crate::error::{num, require_positive, Error, Result};
 
 /// The reference sweep of nominal pressures (Pa): 0.1, 0.2, 1, 2, 5, 10 MPa.
 pub const REFERENCE_PRESSURES_PA: [f64; 6] = [0.1e6, 0.2e6, 1e6, 2e6, 5e6, 10e6];
@@ -66,6 +66,37 @@ pub struct SweepPoint {
     pub residual: f64,
     /// Wall time of this point: contact solve and kn (s).
     pub wall_time_s: f64,
+}
+
+impl SweepPoint {
+    /// The physical ranges of a solved pressure, as the solver guarantees them: `kn > 0`
+    /// (pressing harder never loosens a contact, dp̄/dδ > 0), a contact area ratio in (0, 1]
+    /// (a loaded contact touches somewhere, never over more than the nominal area), finite
+    /// mean gap and approach. Used on results read back from files (shard merge), whose
+    /// numbers no solver vouches for; the message names the field.
+    pub fn check_physical(&self) -> std::result::Result<(), String> {
+        if !(self.kn_n_per_m3.is_finite() && self.kn_n_per_m3 > 0.0) {
+            return Err(format!(
+                "`kn_n_per_m3` = {} must be finite and > 0 (a contact stiffens under load)",
+                num(self.kn_n_per_m3)
+            ));
+        }
+        if !(self.contact_area_ratio > 0.0 && self.contact_area_ratio <= 1.0) {
+            return Err(format!(
+                "`contact_area_ratio` = {} must lie in (0, 1] (real over nominal area)",
+                num(self.contact_area_ratio)
+            ));
+        }
+        for (name, v) in [
+            ("mean_gap_m", self.mean_gap_m),
+            ("approach_m", self.approach_m),
+        ] {
+            if !v.is_finite() {
+                return Err(format!("`{name}` = {} is not finite", num(v)));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl SweepPoint {
