@@ -38,9 +38,10 @@
 //! Reproducibility: every coefficient comes from its own stream, so the surface is the same bit
 //! for bit whatever the number of threads; the same seed gives the same surface.
 
-use crate::error::{require_positive, Error, Result};
+use crate::error::{num, require_positive, Error, Result};
 use crate::grid::Grid2;
 use crate::halfspace::convolution::{Boundary, FftPlan};
+use crate::sanity;
 use ndarray::{Array2, Axis};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -106,9 +107,27 @@ impl GaussianSurfaceSpec {
     /// - each correlation length spans at least two grid spacings (otherwise the Gaussian
     ///   filter is not resolved and the surface is white noise with the wrong ACF);
     /// - each correlation length is at most half the patch (otherwise the periodic patch cannot
-    ///   represent the correlation and the filter wraps onto itself).
+    ///   represent the correlation and the filter wraps onto itself);
+    /// - `rq_m` at most a tenth of [`sanity::MAX_HEIGHT_M`] and the spacings within
+    ///   [`sanity::MIN_SPACING_M`, `sanity::MAX_SPACING_M`]: a Gaussian surface of a million
+    ///   points reaches about ±5 Rq, and every contact command refuses heights and spacings
+    ///   beyond those bounds (metres where micrometres were meant), so the generator refuses
+    ///   them first rather than write a surface nothing can use.
     pub fn validate(&self) -> Result<()> {
         require_positive("rq_m", self.rq_m)?;
+        let max_rq = sanity::MAX_HEIGHT_M / 10.0;
+        if self.rq_m > max_rq {
+            return Err(Error::param(
+                "rq_m",
+                format!(
+                    "RMS height {} m exceeds {} m: roughness heights are micrometres (a unit \
+                     error?); contact commands refuse heights beyond ±{} m",
+                    num(self.rq_m),
+                    num(max_rq),
+                    num(sanity::MAX_HEIGHT_M)
+                ),
+            ));
+        }
         require_positive("clx_m", self.clx_m)?;
         require_positive("cly_m", self.cly_m)?;
         require_positive("lx_m", self.lx_m)?;
@@ -116,6 +135,20 @@ impl GaussianSurfaceSpec {
         for (name, n) in [("nx", self.nx), ("ny", self.ny)] {
             if n < 2 {
                 return Err(Error::param(name, format!("must be at least 2, got {n}")));
+            }
+        }
+        for (name, d, axis) in [("lx_m", self.dx(), "x"), ("ly_m", self.dy(), "y")] {
+            if !(sanity::MIN_SPACING_M..=sanity::MAX_SPACING_M).contains(&d) {
+                return Err(Error::param(
+                    name,
+                    format!(
+                        "grid spacing along {axis} {} m lies outside [{}, {}] m (patch size over \
+                         points): contact commands refuse such a surface",
+                        num(d),
+                        num(sanity::MIN_SPACING_M),
+                        num(sanity::MAX_SPACING_M)
+                    ),
+                ));
             }
         }
         for (name, cl, d, l, axis) in [
@@ -455,6 +488,22 @@ mod tests {
                     ..small()
                 },
                 "rq_m",
+            ),
+            (
+                // Metres where micrometres were meant.
+                GaussianSurfaceSpec {
+                    rq_m: 0.177,
+                    ..small()
+                },
+                "rq_m",
+            ),
+            (
+                GaussianSurfaceSpec {
+                    lx_m: 1e3,
+                    clx_m: 100.0,
+                    ..small()
+                },
+                "lx_m",
             ),
             (
                 GaussianSurfaceSpec {
