@@ -26,8 +26,8 @@
 //! of 1 and 2 threads; Polonsky–Keer (the former method) runs on 1 thread for reference. tamaas
 //! runs its PolonskyKeerRey solver with OMP_NUM_THREADS=1 (and =2 on 512² to show that its wheel
 //! does not use the second thread). Same surface (.npy), E*, grid and tolerance (1e-10) in both
-//! codes. Single-thread ratios use CPU time (asperity: its rayon worker thread from
-//! /proc/thread-self/schedstat; tamaas: time.process_time), two-thread ratios wall time. Time per
+//! codes. Single-thread ratios use CPU time (asperity: its rayon worker thread's
+//! `CLOCK_THREAD_CPUTIME_ID`; tamaas: time.process_time), two-thread ratios wall time. Time per
 //! iteration is given in units of one convolution (one forward and one inverse real transform
 //! of the grid: `FftPlan::convolve_into`, 1 thread, CPU time) and includes the coarse levels.
 //! Units: SI.
@@ -72,14 +72,12 @@ fn load_average() -> String {
         .unwrap_or_else(|_| "?".into())
 }
 
-/// CPU time of the calling thread (s), from /proc/thread-self/schedstat (ns on CPU). With a
-/// one-thread rayon pool every solve runs on that pool's thread, so this is the solve's CPU
-/// time, robust to other processes sharing the machine.
+/// CPU time of the calling thread (s; `CLOCK_THREAD_CPUTIME_ID`, exact to the nanosecond
+/// where /proc/thread-self/schedstat moves in scheduler ticks of several ms). With a one-thread
+/// rayon pool every solve runs on that pool's thread, so this is the solve's CPU time, robust
+/// to other processes sharing the machine.
 fn thread_cpu_s() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-9)
+    cpu_time::ThreadTime::now().as_duration().as_secs_f64()
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {

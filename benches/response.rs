@@ -171,23 +171,10 @@ fn peer(case: &PeerCase) {
     );
 }
 
-/// CPU time of this process (s): the sum over its threads of the nanoseconds on CPU in
-/// /proc/self/task/*/schedstat (rayon workers included).
+/// CPU time of this process (s; `CLOCK_PROCESS_CPUTIME_ID`: all its threads, rayon workers
+/// included).
 fn cpu_time() -> f64 {
-    let mut total = 0.0;
-    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
-        for t in dir.flatten() {
-            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
-                total += s
-                    .split_whitespace()
-                    .next()
-                    .and_then(|v| v.parse::<f64>().ok())
-                    .unwrap_or(0.0)
-                    * 1e-9;
-            }
-        }
-    }
-    total
+    cpu_time::ProcessTime::now().as_duration().as_secs_f64()
 }
 
 /// Wall and CPU time (s) of one call of `f`, averaged over `reps` calls.

@@ -152,13 +152,11 @@ impl StageTimes {
     }
 }
 
-/// CPU time of the calling thread (s), from /proc/thread-self/schedstat (NaN where that file
-/// does not exist).
+/// CPU time of the calling thread (s; `CLOCK_THREAD_CPUTIME_ID`, exact to the nanosecond where
+/// /proc/thread-self/schedstat moves in scheduler ticks of several ms), NaN where the platform
+/// has no such clock.
 fn thread_cpu_s() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-9)
+    cpu_time::ThreadTime::try_now().map_or(f64::NAN, |t| t.as_duration().as_secs_f64())
 }
 
 /// Wall and thread-CPU stopwatch of a stage.
