@@ -135,6 +135,8 @@ pub struct BackbonePoint {
 pub struct SidePoint {
     /// Row (0-based, file order).
     pub row: usize,
+    /// The row's excitation frequency (Hz).
+    pub drive_hz: f64,
     pub point: BackbonePoint,
     /// `(peak |X| / |X|)·|R/X| / Im(R/X)`: a complex error of the response of standard deviation
     /// `s·peak` per component gives the damping ratio a relative standard deviation of `s` times
@@ -227,6 +229,7 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
                         let d = r / x[i];
                         Some(SidePoint {
                             row: i,
+                            drive_hz: s.rows[i].frequency_hz,
                             point,
                             damping_noise_gain: peak / mag[i] * d.norm() / d.im.abs(),
                         })

@@ -1299,6 +1299,7 @@ mod tests {
             } else {
                 (-0.3, -0.1)
             },
+            damping_form_interval: (-0.01, 0.0),
             differing: if stationary { 0 } else { 3 },
             differing_mean: if stationary { f64::NAN } else { -0.2 },
             noise_sd: (0.01, 0.02),
