@@ -336,13 +336,18 @@ mod tests {
 
     const MASS_KG: f64 = 2.0;
 
-    /// Stepped sine 79.2–81.2 Hz at 0.5 N; row `i` responds as the mode `law_of(i)`.
-    fn sweep(law_of: impl Fn(usize) -> BackboneLaw) -> (Sweep, Vec<Complex64>) {
+    /// A displacement-sensor sweep at 0.5 N: rows at `freqs` (Hz), row `i` at `f` with the
+    /// receptance `x_of(i, f)` (m/N).
+    fn sweep_of(
+        path: &str,
+        freqs: impl Iterator<Item = f64>,
+        x_of: impl Fn(usize, f64) -> Complex64,
+    ) -> (Sweep, Vec<Complex64>) {
         let force = 0.5;
-        let (rows, x): (Vec<Row>, Vec<Complex64>) = (0..41)
-            .map(|i| {
-                let f = 79.2 + 0.05 * i as f64;
-                let x = law_of(i).receptance(1.0 / MASS_KG, &[(TAU * f, force)], 1e-2)[0];
+        let (rows, x): (Vec<Row>, Vec<Complex64>) = freqs
+            .enumerate()
+            .map(|(i, f)| {
+                let x = x_of(i, f);
                 let row = Row {
                     line: i + 2,
                     frequency_hz: f,
@@ -354,13 +359,22 @@ mod tests {
             })
             .unzip();
         let s = Sweep {
-            path: "synthetic.csv".into(),
+            path: path.into(),
             sha256: String::new(),
             quantity: Quantity::Displacement,
             rows,
             header_line: 1,
         };
         (s, x)
+    }
+
+    /// Stepped sine 79.2–81.2 Hz at 0.5 N; row `i` responds as the mode `law_of(i)`.
+    fn sweep(law_of: impl Fn(usize) -> BackboneLaw) -> (Sweep, Vec<Complex64>) {
+        sweep_of(
+            "synthetic.csv",
+            (0..41).map(|i| 79.2 + 0.05 * i as f64),
+            |i, f| law_of(i).receptance(1.0 / MASS_KG, &[(TAU * f, 0.5)], 1e-2)[0],
+        )
     }
 
     fn sides(s: Sweep, x: Vec<Complex64>) -> (LevelBackbone, SideComparison) {
@@ -477,34 +491,20 @@ mod tests {
     /// damping `D` viscous (`2ζω_nω`, ζ = 10 %) or rate-independent (`η·ω_n²`, η = 0.2, the
     /// same ζ at resonance), scaled by `scale_of(row)`.
     fn heavily_damped(rate_independent: bool, scale_of: impl Fn(usize) -> f64) -> SideComparison {
-        let (force, wn) = (0.5, TAU * 80.0);
-        let (rows, x): (Vec<Row>, Vec<Complex64>) = (0..49)
-            .map(|i| {
-                let f = 56.0 + 1.0 * i as f64;
+        let wn = TAU * 80.0;
+        let (s, x) = sweep_of(
+            "heavily-damped.csv",
+            (0..49).map(|i| 56.0 + 1.0 * i as f64),
+            |i, f| {
                 let w = TAU * f;
                 let d = if rate_independent {
                     0.2 * wn * wn
                 } else {
                     2.0 * 0.1 * wn * w
                 };
-                let x = 1.0 / (MASS_KG * Complex64::new(wn * wn - w * w, d * scale_of(i)));
-                let row = Row {
-                    line: i + 2,
-                    frequency_hz: f,
-                    force_n: force,
-                    response: x.norm() * force,
-                    phase_rad: x.arg(),
-                };
-                (row, x)
-            })
-            .unzip();
-        let s = Sweep {
-            path: "heavily-damped.csv".into(),
-            sha256: String::new(),
-            quantity: Quantity::Displacement,
-            rows,
-            header_line: 1,
-        };
+                1.0 / (MASS_KG * Complex64::new(wn * wn - w * w, d * scale_of(i)))
+            },
+        );
         sides(s, x).1
     }
 
