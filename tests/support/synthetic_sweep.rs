@@ -12,7 +12,21 @@ use std::f64::consts::TAU;
 /// The sweep an accelerometer would record of drive-point receptances `x` (m/N) at `drives`:
 /// acceleration amplitude with relative noise and phase with noise (rad), both of standard
 /// deviation `noise` (normal, seeded; drawn per row, amplitude then phase).
+#[allow(dead_code)]
 pub fn noisy_sweep(
+    path: String,
+    drives: &[Drive],
+    x: &[Complex64],
+    noise: f64,
+    seed: u64,
+) -> Sweep {
+    noisy_sweep_of(Quantity::Acceleration, path, drives, x, noise, seed)
+}
+
+/// [`noisy_sweep`] as a sensor of `quantity` would record it (displacement, velocity or
+/// acceleration amplitude and its phase).
+pub fn noisy_sweep_of(
+    quantity: Quantity,
     path: String,
     drives: &[Drive],
     x: &[Complex64],
@@ -26,7 +40,7 @@ pub fn noisy_sweep(
         .zip(x)
         .enumerate()
         .map(|(i, (d, xi))| {
-            let y = xi * Quantity::Acceleration.from_displacement(d.omega);
+            let y = xi * quantity.from_displacement(d.omega);
             Row {
                 line: i + 2,
                 frequency_hz: d.omega / TAU,
@@ -39,7 +53,7 @@ pub fn noisy_sweep(
     Sweep {
         path: path.into(),
         sha256: String::new(),
-        quantity: Quantity::Acceleration,
+        quantity,
         rows,
         header_line: 1,
     }
