@@ -36,10 +36,10 @@
 //!
 //! # Adding a sharded sweep
 //! Implement [`ShardedSweep`] for the sweep's configuration (serialisable, with one label per
-//! unit and a check of one unit's result), give the CLI command a `--shard` flag that runs [`run_units`] on the shard's block
-//! and [`write_shard`]s it (the single run calls [`run_units`] with [`Shard::WHOLE`] and its
-//! output writer), and add the kind to `asperity merge`, which calls [`merge`] and the same
-//! output writer.
+//! unit and a check of one unit's result), give the CLI command a `--shard` flag that runs
+//! [`run_units`] on the shard's block and [`write_shard`]s it (the single run calls
+//! [`run_units`] with [`Shard::WHOLE`] and its output writer), and add the kind to `asperity
+//! merge`, which calls [`merge`] and the same output writer.
 
 use crate::error::{Error, Result};
 use serde::de::DeserializeOwned;

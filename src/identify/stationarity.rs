@@ -24,9 +24,16 @@
 //! joint's hysteresis, whose dissipation per cycle does not depend on the frequency, `ζ ∝ 1/ω`),
 //! or a mix. So two rows at the same amplitude and drive frequencies `ω_e` (earlier) and `ω_l`
 //! (later) differ by a ratio between 1 and `ω_e/ω_l` without any change of the structure — under
-//! 1 % for a lightly damped mode (the half-peak band spans `±√3·ζ` in frequency), but about −30 %
-//! at `ζ` = 10 %, where a friction damper is typical. A difference counts by how far it lies
-//! outside that interval, `[min(0, ω_e/ω_l − 1), max(0, ω_e/ω_l − 1)]`.
+//! 1 % for a lightly damped mode (the half-peak band spans `±√3·ζ` in frequency), but up to
+//! about −30 % at `ζ` = 10 %, where a friction damper is typical. A difference is therefore
+//! measured by how far it lies outside that interval, `[min(0, ω_e/ω_l − 1), max(0, ω_e/ω_l −
+//! 1)]` ([`damping_form_interval`]).
+//!
+//! That distance counts when it exceeds both [`DAMPING_TOLERANCE`] and [`NOISE_SIGMAS`]
+//! standard deviations of the difference that the level's measurement scatter `s` alone would
+//! give (`s·gain` per point, [`super::backbone::SidePoint::damping_noise_gain`]: small near the
+//! resonance, growing towards the band's edges); a level is not stationary when at least
+//! [`MIN_DIFFERING_POINTS`] of its compared points differ.
 //!
 //! Units: SI (m, Hz).
 
