@@ -417,33 +417,18 @@ fn assert_fails(o: &Output, needles: &[&str]) {
 fn bad_inputs_fail_clearly_and_write_nothing() {
     let st = setup();
     let out = st.root.join("out");
-    let base = |image: &Path, table: &Path| -> Vec<String> {
-        [
-            "film",
-            "--image",
-            s(image),
-            "--colour-table",
-            s(table),
-            "--pixel-size-mm",
-            "0.1",
-            "--out-dir",
-            s(&out),
-        ]
-        .iter()
-        .map(|x| x.to_string())
-        .collect()
-    };
-    let go = |args: Vec<String>| run(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let film =
+        |image: &Path, table: &Path, extra: &[&str]| film_at_0_1_mm(image, table, &out, extra);
 
     // Unreadable image: text with a .png name, and a missing file.
     let bogus = st.root.join("bogus.png");
     std::fs::write(&bogus, "not an image").unwrap();
     assert_fails(
-        &go(base(&bogus, &st.table)),
+        &film(&bogus, &st.table, &[]),
         &["bogus.png", "cannot read image"],
     );
     assert_fails(
-        &go(base(&st.root.join("missing.png"), &st.table)),
+        &film(&st.root.join("missing.png"), &st.table, &[]),
         &["missing.png"],
     );
 
@@ -455,46 +440,72 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
     )
     .unwrap();
     assert_fails(
-        &go(base(&st.image, &bad_table)),
+        &film(&st.image, &bad_table, &[]),
         &["bad_table.csv:4", "not monotone in pressure"],
     );
 
     // Empty region of interest.
-    let mut a = base(&st.image, &st.table);
-    a.extend(["--roi-rect-mm", "500,500,600,600"].map(String::from));
-    assert_fails(&go(a), &["contains no pixel"]);
+    assert_fails(
+        &film(&st.image, &st.table, &["--roi-rect-mm", "500,500,600,600"]),
+        &["contains no pixel"],
+    );
 
     // A region with no in-range pixel (the white corner).
-    let mut a = base(&st.image, &st.table);
-    a.extend(["--roi-rect-mm", "15,1,19,5"].map(String::from));
-    assert_fails(&go(a), &["no in-range pixel"]);
+    assert_fails(
+        &film(&st.image, &st.table, &["--roi-rect-mm", "15,1,19,5"]),
+        &["no in-range pixel"],
+    );
 
     // An image without any patch.
     let blank = st.root.join("blank.png");
     image::RgbImage::from_pixel(50, 50, image::Rgb([255, 255, 255]))
         .save(&blank)
         .unwrap();
-    assert_fails(&go(base(&blank, &st.table)), &["no pressure patch"]);
+    assert_fails(&film(&blank, &st.table, &[]), &["no pressure patch"]);
 
     // Nodes outside the map (placement far off), and outside the fitted patch.
-    let mut a = base(&st.image, &st.table);
-    a.extend(["--nodes", s(&st.nodes), "--node-offset-mm", "1000,1000"].map(String::from));
-    assert_fails(&go(a), &["outside the film map", "node "]);
-    let mut a = base(&st.image, &st.table);
-    a.extend(["--nodes", s(&st.nodes), "--node-offset-mm", "8,10"].map(String::from));
-    assert_fails(&go(a), &["extrapolate"]);
+    assert_fails(
+        &film(
+            &st.image,
+            &st.table,
+            &["--nodes", s(&st.nodes), "--node-offset-mm", "1000,1000"],
+        ),
+        &["outside the film map", "node "],
+    );
+    assert_fails(
+        &film(
+            &st.image,
+            &st.table,
+            &["--nodes", s(&st.nodes), "--node-offset-mm", "8,10"],
+        ),
+        &["extrapolate"],
+    );
 
     // Malformed nodes file.
     let bad_nodes = st.root.join("bad_nodes.csv");
     std::fs::write(&bad_nodes, "id,x_m,y_m\n1,0.0,0.0\n2,abc,0.0\n").unwrap();
-    let mut a = base(&st.image, &st.table);
-    a.extend(["--nodes", s(&bad_nodes), "--node-offset-mm", "10,10"].map(String::from));
-    assert_fails(&go(a), &["bad_nodes.csv:3", "x_m"]);
+    assert_fails(
+        &film(
+            &st.image,
+            &st.table,
+            &["--nodes", s(&bad_nodes), "--node-offset-mm", "10,10"],
+        ),
+        &["bad_nodes.csv:3", "x_m"],
+    );
 
     // Bad pixel size.
-    let mut a = base(&st.image, &st.table);
-    a[6] = "-0.1".into();
-    assert_fails(&go(a), &["pixel-size-mm"]);
+    let o = run(&[
+        "film",
+        "--image",
+        s(&st.image),
+        "--colour-table",
+        s(&st.table),
+        "--pixel-size-mm",
+        "-0.1",
+        "--out-dir",
+        s(&out),
+    ]);
+    assert_fails(&o, &["pixel-size-mm"]);
 
     // None of the failures left output behind.
     assert!(!out.exists() || std::fs::read_dir(&out).unwrap().count() == 0);
@@ -526,21 +537,7 @@ fn bad_inputs_fail_clearly_and_write_nothing() {
 fn film_flags_units_nodes_and_uniform_patches() {
     let st = setup();
     let out = st.root.join("out-flags");
-    let base = |extra: &[&str]| -> Output {
-        let mut a = vec![
-            "film",
-            "--image",
-            s(&st.image),
-            "--colour-table",
-            s(&st.table),
-            "--pixel-size-mm",
-            "0.1",
-            "--out-dir",
-            s(&out),
-        ];
-        a.extend_from_slice(extra);
-        run(&a)
-    };
+    let base = |extra: &[&str]| film_at_0_1_mm(&st.image, &st.table, &out, extra);
     assert_fails(
         &base(&["--max-colour-distance", "1000"]),
         &["--max-colour-distance", "441.7"],
