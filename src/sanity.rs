@@ -126,21 +126,29 @@ fn height_range(g: &Grid2) -> (f64, f64) {
         })
 }
 
+/// A grid spacing `d` (m) a rough contact patch can have, in [[`MIN_SPACING_M`],
+/// [`MAX_SPACING_M`]]; the message (without the axis or source) otherwise.
+pub fn grid_spacing(d: f64) -> std::result::Result<(), String> {
+    if (MIN_SPACING_M..=MAX_SPACING_M).contains(&d) {
+        Ok(())
+    } else {
+        Err(format!(
+            "grid spacing {} m lies outside [{}, {}] m that a rough contact patch can have \
+             (wrong unit?)",
+            num(d),
+            num(MIN_SPACING_M),
+            num(MAX_SPACING_M)
+        ))
+    }
+}
+
 /// A surface that a contact solver can use: spacings in [[`MIN_SPACING_M`],
 /// [`MAX_SPACING_M`]], heights within ±[`MAX_HEIGHT_M`], and not flat (a flat surface touches
 /// everywhere at the first load: the contact is complete and kn undefined). `source` names the
 /// file or the generated surface.
 pub fn contact_surface(g: &Grid2, source: &str) -> Result<()> {
     for (axis, d) in [("x", g.dx), ("y", g.dy)] {
-        if !(MIN_SPACING_M..=MAX_SPACING_M).contains(&d) {
-            return Err(Error::Data(format!(
-                "{source}: grid spacing along {axis} is {} m, outside [{}, {}] m that a rough \
-                 contact patch can have (wrong unit?)",
-                num(d),
-                num(MIN_SPACING_M),
-                num(MAX_SPACING_M)
-            )));
-        }
+        grid_spacing(d).map_err(|m| Error::Data(format!("{source}: along {axis}, {m}")))?;
     }
     let (lo, hi) = height_range(g);
     let big = lo.abs().max(hi.abs());

@@ -109,7 +109,7 @@ impl GaussianSurfaceSpec {
     /// - each correlation length is at most half the patch (otherwise the periodic patch cannot
     ///   represent the correlation and the filter wraps onto itself);
     /// - `rq_m` at most a tenth of [`sanity::MAX_HEIGHT_M`] and the spacings within
-    ///   [`sanity::MIN_SPACING_M`, `sanity::MAX_SPACING_M`]: a Gaussian surface of a million
+    ///   [`sanity::grid_spacing`]'s range: a Gaussian surface of a million
     ///   points reaches about ±5 Rq, and every contact command refuses heights and spacings
     ///   beyond those bounds (metres where micrometres were meant), so the generator refuses
     ///   them first rather than write a surface nothing can use.
@@ -138,18 +138,9 @@ impl GaussianSurfaceSpec {
             }
         }
         for (name, d, axis) in [("lx_m", self.dx(), "x"), ("ly_m", self.dy(), "y")] {
-            if !(sanity::MIN_SPACING_M..=sanity::MAX_SPACING_M).contains(&d) {
-                return Err(Error::param(
-                    name,
-                    format!(
-                        "grid spacing along {axis} {} m lies outside [{}, {}] m (patch size over \
-                         points): contact commands refuse such a surface",
-                        num(d),
-                        num(sanity::MIN_SPACING_M),
-                        num(sanity::MAX_SPACING_M)
-                    ),
-                ));
-            }
+            sanity::grid_spacing(d).map_err(|m| {
+                Error::param(name, format!("along {axis} (patch size over points), {m}"))
+            })?;
         }
         for (name, cl, d, l, axis) in [
             ("clx_m", self.clx_m, self.dx(), self.lx_m, "x"),
