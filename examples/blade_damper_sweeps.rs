@@ -86,8 +86,8 @@ fn main() -> asperity::Result<()> {
     let mut out = OutputSet::in_dir(&out_dir, "out dir")?;
     for (k, &(force, f0, f1, fr, hw)) in LEVELS.iter().enumerate() {
         let d = drives(force, f0, f1, fr, hw);
-        let (x, failed) = truth.receptance_tolerant(&d, force, false)?;
-        assert!(failed.is_empty());
+        // Not tolerant: a row that fails to converge ends the run with its error.
+        let (x, _) = truth.receptance_tolerant(&d, force, false)?;
         let name = format!("level{}.csv", k + 1);
         let sweep = synthetic_sweep::noisy_sweep_of(
             Quantity::Displacement,
