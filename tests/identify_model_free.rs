@@ -12,8 +12,7 @@ use asperity::identify::measured::{PhaseConvention, Sweep};
 use asperity::identify::model::{Drive, Family, Model, ModelSpec};
 use asperity::identify::model_free::{check_rows, Comparison, ModelFreeCheck, Rows};
 use asperity::identify::report::{level_role, LevelErrors};
-use asperity::identify::select::relative_scatter;
-use asperity::identify::stationarity::{compare_sides, SideComparison};
+use asperity::identify::stationarity::{compare_sides, Scatter, SideComparison};
 use std::f64::consts::TAU;
 
 #[path = "support/synthetic_sweep.rs"]
@@ -201,7 +200,7 @@ fn sides(sweeps: &[Sweep]) -> Vec<Option<SideComparison>> {
         .iter()
         .zip(sweeps)
         .map(|(b, s)| {
-            let c = compare_sides(b, relative_scatter(&LevelData::new(s, &conv)))?;
+            let c = compare_sides(b, Scatter::of(&LevelData::new(s, &conv)))?;
             eprintln!("  {}", c.describe());
             Some(c)
         })

@@ -142,6 +142,10 @@ pub struct SidePoint {
     /// `s·peak` per component gives the damping ratio a relative standard deviation of `s` times
     /// this (the error of `R/X` is `−(R/X)·ε` with `ε = δX/X`, and `ζ ∝ Im(R/X)`).
     pub damping_noise_gain: f64,
+    /// `peak |X| / |X|`: the same error gives the point's amplitude a relative standard
+    /// deviation of `s` times this (its radial component), which moves the point along the
+    /// backbone.
+    pub amplitude_noise_gain: f64,
 }
 
 /// The backbone estimated from one sweep.
@@ -232,6 +236,7 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
                             drive_hz: s.rows[i].frequency_hz,
                             point,
                             damping_noise_gain: peak / mag[i] * d.norm() / d.im.abs(),
+                            amplitude_noise_gain: peak / mag[i],
                         })
                     })
                     .collect()

@@ -1303,6 +1303,7 @@ mod tests {
             differing: if stationary { 0 } else { 3 },
             differing_mean: if stationary { f64::NAN } else { -0.2 },
             noise_sd: (0.01, 0.02),
+            damping_elasticity: (0.5, 1.5),
             frequency_difference_hz: (0.0, 0.1),
             stationary,
         };

@@ -118,6 +118,31 @@ pub fn relative_scatter(level: &LevelData) -> f64 {
     med / (1.1774 * 20f64.sqrt()) / level.peak
 }
 
+/// Measurement scatter of one level per component relative to each row's own response (noise
+/// proportional to the response, as a sensor's or a force gauge's gain error gives): the
+/// median third difference, each divided by the root-sum-square of its four rows' weighted
+/// magnitudes, over the Rayleigh median 1.1774. Beside [`relative_scatter`] (constant noise,
+/// a fraction of the peak), which underestimates proportional noise at the rows near the peak
+/// by the ratio of the peak to the median row's response.
+pub fn proportional_scatter(level: &LevelData) -> f64 {
+    let y = &level.measured;
+    if y.len() < 4 {
+        return f64::NAN;
+    }
+    let mut d3: Vec<f64> = (1..y.len() - 2)
+        .map(|i| {
+            let d = (y[i + 2] - 3.0 * y[i + 1] + 3.0 * y[i] - y[i - 1]).norm();
+            let w = y[i + 2].norm_sqr()
+                + 9.0 * y[i + 1].norm_sqr()
+                + 9.0 * y[i].norm_sqr()
+                + y[i - 1].norm_sqr();
+            d / w.sqrt()
+        })
+        .collect();
+    d3.sort_by(|a, b| a.total_cmp(b));
+    d3[d3.len() / 2] / 1.1774
+}
+
 /// Scatter floor of the objective over some levels: mean of `2·s_l²`.
 pub fn scatter_floor(levels: &[LevelData]) -> f64 {
     levels
