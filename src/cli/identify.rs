@@ -23,6 +23,13 @@ pub enum RowsArg {
     Settled,
 }
 
+fn fit_rows(rows: RowsArg) -> FitRows {
+    match rows {
+        RowsArg::All => FitRows::All,
+        RowsArg::Settled => FitRows::Settled,
+    }
+}
+
 /// Identify a jointed structure's nonlinear mode from stepped-sine sweeps at several excitation
 /// levels (one CSV per level: frequency_Hz, force_amplitude_N, <quantity>_amplitude_<unit>,
 /// phase_rad|phase_deg); fit on some levels, find the missing effect on held-out rows, predict
@@ -84,7 +91,7 @@ pub struct IdentifyArgs {
     /// while the level was measured), only the resonance row and the rows after it in the
     /// file's order, i.e. the part of the test after the structure has been through the level's
     /// largest amplitude. Errors are always scored on every row.
-    #[arg(long, value_enum, default_value = "all", conflicts_with = "structure")]
+    #[arg(long, value_enum, default_value = "all")]
     pub rows: RowsArg,
     /// Multi-DOF reduced model to update instead of the single nonlinear mode: a model file of
     /// `asperity response` (linear structure, contact element tables, excitation and response
@@ -202,10 +209,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
         f.seed = args.seed;
     }
     opts.response_amplitudes = args.response_amplitude.clone();
-    opts.rows = match args.rows {
-        RowsArg::All => FitRows::All,
-        RowsArg::Settled => FitRows::Settled,
-    };
+    opts.rows = fit_rows(args.rows);
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
     let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     let sweeps = read_sweeps(&args.files)?;
@@ -281,6 +285,7 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
             .map(|c| parse_candidates(c, &REDUCED_EFFECTS))
             .transpose()?,
         max_effects: args.max_effects,
+        rows: fit_rows(args.rows),
     };
     let result = identify_reduced(&spec, sweeps, fit_levels, &options, Some(&bar));
     bar.finish_and_clear();

@@ -400,6 +400,37 @@ pub fn check(
     check_rows(sweeps, frfs, levels, fit_levels, model, Rows::All)
 }
 
+/// The check on the settled rows ([`Rows::Settled`]) when a fit level's two sides differ
+/// (`stationarity`: every level's side comparison, `None` where not compared), or `None` when
+/// every fit level is stationary or unchecked; an error as its reason.
+pub fn check_settled(
+    sweeps: &[Sweep],
+    frfs: &[Vec<Complex64>],
+    levels: &[LevelData],
+    fit_levels: &[usize],
+    model: &[LevelErrors],
+    stationarity: &[Option<stationarity::SideComparison>],
+) -> Option<std::result::Result<ModelFreeCheck, String>> {
+    let fit_sides: Vec<Option<stationarity::SideComparison>> = fit_levels
+        .iter()
+        .map(|&i| stationarity[i].clone())
+        .collect();
+    fit_sides
+        .iter()
+        .any(|c| c.as_ref().is_some_and(|c| !c.stationary))
+        .then(|| {
+            check_rows(
+                sweeps,
+                frfs,
+                levels,
+                fit_levels,
+                model,
+                Rows::Settled(&fit_sides),
+            )
+            .map_err(|e| e.to_string())
+        })
+}
+
 /// [`check`] on the fit levels' points chosen by `rows`.
 pub fn check_rows(
     sweeps: &[Sweep],

@@ -705,24 +705,14 @@ pub fn identify(
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
     let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
         .map_err(|e| e.to_string());
-    let fit_sides: Vec<Option<SideComparison>> = fit_levels
-        .iter()
-        .map(|&i| stationarity[i].clone())
-        .collect();
-    let model_free_settled = fit_sides
-        .iter()
-        .any(|c| c.as_ref().is_some_and(|c| !c.stationary))
-        .then(|| {
-            model_free::check_rows(
-                &sweeps,
-                &frfs,
-                &levels,
-                &fit_levels,
-                &errors_after,
-                model_free::Rows::Settled(&fit_sides),
-            )
-            .map_err(|e| e.to_string())
-        });
+    let model_free_settled = model_free::check_settled(
+        &sweeps,
+        &frfs,
+        &levels,
+        &fit_levels,
+        &errors_after,
+        &stationarity,
+    );
     let roles = level_roles(levels.len(), &fit_levels);
     let uncertainty = uncertainty::estimate(
         &after.model.spec,
@@ -769,9 +759,25 @@ pub fn identify(
     })
 }
 
+/// The report's line on fit level `level` (0-based) fitted on its settled rows only: from its
+/// resonance row on (file line `line` at `frequency_hz`), `kept` of its `total` rows.
+pub(crate) fn settled_rows_line(
+    level: usize,
+    line: usize,
+    frequency_hz: f64,
+    kept: usize,
+    total: usize,
+) -> String {
+    format!(
+        "fit rows (--rows settled): level {} is not stationary (see below); fitted from its \
+         resonance row on, line {line} ({frequency_hz:.2} Hz), {kept} of {total} rows\n",
+        level + 1
+    )
+}
+
 /// Per fit level: the first row to fit when only settled rows are ([`FitRows::Settled`] and
 /// the level's sides differ), else `None` (every row).
-fn settled_first_rows(
+pub(crate) fn settled_first_rows(
     fit_levels: &[usize],
     sides: &[Option<SideComparison>],
     backbones: &[LevelBackbone],
@@ -1009,14 +1015,13 @@ impl Identification {
         for (&i, first) in self.fit_levels.iter().zip(&self.settled_from) {
             if let Some(r) = first {
                 let sw = &self.sweeps[i];
-                s += &format!(
-                    "fit rows (--rows settled): level {} is not stationary (see below); fitted \
-                     from its resonance row on, line {} ({:.2} Hz), {} of {} rows\n",
-                    i + 1,
-                    sw.rows[*r].line,
-                    sw.rows[*r].frequency_hz,
+                let row = &sw.rows[*r];
+                s += &settled_rows_line(
+                    i,
+                    row.line,
+                    row.frequency_hz,
                     sw.rows.len() - r,
-                    sw.rows.len()
+                    sw.rows.len(),
                 );
             }
         }
@@ -1212,11 +1217,11 @@ impl Identification {
         let model_free_json =
             super::report::available_or_reason(&self.model_free, serde_json::value::Serializer)
                 .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", p.display())))?;
-        let model_free_settled_json = match &self.model_free_settled {
-            None => serde_json::Value::Null,
-            Some(c) => super::report::available_or_reason(c, serde_json::value::Serializer)
-                .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", p.display())))?,
-        };
+        let model_free_settled_json = super::report::optional_available_or_reason(
+            &self.model_free_settled,
+            serde_json::value::Serializer,
+        )
+        .map_err(|e| Error::Data(format!("{}: cannot serialise: {e}", p.display())))?;
         let json = serde_json::json!({
             "tool": "asperity identify",
             "crate_version": env!("CARGO_PKG_VERSION"),

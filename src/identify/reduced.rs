@@ -78,7 +78,8 @@ use super::model::{solve_sweep, Drive, ParamSpec, RowFailure};
 use super::model_free::{self, ModelFreeCheck};
 use super::pipeline::{
     response_control_amplitudes, response_controlled_text, response_controlled_with,
-    write_backbone_files, write_response_controlled_csv, ResponseControlled,
+    settled_first_rows, settled_rows_line, write_backbone_files, write_response_controlled_csv,
+    FitRows, ResponseControlled,
 };
 use super::report::{
     errors_table, fine_curve_with, level_role, level_roles, plot_level, regions_text, write_json,
@@ -579,6 +580,13 @@ pub struct ReducedIdentification {
     /// have too few points at common amplitudes), or why the data's backbone is not available.
     #[serde(serialize_with = "super::report::available_or_reason")]
     pub stationarity: std::result::Result<Vec<Option<SideComparison>>, String>,
+    /// Per fit level: the first row fitted when only its settled rows were
+    /// ([`FitRows::Settled`] on a level that is not stationary), `None` where every row was.
+    pub settled_from: Vec<Option<usize>>,
+    /// When a fit level's sides differ: the model-free check on the settled rows (the earlier
+    /// side of such levels left out), or why it could not be made.
+    #[serde(serialize_with = "super::report::optional_available_or_reason")]
+    pub model_free_settled: Option<std::result::Result<ModelFreeCheck, String>>,
     /// Per level: the equivalent linear mode of the model's response at the level's rows, as
     /// given and updated (`None`: no resonance inside the measured band).
     pub backbone_before: Vec<Option<BackbonePoint>>,
@@ -653,6 +661,9 @@ pub struct ReducedOptions {
     pub candidates: Option<Vec<Effect>>,
     /// Most effects the search adds.
     pub max_effects: usize,
+    /// Rows of the fit levels to fit (every row, or the settled rows of a level that is not
+    /// stationary).
+    pub rows: FitRows,
 }
 
 impl ReducedOptions {
@@ -665,6 +676,7 @@ impl ReducedOptions {
             chain_steps: None,
             candidates: None,
             max_effects: 3,
+            rows: FitRows::All,
         }
     }
 
@@ -827,7 +839,22 @@ pub fn identify_reduced(
         .iter()
         .map(|s| LevelData::new(s, &convention))
         .collect();
-    let fit_data: Vec<LevelData> = fit_levels.iter().map(|&i| levels[i].clone()).collect();
+    let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
+    let data_backbone = backbone::from_data(&sweeps, &frfs).map_err(|e| e.to_string());
+    let stationarity = data_backbone
+        .as_ref()
+        .map(|b| stationarity::compare_levels(b, &levels))
+        .map_err(Clone::clone);
+    // A level whose sides could not be compared keeps its rows.
+    let settled_from = match (&data_backbone, &stationarity) {
+        (Ok(b), Ok(sides)) => settled_first_rows(&fit_levels, sides, b, options.rows),
+        _ => vec![None; fit_levels.len()],
+    };
+    let fit_data: Vec<LevelData> = fit_levels
+        .iter()
+        .zip(&settled_from)
+        .map(|(&i, first)| first.map_or_else(|| levels[i].clone(), |r| levels[i].from_row(r)))
+        .collect();
     let masks: Vec<Vec<bool>> = fit_data
         .iter()
         .map(|l| vec![true; l.drives.len()])
@@ -844,12 +871,6 @@ pub fn identify_reduced(
     };
     require_converged(spec, &factors_fit, "reduced-model update")?;
     let scatter_floor = super::select::scatter_floor(&fit_data);
-    let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
-    let data_backbone = backbone::from_data(&sweeps, &frfs).map_err(|e| e.to_string());
-    let stationarity = data_backbone
-        .as_ref()
-        .map(|b| stationarity::compare_levels(b, &levels))
-        .map_err(Clone::clone);
     // The effect search, when the four factors leave a residual above the scatter: the
     // single mode's search ([`super::select`]) on the family of this file's model with the
     // reference scales of the data.
@@ -915,6 +936,9 @@ pub fn identify_reduced(
     }
     let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
         .map_err(|e| e.to_string());
+    let model_free_settled = stationarity.as_ref().ok().and_then(|sides| {
+        model_free::check_settled(&sweeps, &frfs, &levels, &fit_levels, &errors_after, sides)
+    });
     let before = ReducedModel::as_given(spec);
     let (responses_before, errors_before) = responses_and_errors(&before, &levels, &fit_levels)?;
     let scatter = fit_data
@@ -973,6 +997,8 @@ pub fn identify_reduced(
         at_scatter,
         uncertainty,
         stationarity,
+        settled_from,
+        model_free_settled,
         data_backbone,
         model_free,
         backbone_before,
@@ -1110,6 +1136,26 @@ impl ReducedIdentification {
                 level_role(i, &self.fit_levels)
             );
         }
+        for (&i, first) in self.fit_levels.iter().zip(&self.settled_from) {
+            if let Some(r) = *first {
+                let l = &self.levels[i];
+                s += &settled_rows_line(
+                    i,
+                    l.lines[r],
+                    l.drives[r].omega / TAU,
+                    l.drives.len() - r,
+                    l.drives.len(),
+                );
+            }
+        }
+        if self.options.rows == FitRows::Settled {
+            if let Err(why) = &self.stationarity {
+                s += &format!(
+                    "fit rows (--rows settled): every row fitted: the levels' sides could not be \
+                     compared: {why}\n"
+                );
+            }
+        }
         s += "\nupdating factors (1 = the model as given) and effects' parameters:\n";
         for (p, v) in self.parameters.iter().zip(&self.fit.model.values) {
             s += &format!(
@@ -1156,6 +1202,9 @@ impl ReducedIdentification {
         match &self.stationarity {
             Ok(c) => s += &stationarity::levels_section(c, &self.fit_levels),
             Err(why) => s += &format!("\nstationarity not checked: {why}\n"),
+        }
+        if let Some(settled) = &self.model_free_settled {
+            s += &model_free::section(settled, &self.errors_after);
         }
         s += &format!(
             "\nmeasurement scatter per component (third differences) of the fit levels: {} of \

@@ -491,6 +491,17 @@ pub fn available_or_reason<T: Serialize, S: serde::Serializer>(
     }
 }
 
+/// [`available_or_reason`] for a result that may also be absent (`null`).
+pub fn optional_available_or_reason<T: Serialize, S: serde::Serializer>(
+    value: &Option<std::result::Result<T, String>>,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    match value {
+        None => s.serialize_none(),
+        Some(v) => available_or_reason(v, s),
+    }
+}
+
 /// Input file description for JSON sidecars.
 #[derive(Debug, Clone, Serialize)]
 pub struct InputFile {
