@@ -795,5 +795,10 @@ fn a_level_whose_damping_falls_during_its_test_is_fitted_on_its_settled_rows() {
         );
         assert!(all.fit.model.values[1] > settled.fit.model.values[1]);
         assert!(settled.model_free_settled.is_some() && all.model_free_settled.is_some());
+        let text = settled.text();
+        assert!(
+            text.contains("fit rows (--rows settled): level 3 is not stationary"),
+            "{text}"
+        );
     }
 }
