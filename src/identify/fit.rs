@@ -82,8 +82,10 @@ impl LevelData {
         }
     }
 
-    /// The level from row `first` (0-based, file order) on, as if the file held only those rows
-    /// (mean force and peak of the kept rows).
+    /// The level from row `first` (0-based, file order) on: the kept rows and their peak (the
+    /// weight of the level's residual), but the whole level's mean force — the test level the
+    /// preload-loss effect is a function of, so that a level is the same model whether it is
+    /// fitted on these rows or scored on all of them.
     pub fn from_row(&self, first: usize) -> Self {
         let first = first.min(self.drives.len().saturating_sub(1));
         let drives = self.drives[first..].to_vec();
@@ -91,7 +93,7 @@ impl LevelData {
         Self {
             name: self.name.clone(),
             quantity: self.quantity,
-            mean_force_n: drives.iter().map(|d| d.force_n).sum::<f64>() / drives.len() as f64,
+            mean_force_n: self.mean_force_n,
             peak: measured.iter().map(|v| v.norm()).fold(0.0, f64::max),
             lines: self.lines[first..].to_vec(),
             drives,
@@ -559,10 +561,10 @@ mod tests {
     use crate::identify::model::Drive;
     use realfft::num_complex::Complex64;
 
-    /// A level cut at a row keeps the rows from it on, and its mean force and peak are those
-    /// of the kept rows; a cut past the end keeps the last row.
+    /// A level cut at a row keeps the rows from it on and their peak, and the whole level's
+    /// mean force; a cut past the end keeps the last row.
     #[test]
-    fn a_level_from_a_row_on_is_the_file_of_those_rows() {
+    fn a_level_from_a_row_on_keeps_those_rows_and_the_level_force() {
         let level = LevelData {
             name: "l.csv".into(),
             quantity: Quantity::Displacement,
@@ -585,7 +587,7 @@ mod tests {
         assert_eq!(cut.drives.len(), 3);
         assert_eq!(cut.drives[0].omega, 502.0);
         assert_eq!(cut.measured[0], Complex64::new(0.0, 3.0));
-        assert_eq!(cut.mean_force_n, 4.0);
+        assert_eq!(cut.mean_force_n, 3.0, "the whole level's");
         assert_eq!(cut.peak, 3.0);
         assert_eq!(level.from_row(9).lines, vec![6]);
     }
