@@ -106,16 +106,7 @@ impl Extensible for ModelSpec {
 /// Measurement scatter of one level per component, relative to its peak (see the module
 /// documentation).
 pub fn relative_scatter(level: &LevelData) -> f64 {
-    let y = &level.measured;
-    if y.len() < 4 {
-        return f64::NAN;
-    }
-    let mut d3: Vec<f64> = (1..y.len() - 2)
-        .map(|i| (y[i + 2] - 3.0 * y[i + 1] + 3.0 * y[i] - y[i - 1]).norm())
-        .collect();
-    d3.sort_by(|a, b| a.total_cmp(b));
-    let med = d3[d3.len() / 2];
-    med / (1.1774 * 20f64.sqrt()) / level.peak
+    median_third_difference(&level.measured, |_| 1.0) / (1.1774 * 20f64.sqrt()) / level.peak
 }
 
 /// Measurement scatter of one level per component relative to each row's own response (noise
@@ -126,21 +117,29 @@ pub fn relative_scatter(level: &LevelData) -> f64 {
 /// by the ratio of the peak to the median row's response.
 pub fn proportional_scatter(level: &LevelData) -> f64 {
     let y = &level.measured;
+    let weight = |i: usize| {
+        (y[i + 2].norm_sqr()
+            + 9.0 * y[i + 1].norm_sqr()
+            + 9.0 * y[i].norm_sqr()
+            + y[i - 1].norm_sqr())
+        .sqrt()
+    };
+    median_third_difference(y, weight) / 1.1774
+}
+
+/// The median over the rows of `|y[i+2] − 3y[i+1] + 3y[i] − y[i−1]| / scale(i)` (a Rayleigh
+/// median, 1.1774 times the standard deviation per component of white noise whose third
+/// difference at `i` has a standard deviation of `scale(i)` per component); NaN below four
+/// rows.
+fn median_third_difference(y: &[Complex64], scale: impl Fn(usize) -> f64) -> f64 {
     if y.len() < 4 {
         return f64::NAN;
     }
     let mut d3: Vec<f64> = (1..y.len() - 2)
-        .map(|i| {
-            let d = (y[i + 2] - 3.0 * y[i + 1] + 3.0 * y[i] - y[i - 1]).norm();
-            let w = y[i + 2].norm_sqr()
-                + 9.0 * y[i + 1].norm_sqr()
-                + 9.0 * y[i].norm_sqr()
-                + y[i - 1].norm_sqr();
-            d / w.sqrt()
-        })
+        .map(|i| (y[i + 2] - 3.0 * y[i + 1] + 3.0 * y[i] - y[i - 1]).norm() / scale(i))
         .collect();
     d3.sort_by(|a, b| a.total_cmp(b));
-    d3[d3.len() / 2] / 1.1774
+    d3[d3.len() / 2]
 }
 
 /// Scatter floor of the objective over some levels: mean of `2·s_l²`.
