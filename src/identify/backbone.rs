@@ -138,14 +138,21 @@ pub struct SidePoint {
     /// The row's excitation frequency (Hz).
     pub drive_hz: f64,
     pub point: BackbonePoint,
-    /// `(peak |X| / |X|)·|R/X| / Im(R/X)`: a complex error of the response of standard deviation
-    /// `s·peak` per component gives the damping ratio a relative standard deviation of `s` times
-    /// this (the error of `R/X` is `−(R/X)·ε` with `ε = δX/X`, and `ζ ∝ Im(R/X)`).
-    pub damping_noise_gain: f64,
-    /// `peak |X| / |X|`: the same error gives the point's amplitude a relative standard
-    /// deviation of `s` times this (its radial component), which moves the point along the
-    /// backbone.
+    /// `|R/X| / Im(R/X)`: a relative error `ε = δX/X` of the response gives the damping ratio a
+    /// relative error of this times `|ε|` (the error of `R/X` is `−(R/X)·ε`, and `ζ ∝ Im(R/X)`).
+    pub damping_sensitivity: f64,
+    /// `peak |X| / |X|`: a complex error of standard deviation `s·peak` per component gives the
+    /// point's amplitude a relative standard deviation of `s` times this (its radial
+    /// component), which moves the point along the backbone.
     pub amplitude_noise_gain: f64,
+}
+
+impl SidePoint {
+    /// `(peak |X| / |X|)·|R/X| / Im(R/X)`: a complex error of standard deviation `s·peak` per
+    /// component gives the damping ratio a relative standard deviation of `s` times this.
+    pub fn damping_noise_gain(&self) -> f64 {
+        self.amplitude_noise_gain * self.damping_sensitivity
+    }
 }
 
 /// The backbone estimated from one sweep.
@@ -235,7 +242,7 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
                             row: i,
                             drive_hz: s.rows[i].frequency_hz,
                             point,
-                            damping_noise_gain: peak / mag[i] * d.norm() / d.im.abs(),
+                            damping_sensitivity: d.norm() / d.im.abs(),
                             amplitude_noise_gain: peak / mag[i],
                         })
                     })

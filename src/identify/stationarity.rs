@@ -227,7 +227,7 @@ impl Scatter {
     /// the two models' `σ`, times the point's damping sensitivity `|R/X|/Im(R/X)` and 1.
     fn point_sd(&self, p: &SidePoint) -> (f64, f64) {
         let sigma = (self.constant * p.amplitude_noise_gain).max(self.proportional);
-        (sigma * p.damping_noise_gain / p.amplitude_noise_gain, sigma)
+        (sigma * p.damping_sensitivity, sigma)
     }
 }
 
@@ -558,7 +558,7 @@ mod tests {
                 })
                 .sum::<f64>()
                 / draws as f64;
-            let (measured, predicted) = (var.sqrt(), s * p.damping_noise_gain);
+            let (measured, predicted) = (var.sqrt(), s * p.damping_noise_gain());
             eprintln!(
                 "row {}: sd {measured:.3e}, predicted {predicted:.3e}",
                 p.row
