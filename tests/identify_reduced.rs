@@ -9,7 +9,8 @@ use asperity::identify::fit::{FitOptions, Parametrised};
 use asperity::identify::measured::Sweep;
 use asperity::identify::model::{Drive, Scales};
 use asperity::identify::reduced::{
-    identify_reduced, EffectSearch, ReducedModel, ReducedOptions, ReducedSpec, SavedReducedModel,
+    identify_reduced, EffectSearch, ReducedIdentification, ReducedModel, ReducedOptions,
+    ReducedSpec, SavedReducedModel,
 };
 use asperity::identify::report::LevelErrors;
 use asperity::identify::select::{Extensible, Verdict};
@@ -718,6 +719,70 @@ fn sweeps_changing(spec: &ReducedSpec, early: &ReducedModel, seed: u64) -> (Vec<
     (sweeps, row)
 }
 
+/// One realisation of a level that changed during its test: level 3 responding as `early` on
+/// its rows before the resonance ([`sweeps_changing`]), fitted on levels 1 and 3 on every row
+/// and on the settled rows. Asserts what holds for any such change: the stationarity check
+/// flags level 3 and never levels 1 and 2, and the settled fit cuts level 3 at its resonance
+/// row (the noise may move it by a row). Returns level 3's check and the two fits.
+fn fit_a_changing_level(
+    spec: &ReducedSpec,
+    early: &ReducedModel,
+    r: u64,
+) -> (
+    asperity::identify::stationarity::SideComparison,
+    ReducedIdentification,
+    ReducedIdentification,
+) {
+    use asperity::identify::pipeline::FitRows;
+    let (sweeps, row) = sweeps_changing(spec, early, 7000 + 10 * r);
+    let fit = |rows| {
+        let opts = ReducedOptions {
+            rows,
+            ..options(r + 1)
+        };
+        identify_reduced(spec, sweeps.clone(), vec![0, 2], &opts, None).unwrap()
+    };
+    let (all, settled) = (fit(FitRows::All), fit(FitRows::Settled));
+    let sides = settled.stationarity.as_ref().unwrap();
+    assert!(
+        sides[..2]
+            .iter()
+            .all(|c| c.as_ref().is_none_or(|c| c.stationary)),
+        "realisation {r}: level 1 or 2 flagged: {:?}",
+        sides[..2]
+            .iter()
+            .map(|c| c.as_ref().map(|c| c.describe()))
+            .collect::<Vec<_>>()
+    );
+    let c = sides[2].clone().expect("level 3 compared");
+    assert!(!c.stationary, "realisation {r}: {}", c.describe());
+    assert_eq!(all.settled_from, vec![None, None]);
+    let first = settled.settled_from[1].expect("level 3 cut");
+    assert!(
+        first.abs_diff(row) <= 1 && settled.settled_from[0].is_none(),
+        "realisation {r}: cut at {:?}, the truth's resonance row {row}",
+        settled.settled_from
+    );
+    assert!(settled.model_free_settled.is_some() && all.model_free_settled.is_some());
+    let text = settled.text();
+    assert!(
+        text.contains("fit rows (--rows settled): level 3 is not stationary"),
+        "{text}"
+    );
+    (c, all, settled)
+}
+
+/// The settled fit's four factors within 2 % of the truth.
+fn settled_factors_within_two_percent(settled: &ReducedIdentification, r: u64) {
+    for (k, (&v, &t)) in settled.fit.model.values.iter().zip(&TRUTH).enumerate() {
+        assert!(
+            (v / t - 1.0).abs() < 0.02,
+            "realisation {r}: settled {} = {v} against {t}",
+            settled.parameters[k].name
+        );
+    }
+}
+
 /// Level 3's damping ratios twice as high on the rows before its resonance as from it on (a
 /// joint that ran in during that level's test), 1 % noise, five realisations: the stationarity
 /// check flags level 3 and never levels 1 and 2 — level 2 is swept where the joint starts to
@@ -730,50 +795,15 @@ fn sweeps_changing(spec: &ReducedSpec, early: &ReducedModel, seed: u64) -> (Vec<
 /// peak −1.5…+0.8 % against +4.0…+6.3 %, RMS 0.009–0.011 against 0.056–0.059.
 #[test]
 fn a_level_whose_damping_falls_during_its_test_is_fitted_on_its_settled_rows() {
-    use asperity::identify::pipeline::FitRows;
     let dir = tempfile::tempdir().unwrap();
     let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
     let mut early = TRUTH.to_vec();
     early[1] *= 2.0;
     let early = spec.model(early);
     for r in 0..5u64 {
-        let (sweeps, row) = sweeps_changing(&spec, &early, 7000 + 10 * r);
-        let fit = |rows| {
-            let opts = ReducedOptions {
-                rows,
-                ..options(r + 1)
-            };
-            identify_reduced(&spec, sweeps.clone(), vec![0, 2], &opts, None).unwrap()
-        };
-        let (all, settled) = (fit(FitRows::All), fit(FitRows::Settled));
-        let sides = settled.stationarity.as_ref().unwrap();
-        assert!(
-            sides[..2]
-                .iter()
-                .all(|c| c.as_ref().is_none_or(|c| c.stationary)),
-            "realisation {r}: level 1 or 2 flagged: {:?}",
-            sides[..2]
-                .iter()
-                .map(|c| c.as_ref().map(|c| c.describe()))
-                .collect::<Vec<_>>()
-        );
-        let c = sides[2].as_ref().expect("level 3 compared");
-        assert!(!c.stationary, "realisation {r}: {}", c.describe());
-        // The rows from the measured resonance on (the noise may move it by a row).
-        assert_eq!(all.settled_from, vec![None, None]);
-        let first = settled.settled_from[1].expect("level 3 cut");
-        assert!(
-            first.abs_diff(row) <= 1 && settled.settled_from[0].is_none(),
-            "realisation {r}: cut at {:?}, the truth's resonance row {row}",
-            settled.settled_from
-        );
-        for (k, (&v, &t)) in settled.fit.model.values.iter().zip(&TRUTH).enumerate() {
-            assert!(
-                (v / t - 1.0).abs() < 0.02,
-                "realisation {r}: settled {} = {v} against {t}",
-                settled.parameters[k].name
-            );
-        }
+        let (c, all, settled) = fit_a_changing_level(&spec, &early, r);
+        assert!(c.differing >= 2, "realisation {r}: {}", c.describe());
+        settled_factors_within_two_percent(&settled, r);
         let (e_all, e_settled) = (&all.errors_after[1], &settled.errors_after[1]);
         eprintln!(
             "realisation {r}: level 3 {}; damping factor every row {:.4}, settled {:.4} (truth \
@@ -794,11 +824,55 @@ fn a_level_whose_damping_falls_during_its_test_is_fitted_on_its_settled_rows() {
             e_settled.rms_complex
         );
         assert!(all.fit.model.values[1] > settled.fit.model.values[1]);
-        assert!(settled.model_free_settled.is_some() && all.model_free_settled.is_some());
-        let text = settled.text();
+    }
+}
+
+/// Level 3's friction 30 % higher on the rows before its resonance than from it on (a joint
+/// whose slip force fell during that level's test), 1 % noise, three realisations. At the
+/// amplitudes both sides share the damping hardly differs (no point beyond the damping's
+/// tolerance), which is why the check once called this level stationary; the natural
+/// frequency's shift between the sides, measured from level 1's, flags it. `--rows settled`
+/// then fits level 3 from its resonance row on: the four factors come back within 2 % and
+/// level 2's peak within 2 %, where the fit on every row misses it by more than 5 %.
+/// Measured: level 3's shift −0.23…−0.31 from level 1's median (noise sd 0.018–0.029), its
+/// damping −4.9…+7.0 % (0 points differ); friction factor settled 1.399–1.402, every row
+/// 1.606–1.611 (truth 1.4); level 2's peak −1.5…+0.8 % against +10.6…+13.0 %, RMS 0.010–0.011
+/// against 0.102–0.107.
+#[test]
+fn a_level_whose_slip_force_changes_during_its_test_is_flagged_by_its_natural_frequency() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
+    let mut early = TRUTH.to_vec();
+    early[3] *= 1.3;
+    let early = spec.model(early);
+    for r in 0..3u64 {
+        let (c, all, settled) = fit_a_changing_level(&spec, &early, r);
+        let (e_all, e_settled) = (&all.errors_after[1], &settled.errors_after[1]);
+        eprintln!(
+            "realisation {r}: level 3 {}; friction factor every row {:.4}, settled {:.4} (truth \
+             {}); level 2 predicted at peak {:+.2} / {:+.2} %, RMS {:.4} / {:.4}; factors {:?} / {:?}",
+            c.describe(),
+            all.fit.model.values[3],
+            settled.fit.model.values[3],
+            TRUTH[3],
+            100.0 * e_all.peak_error,
+            100.0 * e_settled.peak_error,
+            e_all.rms_complex,
+            e_settled.rms_complex,
+            all.fit.model.values,
+            settled.fit.model.values,
+        );
         assert!(
-            text.contains("fit rows (--rows settled): level 3 is not stationary"),
-            "{text}"
+            c.differing < 2 && c.frequency_differing >= 2,
+            "realisation {r}: {}",
+            c.describe()
+        );
+        settled_factors_within_two_percent(&settled, r);
+        assert!(
+            e_settled.peak_error.abs() < 0.02 && e_all.peak_error.abs() > 0.05,
+            "realisation {r}: level 2 peak every row {:+.4}, settled {:+.4}",
+            e_all.peak_error,
+            e_settled.peak_error
         );
     }
 }

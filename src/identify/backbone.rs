@@ -153,6 +153,15 @@ impl SidePoint {
     pub fn damping_noise_gain(&self) -> f64 {
         self.amplitude_noise_gain * self.damping_sensitivity
     }
+
+    /// `|R/X|/(2π)²` (Hz²): a relative error `ε = δX/X` of standard deviation `σ` per component
+    /// gives the squared natural frequency `f_n² = (Re(R/X) + ω²)/(2π)²` an error of standard
+    /// deviation `σ` times this (each component of `δ(R/X) = −(R/X)·ε` has that deviation).
+    /// From the stored quantities: `|R/X| = (|R/X|/Im(R/X))·|2ζ·ω_n·ω|`.
+    pub fn frequency_squared_noise_gain_hz2(&self) -> f64 {
+        self.damping_sensitivity
+            * (2.0 * self.point.damping_ratio * self.point.frequency_hz * self.drive_hz).abs()
+    }
 }
 
 /// The backbone estimated from one sweep.

@@ -1310,6 +1310,12 @@ mod tests {
             noise_sd: (0.01, 0.02),
             damping_elasticity: (0.5, 1.5),
             frequency_difference_hz: (0.0, 0.1),
+            frequency_reference: 0.0,
+            frequency_reference_file: "l.csv".into(),
+            frequency_shift: (-0.02, 0.03),
+            frequency_noise_sd: (0.01, 0.02),
+            frequency_differing: 0,
+            frequency_differing_mean: f64::NAN,
             stationary,
         };
         let backbones = [backbone(20), backbone(21), backbone(22), backbone(23)];

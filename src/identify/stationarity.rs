@@ -14,9 +14,28 @@
 //! Compared quantity: `ζ_later(a)/ζ_earlier(a) − 1` at the amplitude `a` of every point of the
 //! later side inside the earlier side's amplitude span (the earlier side interpolated linearly
 //! in the amplitude), over the rows down to half the peak ([`super::backbone::SIDE_BAND`]), and the
-//! difference of the natural frequencies. Only the damping ratio decides: the pointwise natural
-//! frequency also moves in opposite directions on the two sides when the modal constant is off
-//! (`ω_n² = R/R_true·(ω_0² − ω²) + ω²`), while the damping ratio only scales with it.
+//! natural frequencies' shift below.
+//!
+//! **The natural frequency.** The pointwise natural frequency moves in opposite directions on
+//! the two sides when the modal constant `R̂` it is computed with is off
+//! (`ω̂_n² = ρ·(ω_n² − ω²) + ω²`, `ρ = R̂/R`), while the damping ratio only scales with it. The
+//! compared quantity is therefore the *shift* `s = (f̂_n,l² − f̂_n,e²)/(f_l² − f_e²)` of a pair
+//! (drive frequencies `f_e`, `f_l` of the earlier and later row): `s ≈ Δf_n/Δf_drive`, the
+//! change of the natural frequency in units of the rows' separation. A stationary mode gives
+//! `s = 1 − ρ` at every pair of every level — the same constant, whatever the amplitude and
+//! the damping's form — and a change of the natural frequency between the sides (a slip force
+//! that changed during the test moves the resonance even where the damping at the shared
+//! amplitudes does not change) adds `Δ(f_n²)/(f_l² − f_e²)` to it. The constant is the median
+//! shift of a reference level: in [`compare_levels`] the level of lowest mean force with
+//! compared points (nearest the linear mode whose fit gave `R̂`), alone in [`compare_sides`]
+//! the level's own median (then a uniform shift of the whole level cannot be told from the
+//! modal constant's error, only a shift that varies along the level). On the Brake–Reuss files
+//! the constant reads +0.20 on every level (a modal constant some 20 % high); on the two-mode
+//! test model of `tests/identify_reduced.rs` it is about 0 and a 30 % change of the slip force
+//! before the resonance shifts that level by −0.24…−0.28. A pair's shift counts when its
+//! distance from the reference exceeds both [`FREQUENCY_TOLERANCE`] and [`NOISE_SIGMAS`]
+//! standard deviations of the noise (below); a level is not stationary when at least
+//! [`MIN_DIFFERING_POINTS`] of its points differ in the damping or in the shift.
 //!
 //! **The damping's form.** The pointwise damping ratio is the viscous equivalent,
 //! `ζ = Im(R/X)/(2ω_n·ω)`. A stationary mode's `Im(R/X)` at a given amplitude is `c·ω + h`:
@@ -56,6 +75,12 @@
 //! stationary (differences of −16…+24 % of both signs against noise standard deviations of
 //! 0.7–3.2 %; `tests/identify_reduced.rs`).
 //!
+//! **The shift's noise.** The same relative error `σ` gives `f̂_n²` an error of `σ·|R/X|/(2π)²`
+//! ([`super::backbone::SidePoint::frequency_squared_noise_gain_hz2`]) on each side, and the
+//! placement error moves the earlier side's `f̂_n²` by `d(f̂_n²)/d ln a` of its segment times
+//! the amplitudes' errors; in quadrature, over `f_l² − f_e²`. Near the resonance the two rows
+//! are close in frequency and the shift is noisy; at the band's edges it is well determined.
+//!//!
 //! Units: SI (m, Hz).
 
 use super::backbone::{BackbonePoint, LevelBackbone, SidePoint};
@@ -65,6 +90,12 @@ use serde::Serialize;
 /// `1/ζ`, so a model that splits a larger difference between the sides misses the rows of each
 /// by more than 5 % in amplitude — the identification's goal on a peak.
 pub const DAMPING_TOLERANCE: f64 = 0.10;
+/// Smallest shift of the natural frequency, in units of the rows' separation
+/// (`Δf_n/Δf_drive`), that counts. A model that splits such a shift between the sides
+/// misplaces each side's half-peak rows by about `0.75·s` of their response (7.5 %) and the
+/// resonance by `s·√3·ζ·f_n` (0.07 Hz at ζ = 0.5 % and 80 Hz) — the scale of the
+/// identification's goals on a peak (5 %) and a resonance frequency (0.1 Hz).
+pub const FREQUENCY_TOLERANCE: f64 = 0.10;
 /// A difference counts only beyond this many standard deviations of what the measurement
 /// scatter alone gives.
 pub const NOISE_SIGMAS: f64 = 4.0;
@@ -86,6 +117,12 @@ pub fn criterion_json() -> serde_json::Value {
                   to the peak) and proportional (relative to each row) noise, through the \
                   damping's sensitivity and, for the amplitude, the earlier side's \
                   d ln zeta / d ln a",
+        "frequency_tolerance": FREQUENCY_TOLERANCE,
+        "frequency_shift": "s = (fn_l^2 - fn_e^2)/(f_l^2 - f_e^2) per pair (fn: pointwise natural \
+                            frequency, f: drive frequency), compared with the median s of the \
+                            reference level (the lowest mean force with compared points; a \
+                            stationary mode gives one constant, 1 - R_used/R_true, at every \
+                            pair); noise from |R/X| of each row and d(fn^2)/d ln a",
     })
 }
 
@@ -120,7 +157,23 @@ pub struct SideComparison {
     pub damping_elasticity: (f64, f64),
     /// `f_n,later − f_n,earlier` (Hz): smallest and largest.
     pub frequency_difference_hz: (f64, f64),
-    /// Fewer than [`MIN_DIFFERING_POINTS`] points differ.
+    /// The stationary shift `1 − R̂/R` the pairs' shifts are measured from: the median shift
+    /// of [`SideComparison::frequency_reference_file`].
+    pub frequency_reference: f64,
+    /// The level whose median shift is the reference (this level's own when compared alone).
+    pub frequency_reference_file: String,
+    /// `s − s_ref` over the compared points, `s = (f_n,l² − f_n,e²)/(f_l² − f_e²)`: smallest
+    /// and largest.
+    pub frequency_shift: (f64, f64),
+    /// Standard deviation of the shift from the measurement scatter alone: smallest and
+    /// largest.
+    pub frequency_noise_sd: (f64, f64),
+    /// Compared points whose shift counts (beyond [`FREQUENCY_TOLERANCE`] and the noise).
+    pub frequency_differing: usize,
+    /// Mean of the shifts that count (NaN when none does).
+    pub frequency_differing_mean: f64,
+    /// Fewer than [`MIN_DIFFERING_POINTS`] points differ in the damping and fewer in the
+    /// natural frequency's shift.
     pub stationary: bool,
 }
 
@@ -132,11 +185,21 @@ impl SideComparison {
         let (n0, n1) = self.noise_sd;
         let (i0, i1) = self.damping_form_interval;
         let (scale, unit) = crate::plot::length_unit(a1);
+        let (s0, s1) = self.frequency_shift;
+        let (m0, m1) = self.frequency_noise_sd;
+        let mean = |n: usize, m: String| {
+            if n > 0 {
+                format!(" (mean {m})")
+            } else {
+                String::new()
+            }
+        };
         format!(
             "{}: {} points after the resonance against {} before, at {:.0}–{:.0} {unit}: ζ \
              {:+.1}…{:+.1} % (damping's form alone {:+.1}…{:+.1} %; noise sd {:.1}–{:.1} %), \
              f_n {:+.3}…{:+.3} Hz; {} of {} differ beyond that by {:.0} % and {NOISE_SIGMAS} \
-             sd{} — {}",
+             sd{}; f_n shift Δf_n/Δf_drive {:+.3}…{:+.3} from the reference {:+.3} ({}; noise \
+             sd {:.3}–{:.3}), {} of {} beyond {FREQUENCY_TOLERANCE} and {NOISE_SIGMAS} sd{} — {}",
             self.file,
             self.compared,
             self.points_earlier,
@@ -153,11 +216,26 @@ impl SideComparison {
             self.differing,
             self.compared,
             100.0 * DAMPING_TOLERANCE,
-            if self.differing > 0 {
-                format!(" (mean {:+.1} %)", 100.0 * self.differing_mean)
+            mean(
+                self.differing,
+                format!("{:+.1} %", 100.0 * self.differing_mean)
+            ),
+            s0,
+            s1,
+            self.frequency_reference,
+            if self.frequency_reference_file == self.file {
+                "its own median".to_string()
             } else {
-                String::new()
+                format!("median of {}", self.frequency_reference_file)
             },
+            m0,
+            m1,
+            self.frequency_differing,
+            self.compared,
+            mean(
+                self.frequency_differing,
+                format!("{:+.3}", self.frequency_differing_mean)
+            ),
             if self.stationary {
                 "stationary"
             } else {
@@ -223,31 +301,100 @@ impl Scatter {
         }
     }
 
-    /// Relative standard deviations of a point's damping ratio and amplitude: the larger of
-    /// the two models' `σ`, times the point's damping sensitivity `|R/X|/Im(R/X)` and 1.
-    fn point_sd(&self, p: &SidePoint) -> (f64, f64) {
+    /// Standard deviations of a point's damping ratio (relative), amplitude (relative) and
+    /// squared natural frequency (Hz²): the larger of the two models' `σ`, times the point's
+    /// damping sensitivity `|R/X|/Im(R/X)`, 1, and `|R/X|/(2π)²`.
+    fn point_sd(&self, p: &SidePoint) -> PointSd {
         let sigma = (self.constant * p.amplitude_noise_gain).max(self.proportional);
-        (sigma * p.damping_sensitivity, sigma)
+        PointSd {
+            damping: sigma * p.damping_sensitivity,
+            amplitude: sigma,
+            frequency_squared_hz2: sigma * p.frequency_squared_noise_gain_hz2(),
+        }
     }
 }
 
-/// Every level's two sides: [`compare_sides`] of each backbone with its level's measured
-/// scatter ([`Scatter::of`]).
+/// A point's standard deviations under a level's scatter ([`Scatter::point_sd`]).
+#[derive(Debug, Clone, Copy)]
+struct PointSd {
+    damping: f64,
+    amplitude: f64,
+    frequency_squared_hz2: f64,
+}
+
+/// Every level's two sides, each level with its measured scatter ([`Scatter::of`]) and the
+/// natural frequency's shift measured from the median shift of the level of lowest mean force
+/// that has compared points (module documentation).
 pub fn compare_levels(
     backbones: &[LevelBackbone],
     levels: &[super::fit::LevelData],
 ) -> Vec<Option<SideComparison>> {
-    backbones
+    let pairs: Vec<Option<SidePairs>> = backbones
         .iter()
         .zip(levels)
-        .map(|(b, l)| compare_sides(b, Scatter::of(l)))
+        .map(|(b, l)| side_pairs(b, Scatter::of(l)))
+        .collect();
+    let reference = (0..backbones.len())
+        .filter(|&k| pairs[k].is_some())
+        .min_by(|&a, &b| {
+            backbones[a]
+                .mean_force_n
+                .total_cmp(&backbones[b].mean_force_n)
+        })
+        .map(|k| Reference {
+            shift: pairs[k].as_ref().map_or(f64::NAN, SidePairs::median_shift),
+            file: backbones[k].file.clone(),
+        });
+    backbones
+        .iter()
+        .zip(&pairs)
+        .map(|(b, p)| Some(judge(b, p.as_ref()?, reference.as_ref()?)))
         .collect()
 }
 
 /// Compare the sides of one level's pointwise estimates, `scatter` the level's measurement
-/// scatter ([`Scatter::of`]); `None` when either side has too few points (two on the earlier
-/// side, one of the later side inside its amplitude span).
+/// scatter ([`Scatter::of`]), the natural frequency's shift measured from the level's own
+/// median shift; `None` when either side has too few points (two on the earlier side, one of
+/// the later side inside its amplitude span).
 pub fn compare_sides(b: &LevelBackbone, scatter: Scatter) -> Option<SideComparison> {
+    let pairs = side_pairs(b, scatter)?;
+    let reference = Reference {
+        shift: pairs.median_shift(),
+        file: b.file.clone(),
+    };
+    Some(judge(b, &pairs, &reference))
+}
+
+/// The stationary shift the pairs' shifts are measured from, and the level it is read on.
+struct Reference {
+    shift: f64,
+    file: String,
+}
+
+/// A level's later-side points paired with its earlier side at their amplitudes.
+struct SidePairs {
+    points_earlier: usize,
+    points_later: usize,
+    pairs: Vec<Pair>,
+}
+
+impl SidePairs {
+    /// Median of the pairs' natural-frequency shifts.
+    fn median_shift(&self) -> f64 {
+        let mut v: Vec<f64> = self.pairs.iter().map(|p| p.shift).collect();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    }
+}
+
+/// Pair every later-side point inside the earlier side's amplitude span with the earlier side
+/// read at its amplitude; `None` when there is nothing to compare.
+fn side_pairs(b: &LevelBackbone, scatter: Scatter) -> Option<SidePairs> {
     let side = |later: bool| -> Vec<SidePoint> {
         b.side_points
             .iter()
@@ -276,21 +423,37 @@ pub fn compare_sides(b: &LevelBackbone, scatter: Scatter) -> Option<SideComparis
         .filter(|p| p.point.amplitude_m >= span.0 && p.point.amplitude_m <= span.1)
         .map(|p| {
             let e = interpolate(&earlier, p.point.amplitude_m, scatter);
-            let (damping_l, amplitude_l) = scatter.point_sd(p);
+            let sd = scatter.point_sd(p);
+            let amplitude_sd = sd.amplitude.hypot(e.sd.amplitude);
             let elasticity = e.elasticity.abs();
-            let placement = elasticity * amplitude_l.hypot(e.amplitude_sd);
+            let placement = elasticity * amplitude_sd;
+            let separation = p.drive_hz.powi(2) - e.drive_hz.powi(2);
+            let shift_sd = sd
+                .frequency_squared_hz2
+                .hypot(e.sd.frequency_squared_hz2)
+                .hypot(e.frequency_squared_slope_hz2 * amplitude_sd)
+                / separation.abs();
             Pair {
                 later: p.point,
                 earlier: e.point,
-                sd: damping_l.hypot(e.damping_sd).hypot(placement),
+                sd: sd.damping.hypot(e.sd.damping).hypot(placement),
                 form: damping_form_interval(e.drive_hz, p.drive_hz),
                 elasticity,
+                shift: (p.point.frequency_hz.powi(2) - e.point.frequency_hz.powi(2)) / separation,
+                shift_sd,
             }
         })
         .collect();
-    if pairs.is_empty() {
-        return None;
-    }
+    (!pairs.is_empty()).then_some(SidePairs {
+        points_earlier: earlier.len(),
+        points_later: later.len(),
+        pairs,
+    })
+}
+
+/// The verdict on one level's pairs, shifts measured from `reference`.
+fn judge(b: &LevelBackbone, sides: &SidePairs, reference: &Reference) -> SideComparison {
+    let pairs = &sides.pairs;
     let range = |v: &mut dyn Iterator<Item = f64>| {
         v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
             (a.min(x), b.max(x))
@@ -305,10 +468,17 @@ pub fn compare_sides(b: &LevelBackbone, scatter: Scatter) -> Option<SideComparis
         })
         .map(Pair::difference)
         .collect();
-    Some(SideComparison {
+    let shift = |p: &Pair| p.shift - reference.shift;
+    let shifted: Vec<f64> = pairs
+        .iter()
+        .filter(|p| shift(p).abs() > FREQUENCY_TOLERANCE.max(NOISE_SIGMAS * p.shift_sd))
+        .map(shift)
+        .collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    SideComparison {
         file: b.file.clone(),
-        points_earlier: earlier.len(),
-        points_later: later.len(),
+        points_earlier: sides.points_earlier,
+        points_later: sides.points_later,
         compared: pairs.len(),
         amplitude_range_m: range(&mut pairs.iter().map(|p| p.later.amplitude_m)),
         damping_difference: range(&mut pairs.iter().map(Pair::difference)),
@@ -317,7 +487,7 @@ pub fn compare_sides(b: &LevelBackbone, scatter: Scatter) -> Option<SideComparis
             pairs.iter().map(|p| p.form.1).fold(0.0, f64::max),
         ),
         differing: counting.len(),
-        differing_mean: counting.iter().sum::<f64>() / counting.len() as f64,
+        differing_mean: mean(&counting),
         noise_sd: range(&mut pairs.iter().map(|p| p.sd)),
         damping_elasticity: range(&mut pairs.iter().map(|p| p.elasticity)),
         frequency_difference_hz: range(
@@ -325,8 +495,14 @@ pub fn compare_sides(b: &LevelBackbone, scatter: Scatter) -> Option<SideComparis
                 .iter()
                 .map(|p| p.later.frequency_hz - p.earlier.frequency_hz),
         ),
-        stationary: counting.len() < MIN_DIFFERING_POINTS,
-    })
+        frequency_reference: reference.shift,
+        frequency_reference_file: reference.file.clone(),
+        frequency_shift: range(&mut pairs.iter().map(shift)),
+        frequency_noise_sd: range(&mut pairs.iter().map(|p| p.shift_sd)),
+        frequency_differing: shifted.len(),
+        frequency_differing_mean: mean(&shifted),
+        stationary: counting.len() < MIN_DIFFERING_POINTS && shifted.len() < MIN_DIFFERING_POINTS,
+    }
 }
 
 /// A later-side point and the earlier side read at its amplitude.
@@ -339,6 +515,11 @@ struct Pair {
     form: (f64, f64),
     /// `|d ln ζ/d ln a|` of the earlier side's segment there.
     elasticity: f64,
+    /// `(f_n,l² − f_n,e²)/(f_l² − f_e²)`: the natural frequency's shift between the sides in
+    /// units of the rows' separation (module documentation).
+    shift: f64,
+    /// Its standard deviation from the scatter alone.
+    shift_sd: f64,
 }
 
 impl Pair {
@@ -362,13 +543,14 @@ struct SideAt {
     point: BackbonePoint,
     /// Drive frequency (Hz), interpolated like the point.
     drive_hz: f64,
-    /// The larger relative standard deviations of the two neighbours' damping ratios and
-    /// amplitudes ([`Scatter::point_sd`]).
-    damping_sd: f64,
-    amplitude_sd: f64,
+    /// The larger of the two neighbours' standard deviations, each ([`Scatter::point_sd`]).
+    sd: PointSd,
     /// `d ln ζ/d ln a` of the interpolating segment at the amplitude: how far the value read
     /// moves when the amplitude it is read at, or a neighbour's, moves.
     elasticity: f64,
+    /// `|d(f_n²)/d ln a|` (Hz²) of the interpolating segment: the same for the natural
+    /// frequency.
+    frequency_squared_slope_hz2: f64,
 }
 
 /// The point at amplitude `a` on a side sorted by amplitude, linear in the amplitude between
@@ -389,15 +571,26 @@ fn interpolate(side: &[SidePoint], a: f64, scatter: Scatter) -> SideAt {
         damping_ratio: p.damping_ratio + t * (q.damping_ratio - p.damping_ratio),
     };
     let (l, r) = (&side[k - 1], &side[k]);
-    let ((zl, al), (zr, ar)) = (scatter.point_sd(l), scatter.point_sd(r));
+    let (sl, sr) = (scatter.point_sd(l), scatter.point_sd(r));
+    let spread = q.amplitude_m > p.amplitude_m;
     SideAt {
         point,
         drive_hz: l.drive_hz + t * (r.drive_hz - l.drive_hz),
-        damping_sd: zl.max(zr),
-        amplitude_sd: al.max(ar),
-        elasticity: if q.amplitude_m > p.amplitude_m && point.damping_ratio != 0.0 {
+        sd: PointSd {
+            damping: sl.damping.max(sr.damping),
+            amplitude: sl.amplitude.max(sr.amplitude),
+            frequency_squared_hz2: sl.frequency_squared_hz2.max(sr.frequency_squared_hz2),
+        },
+        elasticity: if spread && point.damping_ratio != 0.0 {
             (q.damping_ratio - p.damping_ratio) / (q.amplitude_m - p.amplitude_m) * a
                 / point.damping_ratio
+        } else {
+            0.0
+        },
+        frequency_squared_slope_hz2: if spread {
+            ((q.frequency_hz.powi(2) - p.frequency_hz.powi(2)) / (q.amplitude_m - p.amplitude_m)
+                * a)
+                .abs()
         } else {
             0.0
         },
@@ -509,18 +702,85 @@ mod tests {
         let (d0, d1) = c.damping_difference;
         assert!(d0.abs() < 0.01 && d1.abs() < 0.01, "{}", c.describe());
         // The natural frequencies differ by the modal constant's error (the sweep's equivalent
-        // linear fit of a nonlinear sweep): 0.003–0.016 Hz here, why only the damping decides.
+        // linear fit of a nonlinear sweep): 0.003–0.016 Hz here. Their shift in units of the
+        // rows' separation is one constant, `1 − R̂/R`, at every pair.
         let (f0, f1) = c.frequency_difference_hz;
         assert!(f0.abs() < 0.03 && f1.abs() < 0.03, "{}", c.describe());
+        let (s0, s1) = c.frequency_shift;
+        assert!(s0.abs() < 0.01 && s1.abs() < 0.01, "{}", c.describe());
+        assert_eq!(c.frequency_differing, 0);
     }
 
-    /// The noise gain of each point: complex white noise of `s·peak` per component on the
-    /// receptance gives the pointwise damping ratio a relative standard deviation of `s·gain`
+    /// Two levels of one mode, the higher one's natural frequency 0.1 Hz lower on its rows
+    /// before the resonance (a slip force that fell at the resonance), its damping unchanged:
+    /// flagged by the natural frequency's shift measured from the lower level, and by nothing
+    /// else. Alone, the level is judged against its own median shift: the change is then seen
+    /// only through the spread of its shifts. Noise-free.
+    #[test]
+    fn a_test_whose_natural_frequency_moves_at_resonance_is_flagged() {
+        use crate::identify::fit::LevelData;
+        use crate::identify::measured::PhaseConvention;
+        let shifted = |f: f64| BackboneLaw {
+            frequency_hz: Polynomial {
+                coefficients: vec![80.3 + f, -0.2],
+                a_ref_m: 2e-4,
+            },
+            ..law(1.0)
+        };
+        let (s0, x0) = sweep(|_| law(1.0));
+        let resonance = backbone::from_data(&[s0], &[x0]).unwrap()[0].resonance_row;
+        let (low, _) = sweep_of(
+            "low.csv",
+            (0..41).map(|i| 79.5 + 0.05 * i as f64),
+            |_, f| law(1.0).receptance(1.0 / MASS_KG, &[(TAU * f, 0.1)], 1e-2)[0],
+        );
+        let low = Sweep {
+            rows: low
+                .rows
+                .into_iter()
+                .map(|r| Row {
+                    force_n: 0.1,
+                    response: r.response / 0.5 * 0.1,
+                    ..r
+                })
+                .collect(),
+            ..low
+        };
+        let (high, _) = sweep(|i| shifted(if i < resonance { -0.1 } else { 0.0 }));
+        let sweeps = [low, high];
+        let conv = PhaseConvention::detect(&sweeps).unwrap();
+        let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&conv)).collect();
+        let levels: Vec<LevelData> = sweeps.iter().map(|s| LevelData::new(s, &conv)).collect();
+        let backbones = backbone::from_data(&sweeps, &frfs).unwrap();
+        let sides = compare_levels(&backbones, &levels);
+        let c = sides[1].as_ref().expect("compared");
+        assert!(!c.stationary, "{}", c.describe());
+        assert_eq!(c.differing, 0, "{}", c.describe());
+        assert!(c.frequency_differing >= 2, "{}", c.describe());
+        assert_eq!(c.frequency_reference_file, "low.csv");
+        // The later side's f_n is the higher: no shift negative, those that count positive.
+        assert!(
+            c.frequency_shift.0 > -0.01 && c.frequency_differing_mean > 0.1,
+            "{}",
+            c.describe()
+        );
+        // Alone, its own median hides the uniform part of the change.
+        let alone = compare_sides(&backbones[1], Scatter::NONE).unwrap();
+        assert!(
+            alone.frequency_shift.0 < 0.0 && alone.frequency_shift.1 > 0.0,
+            "{}",
+            alone.describe()
+        );
+    }
+
+    /// The noise gains of each point: complex white noise of `s·peak` per component on the
+    /// receptance gives the pointwise damping ratio a relative standard deviation of `s·gain`,
+    /// and the squared natural frequency `s·(peak/|X|)·|R/X|/(2π)²`
     /// (Monte Carlo, 4000 draws at `s` = 1e-3 on a linear mode with ζ = 0.2 %, the true modal
     /// constant; within 5 % at every row of the band — four times the sampling error of a
     /// standard deviation from 4000 draws, 1.1 %).
     #[test]
-    fn noise_gain_predicts_the_scatter_of_the_pointwise_damping() {
+    fn noise_gains_predict_the_scatter_of_the_pointwise_estimates() {
         use rand::SeedableRng;
         use rand_distr::{Distribution, Normal};
         let linear = BackboneLaw {
@@ -566,6 +826,28 @@ mod tests {
             assert!(
                 (measured / predicted - 1.0).abs() < 0.05,
                 "row {}: sd {measured:.3e}, predicted {predicted:.3e}",
+                p.row
+            );
+            // The squared natural frequency's deviation (Hz²), same draws' statistics.
+            let f2 = p.point.frequency_hz.powi(2);
+            let var = (0..draws)
+                .map(|_| {
+                    let xn =
+                        x[p.row] + Complex64::new(noise.sample(&mut rng), noise.sample(&mut rng));
+                    let f = backbone::pointwise_mode(1.0 / MASS_KG, row.omega(), xn, row.force_n)
+                        .unwrap()
+                        .frequency_hz;
+                    (f * f - f2).powi(2)
+                })
+                .sum::<f64>()
+                / draws as f64;
+            let (measured, predicted) = (
+                var.sqrt(),
+                s * p.amplitude_noise_gain * p.frequency_squared_noise_gain_hz2(),
+            );
+            assert!(
+                (measured / predicted - 1.0).abs() < 0.05,
+                "row {}: f_n² sd {measured:.3e} Hz², predicted {predicted:.3e}",
                 p.row
             );
         }
