@@ -249,8 +249,10 @@ impl SideComparison {
 /// file).
 pub fn section(levels: &[(String, Option<&SideComparison>)]) -> String {
     let mut s = format!(
-        "\nstationarity: each level's pointwise damping after the resonance row against before it \
-         at the same amplitude (one nonlinear mode: equal; tolerance {:.0} %):\n",
+        "\nstationarity: each level's pointwise damping and natural frequency after the resonance \
+         row against before it at the same amplitude (one nonlinear mode: equal damping, \
+         tolerance {:.0} %; the natural frequency's shift Δf_n/Δf_drive one constant at every \
+         pair, tolerance {FREQUENCY_TOLERANCE}):\n",
         100.0 * DAMPING_TOLERANCE
     );
     for (label, c) in levels {
