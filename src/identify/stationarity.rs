@@ -30,9 +30,11 @@
 //! compared points (nearest the linear mode whose fit gave `R̂`), alone in [`compare_sides`]
 //! the level's own median (then a uniform shift of the whole level cannot be told from the
 //! modal constant's error, only a shift that varies along the level). On the Brake–Reuss files
-//! the constant reads +0.20 on every level (a modal constant some 20 % high); on the two-mode
-//! test model of `tests/identify_reduced.rs` it is about 0 and a 30 % change of the slip force
-//! before the resonance shifts that level by −0.24…−0.28. A pair's shift counts when its
+//! the constant reads +0.20 on every level (the modal constant used, from level 1, some 20 %
+//! low); on the two-mode
+//! test model of `tests/identify_reduced.rs` it is about 0, and a slip force 30 % higher before
+//! the resonance shifts that level's pairs by −0.06…−0.63 (largest per realisation −0.26 or
+//! more, 10 realisations with 1 % noise). A pair's shift counts when its
 //! distance from the reference exceeds both [`FREQUENCY_TOLERANCE`] and [`NOISE_SIGMAS`]
 //! standard deviations of the noise (below); a level is not stationary when at least
 //! [`MIN_DIFFERING_POINTS`] of its points differ in the damping or in the shift.
@@ -80,7 +82,7 @@
 //! placement error moves the earlier side's `f̂_n²` by `d(f̂_n²)/d ln a` of its segment times
 //! the amplitudes' errors; in quadrature, over `f_l² − f_e²`. Near the resonance the two rows
 //! are close in frequency and the shift is noisy; at the band's edges it is well determined.
-//!//!
+//!
 //! Units: SI (m, Hz).
 
 use super::backbone::{BackbonePoint, LevelBackbone, SidePoint};
