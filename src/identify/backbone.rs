@@ -13,11 +13,26 @@
 //!
 //! # Pointwise inversion
 //!
-//! With the modal constant `R` of the lowest level (the modal mass does not depend on the
+//! With one modal constant `R` for every level (the modal mass does not depend on the
 //! amplitude), every row near resonance gives its own equivalent mode:
 //! `R/X_i = ω_n,i² − ω_i² + 2iζ_i·ω_n,i·ω_i`, at the row's drive-point displacement amplitude
 //! `|X_i|·F_i`. Rows inside the half-power band are used (outside it the imaginary part is a
 //! small difference of large numbers).
+//!
+//! # The modal constant
+//!
+//! The equivalent linear fit of the lowest level gives a first `R̂`, but a nonlinear sweep is
+//! not a linear mode and its fit's constant is biased (on the Brake–Reuss files the four
+//! levels' fits give modal masses of 2.54 down to 1.95 kg). A stepped sine passes every
+//! amplitude twice, and for one nonlinear mode the two rows at the same amplitude share one
+//! natural frequency; computed with `R̂ = ρR` they differ instead by
+//! `f̂_n,l² − f̂_n,e² = (1 − ρ)(f_l² − f_e²)` (drive frequencies `f_e`, `f_l`). The median of
+//! that shift over the pairs of the reference level — the lowest mean force whose sides can be
+//! compared, [`super::stationarity::reference_shift`] — gives `ρ`, and the inversion is redone
+//! with `R = R̂/ρ`, under which that level's sides agree (on the Brake–Reuss files 2.02 kg in
+//! place of level 1's 2.54 kg). The damping ratios only scale with `ρ`, the natural frequencies'
+//! side-to-side spread is what changes. Kept at `R̂` when the reference level has fewer than
+//! [`MIN_REFERENCE_PAIRS`] pairs or a shift beyond [`MAX_REFERENCE_SHIFT`].
 
 use super::measured::{Quantity, Sweep};
 use crate::error::{Error, Result};
@@ -185,6 +200,9 @@ pub struct LevelBackbone {
     /// Row of the largest receptance, the top of the half-power band.
     #[serde(skip)]
     pub resonance_row: usize,
+    /// `1/R` (kg): the modal mass the pointwise inversion used, the same for every level of a
+    /// [`from_data`] call (see there).
+    pub pointwise_modal_mass_kg: f64,
 }
 
 /// Half-power band: indices of the rows whose `|Y|` is at least `peak/√2`, as the contiguous
@@ -216,7 +234,9 @@ pub fn band_rows(y: &[f64], fraction: f64) -> (usize, usize) {
 pub const SIDE_BAND: f64 = 0.5;
 
 /// Backbones of several sweeps: an equivalent linear mode per sweep and the pointwise
-/// inversion with the modal constant of the sweep of lowest mean force.
+/// inversion with one modal constant for all, the one under which the two sides of the
+/// reference level agree in natural frequency (module documentation; without a level whose
+/// sides can be compared, that of the linear fit of the sweep of lowest mean force).
 pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelBackbone>> {
     let mut fits = Vec::with_capacity(sweeps.len());
     for (s, y) in sweeps.iter().zip(frfs) {
@@ -233,10 +253,32 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
                 .total_cmp(&sweeps[b].mean_force_n())
         })
         .ok_or_else(|| Error::Data("no sweep".into()))?;
-    let r = 1.0 / fits[lowest].2.modal_mass_kg;
-    Ok(sweeps
+    let linear_r = 1.0 / fits[lowest].2.modal_mass_kg;
+    let first = invert_levels(sweeps, &fits, linear_r);
+    Ok(
+        match super::stationarity::reference_shift(&first)
+            .filter(|s| s.pairs >= MIN_REFERENCE_PAIRS && s.shift.abs() <= MAX_REFERENCE_SHIFT)
+        {
+            Some(s) => invert_levels(sweeps, &fits, linear_r / (1.0 - s.shift)),
+            None => first,
+        },
+    )
+}
+
+/// Fewest compared pairs of the reference level for its median shift to set the modal constant.
+pub const MIN_REFERENCE_PAIRS: usize = 3;
+/// Largest reference shift `1 − R̂/R` taken as the linear fit's error of the modal constant
+/// (beyond, a factor 2 in the modal mass, the sides are not one mode's and the linear fit's
+/// constant is kept).
+pub const MAX_REFERENCE_SHIFT: f64 = 0.5;
+
+type LevelFit = (Vec<f64>, Vec<Complex64>, LinearMode);
+
+/// The pointwise inversion of every level with the modal constant `r` (1/kg).
+fn invert_levels(sweeps: &[Sweep], fits: &[LevelFit], r: f64) -> Vec<LevelBackbone> {
+    sweeps
         .iter()
-        .zip(&fits)
+        .zip(fits)
         .map(|(s, (om, x, lin))| {
             let mag: Vec<f64> = x.iter().map(|v| v.norm()).collect();
             let ip = s.peak_row();
@@ -275,9 +317,10 @@ pub fn from_data(sweeps: &[Sweep], frfs: &[Vec<Complex64>]) -> Result<Vec<LevelB
                 point_rows,
                 side_points,
                 resonance_row,
+                pointwise_modal_mass_kg: 1.0 / r,
             }
         })
-        .collect())
+        .collect()
 }
 
 /// Pointwise inversion of one row (see the module documentation): the equivalent mode

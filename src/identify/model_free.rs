@@ -447,7 +447,7 @@ pub fn check_rows(
         .iter()
         .min_by(|a, b| a.mean_force_n.total_cmp(&b.mean_force_n))
         .ok_or_else(|| Error::Data("model-free check: no fit level".into()))?;
-    let modal_mass_kg = lowest.linear.modal_mass_kg;
+    let modal_mass_kg = lowest.pointwise_modal_mass_kg;
     let mut earlier_side_left_out = Vec::new();
     let mut points: Vec<BackbonePoint> = Vec::new();
     for (j, b) in backbones.iter().enumerate() {

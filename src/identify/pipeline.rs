@@ -1292,6 +1292,7 @@ mod tests {
             point_rows: Vec::new(),
             side_points: Vec::new(),
             resonance_row,
+            pointwise_modal_mass_kg: 2.0,
         };
         let sides = |stationary| SideComparison {
             file: "l.csv".into(),

@@ -29,9 +29,11 @@
 //! shift of a reference level: in [`compare_levels`] the level of lowest mean force with
 //! compared points (nearest the linear mode whose fit gave `R̂`), alone in [`compare_sides`]
 //! the level's own median (then a uniform shift of the whole level cannot be told from the
-//! modal constant's error, only a shift that varies along the level). On the Brake–Reuss files
-//! the constant reads +0.20 on every level (the modal constant used, from level 1, some 20 %
-//! low); on the two-mode
+//! modal constant's error, only a shift that varies along the level). [`super::backbone::from_data`]
+//! already sets the modal constant from the same reference level's median shift, so the
+//! reference reads 0 unless it kept the linear fit's constant (too few pairs, or too large a
+//! shift); computed with level 1's linear-fit constant the Brake–Reuss reference reads +0.205
+//! (that constant some 20 % low) and levels 3 and 4 lie −0.04…+0.03 from it. On the two-mode
 //! test model of `tests/identify_reduced.rs` it is about 0, and a slip force 30 % higher before
 //! the resonance shifts that level's pairs by −0.06…−0.63 (largest per realisation −0.26 or
 //! more, 10 realisations with 1 % noise). A pair's shift counts when its
@@ -354,6 +356,28 @@ pub fn compare_levels(
         .zip(&pairs)
         .map(|(b, p)| Some(judge(b, p.as_ref()?, reference.as_ref()?)))
         .collect()
+}
+
+/// The median natural-frequency shift of the reference level of `backbones` (the lowest mean
+/// force with compared pairs) and its pair count; `None` without such a level. The shift does
+/// not depend on the noise, so none is assumed.
+pub fn reference_shift(backbones: &[LevelBackbone]) -> Option<ReferenceShift> {
+    backbones
+        .iter()
+        .filter_map(|b| Some((b, side_pairs(b, Scatter::NONE)?)))
+        .min_by(|(a, _), (b, _)| a.mean_force_n.total_cmp(&b.mean_force_n))
+        .map(|(_, p)| ReferenceShift {
+            shift: p.median_shift(),
+            pairs: p.pairs.len(),
+        })
+}
+
+/// [`reference_shift`]'s result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceShift {
+    /// Median `(f_n,l² − f_n,e²)/(f_l² − f_e²)` of the level's pairs.
+    pub shift: f64,
+    pub pairs: usize,
 }
 
 /// Compare the sides of one level's pointwise estimates, `scatter` the level's measurement
