@@ -772,6 +772,47 @@ fn fit_a_changing_level(
     (c, all, settled)
 }
 
+/// The test model (in a directory kept alive by the returned guard) and the truth with its
+/// updating factor `index` multiplied by `factor`: level 3's response before its resonance in
+/// [`fit_a_changing_level`].
+fn model_changed_early(
+    index: usize,
+    factor: f64,
+) -> (tempfile::TempDir, ReducedSpec, ReducedModel) {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
+    let mut early = TRUTH.to_vec();
+    early[index] *= factor;
+    let early = spec.model(early);
+    (dir, spec, early)
+}
+
+/// Print level 3's check, factor `k` of both fits and their errors on level 2; returns those
+/// errors (every row, settled).
+fn print_fits<'a>(
+    r: u64,
+    k: usize,
+    c: &asperity::identify::stationarity::SideComparison,
+    all: &'a ReducedIdentification,
+    settled: &'a ReducedIdentification,
+) -> (&'a LevelErrors, &'a LevelErrors) {
+    let (e_all, e_settled) = (&all.errors_after[1], &settled.errors_after[1]);
+    eprintln!(
+        "realisation {r}: level 3 {}; {} every row {:.4}, settled {:.4} (truth {}); level 2 \
+         predicted at peak {:+.2} / {:+.2} %, RMS {:.4} / {:.4}",
+        c.describe(),
+        settled.parameters[k].name,
+        all.fit.model.values[k],
+        settled.fit.model.values[k],
+        TRUTH[k],
+        100.0 * e_all.peak_error,
+        100.0 * e_settled.peak_error,
+        e_all.rms_complex,
+        e_settled.rms_complex
+    );
+    (e_all, e_settled)
+}
+
 /// The settled fit's four factors within 2 % of the truth.
 fn settled_factors_within_two_percent(settled: &ReducedIdentification, r: u64) {
     for (k, (&v, &t)) in settled.fit.model.values.iter().zip(&TRUTH).enumerate() {
@@ -795,28 +836,12 @@ fn settled_factors_within_two_percent(settled: &ReducedIdentification, r: u64) {
 /// peak −1.5…+0.8 % against +4.0…+6.3 %, RMS 0.009–0.011 against 0.056–0.059.
 #[test]
 fn a_level_whose_damping_falls_during_its_test_is_fitted_on_its_settled_rows() {
-    let dir = tempfile::tempdir().unwrap();
-    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
-    let mut early = TRUTH.to_vec();
-    early[1] *= 2.0;
-    let early = spec.model(early);
+    let (_dir, spec, early) = model_changed_early(1, 2.0);
     for r in 0..5u64 {
         let (c, all, settled) = fit_a_changing_level(&spec, &early, r);
         assert!(c.differing >= 2, "realisation {r}: {}", c.describe());
         settled_factors_within_two_percent(&settled, r);
-        let (e_all, e_settled) = (&all.errors_after[1], &settled.errors_after[1]);
-        eprintln!(
-            "realisation {r}: level 3 {}; damping factor every row {:.4}, settled {:.4} (truth \
-             {}); level 2 predicted at peak {:+.2} / {:+.2} %, RMS {:.4} / {:.4}",
-            c.describe(),
-            all.fit.model.values[1],
-            settled.fit.model.values[1],
-            TRUTH[1],
-            100.0 * e_all.peak_error,
-            100.0 * e_settled.peak_error,
-            e_all.rms_complex,
-            e_settled.rms_complex
-        );
+        let (e_all, e_settled) = print_fits(r, 1, &c, &all, &settled);
         assert!(
             e_settled.rms_complex < 0.02 && e_all.rms_complex > e_settled.rms_complex,
             "realisation {r}: level 2 RMS every row {:.4}, settled {:.4}",
@@ -840,28 +865,10 @@ fn a_level_whose_damping_falls_during_its_test_is_fitted_on_its_settled_rows() {
 /// against 0.102–0.107.
 #[test]
 fn a_level_whose_slip_force_changes_during_its_test_is_flagged_by_its_natural_frequency() {
-    let dir = tempfile::tempdir().unwrap();
-    let spec = ReducedSpec::load(&write_model(dir.path(), 0.005)).unwrap();
-    let mut early = TRUTH.to_vec();
-    early[3] *= 1.3;
-    let early = spec.model(early);
+    let (_dir, spec, early) = model_changed_early(3, 1.3);
     for r in 0..3u64 {
         let (c, all, settled) = fit_a_changing_level(&spec, &early, r);
-        let (e_all, e_settled) = (&all.errors_after[1], &settled.errors_after[1]);
-        eprintln!(
-            "realisation {r}: level 3 {}; friction factor every row {:.4}, settled {:.4} (truth \
-             {}); level 2 predicted at peak {:+.2} / {:+.2} %, RMS {:.4} / {:.4}; factors {:?} / {:?}",
-            c.describe(),
-            all.fit.model.values[3],
-            settled.fit.model.values[3],
-            TRUTH[3],
-            100.0 * e_all.peak_error,
-            100.0 * e_settled.peak_error,
-            e_all.rms_complex,
-            e_settled.rms_complex,
-            all.fit.model.values,
-            settled.fit.model.values,
-        );
+        let (e_all, e_settled) = print_fits(r, 3, &c, &all, &settled);
         assert!(
             c.differing < 2 && c.frequency_differing >= 2,
             "realisation {r}: {}",

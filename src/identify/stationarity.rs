@@ -834,50 +834,35 @@ mod tests {
         let draws = 4000;
         for p in &b.side_points {
             let row = &sw.rows[p.row];
-            let z0 = p.point.damping_ratio;
-            let var = (0..draws)
-                .map(|_| {
-                    let xn =
-                        x[p.row] + Complex64::new(noise.sample(&mut rng), noise.sample(&mut rng));
-                    let z = backbone::pointwise_mode(1.0 / MASS_KG, row.omega(), xn, row.force_n)
-                        .unwrap()
-                        .damping_ratio;
-                    (z / z0 - 1.0).powi(2)
-                })
-                .sum::<f64>()
-                / draws as f64;
-            let (measured, predicted) = (var.sqrt(), s * p.damping_noise_gain());
-            eprintln!(
-                "row {}: sd {measured:.3e}, predicted {predicted:.3e}",
-                p.row
-            );
-            assert!(
-                (measured / predicted - 1.0).abs() < 0.05,
-                "row {}: sd {measured:.3e}, predicted {predicted:.3e}",
-                p.row
-            );
-            // The squared natural frequency's deviation (Hz²), same draws' statistics.
-            let f2 = p.point.frequency_hz.powi(2);
-            let var = (0..draws)
-                .map(|_| {
-                    let xn =
-                        x[p.row] + Complex64::new(noise.sample(&mut rng), noise.sample(&mut rng));
-                    let f = backbone::pointwise_mode(1.0 / MASS_KG, row.omega(), xn, row.force_n)
-                        .unwrap()
-                        .frequency_hz;
-                    (f * f - f2).powi(2)
-                })
-                .sum::<f64>()
-                / draws as f64;
-            let (measured, predicted) = (
-                var.sqrt(),
-                s * p.amplitude_noise_gain * p.frequency_squared_noise_gain_hz2(),
-            );
-            assert!(
-                (measured / predicted - 1.0).abs() < 0.05,
-                "row {}: f_n² sd {measured:.3e} Hz², predicted {predicted:.3e}",
-                p.row
-            );
+            let (z0, f2) = (p.point.damping_ratio, p.point.frequency_hz.powi(2));
+            // Mean squares of the relative damping error and of the f_n² error (Hz²).
+            let (var_z, var_f2) = (0..draws).fold((0.0, 0.0), |(vz, vf), _| {
+                let xn = x[p.row] + Complex64::new(noise.sample(&mut rng), noise.sample(&mut rng));
+                let q =
+                    backbone::pointwise_mode(1.0 / MASS_KG, row.omega(), xn, row.force_n).unwrap();
+                (
+                    vz + (q.damping_ratio / z0 - 1.0).powi(2) / draws as f64,
+                    vf + (q.frequency_hz.powi(2) - f2).powi(2) / draws as f64,
+                )
+            });
+            for (what, measured, predicted) in [
+                ("ζ (relative)", var_z.sqrt(), s * p.damping_noise_gain()),
+                (
+                    "f_n² (Hz²)",
+                    var_f2.sqrt(),
+                    s * p.amplitude_noise_gain * p.frequency_squared_noise_gain_hz2(),
+                ),
+            ] {
+                eprintln!(
+                    "row {}: {what} sd {measured:.3e}, predicted {predicted:.3e}",
+                    p.row
+                );
+                assert!(
+                    (measured / predicted - 1.0).abs() < 0.05,
+                    "row {}: {what} sd {measured:.3e}, predicted {predicted:.3e}",
+                    p.row
+                );
+            }
         }
     }
 
