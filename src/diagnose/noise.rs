@@ -84,7 +84,9 @@ pub fn robust_sigma(v: &[f64]) -> f64 {
     MAD_TO_SIGMA * median(&dev)
 }
 
-fn median(v: &[f64]) -> f64 {
+/// Median of a non-empty `v` (the mean of the two middle values for an even count; sorted by
+/// `total_cmp`, so a NaN-free input is assumed).
+pub(crate) fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(|a, b| a.total_cmp(b));
     let n = s.len();

@@ -340,17 +340,10 @@ pub fn compare_levels(
         .zip(levels)
         .map(|(b, l)| side_pairs(b, Scatter::of(l)))
         .collect();
-    let reference = (0..backbones.len())
-        .filter(|&k| pairs[k].is_some())
-        .min_by(|&a, &b| {
-            backbones[a]
-                .mean_force_n
-                .total_cmp(&backbones[b].mean_force_n)
-        })
-        .map(|k| Reference {
-            shift: pairs[k].as_ref().map_or(f64::NAN, SidePairs::median_shift),
-            file: backbones[k].file.clone(),
-        });
+    let reference = reference_level(backbones, &pairs).map(|k| Reference {
+        shift: pairs[k].as_ref().map_or(f64::NAN, SidePairs::median_shift),
+        file: backbones[k].file.clone(),
+    });
     backbones
         .iter()
         .zip(&pairs)
@@ -362,13 +355,25 @@ pub fn compare_levels(
 /// force with compared pairs) and its pair count; `None` without such a level. The shift does
 /// not depend on the noise, so none is assumed.
 pub fn reference_shift(backbones: &[LevelBackbone]) -> Option<ReferenceShift> {
-    backbones
+    let pairs: Vec<Option<SidePairs>> = backbones
         .iter()
-        .filter_map(|b| Some((b, side_pairs(b, Scatter::NONE)?)))
-        .min_by(|(a, _), (b, _)| a.mean_force_n.total_cmp(&b.mean_force_n))
-        .map(|(_, p)| ReferenceShift {
-            shift: p.median_shift(),
-            pairs: p.pairs.len(),
+        .map(|b| side_pairs(b, Scatter::NONE))
+        .collect();
+    let p = pairs[reference_level(backbones, &pairs)?].as_ref()?;
+    Some(ReferenceShift {
+        shift: p.median_shift(),
+        pairs: p.pairs.len(),
+    })
+}
+
+/// The reference level: of the levels with compared pairs, the one of lowest mean force.
+fn reference_level(backbones: &[LevelBackbone], pairs: &[Option<SidePairs>]) -> Option<usize> {
+    (0..backbones.len())
+        .filter(|&k| pairs[k].is_some())
+        .min_by(|&a, &b| {
+            backbones[a]
+                .mean_force_n
+                .total_cmp(&backbones[b].mean_force_n)
         })
 }
 
@@ -409,14 +414,8 @@ struct SidePairs {
 impl SidePairs {
     /// Median of the pairs' natural-frequency shifts.
     fn median_shift(&self) -> f64 {
-        let mut v: Vec<f64> = self.pairs.iter().map(|p| p.shift).collect();
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        }
+        let v: Vec<f64> = self.pairs.iter().map(|p| p.shift).collect();
+        crate::diagnose::noise::median(&v)
     }
 }
 
