@@ -27,8 +27,9 @@
 //! amplitude twice, and for one nonlinear mode the two rows at the same amplitude share one
 //! natural frequency; computed with `R̂ = ρR` they differ instead by
 //! `f̂_n,l² − f̂_n,e² = (1 − ρ)(f_l² − f_e²)` (drive frequencies `f_e`, `f_l`). The median of
-//! that shift over the pairs of the reference level — the lowest mean force whose sides can be
-//! compared, [`super::stationarity::reference_shift`] — gives `ρ`, and the inversion is redone
+//! that shift over the pairs of the reference level — of three or more levels whose sides can
+//! be compared the one of median shift, of two the lowest mean force,
+//! [`super::stationarity::reference_shift`] — gives `ρ`, and the inversion is redone
 //! with `R = R̂/ρ`, under which that level's sides agree (on the Brake–Reuss files 2.02 kg in
 //! place of level 1's 2.54 kg). The damping ratios only scale with `ρ`, the natural frequencies'
 //! side-to-side spread is what changes. Kept at `R̂` when the reference level has fewer than
