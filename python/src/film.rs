@@ -425,9 +425,8 @@ pub fn film_preloads<'py>(
         rotation_rad,
         scale,
     };
-    let pressure_at = |x: f64, y: f64| {
-        asperity::film::fitted_pressure_at(&film_map.inner, &region.inner, &fit.inner, x, y)
-    };
+    let field = asperity::film::FittedRegion::new(&film_map.inner, &region.inner, &fit.inner);
+    let pressure_at = |x: f64, y: f64| field.pressure_at(x, y);
     let (pre, summary) = nodes::preloads(&nodes, &placement, pressure_at, total_load_n).py()?;
     Ok((preload_columns(py, &pre)?, to_python(py, &summary)?))
 }

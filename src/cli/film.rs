@@ -4,7 +4,6 @@ use asperity::elements::{provenance_json, InputFile};
 use asperity::film::colour::{
     ColourTable, ColourToPressure, DensityCalibration, DEFAULT_MAX_COLOUR_DISTANCE,
 };
-use asperity::film::fitted_pressure_at;
 use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placement, Preload};
 use asperity::film::polyfit::{self, PolyFit2};
 use asperity::film::reduce::reduce;
@@ -14,6 +13,7 @@ use asperity::film::regions::{
     DEFAULT_MIN_SOLIDITY, DEFAULT_RIM_PIXELS,
 };
 use asperity::film::scan::{self, Channel};
+use asperity::film::FittedRegion;
 use asperity::output::write_string_atomic;
 use asperity::plot::{heatmap, HeatMap};
 use asperity::{Error, Result};
@@ -615,7 +615,8 @@ pub fn run(args: FilmArgs) -> Result<()> {
             rotation_rad: args.node_rotation_deg.to_radians(),
             scale: args.node_scale,
         };
-        let pressure_at = |x: f64, y: f64| fitted_pressure_at(&map, region, fit, x, y);
+        let field = FittedRegion::new(&map, region, fit);
+        let pressure_at = |x: f64, y: f64| field.pressure_at(x, y);
         // Errors about the nodes (their positions, their triangulation) name the nodes file.
         let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)
             .map_err(|e| e.in_file(nodes_path))?;
