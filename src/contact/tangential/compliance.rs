@@ -548,7 +548,8 @@ fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
     (dense, fft)
 }
 
-/// Largest eigenvalue of the (symmetric positive definite) restricted compliance by power
+/// Largest eigenvalue of the (symmetric positive semi-definite: a periodic patch in contact at
+/// every point has the uniform traction as a null vector) restricted compliance by power
 /// iteration (m/Pa). The start vector mixes both components so that no mode is missed by
 /// symmetry.
 pub(super) fn largest_eigenvalue(c: &Compliance, n: usize) -> f64 {

@@ -719,7 +719,8 @@ impl TangentialSolver {
     /// (the linear extrapolation that is exact while the stick and slip sets do not change;
     /// capped at `s ≤ 2`). At a reversal, the current traction: every point sticks at first.
     /// Only the starting point changes; the converged solution is the same (the problem is
-    /// strictly convex).
+    /// strictly convex — except on a periodic patch in contact at every point, where a uniform
+    /// traction costs no compliance energy and only the friction disks bound it).
     fn warm_start(&self, control: Control) -> Vec<[f64; 2]> {
         let (Control::Displacement(d), Some((d_prev, q_prev))) = (control, &self.previous) else {
             return self.q.clone();
@@ -745,7 +746,12 @@ impl TangentialSolver {
     /// Rigid shift at which monotonic loading from the virgin state along the unit direction
     /// `e` reaches gross slip (m): with every point saturated, `q_i = μ p_i e`, the slip
     /// `g_i = δ − (C q)_i` must point along `e` everywhere, which first happens at
-    /// `δ_gs = max_i (C q)_i·e`. For a Hertz contact this is Mindlin's `3μP·s/(16a)`.
+    /// `δ_gs = max_i (C q)_i·e`. For a Hertz contact this is Mindlin's `3μP·s/(16a)`. Exact
+    /// where `(C q)_i` is parallel to `e` at every point (a pressure field mirror-symmetric about
+    /// the `e` axis, as Hertz's); on a rough patch the x–y coupling of the Cerruti kernel
+    /// (`c_dir`) gives `(C q)_i` a small sideways component, the saturated field is then not
+    /// exactly along `e`, and `δ_gs` is an approximation (second order in the sideways angle),
+    /// used as an amplitude scale.
     pub fn gross_slip_displacement(&self, direction: [f64; 2]) -> Result<f64> {
         let m = direction[0].hypot(direction[1]);
         if !(m.is_finite() && m > 0.0) {
