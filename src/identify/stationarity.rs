@@ -731,6 +731,27 @@ mod tests {
         )
     }
 
+    /// [`law`] at scale 1 with its natural frequency moved by `f` (Hz).
+    fn shifted(f: f64) -> BackboneLaw {
+        BackboneLaw {
+            frequency_hz: Polynomial {
+                coefficients: vec![80.3 + f, -0.2],
+                a_ref_m: 2e-4,
+            },
+            ..law(1.0)
+        }
+    }
+
+    /// The backbones and fit data of several sweeps, as the identification forms them.
+    fn levels_of(sweeps: &[Sweep]) -> (Vec<LevelBackbone>, Vec<crate::identify::fit::LevelData>) {
+        use crate::identify::fit::LevelData;
+        use crate::identify::measured::PhaseConvention;
+        let conv = PhaseConvention::detect(sweeps).unwrap();
+        let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&conv)).collect();
+        let levels: Vec<LevelData> = sweeps.iter().map(|s| LevelData::new(s, &conv)).collect();
+        (backbone::from_data(sweeps, &frfs).unwrap(), levels)
+    }
+
     fn sides(s: Sweep, x: Vec<Complex64>) -> (LevelBackbone, SideComparison) {
         let b = backbone::from_data(&[s], &[x]).unwrap().remove(0);
         let c = compare_sides(&b, Scatter::NONE).expect("both sides have points");
@@ -765,15 +786,6 @@ mod tests {
     /// only through the spread of its shifts. Noise-free.
     #[test]
     fn a_test_whose_natural_frequency_moves_at_resonance_is_flagged() {
-        use crate::identify::fit::LevelData;
-        use crate::identify::measured::PhaseConvention;
-        let shifted = |f: f64| BackboneLaw {
-            frequency_hz: Polynomial {
-                coefficients: vec![80.3 + f, -0.2],
-                a_ref_m: 2e-4,
-            },
-            ..law(1.0)
-        };
         let (s0, x0) = sweep(|_| law(1.0));
         let resonance = backbone::from_data(&[s0], &[x0]).unwrap()[0].resonance_row;
         let (low, _) = sweep_of(
@@ -783,11 +795,7 @@ mod tests {
             |_, f| law(1.0).receptance(1.0 / MASS_KG, &[(TAU * f, 0.1)], 1e-2)[0],
         );
         let (high, _) = sweep(|i| shifted(if i < resonance { -0.1 } else { 0.0 }));
-        let sweeps = [low, high];
-        let conv = PhaseConvention::detect(&sweeps).unwrap();
-        let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&conv)).collect();
-        let levels: Vec<LevelData> = sweeps.iter().map(|s| LevelData::new(s, &conv)).collect();
-        let backbones = backbone::from_data(&sweeps, &frfs).unwrap();
+        let (backbones, levels) = levels_of(&[low, high]);
         let sides = compare_levels(&backbones, &levels);
         let c = sides[1].as_ref().expect("compared");
         assert!(!c.stationary, "{}", c.describe());
@@ -817,15 +825,6 @@ mod tests {
     /// mass at 1.49 kg for the truth's 2 kg. Noise-free.
     #[test]
     fn with_three_levels_a_changed_lowest_level_is_the_one_flagged() {
-        use crate::identify::fit::LevelData;
-        use crate::identify::measured::PhaseConvention;
-        let shifted = |f: f64| BackboneLaw {
-            frequency_hz: Polynomial {
-                coefficients: vec![80.3 + f, -0.2],
-                a_ref_m: 2e-4,
-            },
-            ..law(1.0)
-        };
         let at = |force: f64, law: BackboneLaw, f: f64| {
             law.receptance(1.0 / MASS_KG, &[(TAU * f, force)], 1e-2)[0]
         };
@@ -837,11 +836,7 @@ mod tests {
         });
         let (mid, _) = sweep_of("mid.csv", 0.3, freqs(), |_, f| at(0.3, law(1.0), f));
         let (high, _) = sweep(|_| law(1.0));
-        let sweeps = [low, mid, high];
-        let conv = PhaseConvention::detect(&sweeps).unwrap();
-        let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&conv)).collect();
-        let levels: Vec<LevelData> = sweeps.iter().map(|s| LevelData::new(s, &conv)).collect();
-        let backbones = backbone::from_data(&sweeps, &frfs).unwrap();
+        let (backbones, levels) = levels_of(&[low, mid, high]);
         eprintln!("modal mass {} kg", backbones[0].pointwise_modal_mass_kg);
         let sides: Vec<SideComparison> = compare_levels(&backbones, &levels)
             .into_iter()
