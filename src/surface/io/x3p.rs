@@ -5,7 +5,9 @@
 //!
 //! - `Record1/Axes/CX`, `CY`: `AxisType` must be `I` (incremental: a regular grid) with the
 //!   spacing `Increment` in metres; `CZ`: `AxisType` `A` (absolute), `DataType` `D` (f64), `F`
-//!   (f32), `L` (u32) or `I` (u16), optional `Increment` (scale) and `Offset`.
+//!   (f32), `L` (signed 32-bit integer) or `I` (signed 16-bit integer; as the openGPS reference
+//!   library's `OGPS_Int32`/`OGPS_Int16` and Gwyddion's x3p reader), optional `Increment`
+//!   (scale) and `Offset`.
 //! - `Record3/MatrixDimension/SizeX`, `SizeY` (points along x, y), `SizeZ` must be 1.
 //! - The binary data are little-endian, x fastest: value `k = j·SizeX + i` is the height at
 //!   `(i·dx, j·dy)`; its length must be exactly `SizeX·SizeY·size(DataType)`. When
@@ -207,8 +209,8 @@ fn decode(data_type: char, b: &[u8]) -> f64 {
     match data_type {
         'D' => f64::from_le_bytes(b.try_into().expect("8 bytes")),
         'F' => f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64,
-        'L' => u32::from_le_bytes(b.try_into().expect("4 bytes")) as f64,
-        _ => u16::from_le_bytes(b.try_into().expect("2 bytes")) as f64,
+        'L' => i32::from_le_bytes(b.try_into().expect("4 bytes")) as f64,
+        _ => i16::from_le_bytes(b.try_into().expect("2 bytes")) as f64,
     }
 }
 
@@ -536,6 +538,20 @@ mod tests {
         );
         let g = read(&p).unwrap();
         assert!((g.heights[[2, 1]] - (5e-9 - 2e-9)).abs() < 1e-24);
+        // The integer types are signed: −100 and −5000 increments read below the offset
+        // (read as unsigned they were +65 436 and +4 294 962 296 increments).
+        let neg16: Vec<u8> = (0..nx * ny)
+            .flat_map(|k| if k == 4 { -100i16 } else { k as i16 }.to_le_bytes())
+            .collect();
+        let p = dir.path().join("i-neg.x3p");
+        archive(&p, "I", "<Increment>1e-9</Increment>", nx, ny, &neg16);
+        assert!((read(&p).unwrap().heights[[1, 1]] + 100e-9).abs() < 1e-22);
+        let neg32: Vec<u8> = (0..nx * ny)
+            .flat_map(|k| if k == 4 { -5000i32 } else { k as i32 }.to_le_bytes())
+            .collect();
+        let p = dir.path().join("l-neg.x3p");
+        archive(&p, "L", "<Increment>1e-9</Increment>", nx, ny, &neg32);
+        assert!((read(&p).unwrap().heights[[1, 1]] + 5000e-9).abs() < 1e-21);
         let u32_bin: Vec<u8> = (0..nx * ny)
             .flat_map(|k| (k as u32).to_le_bytes())
             .collect();
