@@ -13,7 +13,8 @@
 //!   mean is `(1/L)∫h dx` (trapezoidal rule), `Rq² = (1/3L) Σ (h_i² + h_i h_{i+1} + h_{i+1}²) Δx_i`
 //!   with heights about the mean, and the rms slope is `[(1/L) Σ Δh_i²/Δx_i]^½`.
 //! - **Slopes** are first differences over the spacing, `(h_{i+1} - h_i)/dx`. Periodic data
-//!   include the wrap-around difference. Non-periodic areas use the differences at the points
+//!   include the wrap-around difference (after removing the mean only: a removed plane leaves a
+//!   seam, and plane-detrended data are treated as non-periodic, [`Detrend::periodic`]). Non-periodic areas use the differences at the points
 //!   `i < nx-1, j < ny-1` for both directions (SurfaceTopography's trimming of its upwind stencil),
 //!   and `rms_gradient = [⟨(∂h/∂x)² + (∂h/∂y)²⟩]^½`; a non-periodic profile has `n-1` differences.
 //! - **ACF** `C(δ) = ⟨h(x) h(x+δ)⟩ / ⟨h²⟩`, computed by FFT: circular for periodic data, zero-padded
@@ -66,6 +67,18 @@ pub enum Detrend {
     Mean,
     /// Remove the least-squares plane (area) or line (profile).
     Plane,
+}
+
+impl Detrend {
+    /// Whether detrended data from a topography with periodicity `periodic` are still one
+    /// period: removing the mean keeps a periodic topography periodic, removing a plane does
+    /// not (its tilt leaves a jump of `b·L` at the seam), as in SurfaceTopography
+    /// (`DetrendedUniformTopography.is_periodic`). Slopes, autocorrelation and spectrum of
+    /// plane-detrended data are therefore those of a non-periodic topography (no wrap-around
+    /// difference, zero-padded correlation, windowed spectrum).
+    pub fn periodic(self, periodic: bool) -> bool {
+        periodic && self == Detrend::Mean
+    }
 }
 
 impl std::str::FromStr for Detrend {
@@ -643,7 +656,7 @@ fn profile_result(
     SurfaceStats {
         kind: "profile",
         uniform: p.is_uniform(),
-        periodic: p.periodic,
+        periodic: detrend.periodic(p.periodic),
         detrend,
         nx: p.len(),
         ny: 1,
@@ -710,7 +723,13 @@ fn profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
         None => {
             let h = detrend_uniform_line(&p.heights, detrend);
             let (ra, rq, rsk, rku) = sample_moments(h.iter());
-            (ra, rq, rsk, rku, rms_slope_uniform(&h, p.dx, p.periodic))
+            (
+                ra,
+                rq,
+                rsk,
+                rku,
+                rms_slope_uniform(&h, p.dx, detrend.periodic(p.periodic)),
+            )
         }
         Some(x) => {
             let h = detrend_nonuniform(x, &p.heights, detrend);
@@ -727,7 +746,11 @@ fn profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
         }
     };
     check_not_flat(rq, rku, max_abs(p.heights.iter()))?;
-    let acf = acf_profile(&uniform_profile_heights(p, detrend), p.dx, p.periodic);
+    let acf = acf_profile(
+        &uniform_profile_heights(p, detrend),
+        p.dx,
+        detrend.periodic(p.periodic),
+    );
     Ok(profile_result(p, detrend, (ra, rq, rsk, rku), slope, &acf))
 }
 
@@ -741,10 +764,10 @@ fn area_stats(g: &Grid2, detrend: Detrend) -> Result<SurfaceStats> {
     let h = detrend_area(&g.heights, detrend);
     let (ra, rq, rsk, rku) = sample_moments(h.iter());
     check_not_flat(rq, rku, max_abs(g.heights.iter()))?;
-    let (sx, sy, grad) = rms_slopes_area(&h, g.dx, g.dy, g.periodic);
-    let (radial, ax, ay) = acf_area(&h, g.dx, g.dy, g.periodic);
+    let (sx, sy, grad) = rms_slopes_area(&h, g.dx, g.dy, detrend.periodic(g.periodic));
+    let (radial, ax, ay) = acf_area(&h, g.dx, g.dy, detrend.periodic(g.periodic));
     Ok(area_result(
-        (nx, ny, g.dx, g.dy, g.periodic, 0),
+        (nx, ny, g.dx, g.dy, detrend.periodic(g.periodic), 0),
         detrend,
         (ra, rq, rsk, rku),
         (sx, sy, grad),
@@ -776,13 +799,13 @@ pub fn power_spectrum(topo: &Topography, detrend: Detrend) -> Result<Psd> {
         Topography::Profile(p) => Ok(psd_profile(
             &uniform_profile_heights(p, detrend),
             p.dx,
-            p.periodic,
+            detrend.periodic(p.periodic),
         )),
         Topography::Area(g) => Ok(psd_area(
             &detrend_area(&g.heights, detrend),
             g.dx,
             g.dy,
-            g.periodic,
+            detrend.periodic(g.periodic),
         )),
     }
 }
@@ -792,17 +815,25 @@ pub fn autocorrelation(topo: &Topography, detrend: Detrend) -> Acf {
     match topo {
         Topography::MaskedArea(m) => {
             let h = masked_detrend(&m.heights, detrend);
-            acf_area_masked(&h, m.dx, m.dy, m.periodic).0
+            acf_area_masked(&h, m.dx, m.dy, detrend.periodic(m.periodic)).0
         }
         Topography::Profile(p) if p.missing() > 0 => {
             let h = masked_detrend(&profile_column(&p.heights), detrend);
-            acf_profile_masked(&h, p.dx, p.periodic)
+            acf_profile_masked(&h, p.dx, detrend.periodic(p.periodic))
         }
-        Topography::Profile(p) => {
-            acf_profile(&uniform_profile_heights(p, detrend), p.dx, p.periodic)
-        }
+        Topography::Profile(p) => acf_profile(
+            &uniform_profile_heights(p, detrend),
+            p.dx,
+            detrend.periodic(p.periodic),
+        ),
         Topography::Area(g) => {
-            acf_area(&detrend_area(&g.heights, detrend), g.dx, g.dy, g.periodic).0
+            acf_area(
+                &detrend_area(&g.heights, detrend),
+                g.dx,
+                g.dy,
+                detrend.periodic(g.periodic),
+            )
+            .0
         }
     }
 }
@@ -1059,8 +1090,9 @@ fn masked_profile_stats(p: &Profile, detrend: Detrend) -> Result<SurfaceStats> {
     let (ra, rq, rsk, rku) = sample_moments(h.iter().filter(|v| !v.is_nan()));
     check_not_flat(rq, rku, max_abs(p.heights.iter()))?;
     let hv: Vec<f64> = h.iter().copied().collect();
-    let slope = rms_finite(masked_slopes_profile(&hv, p.dx, p.periodic).into_iter());
-    let acf = acf_profile_masked(&h, p.dx, p.periodic);
+    let slope =
+        rms_finite(masked_slopes_profile(&hv, p.dx, detrend.periodic(p.periodic)).into_iter());
+    let acf = acf_profile_masked(&h, p.dx, detrend.periodic(p.periodic));
     Ok(profile_result(p, detrend, (ra, rq, rsk, rku), slope, &acf))
 }
 
@@ -1074,7 +1106,7 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
     let h = masked_detrend(&m.heights, detrend);
     let (ra, rq, rsk, rku) = sample_moments(h.iter().filter(|v| !v.is_nan()));
     check_not_flat(rq, rku, max_abs(m.heights.iter()))?;
-    let (gx, gy) = masked_slopes_area(&h, m.dx, m.dy, m.periodic);
+    let (gx, gy) = masked_slopes_area(&h, m.dx, m.dy, detrend.periodic(m.periodic));
     let sx = rms_finite(gx.iter().copied());
     let sy = rms_finite(gy.iter().copied());
     let grad = rms_finite(gx.iter().zip(&gy).map(|(a, b)| (a * a + b * b).sqrt()));
@@ -1083,9 +1115,16 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
             "no two neighbouring points are both measured: slopes cannot be computed".into(),
         ));
     }
-    let (radial, ax, ay) = acf_area_masked(&h, m.dx, m.dy, m.periodic);
+    let (radial, ax, ay) = acf_area_masked(&h, m.dx, m.dy, detrend.periodic(m.periodic));
     Ok(area_result(
-        (nx, ny, m.dx, m.dy, m.periodic, m.missing()),
+        (
+            nx,
+            ny,
+            m.dx,
+            m.dy,
+            detrend.periodic(m.periodic),
+            m.missing(),
+        ),
         detrend,
         (ra, rq, rsk, rku),
         (sx, sy, grad),
@@ -1097,6 +1136,40 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
 mod tests {
     use super::*;
     use crate::surface::generate::{generate, GaussianSurfaceSpec};
+
+    /// Removing a plane from one period of a periodic surface leaves a seam: the statistics are
+    /// then those of the same heights taken as non-periodic (SurfaceTopography's rule). On
+    /// `h = sin(2πi/64)` (64 × 64, dx = 1) the fitted tilt is −0.030 and the wrap-around
+    /// difference made the rms slope 0.2345 where the non-periodic one is 0.0744.
+    #[test]
+    fn plane_detrending_makes_a_periodic_area_non_periodic() {
+        let n = 64;
+        let h = Array2::from_shape_fn((n, n), |(i, _)| (2.0 * PI * i as f64 / n as f64).sin());
+        let topo = |periodic| {
+            Topography::Area(crate::grid::Grid2::new(h.clone(), 1.0, 1.0, periodic).unwrap())
+        };
+        let plane = stats(&topo(true), Detrend::Plane).unwrap();
+        let open = stats(&topo(false), Detrend::Plane).unwrap();
+        assert!(!plane.periodic);
+        assert_eq!(plane.rms_slope, open.rms_slope);
+        assert!(
+            (plane.rms_slope - 0.0744).abs() < 5e-4,
+            "{}",
+            plane.rms_slope
+        );
+        let psd = |periodic| power_spectrum(&topo(periodic), Detrend::Plane).unwrap();
+        assert_eq!(psd(true), psd(false));
+        // Removing the mean keeps it periodic: the sine's exact slope 2π/64/√2 (x) over the
+        // area, the gradient's rms.
+        let mean = stats(&topo(true), Detrend::Mean).unwrap();
+        assert!(mean.periodic);
+        let exact = 2.0 * (PI / n as f64).sin() / 2f64.sqrt();
+        assert!(
+            (mean.rms_slope - exact).abs() < 1e-12,
+            "{} {exact}",
+            mean.rms_slope
+        );
+    }
 
     fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs()
