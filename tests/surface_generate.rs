@@ -41,6 +41,8 @@ fn generate_writes_npy_with_requested_rq() {
         out.to_str().unwrap(),
     ]);
     let g = written_area(&o, &out);
+    // cl/L = 0.05: the expected 1/e length is within 2 % of cl, no note.
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("note"));
     assert_eq!((g.nx(), g.ny()), (128, 128));
     assert!(g.periodic);
     assert!((g.dx - 1e-4 / 128.0).abs() < 1e-18);
@@ -60,6 +62,38 @@ fn generate_writes_npy_with_requested_rq() {
     })
     .unwrap();
     assert_eq!(lib.heights, g.heights);
+}
+
+/// A patch four correlation lengths across: the surface's expected 1/e length is 84 % of the
+/// requested one along both axes (`surface::generate::expected_correlation_length_x`, checked
+/// there against generated surfaces), and the note says so.
+#[test]
+fn generate_notes_a_patch_too_small_for_its_correlation_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("small.npy");
+    let o = asperity(&[
+        "surface",
+        "generate",
+        "--rq-m",
+        "1e-6",
+        "--cl-m",
+        "16e-6",
+        "--size-m",
+        "64e-6",
+        "--n",
+        "64",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    written_area(&o, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    for axis in ["x", "y"] {
+        assert!(
+            err.contains(&format!("along {axis}: the generated")),
+            "{err}"
+        );
+    }
+    assert_eq!(err.matches("84.2 %").count(), 2, "{err}");
 }
 
 fn assert_fails_without_output(args: &[&str], out: &Path, want: &str) {

@@ -349,6 +349,31 @@ fn generate(a: GenerateArgs) -> Result<()> {
     let t0 = Instant::now();
     let grid = surface::generate(&spec)?;
     let t_gen = t0.elapsed().as_secs_f64();
+    let swapped = surface::generate::GaussianSurfaceSpec {
+        clx_m: spec.cly_m,
+        cly_m: spec.clx_m,
+        lx_m: spec.ly_m,
+        ly_m: spec.lx_m,
+        nx: spec.ny,
+        ny: spec.nx,
+        ..spec
+    };
+    for (axis, s, cl) in [("x", &spec, spec.clx_m), ("y", &swapped, spec.cly_m)] {
+        let expected = surface::generate::expected_correlation_length_x(s);
+        if expected.is_none_or(|e| e < 0.98 * cl) {
+            eprintln!(
+                "note: the patch holds few correlation lengths along {axis}: the generated \
+                 surface's expected 1/e correlation length there is {} of the requested {cl:.4e} m \
+                 (the mean wave is removed and periodic images add); enlarge the patch for the \
+                 requested autocorrelation",
+                expected.map_or("beyond half the patch".to_string(), |e| format!(
+                    "{:.3e} m, {:.1} %",
+                    e,
+                    100.0 * e / cl
+                ))
+            );
+        }
+    }
     pb.set_message("writing");
     let title = format!(
         "generated: Rq {:.3} µm, cl {:.2} × {:.2} µm, seed {}",
