@@ -2,11 +2,14 @@
 //!
 //! The path `y(s) = (z(s), ω(s))` of solutions of `R(z, ω) = 0` is followed in scaled variables
 //! `ŷ = (z/z_s, ω/ω_s)` (`ω_s` = the frequency span, `z_s` = the largest unknown seen so far)
-//! with a tangent predictor `ŷ_p = ŷ_i + Δs·t̂_i` and a bordered Newton corrector on
+//! with a predictor `ŷ_p = ŷ_i + Δs·t̂_i` and a bordered Newton corrector on
 //! `[R(ŷ) = 0; t̂_iᵀ·(ŷ − ŷ_p) = 0]` (Keller 1977; Seydel, *Practical Bifurcation and Stability
 //! Analysis*, 3rd ed., Springer 2010, §4.3–4.5). The bordered matrix stays regular at turning
-//! points, so folds (Duffing) are followed. The next tangent solves
-//! `[∂R/∂ŷ; t̂_iᵀ]·t̂ = [0; 1]`.
+//! points, so folds (Duffing) are followed. The direction `t̂` is the secant through the last
+//! two points (unit length in the scaled variables; the first one solves
+//! `[∂R/∂ŷ; eᵀ]·t̂ = [0; 1]`, `e` the unit frequency direction in the sweep's sense), and the
+//! turning angle of the step control is measured between
+//! successive secants.
 //!
 //! Step control: the step is rejected and halved when the corrector fails or when the path
 //! turns by more than `max_angle_deg`; after an accepted step it is scaled by

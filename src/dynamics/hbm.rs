@@ -763,7 +763,7 @@ impl<'a> HbmSystem<'a> {
 }
 
 impl HbmSystem<'_> {
-    /// The periodic solution delayed by `τ = T/(2e)`, `e` the excitation's harmonic: harmonic
+    /// The periodic solution advanced by `τ = T/(2e)`, `e` the excitation's harmonic: harmonic
     /// `h` turns by `θ = hπ/e` (`(a, b) → (a cos θ + b sin θ, b cos θ − a sin θ)` for
     /// `a cos hωt + b sin hωt`), the mean stays. It answers the excitation negated, since the
     /// steady state of a time-invariant system commutes with a time shift.

@@ -236,8 +236,9 @@ pub fn write_elements_csv(path: &Path, system: &HbmSystem<'_>, result: &LevelRes
     })
 }
 
-/// PNG of the FRF family: first-harmonic receptance `|X1|/F` (m/N) of one response DOF versus
-/// frequency, one curve per level.
+/// PNG of the FRF family: the receptance at the excitation's harmonic `e`, `|X_e|/F` (m/N), of
+/// one response DOF versus frequency, one curve per level (`e = 1` unless the drive is at a
+/// higher harmonic).
 pub fn plot_frf_family(
     path: &Path,
     system: &HbmSystem<'_>,
@@ -261,13 +262,19 @@ pub fn plot_frf_family(
             Series::line(format!("F = {} N", r.level_n), pts)
         })
         .collect();
-    let title = format!("FRF family at {label}: first-harmonic receptance");
+    let e = system.excitation.harmonic;
+    let title = if e == 1 {
+        format!("FRF family at {label}: first-harmonic receptance")
+    } else {
+        format!("FRF family at {label}: receptance at harmonic {e} (the excitation's)")
+    };
+    let y_label = format!("|X{e}| / F (m/N)");
     line_plot(
         path,
         &LinePlot {
             title: &title,
             x_label: "frequency (Hz)",
-            y_label: "|X1| / F (m/N)",
+            y_label: &y_label,
             x_scale: Scale::Linear,
             y_scale: Scale::Log,
         },

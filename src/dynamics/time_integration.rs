@@ -341,7 +341,7 @@ pub fn steady_state(
                     solver: format!("Newmark time step at t = {t1:.6e} s"),
                     iterations: 60,
                     residual: norm(&r) / scale,
-                    tolerance: 1e-12,
+                    tolerance: 1e-8,
                 });
             }
             for j in 0..n {

@@ -871,7 +871,7 @@ impl Model {
 }
 
 /// Relative residual tolerance of the harmonic balance in identification: `1e-8` (the solver's
-/// default is `1e-9`); the responses are then exact to far below the measurement scatter
+/// default, [`crate::dynamics::hbm::NewtonSettings`], is `1e-7`); the responses are then exact to far below the measurement scatter
 /// (≥ 1e-4 of the peak on the Brake–Reuss beam) and a warm-started row needs one Newton
 /// iteration less.
 pub const NEWTON_TOLERANCE: f64 = 1e-8;
