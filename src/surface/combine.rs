@@ -30,14 +30,15 @@ impl Material {
         poisson_ratio: 0.3,
     };
 
-    /// Check E > 0 and -1 < ν < 0.5.
+    /// Check E > 0 and -1 < ν ≤ 0.5 (0.5: incompressible, e.g. an elastomer; nothing here
+    /// divides by `1 − 2ν`).
     pub fn validated(self, name: &str) -> Result<Self> {
         require_positive(&format!("{name}.youngs_modulus_pa"), self.youngs_modulus_pa)?;
         let nu = self.poisson_ratio;
-        if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+        if !(nu.is_finite() && nu > -1.0 && nu <= 0.5) {
             return Err(Error::param(
                 format!("{name}.poisson_ratio"),
-                format!("must lie in (-1, 0.5), got {nu}"),
+                format!("must lie in (-1, 0.5], got {nu}"),
             ));
         }
         Ok(self)
@@ -120,6 +121,35 @@ fn require_nonnegative(name: &str, v: f64) -> Result<f64> {
 mod tests {
     use super::*;
     use ndarray::Array2;
+
+    /// An incompressible body (ν = 0.5) is accepted: E* = E/(1 − ν²) = 4E/3 for one rigid
+    /// counterface; ν beyond 0.5 is refused by name.
+    #[test]
+    fn incompressible_body_is_accepted() {
+        let rubber = Material {
+            youngs_modulus_pa: 3e6,
+            poisson_ratio: 0.5,
+        };
+        let rigid = Material {
+            youngs_modulus_pa: f64::MAX,
+            poisson_ratio: 0.0,
+        };
+        let e = composite_modulus(rubber, rigid).unwrap();
+        assert!((e / 4e6 - 1.0).abs() < 1e-12, "{e}");
+        let e = composite_modulus(
+            Material {
+                poisson_ratio: 0.51,
+                ..rubber
+            },
+            rigid,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("body1.poisson_ratio") && e.contains("(-1, 0.5]"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn equivalent_surface_is_the_difference_and_rq_adds_for_independent_surfaces() {
