@@ -842,6 +842,35 @@ pub fn cycle_summary(
 #[cfg(test)]
 mod tests {
 
+    /// A Gaul–Lenz element (k = 0.5, Et = 0) driven at one and three slip displacements: its
+    /// fundamental force coefficients at 64 samples per period (the default for H = 3) agree
+    /// with 4096 samples to 1e-5 (measured 1.2e-6; 3e-4 at 16 samples). With the backward-Euler
+    /// update used before 2026-11-27 they were off by −1.8 % and −2.2 % (in phase, quadrature)
+    /// at one slip displacement and +0.9 % and −2.9 % at three, halving with each doubling.
+    #[test]
+    fn valanis_aft_forces_converge_with_the_sampling() {
+        use crate::dynamics::nonlinear::GaulLenz;
+        use crate::element::GaulLenzParams;
+        let gl = GaulLenz::new(&GaulLenzParams {
+            e0: 1.0,
+            k: 0.5,
+            et: 0.0,
+            sigma0: 1.0,
+        })
+        .unwrap();
+        for a in [1.0, 3.0] {
+            let forces = |n| {
+                let h = Harmonics::new(3, true, Some(n)).unwrap();
+                evaluate(&gl, &h, &[0.0, a, 0.0, 0.0], false, &AftSettings::default()).forces
+            };
+            let (coarse, fine) = (forces(64), forces(4096));
+            for c in 0..2 {
+                let e = coarse[c] / fine[c] - 1.0;
+                assert!(e.abs() < 1e-5, "a = {a}, coefficient {c}: {e:e}");
+            }
+        }
+    }
+
     #[test]
     fn harmonics_beyond_the_limits_are_refused_before_allocating() {
         let e = Harmonics::new(100_000, false, None)

@@ -246,6 +246,54 @@ pub fn implicit_euler_step(
     }
 }
 
+/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in [`StepPartials`].
+const F0: usize = 0;
+const QR0: usize = 1;
+const Q0: usize = 2;
+const FZ0: usize = 3;
+const Q1: usize = 4;
+const FZ1: usize = 5;
+
+/// The start `(F, q, q_ref)` of the smooth update of an increment that ends in contact
+/// (`fz1 > 0`) — the state itself, or the virgin state at the re-contact point
+/// `q_c = q0 + θ·(q1 − q0)`, `θ = Fz0/(Fz0 − Fz1)` — and its derivatives with respect to the six
+/// inputs.
+#[allow(clippy::type_complexity)]
+fn smooth_start(
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> (f64, f64, f64, [f64; 6], [f64; 6], [f64; 6]) {
+    if state.fz <= 0.0 {
+        let theta = state.fz / (state.fz - fz1);
+        let den = (state.fz - fz1) * (state.fz - fz1);
+        let dth_dfz0 = -fz1 / den;
+        let dth_dfz1 = state.fz / den;
+        let qc = state.q + theta * (q1 - state.q);
+        let mut dqc = [0.0; 6];
+        dqc[Q0] = 1.0 - theta;
+        dqc[Q1] = theta;
+        dqc[FZ0] = (q1 - state.q) * dth_dfz0;
+        dqc[FZ1] = (q1 - state.q) * dth_dfz1;
+        (0.0, qc, qc, [0.0; 6], dqc, dqc)
+    } else {
+        let mut df = [0.0; 6];
+        df[F0] = 1.0;
+        let mut dq = [0.0; 6];
+        dq[Q0] = 1.0;
+        let mut dqr = [0.0; 6];
+        dqr[QR0] = 1.0;
+        (state.force, state.q, state.q_ref, df, dq, dqr)
+    }
+}
+
+/// The unit derivative of input `k`.
+fn unit(k: usize) -> [f64; 6] {
+    let mut v = [0.0; 6];
+    v[k] = 1.0;
+    v
+}
+
 /// Partial derivatives of one [`implicit_euler_step`] with respect to its inputs, in the order
 /// `(F0, q_ref0, q0, Fz0, q1, Fz1)` (start force, start reference displacement, start
 /// displacement, start normal load, end displacement, end normal load).
@@ -276,40 +324,12 @@ pub fn implicit_euler_step_partials(
 ) -> (ValanisState, StepPartials) {
     let out = implicit_euler_step(p, state, q1, fz1);
     let mut d = StepPartials::default();
-    // Index of each input in the partial arrays.
-    const F0: usize = 0;
-    const QR0: usize = 1;
-    const Q0: usize = 2;
-    const FZ0: usize = 3;
-    const Q1: usize = 4;
-    const FZ1: usize = 5;
     if fz1 <= 0.0 {
         // Ends separated: F1 = 0, q_ref1 = q1.
         d.q_ref[Q1] = 1.0;
         return (out, d);
     }
-    // Start of the smooth update and its derivatives w.r.t. the six inputs.
-    let (fs, qs, qrs, dfs, dqs, dqrs) = if state.fz <= 0.0 {
-        let theta = state.fz / (state.fz - fz1);
-        let den = (state.fz - fz1) * (state.fz - fz1);
-        let dth_dfz0 = -fz1 / den;
-        let dth_dfz1 = state.fz / den;
-        let qc = state.q + theta * (q1 - state.q);
-        let mut dqc = [0.0; 6];
-        dqc[Q0] = 1.0 - theta;
-        dqc[Q1] = theta;
-        dqc[FZ0] = (q1 - state.q) * dth_dfz0;
-        dqc[FZ1] = (q1 - state.q) * dth_dfz1;
-        (0.0, qc, qc, [0.0; 6], dqc, dqc)
-    } else {
-        let mut df = [0.0; 6];
-        df[F0] = 1.0;
-        let mut dq = [0.0; 6];
-        dq[Q0] = 1.0;
-        let mut dqr = [0.0; 6];
-        dqr[QR0] = 1.0;
-        (state.force, state.q, state.q_ref, df, dq, dqr)
-    };
+    let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
     d.q_ref = dqrs;
     let dq1 = {
         let mut v = [0.0; 6];
@@ -446,6 +466,100 @@ pub fn frozen_load_step(
         fz: fz1,
         q_ref: start.q_ref,
     }
+}
+
+/// [`frozen_load_step`] together with the exact derivatives of the update ([`StepPartials`]),
+/// for the alternating frequency–time method, whose Newton iteration differentiates the
+/// element through the period.
+///
+/// Derivation, per input: the start (the state, or the re-contact point) as in
+/// [`implicit_euler_step_partials`]; its force projected onto the band of `Fz1` (on the band's
+/// edge `F0' = Et·(q0 − q_ref) ± μ·Fz1·(1 − Et/E0)`); then [`closed_form_branch`],
+/// differentiated implicitly through `ψ(w) = k·r0·(eʷ − 1) + (k − 1)·w − D²·λ·|Δq| = 0`:
+/// `dw = (d(D²λ|Δq|) − k·(eʷ − 1)·dr0)/ψ'(w)`, `dr0 = D·dx0`,
+/// `dx0 = dg·(Et·(q0 − q_ref) − F0') + g·(Et·(dq0 − dq_ref) − dF0')` (zero where `x0` is
+/// clamped to `x∞`), `dx1 = eʷ·(dr0 + r0·dw)/D` (`dx1 = dx0` on the asymptote), `g = s·λ/E0`,
+/// `dλ/dFz1 = −λ/Fz1`; `F1 = Et·(q1 − q_ref) − x1/g`; finally the projection of `F1`. On the
+/// kink `q1 = q0` the one-sided derivative for `q1 > q0` is returned.
+pub fn frozen_load_step_partials(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+) -> (ValanisState, StepPartials) {
+    let out = frozen_load_step(p, state, q1, fz1);
+    let mut d = StepPartials::default();
+    if fz1 <= 0.0 {
+        // Ends separated: F1 = 0, q_ref1 = q1.
+        d.q_ref[Q1] = 1.0;
+        return (out, d);
+    }
+    let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
+    d.q_ref = dqrs;
+    let (dq1, dfz1) = (unit(Q1), unit(FZ1));
+    let half = p.slip_limit(fz1);
+    let dhalf = p.mu * (1.0 - p.et / p.e0);
+    // The start force on the band of Fz1.
+    let centre0 = p.et * (qs - qrs);
+    let dcentre0: [f64; 6] = std::array::from_fn(|i| p.et * (dqs[i] - dqrs[i]));
+    let (f0, df0) = if fs > centre0 + half {
+        (
+            centre0 + half,
+            std::array::from_fn(|i| dcentre0[i] + dhalf * dfz1[i]),
+        )
+    } else if fs < centre0 - half {
+        (
+            centre0 - half,
+            std::array::from_fn(|i| dcentre0[i] - dhalf * dfz1[i]),
+        )
+    } else {
+        (fs, dfs)
+    };
+    let centre = p.et * (q1 - qrs);
+    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
+    let dq = q1 - qs;
+    let (force, mut dforce) = if dq == 0.0 {
+        // F1 = F0' and, for Δq → 0+, dF1/dq1 = the branch's slope at the start.
+        let x = p.lambda(fz1) / p.e0 * (centre - f0);
+        let slope = force_slope(p, x);
+        (
+            f0,
+            std::array::from_fn(|i| df0[i] + slope * (dq1[i] - dqs[i])),
+        )
+    } else {
+        let b = branch_solution(p, fz1, qrs, qs, f0, q1);
+        let a = p.et / p.e0;
+        let dd = a * p.k - 1.0;
+        let ew = b.w.exp();
+        let psi_w = p.k * b.r0 * ew + (p.k - 1.0);
+        let df: [f64; 6] = std::array::from_fn(|i| {
+            let dlam = -b.lam / fz1 * dfz1[i];
+            let dg = b.s * dlam / p.e0;
+            let dx0 = if b.clamped {
+                0.0
+            } else {
+                dg * (centre0 - f0) + b.g * (dcentre0[i] - df0[i])
+            };
+            let dr0 = dd * dx0;
+            let dx1 = if b.r0 >= 0.0 {
+                dx0
+            } else {
+                let dtarget = dd * dd * (dlam * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]));
+                let dw = (dtarget - p.k * (ew - 1.0) * dr0) / psi_w;
+                ew * (dr0 + b.r0 * dw) / dd
+            };
+            dcentre[i] - dx1 / b.g + b.x1 / (b.g * b.g) * dg
+        });
+        (centre - b.x1 / b.g, df)
+    };
+    // Projection onto the admissible band |F − centre| ≤ μ·Fz1·(1 − Et/E0).
+    if force > centre + half {
+        dforce = std::array::from_fn(|i| dcentre[i] + dhalf * dfz1[i]);
+    } else if force < centre - half {
+        dforce = std::array::from_fn(|i| dcentre[i] - dhalf * dfz1[i]);
+    }
+    d.force = dforce;
+    (out, d)
 }
 
 /// One increment by adaptive Dormand–Prince 5(4) (see [`reference_step`]); `state` must be in
@@ -677,19 +791,42 @@ pub fn closed_form_branch(
     if dq == 0.0 {
         return f0;
     }
+    let b = branch_solution(p, fz, q_ref, q0, f0, q1);
+    p.et * (q1 - q_ref) - b.x1 / b.g
+}
+
+/// The intermediate values of [`closed_form_branch`] for `fz > 0` and `q1 ≠ q0`, which its
+/// derivatives ([`frozen_load_step_partials`]) need.
+struct Branch {
+    /// Direction `sign(q1 − q0)`, `λ(fz)` and `g = s·λ/E0`.
+    s: f64,
+    lam: f64,
+    g: f64,
+    /// Whether `x0` was clamped to `x∞`.
+    clamped: bool,
+    /// `r0 = C + D·x0`; when `r0 < 0`, `w` is the root of `ψ`.
+    r0: f64,
+    w: f64,
+    x1: f64,
+}
+
+fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1: f64) -> Branch {
+    let dq = q1 - q0;
     let s = dq.signum();
     let lam = p.lambda(fz);
     let g = s * lam / p.e0;
     let a = p.et / p.e0;
     let (c, d) = (a - 1.0, a * p.k - 1.0);
-    let x0 = (g * (p.et * (q0 - q_ref) - f0)).max(p.x_asymptote());
+    let x0_raw = g * (p.et * (q0 - q_ref) - f0);
+    let clamped = x0_raw < p.x_asymptote();
+    let x0 = x0_raw.max(p.x_asymptote());
     let r0 = c + d * x0;
+    let mut w = 0.0f64;
     let x1 = if r0 >= 0.0 {
         // On the asymptote already: the force follows it.
         x0
     } else {
         let target = d * d * lam * dq.abs();
-        let mut w = 0.0f64;
         for _ in 0..100 {
             let ew = w.exp();
             let psi = p.k * r0 * (ew - 1.0) + (p.k - 1.0) * w - target;
@@ -702,7 +839,15 @@ pub fn closed_form_branch(
         }
         (r0 * w.exp() - c) / d
     };
-    p.et * (q1 - q_ref) - x1 / g
+    Branch {
+        s,
+        lam,
+        g,
+        clamped,
+        r0,
+        w,
+        x1,
+    }
 }
 
 #[cfg(test)]
@@ -917,59 +1062,112 @@ mod tests {
 
     #[test]
     fn step_partials_match_finite_differences() {
+        type Step = fn(&ValanisParams, &ValanisState, f64, f64) -> ValanisState;
+        type Partials = fn(&ValanisParams, &ValanisState, f64, f64) -> (ValanisState, StepPartials);
         let p = ValanisParams::new(2.0e7, 0.5, 1.0e6, 0.6).unwrap();
         let slip = p.mu * 10.0 / p.e0;
-        // (F0, q_ref0, q0, Fz0, q1, Fz1): loading, unloading, near the limit, re-contact.
+        // (F0, q_ref0, q0, Fz0, q1, Fz1): loading, unloading, near the limit, re-contact, gross
+        // slip, a start force above the band of a fallen load (projected first), on a branch
+        // with k = 0 and on one started on the asymptote.
         let cases = [
             [0.0, 0.0, 0.0, 10.0, 0.3 * slip, 10.0],
             [3.0, 0.1 * slip, 0.5 * slip, 10.0, 0.2 * slip, 12.0],
             [-2.0, 0.0, -0.4 * slip, 9.0, -0.1 * slip, 8.0],
             [0.0, 0.2 * slip, 0.1 * slip, -3.0, 0.6 * slip, 7.0],
             [1.0, 0.0, 0.2 * slip, 10.0, 5.0 * slip, 10.0],
+            [5.9, 0.0, 0.3 * slip, 10.0, 0.5 * slip, 8.0],
         ];
-        // At Δq = 0 the derivative with respect to q1 is the slope for Δq → 0+ (E0 on a virgin
-        // element).
-        let st = ValanisState::virgin(0.0, 10.0);
-        let (_, d0) = implicit_euler_step_partials(&p, &st, 0.0, 10.0);
-        assert!((d0.force[4] - p.e0).abs() < 1e-9 * p.e0 && d0.force[2] == -d0.force[4]);
-        for c in cases {
-            let eval = |v: &[f64; 6]| {
-                let st = ValanisState {
-                    force: v[0],
-                    q_ref: v[1],
-                    q: v[2],
-                    fz: v[3],
+        let methods: [(&str, Step, Partials); 2] = [
+            (
+                "implicit Euler",
+                implicit_euler_step,
+                implicit_euler_step_partials,
+            ),
+            ("frozen load", frozen_load_step, frozen_load_step_partials),
+        ];
+        for (name, step, partials) in methods {
+            // At Δq = 0 the derivative with respect to q1 is the slope for Δq → 0+ (E0 on a
+            // virgin element).
+            let st = ValanisState::virgin(0.0, 10.0);
+            let (_, d0) = partials(&p, &st, 0.0, 10.0);
+            assert!((d0.force[4] - p.e0).abs() < 1e-9 * p.e0 && d0.force[2] == -d0.force[4]);
+            for c in cases {
+                let eval = |v: &[f64; 6]| {
+                    let st = ValanisState {
+                        force: v[0],
+                        q_ref: v[1],
+                        q: v[2],
+                        fz: v[3],
+                    };
+                    step(&p, &st, v[4], v[5])
                 };
-                implicit_euler_step(&p, &st, v[4], v[5])
-            };
+                let st = ValanisState {
+                    force: c[0],
+                    q_ref: c[1],
+                    q: c[2],
+                    fz: c[3],
+                };
+                let (out, d) = partials(&p, &st, c[4], c[5]);
+                assert_eq!(out, eval(&c));
+                let scale = [1.0, slip, slip, 10.0, slip, 10.0];
+                for i in 0..6 {
+                    let h = 1e-6 * scale[i];
+                    let mut up = c;
+                    let mut dn = c;
+                    up[i] += h;
+                    dn[i] -= h;
+                    let (a, b) = (eval(&up), eval(&dn));
+                    let fd_f = (a.force - b.force) / (2.0 * h);
+                    let fd_r = (a.q_ref - b.q_ref) / (2.0 * h);
+                    let typical = [1.0, p.e0, p.e0, p.mu, p.e0, p.mu][i];
+                    let tol_f = 1e-5 * (typical + fd_f.abs());
+                    assert!(
+                        (fd_f - d.force[i]).abs() <= tol_f,
+                        "{name}: case {c:?} input {i}: dF {} vs fd {fd_f}",
+                        d.force[i]
+                    );
+                    assert!(
+                        (fd_r - d.q_ref[i]).abs() <= 1e-6,
+                        "{name}: case {c:?} input {i}: dq_ref {} vs fd {fd_r}",
+                        d.q_ref[i]
+                    );
+                }
+            }
+        }
+        // k = 0 and Et = 0 (the asymptote x∞ = −1 is reached), frozen load.
+        let p0 = ValanisParams::new(2.0e7, 0.0, 0.0, 0.6).unwrap();
+        for c in [
+            [0.0, 0.0, 0.0, 10.0, 0.7 * slip, 10.0],
+            [5.99, 0.0, 0.0, 10.0, 0.2 * slip, 10.0],
+        ] {
             let st = ValanisState {
                 force: c[0],
                 q_ref: c[1],
                 q: c[2],
                 fz: c[3],
             };
-            let (_, d) = implicit_euler_step_partials(&p, &st, c[4], c[5]);
-            let scale = [1.0, slip, slip, 10.0, slip, 10.0];
-            for i in 0..6 {
-                let h = 1e-6 * scale[i];
+            let (_, d) = frozen_load_step_partials(&p0, &st, c[4], c[5]);
+            for i in [0, 2, 4, 5] {
+                let h = 1e-6 * [1.0, slip, slip, 10.0, slip, 10.0][i];
                 let mut up = c;
                 let mut dn = c;
                 up[i] += h;
                 dn[i] -= h;
-                let (a, b) = (eval(&up), eval(&dn));
-                let fd_f = (a.force - b.force) / (2.0 * h);
-                let fd_r = (a.q_ref - b.q_ref) / (2.0 * h);
-                let typical = [1.0, p.e0, p.e0, p.mu, p.e0, p.mu][i];
-                let tol_f = 1e-5 * (typical + fd_f.abs());
+                let f = |v: &[f64; 6]| {
+                    let st = ValanisState {
+                        force: v[0],
+                        q_ref: v[1],
+                        q: v[2],
+                        fz: v[3],
+                    };
+                    frozen_load_step(&p0, &st, v[4], v[5]).force
+                };
+                let fd = (f(&up) - f(&dn)) / (2.0 * h);
+                let typical = [1.0, p0.e0, p0.e0, p0.mu, p0.e0, p0.mu][i];
                 assert!(
-                    (fd_f - d.force[i]).abs() <= tol_f,
-                    "case {c:?} input {i}: dF {} vs fd {fd_f}",
+                    (fd - d.force[i]).abs() <= 1e-5 * (typical + fd.abs()),
+                    "k = 0: case {c:?} input {i}: dF {} vs fd {fd}",
                     d.force[i]
-                );
-                assert!(
-                    (fd_r - d.q_ref[i]).abs() <= 1e-6,
-                    "case {c:?} input {i}: dq_ref {} vs fd {fd_r}",
-                    d.q_ref[i]
                 );
             }
         }
