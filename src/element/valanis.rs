@@ -827,13 +827,26 @@ fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1:
         x0
     } else {
         let target = d * d * lam * dq.abs();
+        // Start from the root of ψ's second-order Taylor polynomial at 0,
+        // `½·k·r0·w² + (k·r0 + k − 1)·w − target = 0`, within O(target³) of ψ's root (when the
+        // quadratic has no real root, the first Newton step from 0 instead).
+        let (b1, a2) = (p.k * r0 + p.k - 1.0, 0.5 * p.k * r0);
+        let disc = b1 * b1 + 4.0 * a2 * target;
+        w = if disc >= 0.0 {
+            // The root nearer 0, cancellation-free (b1 < 0).
+            -2.0 * target / (-b1 + disc.sqrt())
+        } else {
+            target / b1
+        };
         for _ in 0..100 {
             let ew = w.exp();
             let psi = p.k * r0 * (ew - 1.0) + (p.k - 1.0) * w - target;
             let dpsi = p.k * r0 * ew + (p.k - 1.0);
             let step = psi / dpsi;
             w -= step;
-            if step.abs() <= 1e-15 * w.abs().max(1.0) {
+            // ψ''/ψ' lies in [0, 1) (k·r0·eʷ ≤ 0 and k − 1 < 0), so the error left after a
+            // step is at most step²/2: stop once that is below 1e-15 (one exp saved).
+            if step * step <= 2e-15 * w.abs().max(1.0) {
                 break;
             }
         }
