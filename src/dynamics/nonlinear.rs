@@ -24,6 +24,10 @@
 
 use crate::element::jenkins::{self, JenkinsParams};
 use crate::element::valanis::{self, ValanisParams, ValanisState};
+// Index of the inputs in `valanis::StepPartials`.
+use crate::element::valanis::{
+    F0 as VF0, FZ0 as VFZ0, FZ1 as VFZ1, Q0 as VQ0, Q1 as VQ1, QR0 as VQR0,
+};
 use crate::error::{Error, Result};
 
 /// Contact state of an element at one time sample (for stick / slip / separation fractions).
@@ -305,14 +309,6 @@ impl HystereticElement for Jenkins {
         }
     }
 }
-
-/// Index of the inputs in [`valanis::StepPartials`].
-const VF0: usize = 0;
-const VQR0: usize = 1;
-const VQ0: usize = 2;
-const VFZ0: usize = 3;
-const VQ1: usize = 4;
-const VFZ1: usize = 5;
 
 /// Gaul–Lenz element: the Valanis element with a constant stick limit `σ0` (N) on one
 /// displacement component ([`crate::element::gaul_lenz`]). State: force and `q_ref`. Each

@@ -246,13 +246,13 @@ pub fn implicit_euler_step(
     }
 }
 
-/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in [`StepPartials`].
-const F0: usize = 0;
-const QR0: usize = 1;
-const Q0: usize = 2;
-const FZ0: usize = 3;
-const Q1: usize = 4;
-const FZ1: usize = 5;
+/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in the arrays of [`StepPartials`].
+pub const F0: usize = 0;
+pub const QR0: usize = 1;
+pub const Q0: usize = 2;
+pub const FZ0: usize = 3;
+pub const Q1: usize = 4;
+pub const FZ1: usize = 5;
 
 /// The start `(F, q, q_ref)` of the smooth update of an increment that ends in contact
 /// (`fz1 > 0`) — the state itself, or the virgin state at the re-contact point
@@ -287,11 +287,41 @@ fn smooth_start(
     }
 }
 
+/// The partials of an increment that ends separated: `F1 = 0`, `q_ref1 = q1`.
+fn separated_partials() -> StepPartials {
+    let mut d = StepPartials::default();
+    d.q_ref[Q1] = 1.0;
+    d
+}
+
 /// The unit derivative of input `k`.
 fn unit(k: usize) -> [f64; 6] {
     let mut v = [0.0; 6];
     v[k] = 1.0;
     v
+}
+
+/// Derivative of a force after its projection onto the band `|F − centre| ≤ μ·Fz1·(1 − Et/E0)`
+/// ([`project`]): `dforce` where `force` lies inside, the band edge's `dcentre ± dhalf·dFz1`
+/// outside.
+fn projected_partials(
+    p: &ValanisParams,
+    force: f64,
+    centre: f64,
+    dcentre: &[f64; 6],
+    fz1: f64,
+    dforce: [f64; 6],
+) -> [f64; 6] {
+    let half = p.slip_limit(fz1);
+    let dhalf = p.mu * (1.0 - p.et / p.e0);
+    let dfz1 = unit(FZ1);
+    if force > centre + half {
+        std::array::from_fn(|i| dcentre[i] + dhalf * dfz1[i])
+    } else if force < centre - half {
+        std::array::from_fn(|i| dcentre[i] - dhalf * dfz1[i])
+    } else {
+        dforce
+    }
 }
 
 /// Partial derivatives of one [`implicit_euler_step`] with respect to its inputs, in the order
@@ -323,29 +353,20 @@ pub fn implicit_euler_step_partials(
     fz1: f64,
 ) -> (ValanisState, StepPartials) {
     let out = implicit_euler_step(p, state, q1, fz1);
-    let mut d = StepPartials::default();
     if fz1 <= 0.0 {
-        // Ends separated: F1 = 0, q_ref1 = q1.
-        d.q_ref[Q1] = 1.0;
-        return (out, d);
+        return (out, separated_partials());
     }
     let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    d.q_ref = dqrs;
-    let dq1 = {
-        let mut v = [0.0; 6];
-        v[Q1] = 1.0;
-        v
+    let mut d = StepPartials {
+        q_ref: dqrs,
+        ..Default::default()
     };
-    let dfz1 = {
-        let mut v = [0.0; 6];
-        v[FZ1] = 1.0;
-        v
-    };
+    let (dq1, dfz1) = (unit(Q1), unit(FZ1));
     let centre = p.et * (q1 - qrs);
     let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
     let dq = q1 - qs;
     // Unprojected force and its derivative.
-    let (force, mut dforce) = if dq == 0.0 {
+    let (force, dforce) = if dq == 0.0 {
         // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
         let lam = p.lambda(fz1);
         let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
@@ -389,15 +410,7 @@ pub fn implicit_euler_step_partials(
         }
         (centre - x / g, df)
     };
-    // Projection onto the admissible band |F − centre| ≤ μ·Fz1·(1 − Et/E0).
-    let half = p.slip_limit(fz1);
-    let dhalf = p.mu * (1.0 - p.et / p.e0);
-    if force > centre + half {
-        dforce = std::array::from_fn(|i| dcentre[i] + dhalf * dfz1[i]);
-    } else if force < centre - half {
-        dforce = std::array::from_fn(|i| dcentre[i] - dhalf * dfz1[i]);
-    }
-    d.force = dforce;
+    d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
     (out, d)
 }
 
@@ -488,37 +501,24 @@ pub fn frozen_load_step_partials(
     fz1: f64,
 ) -> (ValanisState, StepPartials) {
     let out = frozen_load_step(p, state, q1, fz1);
-    let mut d = StepPartials::default();
     if fz1 <= 0.0 {
-        // Ends separated: F1 = 0, q_ref1 = q1.
-        d.q_ref[Q1] = 1.0;
-        return (out, d);
+        return (out, separated_partials());
     }
     let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    d.q_ref = dqrs;
+    let mut d = StepPartials {
+        q_ref: dqrs,
+        ..Default::default()
+    };
     let (dq1, dfz1) = (unit(Q1), unit(FZ1));
-    let half = p.slip_limit(fz1);
-    let dhalf = p.mu * (1.0 - p.et / p.e0);
     // The start force on the band of Fz1.
     let centre0 = p.et * (qs - qrs);
     let dcentre0: [f64; 6] = std::array::from_fn(|i| p.et * (dqs[i] - dqrs[i]));
-    let (f0, df0) = if fs > centre0 + half {
-        (
-            centre0 + half,
-            std::array::from_fn(|i| dcentre0[i] + dhalf * dfz1[i]),
-        )
-    } else if fs < centre0 - half {
-        (
-            centre0 - half,
-            std::array::from_fn(|i| dcentre0[i] - dhalf * dfz1[i]),
-        )
-    } else {
-        (fs, dfs)
-    };
+    let f0 = project(p, fs, qs, qrs, fz1);
+    let df0 = projected_partials(p, fs, centre0, &dcentre0, fz1, dfs);
     let centre = p.et * (q1 - qrs);
     let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
     let dq = q1 - qs;
-    let (force, mut dforce) = if dq == 0.0 {
+    let (force, dforce) = if dq == 0.0 {
         // F1 = F0' and, for Δq → 0+, dF1/dq1 = the branch's slope at the start.
         let x = p.lambda(fz1) / p.e0 * (centre - f0);
         let slope = force_slope(p, x);
@@ -552,13 +552,7 @@ pub fn frozen_load_step_partials(
         });
         (centre - b.x1 / b.g, df)
     };
-    // Projection onto the admissible band |F − centre| ≤ μ·Fz1·(1 − Et/E0).
-    if force > centre + half {
-        dforce = std::array::from_fn(|i| dcentre[i] + dhalf * dfz1[i]);
-    } else if force < centre - half {
-        dforce = std::array::from_fn(|i| dcentre[i] - dhalf * dfz1[i]);
-    }
-    d.force = dforce;
+    d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
     (out, d)
 }
 
