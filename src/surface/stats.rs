@@ -14,8 +14,9 @@
 //!   with heights about the mean, and the rms slope is `[(1/L) Σ Δh_i²/Δx_i]^½`.
 //! - **Slopes** are first differences over the spacing, `(h_{i+1} - h_i)/dx`. Periodic data
 //!   include the wrap-around difference (after removing the mean only: a removed plane leaves a
-//!   seam, and plane-detrended data are treated as non-periodic, [`Detrend::periodic`]). Non-periodic areas use the differences at the points
-//!   `i < nx-1, j < ny-1` for both directions (SurfaceTopography's trimming of its upwind stencil),
+//!   seam, and plane-detrended data are treated as non-periodic, [`Detrend::periodic`]).
+//!   Non-periodic areas use the differences at the points `i < nx-1, j < ny-1` for both
+//!   directions (SurfaceTopography's trimming of its upwind stencil),
 //!   and `rms_gradient = [⟨(∂h/∂x)² + (∂h/∂y)²⟩]^½`; a non-periodic profile has `n-1` differences.
 //! - **ACF** `C(δ) = ⟨h(x) h(x+δ)⟩ / ⟨h²⟩`, computed by FFT: circular for periodic data, zero-padded
 //!   with the unbiased overlap normalisation `1/((nx-|δi|)(ny-|δj|))` otherwise; radially averaged
