@@ -527,27 +527,29 @@ pub fn frozen_load_step_partials(
         )
     } else {
         let b = branch_solution(p, fz1, qrs, qs, f0, q1);
-        let a = p.et / p.e0;
-        let dd = a * p.k - 1.0;
-        let ew = b.w.exp();
-        let psi_w = p.k * b.r0 * ew + (p.k - 1.0);
+        let dd = p.et / p.e0 * p.k - 1.0;
+        // λ and g depend on Fz1 only.
+        let dlam_dfz1 = -b.lam / fz1;
+        let dg_dfz1 = b.s * dlam_dfz1 / p.e0;
+        // dx1 = c_x0·dx0 + c_t·d(λ·|Δq|), from dx1 = eʷ·(dr0 + r0·dw)/D with dr0 = D·dx0.
+        let (c_x0, c_t) = if b.r0 >= 0.0 {
+            (1.0, 0.0)
+        } else {
+            let psi_w = p.k * b.r0 * b.ew + (p.k - 1.0);
+            (
+                b.ew * (1.0 - b.r0 * p.k * (b.ew - 1.0) / psi_w),
+                b.ew * b.r0 * dd / psi_w,
+            )
+        };
+        let inv_g = 1.0 / b.g;
+        let gap0 = if b.clamped { 0.0 } else { centre0 - f0 };
+        let g0 = if b.clamped { 0.0 } else { b.g };
         let df: [f64; 6] = std::array::from_fn(|i| {
-            let dlam = -b.lam / fz1 * dfz1[i];
-            let dg = b.s * dlam / p.e0;
-            let dx0 = if b.clamped {
-                0.0
-            } else {
-                dg * (centre0 - f0) + b.g * (dcentre0[i] - df0[i])
-            };
-            let dr0 = dd * dx0;
-            let dx1 = if b.r0 >= 0.0 {
-                dx0
-            } else {
-                let dtarget = dd * dd * (dlam * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]));
-                let dw = (dtarget - p.k * (ew - 1.0) * dr0) / psi_w;
-                ew * (dr0 + b.r0 * dw) / dd
-            };
-            dcentre[i] - dx1 / b.g + b.x1 / (b.g * b.g) * dg
+            let dg = dg_dfz1 * dfz1[i];
+            let dx0 = dg * gap0 + g0 * (dcentre0[i] - df0[i]);
+            let dtarget = dlam_dfz1 * dfz1[i] * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]);
+            let dx1 = c_x0 * dx0 + c_t * dtarget;
+            dcentre[i] - dx1 * inv_g + b.x1 * inv_g * inv_g * dg
         });
         (centre - b.x1 / b.g, df)
     };
@@ -804,9 +806,9 @@ struct Branch {
     g: f64,
     /// Whether `x0` was clamped to `x∞`.
     clamped: bool,
-    /// `r0 = C + D·x0`; when `r0 < 0`, `w` is the root of `ψ`.
+    /// `r0 = C + D·x0`; when `r0 < 0`, `eʷ` with `w` the root of `ψ` (1 otherwise).
     r0: f64,
-    w: f64,
+    ew: f64,
     x1: f64,
 }
 
@@ -821,7 +823,7 @@ fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1:
     let clamped = x0_raw < p.x_asymptote();
     let x0 = x0_raw.max(p.x_asymptote());
     let r0 = c + d * x0;
-    let mut w = 0.0f64;
+    let mut ew = 1.0;
     let x1 = if r0 >= 0.0 {
         // On the asymptote already: the force follows it.
         x0
@@ -832,25 +834,28 @@ fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1:
         // quadratic has no real root, the first Newton step from 0 instead).
         let (b1, a2) = (p.k * r0 + p.k - 1.0, 0.5 * p.k * r0);
         let disc = b1 * b1 + 4.0 * a2 * target;
-        w = if disc >= 0.0 {
+        let mut w = if disc >= 0.0 {
             // The root nearer 0, cancellation-free (b1 < 0).
             -2.0 * target / (-b1 + disc.sqrt())
         } else {
             target / b1
         };
+        ew = w.exp();
         for _ in 0..100 {
-            let ew = w.exp();
             let psi = p.k * r0 * (ew - 1.0) + (p.k - 1.0) * w - target;
             let dpsi = p.k * r0 * ew + (p.k - 1.0);
             let step = psi / dpsi;
             w -= step;
             // ψ''/ψ' lies in [0, 1) (k·r0·eʷ ≤ 0 and k − 1 < 0), so the error left after a
-            // step is at most step²/2: stop once that is below 1e-15 (one exp saved).
+            // step is at most step²/2: stop once that is below 1e-15, with
+            // `e^(w − step) = eʷ·(1 − step + step²/2)` to O(step³) ≈ 1e-23 (no further exp).
             if step * step <= 2e-15 * w.abs().max(1.0) {
+                ew *= 1.0 - step + 0.5 * step * step;
                 break;
             }
+            ew = w.exp();
         }
-        (r0 * w.exp() - c) / d
+        (r0 * ew - c) / d
     };
     Branch {
         s,
@@ -858,7 +863,7 @@ fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1:
         g,
         clamped,
         r0,
-        w,
+        ew,
         x1,
     }
 }
