@@ -333,9 +333,10 @@ impl ResponseModel {
     /// Returns a dict: the columns of `response_level_<i>.csv` as float64 arrays
     /// (`frequency_Hz`, `<dof>_h<k>_amplitude_m`, `<dof>_h<k>_phase_rad`, `<dof>_h0_mean_m`,
     /// `dissipated_energy_J`, `stick_fraction`, `slip_fraction`, `separation_fraction`,
-    /// `newton_iterations`, `relative_residual`) under `"columns"`; `"coordinate_harmonics"`
-    /// (points, n, coefficients, m: `x_r(t) = Σ a·cos(kωt) + b·sin(kωt)` with, for each order
-    /// `k` of `"harmonic_orders"` in turn, one coefficient for k = 0 (the mean) or a, b); the
+    /// `newton_iterations`, `relative_residual`, `aft_periodicity_error`) under `"columns"`;
+    /// `"coordinate_harmonics"` (points, n, coefficients, m: `x_r(t) = Σ a·cos(kωt) +
+    /// b·sin(kωt)` with, for each order `k` of `"harmonic_orders"` in turn, one coefficient for
+    /// k = 0 (the mean) or a, b); the
     /// `"harmonic_orders"`; `"peak"` (index of the largest first-harmonic amplitude of the
     /// first response); `"peak_elements"` (label, law, dissipated_energy_J,
     /// stick/slip/separation fractions at the peak); `"level_N"`, `"formulation"`,

@@ -56,7 +56,7 @@ def cli_format(name, x):
         return f"{x:.6f}"
     if name == "newton_iterations":
         return str(int(x))
-    if name == "relative_residual":
+    if name in ("relative_residual", "aft_periodicity_error"):
         return rust_exp(x, 3)
     if name.endswith("_fraction") or name == "dissipated_energy_J":
         return rust_exp(x, 6)

@@ -103,6 +103,19 @@ pub struct Branch {
     pub wall_time_s: f64,
 }
 
+impl Branch {
+    /// Points at which some element's AFT state did not become periodic within the period cap
+    /// (periodicity error above `tolerance`, the [`crate::dynamics::aft::AftSettings`]
+    /// tolerance): their element forces are those of the last period integrated, not of the
+    /// steady state.
+    pub fn non_periodic_points(&self, tolerance: f64) -> usize {
+        self.points
+            .iter()
+            .filter(|p| p.periodicity_error > tolerance || p.periodicity_error.is_nan())
+            .count()
+    }
+}
+
 /// Outcome of one corrector run.
 struct Corrected {
     z: DVector<f64>,
@@ -494,4 +507,39 @@ fn correct(
         y += dy;
     }
     Err("corrector: no iteration".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(periodicity_error: f64) -> HbmPoint {
+        HbmPoint {
+            omega: 1.0,
+            level: 1.0,
+            z: DVector::zeros(1),
+            iterations: 1,
+            residual: 0.0,
+            converged: true,
+            periodicity_error,
+            wall_time_s: 0.0,
+        }
+    }
+
+    #[test]
+    fn points_above_the_periodicity_tolerance_or_nan_are_counted() {
+        let branch = Branch {
+            level: 1.0,
+            points: [0.0, 1e-13, 1e-12, 2e-12, 0.5, f64::NAN]
+                .into_iter()
+                .map(point)
+                .collect(),
+            rejected_steps: 0,
+            turning_points: 0,
+            jacobians: 0,
+            wall_time_s: 0.0,
+        };
+        assert_eq!(branch.non_periodic_points(1e-12), 3);
+        assert_eq!(branch.non_periodic_points(1.0), 1);
+    }
 }

@@ -86,7 +86,10 @@ pub fn summarise(
 /// harmonic `k` the amplitude `<dof>_h<k>_amplitude_m` (m) and phase `<dof>_h<k>_phase_rad` of
 /// `a − i·b` (or `<dof>_h0_mean_m`); then `dissipated_energy_J` (J per cycle, summed over the
 /// elements), the element-averaged `stick_fraction`, `slip_fraction`, `separation_fraction`,
-/// `newton_iterations` and `relative_residual`. One value per branch point.
+/// `newton_iterations`, `relative_residual` and `aft_periodicity_error` (the largest relative
+/// periodicity error of an element's AFT state at the point; above the AFT tolerance, 1e-12 by
+/// default, an element did not reach its periodic state within the period cap). One value per
+/// branch point.
 pub fn level_columns(
     system: &HbmSystem<'_>,
     responses: &[(String, DVector<f64>)],
@@ -146,6 +149,10 @@ pub fn level_columns(
         "relative_residual".to_string(),
         points.iter().map(|p| p.residual).collect(),
     ));
+    cols.push((
+        "aft_periodicity_error".to_string(),
+        points.iter().map(|p| p.periodicity_error).collect(),
+    ));
     cols
 }
 
@@ -170,7 +177,8 @@ pub fn write_level_csv(
         )
         .map_err(io)?;
         writeln!(w, "# units: frequency_Hz in Hz; amplitudes in m (h0: mean displacement); phase_rad = arg(a − i·b) of x = a·cos(kωt) + b·sin(kωt), relative to the force cos(ωt);").map_err(io)?;
-        writeln!(w, "#   dissipated_energy_J: sum over elements of ∮f·du per cycle; stick/slip/separation: element-averaged fractions of the period").map_err(io)?;
+        writeln!(w, "#   dissipated_energy_J: sum over elements of ∮f·du per cycle; stick/slip/separation: element-averaged fractions of the period;").map_err(io)?;
+        writeln!(w, "#   relative_residual: harmonic-balance residual / its scale; aft_periodicity_error: largest relative periodicity error of an element's AFT state (above {:.0e}: not periodic within {} periods)", system.aft.periodicity_tolerance, system.aft.max_periods).map_err(io)?;
         let names: Vec<&str> = cols.iter().map(|(n, _)| n.as_str()).collect();
         writeln!(w, "{}", names.join(",")).map_err(io)?;
         for i in 0..result.branch.points.len() {
@@ -182,7 +190,7 @@ pub fn write_level_csv(
                         format!("{x:.6}")
                     } else if name == "newton_iterations" {
                         format!("{}", x as usize)
-                    } else if name == "relative_residual" {
+                    } else if name == "relative_residual" || name == "aft_periodicity_error" {
                         format!("{x:.3e}")
                     } else if name.ends_with("_fraction") || name == "dissipated_energy_J" {
                         format!("{x:.6e}")
