@@ -287,6 +287,7 @@ fn catalogue() -> Vec<Case> {
         case("density calibration bad header", "film --image {d}/i.png --density-calibration {d}/c.csv --pixel-size-mm 0.1 --out-dir {d}/out", &["c.csv:1", "header"]).file("i.png", disc_png()).file("c.csv", "a,b\n0.1,1\n"),
         case("density calibration not monotone", "film --image {d}/i.png --density-calibration {d}/c.csv --pixel-size-mm 0.1 --out-dir {d}/out", &["c.csv", "monotone"]).file("i.png", disc_png()).file("c.csv", "density,pressure_MPa\n0.5,1\n0.3,2\n"),
         case("image that is not an image", "film --image {d}/i.png --density-calibration {d}/c.csv --pixel-size-mm 0.1 --out-dir {d}/out", &["i.png", "cannot read image"]).file("i.png", "text").file("c.csv", "density,pressure_MPa\n0.3,2.5\n1,10\n"),
+        case("image declaring 72 dpi (a software default) and no --pixel-size-mm", "film --image {d}/i.png --density-calibration {d}/c.csv --out-dir {d}/out", &["i.png", "--pixel-size-mm", "72.009 dpi"]).file("i.png", disc_png_72dpi()).file("c.csv", "density,pressure_MPa\n0.3,2.5\n1,10\n"),
         case("image without dpi and no --pixel-size-mm", "film --image {d}/i.png --density-calibration {d}/c.csv --out-dir {d}/out", &["--pixel-size-mm", "no resolution"]).file("i.png", disc_png()).file("c.csv", "density,pressure_MPa\n0.3,2.5\n1,10\n"),
         case("nodes without columns", "film --image {d}/i.png --colour-table {d}/t.csv --pixel-size-mm 0.1 --fit-order 0 --nodes {d}/n.csv --out-dir {d}/out", &["n.csv:1", "id, x_m, y_m"]).file("i.png", disc_png()).file("t.csv", "pressure_MPa,R,G,B\n0,255,255,255\n2.5,255,200,200\n10,255,0,0\n").file("n.csv", "a,b\n1,2\n"),
         case("nodes duplicate id", "film --image {d}/i.png --colour-table {d}/t.csv --pixel-size-mm 0.1 --fit-order 0 --nodes {d}/n.csv --out-dir {d}/out", &["n.csv:3", "duplicate"]).file("i.png", disc_png()).file("t.csv", "pressure_MPa,R,G,B\n0,255,255,255\n2.5,255,200,200\n10,255,0,0\n").file("n.csv", "id,x_m,y_m\n1,0,0\n1,1e-3,0\n"),
@@ -350,6 +351,23 @@ fn disc_png() -> Vec<u8> {
     let mut buf = std::io::Cursor::new(Vec::new());
     im.write_to(&mut buf, image::ImageFormat::Png).unwrap();
     buf.into_inner()
+}
+
+/// [`disc_png`] declaring 2835 pixels per metre (72 dpi, the default of image software).
+fn disc_png_72dpi() -> Vec<u8> {
+    let im = image::load_from_memory(&disc_png()).unwrap().to_rgb8();
+    let mut buf = Vec::new();
+    {
+        let mut e = png::Encoder::new(&mut buf, im.width(), im.height());
+        e.set_color(png::ColorType::Rgb);
+        e.set_pixel_dims(Some(png::PixelDimensions {
+            xppu: 2835,
+            yppu: 2835,
+            unit: png::Unit::Meter,
+        }));
+        e.write_header().unwrap().write_image_data(&im).unwrap();
+    }
+    buf
 }
 
 /// Every path below `dir`, recursively.

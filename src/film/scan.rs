@@ -147,7 +147,11 @@ impl Resolution {
     }
 }
 
-/// Square pixels of `x`, `y` dots per `unit_m` metres.
+/// Resolutions that image software declares by default (screen resolutions), not a scanner.
+const SOFTWARE_DEFAULT_DPI: [f64; 2] = [72.0, 96.0];
+
+/// Square pixels of `x`, `y` dots per `unit_m` metres; an error for non-square pixels or a
+/// software-default resolution ([`SOFTWARE_DEFAULT_DPI`]).
 fn square(
     path: &Path,
     x: f64,
@@ -170,8 +174,27 @@ fn square(
             ),
         ));
     }
+    // 72 and 96 dpi are what image software writes when it does not know the resolution (the
+    // screen defaults of Mac OS and Windows); a film scanned at one of them is rare, a film
+    // rendered or re-saved by an application that wrote its default is common. Trusting it
+    // would scale every length, area and load by the ratio to the true pixel size.
+    let dpi = x * 0.0254 / unit_m;
+    if let Some(default) = SOFTWARE_DEFAULT_DPI
+        .into_iter()
+        .find(|d| (dpi - d).abs() < 0.05)
+    {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "the image declares {} dpi ({source}), the default image software writes when                  the scan resolution is unknown: give --pixel-size-mm (for a true {default} dpi                  scan, {} mm)",
+                num((dpi * 1e3).round() / 1e3),
+                num((25.4 / default * 1e4).round() / 1e4)
+            ),
+        ));
+    }
     Ok(Some(Resolution {
-        dpi: x * 0.0254 / unit_m,
+        dpi,
         pixel_size_m: unit_m / x,
         source,
     }))
@@ -524,5 +547,47 @@ mod tests {
         }
         let r = resolution(&png).unwrap().unwrap();
         assert!((r.dpi - 300.0).abs() < 0.05, "{r:?}");
+    }
+
+    #[test]
+    fn software_default_resolutions_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        // 2835 px/m = 72.009 dpi and 3780 px/m = 96.012 dpi: the PNG defaults; 3000 px/m =
+        // 76.2 dpi is taken as declared.
+        for (ppm, refused) in [(2835, true), (3780, true), (3000, false)] {
+            let png = dir.path().join(format!("{ppm}.png"));
+            {
+                let f = std::fs::File::create(&png).unwrap();
+                let mut e = ::png::Encoder::new(std::io::BufWriter::new(f), 2, 2);
+                e.set_color(::png::ColorType::Rgb);
+                e.set_pixel_dims(Some(::png::PixelDimensions {
+                    xppu: ppm,
+                    yppu: ppm,
+                    unit: ::png::Unit::Meter,
+                }));
+                e.write_header()
+                    .unwrap()
+                    .write_image_data(&[255; 12])
+                    .unwrap();
+            }
+            match resolution(&png) {
+                Err(e) => {
+                    assert!(refused, "{ppm} px/m refused: {e}");
+                    let msg = e.to_string();
+                    assert!(
+                        msg.contains("--pixel-size-mm") && msg.contains(&format!("{ppm}.png")),
+                        "{msg}"
+                    );
+                }
+                Ok(r) => assert!(!refused, "{ppm} px/m accepted: {r:?}"),
+            }
+        }
+        // A JFIF header declaring 72 dpi (unit 1: dots per inch).
+        let mut jpg = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10];
+        jpg.extend_from_slice(b"JFIF\0\x01\x01\x01\x00\x48\x00\x48\x00\x00");
+        jpg.extend_from_slice(&[0xFF, 0xDA]);
+        let p = dir.path().join("a.jpg");
+        std::fs::write(&p, &jpg).unwrap();
+        assert!(resolution(&p).is_err());
     }
 }
