@@ -627,8 +627,16 @@ pub fn run(args: FilmArgs) -> Result<()> {
             region.id,
             fit.order
         );
+        let area_source = if psum.areas_from_triangulation {
+            format!(
+                "triangulated, {:.4} mm² of gaps left out",
+                psum.gap_area_m2 * 1e6
+            )
+        } else {
+            "given".to_string()
+        };
         eprintln!(
-            "{} nodes on region {}: total area {:.4} mm², total load {:.6} N (scale {:.6}), {} negative fitted pressures set to 0",
+            "{} nodes on region {}: total area {:.4} mm² ({area_source}), total load {:.6} N (scale {:.6}), {} negative fitted pressures set to 0",
             psum.n_nodes,
             region.id,
             psum.total_area_m2 * 1e6,
