@@ -627,6 +627,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
             region.id,
             fit.order
         );
+        if psum.gap_triangles > 0 {
+            eprintln!(
+                "warning: {} triangles of the nodes' triangulation ({:.4} mm²) span gaps of the node set (holes, space between patches) and were left out of the areas; an element of the mesh more than {} times larger than those round it reads as a gap too: give area_m2 in {} if these are elements",
+                psum.gap_triangles,
+                psum.gap_area_m2 * 1e6,
+                asperity::film::nodes::GAP_EDGE_FACTOR,
+                nodes_path.display()
+            );
+        }
         let area_source = if psum.areas_from_triangulation {
             format!(
                 "triangulated, {:.4} mm² of gaps left out",

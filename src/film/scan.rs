@@ -177,17 +177,21 @@ fn square(
     // 72 and 96 dpi are what image software writes when it does not know the resolution (the
     // screen defaults of Mac OS and Windows); a film scanned at one of them is rare, a film
     // rendered or re-saved by an application that wrote its default is common. Trusting it
-    // would scale every length, area and load by the ratio to the true pixel size.
+    // would scale every length, area and load by the ratio to the true pixel size. Within
+    // 1.5 %: the defaults rounded to pixels per metre (2835, 3780: 72.01, 96.01 dpi) or per
+    // centimetre (28, 38: 71.12, 96.52 dpi); the nearest scanner resolution, 75 dpi, is 4 % away.
     let dpi = x * 0.0254 / unit_m;
     if let Some(default) = SOFTWARE_DEFAULT_DPI
         .into_iter()
-        .find(|d| (dpi - d).abs() < 0.05)
+        .find(|d| (dpi / d - 1.0).abs() < 0.015)
     {
         return Err(Error::parse(
             path,
             0,
             format!(
-                "the image declares {} dpi ({source}), the default image software writes when                  the scan resolution is unknown: give --pixel-size-mm (for a true {default} dpi                  scan, {} mm)",
+                "the image declares {} dpi ({source}), the default image software writes when \
+                 the scan resolution is unknown: give --pixel-size-mm (for a true {default} dpi \
+                 scan, {} mm)",
                 num((dpi * 1e3).round() / 1e3),
                 num((25.4 / default * 1e4).round() / 1e4)
             ),
@@ -552,9 +556,9 @@ mod tests {
     #[test]
     fn software_default_resolutions_are_refused() {
         let dir = tempfile::tempdir().unwrap();
-        // 2835 px/m = 72.009 dpi and 3780 px/m = 96.012 dpi: the PNG defaults; 3000 px/m =
-        // 76.2 dpi is taken as declared.
-        for (ppm, refused) in [(2835, true), (3780, true), (3000, false)] {
+        // 2835 px/m = 72.009 dpi and 3780 px/m = 96.012 dpi: the PNG defaults; 2953 px/m =
+        // 75.0 dpi, the lowest scanner setting, is taken as declared.
+        for (ppm, refused) in [(2835, true), (3780, true), (2953, false)] {
             let png = dir.path().join(format!("{ppm}.png"));
             {
                 let f = std::fs::File::create(&png).unwrap();
@@ -588,6 +592,17 @@ mod tests {
         jpg.extend_from_slice(&[0xFF, 0xDA]);
         let p = dir.path().join("a.jpg");
         std::fs::write(&p, &jpg).unwrap();
-        assert!(resolution(&p).is_err());
+        let msg = resolution(&p).unwrap_err().to_string();
+        assert!(
+            msg.contains("72 dpi (JPEG JFIF)") && msg.contains("--pixel-size-mm"),
+            "{msg}"
+        );
+        // The same default in dots per centimetre (unit 2: 38 /cm = 96.52 dpi).
+        let mut jpg = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10];
+        jpg.extend_from_slice(b"JFIF\0\x01\x01\x02\x00\x26\x00\x26\x00\x00");
+        jpg.extend_from_slice(&[0xFF, 0xDA]);
+        std::fs::write(&p, &jpg).unwrap();
+        let msg = resolution(&p).unwrap_err().to_string();
+        assert!(msg.contains("96.52 dpi"), "{msg}");
     }
 }
