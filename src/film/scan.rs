@@ -521,34 +521,43 @@ mod tests {
         assert!(p.stained_above > 0.025 && p.stained_above < 0.05, "{p:?}");
     }
 
+    /// A 2 × 2 white PNG declaring `ppm` pixels per metre (pHYs).
+    fn write_png_with_density(path: &Path, ppm: u32) {
+        let f = std::fs::File::create(path).unwrap();
+        let mut e = ::png::Encoder::new(std::io::BufWriter::new(f), 2, 2);
+        e.set_color(::png::ColorType::Rgb);
+        e.set_pixel_dims(Some(::png::PixelDimensions {
+            xppu: ppm,
+            yppu: ppm,
+            unit: ::png::Unit::Meter,
+        }));
+        e.write_header()
+            .unwrap()
+            .write_image_data(&[255; 12])
+            .unwrap();
+    }
+
+    /// A JPEG start with a JFIF header declaring `density` in `units` (1: per inch, 2: per cm).
+    fn write_jfif_with_density(path: &Path, units: u8, density: u16) {
+        let [hi, lo] = density.to_be_bytes();
+        let mut jpg = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10];
+        jpg.extend_from_slice(b"JFIF\0\x01\x01");
+        jpg.extend_from_slice(&[units, hi, lo, hi, lo, 0, 0, 0xFF, 0xDA]);
+        std::fs::write(path, &jpg).unwrap();
+    }
+
     #[test]
     fn resolutions_from_headers() {
         let dir = tempfile::tempdir().unwrap();
         // A JFIF header declaring 200 dpi.
-        let mut jpg = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10];
-        jpg.extend_from_slice(b"JFIF\0\x01\x01\x01\x00\xC8\x00\xC8\x00\x00");
-        jpg.extend_from_slice(&[0xFF, 0xDA]);
         let p = dir.path().join("a.jpg");
-        std::fs::write(&p, &jpg).unwrap();
+        write_jfif_with_density(&p, 1, 200);
         let r = resolution(&p).unwrap().unwrap();
         assert!((r.dpi - 200.0).abs() < 1e-12);
         assert!((r.pixel_size_mm() - 0.127).abs() < 1e-12);
         // A PNG written with pHYs: 11811 px/m = 300 dpi (to 0.01 %).
         let png = dir.path().join("a.png");
-        {
-            let f = std::fs::File::create(&png).unwrap();
-            let mut e = ::png::Encoder::new(std::io::BufWriter::new(f), 2, 2);
-            e.set_color(::png::ColorType::Rgb);
-            e.set_pixel_dims(Some(::png::PixelDimensions {
-                xppu: 11811,
-                yppu: 11811,
-                unit: ::png::Unit::Meter,
-            }));
-            e.write_header()
-                .unwrap()
-                .write_image_data(&[255; 12])
-                .unwrap();
-        }
+        write_png_with_density(&png, 11811);
         let r = resolution(&png).unwrap().unwrap();
         assert!((r.dpi - 300.0).abs() < 0.05, "{r:?}");
     }
@@ -560,20 +569,7 @@ mod tests {
         // 75.0 dpi, the lowest scanner setting, is taken as declared.
         for (ppm, refused) in [(2835, true), (3780, true), (2953, false)] {
             let png = dir.path().join(format!("{ppm}.png"));
-            {
-                let f = std::fs::File::create(&png).unwrap();
-                let mut e = ::png::Encoder::new(std::io::BufWriter::new(f), 2, 2);
-                e.set_color(::png::ColorType::Rgb);
-                e.set_pixel_dims(Some(::png::PixelDimensions {
-                    xppu: ppm,
-                    yppu: ppm,
-                    unit: ::png::Unit::Meter,
-                }));
-                e.write_header()
-                    .unwrap()
-                    .write_image_data(&[255; 12])
-                    .unwrap();
-            }
+            write_png_with_density(&png, ppm);
             match resolution(&png) {
                 Err(e) => {
                     assert!(refused, "{ppm} px/m refused: {e}");
@@ -587,21 +583,15 @@ mod tests {
             }
         }
         // A JFIF header declaring 72 dpi (unit 1: dots per inch).
-        let mut jpg = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10];
-        jpg.extend_from_slice(b"JFIF\0\x01\x01\x01\x00\x48\x00\x48\x00\x00");
-        jpg.extend_from_slice(&[0xFF, 0xDA]);
         let p = dir.path().join("a.jpg");
-        std::fs::write(&p, &jpg).unwrap();
+        write_jfif_with_density(&p, 1, 72);
         let msg = resolution(&p).unwrap_err().to_string();
         assert!(
             msg.contains("72 dpi (JPEG JFIF)") && msg.contains("--pixel-size-mm"),
             "{msg}"
         );
         // The same default in dots per centimetre (unit 2: 38 /cm = 96.52 dpi).
-        let mut jpg = vec![0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10];
-        jpg.extend_from_slice(b"JFIF\0\x01\x01\x02\x00\x26\x00\x26\x00\x00");
-        jpg.extend_from_slice(&[0xFF, 0xDA]);
-        std::fs::write(&p, &jpg).unwrap();
+        write_jfif_with_density(&p, 2, 38);
         let msg = resolution(&p).unwrap_err().to_string();
         assert!(msg.contains("96.52 dpi"), "{msg}");
     }
