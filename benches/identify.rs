@@ -4,7 +4,10 @@
 //! sharing the machine) with the ratio to the Jenkins baseline; and, with
 //! `ASPERITY_BENCH_FULL=1`, the wall time of the whole identification with the CLI's defaults.
 //!
-//! Run: `ASPERITY_DATA_DIR=../shared/data cargo bench --bench identify`.
+//! Run: `ASPERITY_DATA_DIR=../shared/data cargo bench --bench identify`. One model only:
+//! `ASPERITY_BENCH_CASE=jenkins`; a fixed number of evaluations instead of 2 s of CPU time
+//! (for instruction counts under `valgrind --tool=callgrind`, deterministic where CPU time on a
+//! shared machine is not): `ASPERITY_BENCH_EVALS=25`.
 
 use asperity::identify::effects::Effect;
 use asperity::identify::fit::{LevelData, Objective};
@@ -81,7 +84,17 @@ fn main() {
         .build()
         .unwrap();
     let mut reference = f64::NAN;
+    let only = std::env::var("ASPERITY_BENCH_CASE").ok();
+    let fixed_evals: Option<usize> = std::env::var("ASPERITY_BENCH_EVALS").ok().map(|v| {
+        v.parse().unwrap_or_else(|_| {
+            eprintln!("ASPERITY_BENCH_EVALS={v}: expected a whole number of evaluations");
+            std::process::exit(2)
+        })
+    });
     for (name, spec) in cases {
+        if only.as_deref().is_some_and(|o| o != name) {
+            continue;
+        }
         let mut m = Model::neutral(spec.clone());
         // A joint slipping over part of the measured range: κ = 5 %, δ = 100 µm.
         m.values[3] = 0.05;
@@ -89,9 +102,10 @@ fn main() {
         let obj = Objective::new(spec, &levels, &masks, None);
         let per = pool.install(|| {
             obj.cost_of(&m);
-            // At least 0.5 s of CPU time: the thread's CPU clock advances in scheduler ticks.
+            // At least 2 s of CPU time (a shared machine's CPU time per evaluation scatters by
+            // ±30 % over 0.5 s), or exactly the evaluations asked for.
             let (t0, mut n) = (thread_cpu_s(), 0);
-            while n < 5 || thread_cpu_s() - t0 < 0.5 {
+            while fixed_evals.map_or(n < 5 || thread_cpu_s() - t0 < 2.0, |f| n < f) {
                 obj.cost_of(&m);
                 n += 1;
             }
