@@ -34,8 +34,8 @@
 //! the virgin start. Checked against finite differences in the tests below. For an element on
 //! one displacement component with at most two states (the joints of an identification, the
 //! springs and dampers of its effects) the step partials of the period are recorded first and
-//! each column is then carried through the whole period on its own; otherwise all columns
-//! advance together step by step. Both give the same derivative (test
+//! the columns then carried through the period by code specialised to the number of states;
+//! otherwise by the general chain rule. Both give the same derivative (test
 //! `column_jacobian_of_one_component_elements_equals_the_general_one`).
 
 use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
@@ -53,8 +53,6 @@ pub struct Harmonics {
     n_time: usize,
     /// `n_time × len` synthesis matrix: `x_i = Σ_c E[i][c]·X_c`.
     synthesis: Vec<f64>,
-    /// The same matrix column by column (`len × n_time`): `E[·][c]` contiguous.
-    synthesis_columns: Vec<f64>,
     /// `len × n_time` analysis matrix: `X_c = Σ_i D[c][i]·x_i`.
     analysis: Vec<f64>,
     forward: Arc<dyn realfft::RealToComplex<f64>>,
@@ -122,15 +120,11 @@ impl Harmonics {
                 }
             }
         }
-        let synthesis_columns = (0..len * n)
-            .map(|idx| synthesis[(idx % n) * len + idx / n])
-            .collect();
         let mut planner = RealFftPlanner::<f64>::new();
         Ok(Self {
             orders,
             n_time: n,
             synthesis,
-            synthesis_columns,
             analysis,
             forward: planner.plan_fft_forward(n),
             inverse: planner.plan_fft_inverse(n),
@@ -190,11 +184,6 @@ impl Harmonics {
     pub fn synthesis_row(&self, i: usize) -> &[f64] {
         let len = self.len();
         &self.synthesis[i * len..(i + 1) * len]
-    }
-
-    /// Synthesis column of coefficient `c`: the samples of the unit coefficient `X_c = 1`.
-    pub fn synthesis_column(&self, c: usize) -> &[f64] {
-        &self.synthesis_columns[c * self.n_time..(c + 1) * self.n_time]
     }
 
     /// Analysis row of coefficient `c`: `X_c = Σ_i row[i]·x_i`.
@@ -501,10 +490,10 @@ fn run_sensitive<'a>(
 }
 
 /// The partials of one step of a one-component element (`d = 1`) with `M` states, kept for
-/// every sample of a period so that the sensitivities can be carried through the period one
-/// column at a time ([`propagate_column`]) instead of all columns step by step: for the joint
-/// of an identification (one state, four harmonic coefficients) the step-by-step chain rule
-/// spent most of its time on loops a few entries long.
+/// every sample of a period so that the sensitivity columns can be carried through the period
+/// afterwards by code whose sizes are known at compile time ([`propagate_columns`]): for the
+/// joint of an identification (one state, four harmonic coefficients) the general chain rule,
+/// with its sizes known only at run time, spent most of its time on the loops' bookkeeping.
 #[derive(Clone, Copy)]
 struct StepRecord<const M: usize> {
     /// `∂s_{i+1}/∂s_i` (row r, column k).
@@ -569,60 +558,62 @@ fn record_period<'a, const M: usize>(
     steps
 }
 
-/// Carry one sensitivity column through a recorded period: the state sensitivity starts at
-/// `ds` and ends there; the displacement samples' sensitivity is `e` (a synthesis column, zeros
-/// for a start-state column). The force sensitivity of sample `i + 1` is written to `t[i + 1]`
-/// (`t[0]` for the last step): `t_{i+1} = f_s·ds_i + f_0·e_i + f_1·e_{i+1}`,
+/// Carry sensitivity columns through a recorded period, all columns advanced together at each
+/// step (they are independent, so the processor overlaps them: one column at a time would be a
+/// chain of dependent multiply-adds as long as the period). Column `c` starts with the state
+/// sensitivity `ds[c]` and ends there; the first `len` columns are driven by the harmonic
+/// coefficients (`synthesis`: `N × len`, row-major), the others by the start state only. The
+/// force sensitivity of sample `i + 1` to column `c` is written to `t[(i + 1)·ncol + c]` (row 0
+/// for the last step): `t_{i+1} = f_s·ds_i + f_0·e_i + f_1·e_{i+1}`,
 /// `ds_{i+1} = A·ds_i + b_0·e_i + b_1·e_{i+1}`.
-fn propagate_column<const M: usize>(
+fn propagate_columns<const M: usize>(
     steps: &[StepRecord<M>],
-    e: &[f64],
-    ds: &mut [f64; M],
+    synthesis: &[f64],
+    len: usize,
+    ds: &mut [[f64; M]],
     t: &mut [f64],
 ) {
-    let n = steps.len();
-    let (e, t) = (&e[..n], &mut t[..n]);
-    let mut e0 = e[0];
+    let (n, ncol) = (steps.len(), ds.len());
+    debug_assert!(len <= ncol && synthesis.len() >= n * len && t.len() >= n * ncol);
+    let (driven, free) = ds.split_at_mut(len);
     for (i, st) in steps.iter().enumerate() {
         let i1 = if i + 1 == n { 0 } else { i + 1 };
-        let e1 = e[i1];
-        let mut force = st.f0 * e0 + st.f1 * e1;
-        for k in 0..M {
-            force += st.fs[k] * ds[k];
+        let e0 = &synthesis[i * len..(i + 1) * len];
+        let e1 = &synthesis[i1 * len..(i1 + 1) * len];
+        let (tu, ts) = t[i1 * ncol..(i1 + 1) * ncol].split_at_mut(len);
+        for (((d, tc), &x0), &x1) in driven.iter_mut().zip(tu).zip(e0).zip(e1) {
+            let (force, next) = st.advance(d, x0, x1);
+            *tc = force;
+            *d = next;
         }
-        t[i1] = force;
-        let mut next = [0.0; M];
-        for r in 0..M {
-            let mut v = st.b0[r] * e0 + st.b1[r] * e1;
-            for k in 0..M {
-                v += st.a[r][k] * ds[k];
-            }
-            next[r] = v;
+        for (d, tc) in free.iter_mut().zip(ts) {
+            let (force, next) = st.advance(d, 0.0, 0.0);
+            *tc = force;
+            *d = next;
         }
-        *ds = next;
-        e0 = e1;
     }
 }
 
-/// The monodromy `Φ = ∂s_N/∂s_0` (`M × M`, row-major) of a recorded period, and in `ts`
-/// (`M × N`) the force sensitivities to the start state.
-fn monodromy_columns<'a, const M: usize>(
-    steps: &[StepRecord<M>],
-    arena: &'a Bump,
-    ts: &mut [f64],
-) -> &'a [f64] {
-    let n = steps.len();
-    let phi = zeros(arena, M * M);
-    let no_input = zeros(arena, n);
-    for j in 0..M {
-        let mut ds = [0.0; M];
-        ds[j] = 1.0;
-        propagate_column(steps, no_input, &mut ds, &mut ts[j * n..(j + 1) * n]);
-        for r in 0..M {
-            phi[r * M + j] = ds[r];
+impl<const M: usize> StepRecord<M> {
+    /// Force sensitivity at the step's end sample and the state sensitivity there, from the
+    /// state sensitivity `ds` at its start and the displacement sensitivities `e0`, `e1` of its
+    /// two samples.
+    #[inline(always)]
+    fn advance(&self, ds: &[f64; M], e0: f64, e1: f64) -> (f64, [f64; M]) {
+        let mut force = self.f0 * e0 + self.f1 * e1;
+        for k in 0..M {
+            force += self.fs[k] * ds[k];
         }
+        let mut next = [0.0; M];
+        for r in 0..M {
+            let mut v = self.b0[r] * e0 + self.b1[r] * e1;
+            for k in 0..M {
+                v += self.a[r][k] * ds[k];
+            }
+            next[r] = v;
+        }
+        (force, next)
     }
-    phi
 }
 
 /// One period from `p.s0` and its monodromy (`m × m`): column by column for a one-component
@@ -641,8 +632,15 @@ fn period_with_monodromy<'a>(
         part: &mut StepPartials,
     ) -> &'a [f64] {
         let steps = record_period::<M>(el, p, arena, part);
-        let ts = zeros(arena, M * steps.len());
-        monodromy_columns(steps, arena, ts)
+        let ds = arena.alloc_slice_fill_with(M, |j| {
+            let mut unit = [0.0; M];
+            unit[j] = 1.0;
+            unit
+        });
+        let t = zeros(arena, steps.len() * M);
+        propagate_columns(steps, &[], 0, ds, t);
+        // Φ[r][j] = ∂s_N,r/∂s_0,j: column j's end state.
+        arena.alloc_slice_fill_with(M * M, |idx| ds[idx % M][idx / M])
     }
     match (el.dofs(), el.state_len()) {
         (1, 1) => columns::<1>(el, p, arena, part),
@@ -651,8 +649,8 @@ fn period_with_monodromy<'a>(
     }
 }
 
-/// [`element_jacobian`] for a one-component element with `M` states, column by column over
-/// the recorded final period: the same chain rule, implicit-function step and analysis.
+/// [`element_jacobian`] for a one-component element with `M` states, over the recorded final
+/// period ([`propagate_columns`]): the same chain rule, implicit-function step and analysis.
 fn element_jacobian_1d<const M: usize>(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
@@ -661,28 +659,23 @@ fn element_jacobian_1d<const M: usize>(
     part: &mut StepPartials,
 ) -> Vec<f64> {
     let (n, len) = (harmonics.n_time(), harmonics.len());
+    let ncol = len + M;
     let steps = record_period::<M>(element, &mut cycle.period, arena, part);
-    // Force sensitivities per column (harmonic coefficients, then start states), `N` each.
-    let t = zeros(arena, (len + M) * n);
-    let (tu, ts) = t.split_at_mut(len * n);
-    // End-state sensitivities `∂s_N/∂U` (`M × len`) and the monodromy `Φ` (`M × M`).
-    let ds_end_u = zeros(arena, M * len);
-    for c in 0..len {
-        let mut ds = [0.0; M];
-        propagate_column(
-            steps,
-            harmonics.synthesis_column(c),
-            &mut ds,
-            &mut tu[c * n..(c + 1) * n],
-        );
-        for r in 0..M {
-            ds_end_u[r * len + c] = ds[r];
+    // Columns: the harmonic coefficients (from zero), then the start states (from unit vectors).
+    let ds = arena.alloc_slice_fill_with(ncol, |c| {
+        let mut v = [0.0; M];
+        if c >= len {
+            v[c - len] = 1.0;
         }
-    }
-    let phi = monodromy_columns(steps, arena, ts);
+        v
+    });
+    // Force sensitivities, `N × ncol`.
+    let t = zeros(arena, n * ncol);
+    propagate_columns(steps, &harmonics.synthesis, len, ds, t);
+    // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start (`M × len`).
+    let ds0 = zeros(arena, M * len);
     if M > 0 {
-        // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start; the
-        // total force sensitivity of column c is t_c + Σ_k t_{s,k}·ds0[k, c].
+        let phi: &[f64] = arena.alloc_slice_fill_with(M * M, |idx| ds[len + idx % M][idx / M]);
         let scales = zeros(arena, M);
         element.state_scales(scales);
         for s in scales.iter_mut() {
@@ -690,31 +683,35 @@ fn element_jacobian_1d<const M: usize>(
         }
         let pinv = periodic_pinv(phi, scales, M, arena);
         let proj = projector(pinv, phi, M, arena);
-        for c in 0..len {
-            for r in 0..M {
+        for r in 0..M {
+            for c in 0..len {
                 let mut v = 0.0;
                 for k in 0..M {
-                    v += pinv[r * M + k] * ds_end_u[k * len + c];
+                    v += pinv[r * M + k] * ds[c][k];
                     let null = if k == r { 1.0 } else { 0.0 } - proj[r * M + k];
                     v += null * cycle.ds_init[k * len + c];
                 }
-                let column = &mut tu[c * n..(c + 1) * n];
-                for (tv, sv) in column.iter_mut().zip(&ts[r * n..(r + 1) * n]) {
-                    *tv += v * sv;
-                }
+                ds0[r * len + c] = v;
             }
         }
     }
-    // J[h, c] = Σ_i D[h][i]·t_c[i].
+    // Total force sensitivity of sample i, T_i = t_i,U + Σ_k t_i,s_k·ds0[k, ·], and its
+    // harmonics J[h, ·] = Σ_i D[h][i]·T_i.
     let mut jac = vec![0.0; len * len];
-    for hc in 0..len {
-        let w = harmonics.analysis_row(hc);
-        for c in 0..len {
-            jac[hc * len + c] = w
-                .iter()
-                .zip(&tu[c * n..(c + 1) * n])
-                .map(|(a, b)| a * b)
-                .sum();
+    let total = zeros(arena, len);
+    for i in 0..n {
+        let (tu, ts) = t[i * ncol..(i + 1) * ncol].split_at(len);
+        total.copy_from_slice(tu);
+        for (k, &tk) in ts.iter().enumerate() {
+            for (tv, dv) in total.iter_mut().zip(&ds0[k * len..(k + 1) * len]) {
+                *tv += tk * dv;
+            }
+        }
+        for hc in 0..len {
+            let w = harmonics.analysis[hc * n + i];
+            for (o, tv) in jac[hc * len..(hc + 1) * len].iter_mut().zip(total.iter()) {
+                *o += w * tv;
+            }
         }
     }
     jac
