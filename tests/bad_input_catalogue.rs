@@ -4,6 +4,9 @@
 //! 134 = abort), an error message naming the file, line or flag (the expected fragments), and
 //! no output left behind (neither the requested outputs nor staging or temporary files).
 
+#[path = "support/png_density.rs"]
+mod png_density;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -356,18 +359,7 @@ fn disc_png() -> Vec<u8> {
 /// [`disc_png`] declaring 2835 pixels per metre (72 dpi, the default of image software).
 fn disc_png_72dpi() -> Vec<u8> {
     let im = image::load_from_memory(&disc_png()).unwrap().to_rgb8();
-    let mut buf = Vec::new();
-    {
-        let mut e = png::Encoder::new(&mut buf, im.width(), im.height());
-        e.set_color(png::ColorType::Rgb);
-        e.set_pixel_dims(Some(png::PixelDimensions {
-            xppu: 2835,
-            yppu: 2835,
-            unit: png::Unit::Meter,
-        }));
-        e.write_header().unwrap().write_image_data(&im).unwrap();
-    }
-    buf
+    png_density::rgb_png_with_density(im.width(), im.height(), &im, 2835)
 }
 
 /// Every path below `dir`, recursively.

@@ -6,6 +6,9 @@
 //! with its pressure, report the below-range one, skip the saturated one with a warning, reject
 //! the marks, and take the pixel size from the image.
 
+#[path = "support/png_density.rs"]
+mod png_density;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -87,16 +90,9 @@ fn write_scan(path: &Path) {
             }
         }
     }
-    let f = std::fs::File::create(path).unwrap();
-    let mut e = png::Encoder::new(std::io::BufWriter::new(f), W as u32, H as u32);
-    e.set_color(png::ColorType::Rgb);
     // 254 dpi = 10000 pixels per metre: 0.1 mm pixels.
-    e.set_pixel_dims(Some(png::PixelDimensions {
-        xppu: 10000,
-        yppu: 10000,
-        unit: png::Unit::Meter,
-    }));
-    e.write_header().unwrap().write_image_data(&data).unwrap();
+    let png = png_density::rgb_png_with_density(W as u32, H as u32, &data, 10000);
+    std::fs::write(path, png).unwrap();
 }
 
 fn rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
