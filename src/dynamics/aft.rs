@@ -673,28 +673,8 @@ fn element_jacobian_1d<const M: usize>(
     let t = zeros(arena, n * ncol);
     propagate_columns(steps, &harmonics.synthesis, len, ds, t);
     // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start (`M × len`).
-    let ds0 = zeros(arena, M * len);
-    if M > 0 {
-        let phi: &[f64] = arena.alloc_slice_fill_with(M * M, |idx| ds[len + idx % M][idx / M]);
-        let scales = zeros(arena, M);
-        element.state_scales(scales);
-        for s in scales.iter_mut() {
-            *s = s.abs().max(f64::MIN_POSITIVE);
-        }
-        let pinv = periodic_pinv(phi, scales, M, arena);
-        let proj = projector(pinv, phi, M, arena);
-        for r in 0..M {
-            for c in 0..len {
-                let mut v = 0.0;
-                for k in 0..M {
-                    v += pinv[r * M + k] * ds[c][k];
-                    let null = if k == r { 1.0 } else { 0.0 } - proj[r * M + k];
-                    v += null * cycle.ds_init[k * len + c];
-                }
-                ds0[r * len + c] = v;
-            }
-        }
-    }
+    let phi: &[f64] = arena.alloc_slice_fill_with(M * M, |idx| ds[len + idx % M][idx / M]);
+    let ds0 = start_state_sensitivity(element, phi, |k, c| ds[c][k], cycle.ds_init, len, arena);
     // Total force sensitivity of sample i, T_i = t_i,U + Σ_k t_i,s_k·ds0[k, ·], and its
     // harmonics J[h, ·] = Σ_i D[h][i]·T_i.
     let mut jac = vec![0.0; len * len];
@@ -964,6 +944,44 @@ pub fn evaluate_from(
     })
 }
 
+/// `ds0/dU` (`m × nu`, row-major) of the periodic cycle's start state, from the periodicity
+/// condition `(I − Φ)·ds0 = ∂s_N/∂U` (`ds_end_u(k, col)` = `∂s_N,k/∂U_col`, `Φ` the `m × m`
+/// monodromy), the monodromy's neutral directions taking the virgin start's derivative
+/// `ds_init` (`m × nu`).
+fn start_state_sensitivity<'a>(
+    element: &dyn HystereticElement,
+    phi: &[f64],
+    ds_end_u: impl Fn(usize, usize) -> f64,
+    ds_init: &[f64],
+    nu: usize,
+    arena: &'a Bump,
+) -> &'a [f64] {
+    let m = element.state_len();
+    let ds0 = zeros(arena, m * nu);
+    if m == 0 {
+        return ds0;
+    }
+    let scales = zeros(arena, m);
+    element.state_scales(scales);
+    for s in scales.iter_mut() {
+        *s = s.abs().max(f64::MIN_POSITIVE);
+    }
+    let pinv = periodic_pinv(phi, scales, m, arena);
+    let proj = projector(pinv, phi, m, arena);
+    for r in 0..m {
+        for col in 0..nu {
+            let mut v = 0.0;
+            for k in 0..m {
+                v += pinv[r * m + k] * ds_end_u(k, col);
+                let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
+                v += null * ds_init[k * nu + col];
+            }
+            ds0[r * nu + col] = v;
+        }
+    }
+    ds0
+}
+
 /// The exact Jacobian `∂forces/∂u` (`d·len × d·len`, row-major) of the periodic cycle found.
 fn element_jacobian(
     element: &dyn HystereticElement,
@@ -998,29 +1016,16 @@ fn element_jacobian_general(
     let sens = run_sensitive(element, harmonics, &mut cycle.period, true, arena, part);
     let ncol = sens.ncol;
     // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
-    let ds0 = zeros(arena, m * nu);
-    if m > 0 {
-        let phi: &[f64] =
-            arena.alloc_slice_fill_with(m * m, |idx| sens.ds_end[(idx / m) * ncol + nu + idx % m]);
-        let scales = zeros(arena, m);
-        element.state_scales(scales);
-        for s in scales.iter_mut() {
-            *s = s.abs().max(f64::MIN_POSITIVE);
-        }
-        let pinv = periodic_pinv(phi, scales, m, arena);
-        let proj = projector(pinv, phi, m, arena);
-        for r in 0..m {
-            for col in 0..nu {
-                let mut v = 0.0;
-                for k in 0..m {
-                    v += pinv[r * m + k] * sens.ds_end[k * ncol + col];
-                    let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
-                    v += null * cycle.ds_init[k * nu + col];
-                }
-                ds0[r * nu + col] = v;
-            }
-        }
-    }
+    let phi: &[f64] =
+        arena.alloc_slice_fill_with(m * m, |idx| sens.ds_end[(idx / m) * ncol + nu + idx % m]);
+    let ds0 = start_state_sensitivity(
+        element,
+        phi,
+        |k, col| sens.ds_end[k * ncol + col],
+        cycle.ds_init,
+        nu,
+        arena,
+    );
     // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU, and its harmonics
     // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
     // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
