@@ -1260,13 +1260,10 @@ mod tests {
         assert!(w < 1e-5, "jenkins contact: {w}");
     }
 
-    /// A warm start (the periodic state of a neighbouring displacement, or an arbitrary state)
-    /// finds the cold start's cycle: same forces and Jacobian, neutral directions (a fully stuck
-    /// slider, q_ref without separation) from the virgin start; and it saves periods.
-    /// The column-by-column monodromy and Jacobian of one-component elements
-    /// ([`period_with_monodromy`], [`element_jacobian_1d`]) against the step-by-step chain rule
-    /// of any element ([`run_sensitive`], [`element_jacobian_general`]): the same derivatives,
-    /// summed in another order, so equal to 1e-12 of the largest entry.
+    /// The monodromy and Jacobian of one-component elements over a recorded period
+    /// ([`period_with_monodromy`], [`element_jacobian_1d`]) against the general chain rule
+    /// ([`run_sensitive`], [`element_jacobian_general`]): the same derivatives, summed in
+    /// another order, so equal to 1e-12 of the largest entry.
     #[test]
     fn column_jacobian_of_one_component_elements_equals_the_general_one() {
         let h = Harmonics::new(3, true, None).unwrap();
@@ -1318,6 +1315,9 @@ mod tests {
         }
     }
 
+    /// A warm start (the periodic state of a neighbouring displacement, or an arbitrary state)
+    /// finds the cold start's cycle: same forces and Jacobian, neutral directions (a fully stuck
+    /// slider, q_ref without separation) from the virgin start; and it saves periods.
     #[test]
     fn warm_start_finds_the_cold_cycle() {
         let h = Harmonics::new(3, false, Some(64)).unwrap();
