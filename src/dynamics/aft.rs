@@ -34,9 +34,9 @@
 //! the virgin start. Checked against finite differences in the tests below. For an element on
 //! one displacement component with at most two states (the joints of an identification, the
 //! springs and dampers of its effects) the step partials of the period are recorded first and
-//! the columns then carried through the period by code specialised to the number of states;
-//! otherwise by the general chain rule. Both give the same derivative (test
-//! `column_jacobian_of_one_component_elements_equals_the_general_one`).
+//! the sensitivity columns then carried through the period by code specialised to the number of
+//! states; otherwise by the general chain rule. Both give the same sensitivities (test
+//! `recorded_sensitivities_equal_the_general_chain_rule`).
 
 use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
 use crate::error::{Error, Result};
@@ -422,7 +422,28 @@ fn chain_rule_rows(
 /// Run one period from `p.s0` with forward sensitivities. With `with_u` the columns are the
 /// displacement harmonics, then the `m` start-state components, and the force sensitivities of
 /// every sample are kept (for the Jacobian); without, only the monodromy `∂s_N/∂s_0` is formed.
+/// One-component elements with at most two states go through [`run_sensitive_recorded`], the
+/// others through the general chain rule ([`run_sensitive_general`]); both give the same
+/// sensitivities in the same layout.
 fn run_sensitive<'a>(
+    el: &dyn HystereticElement,
+    h: &Harmonics,
+    p: &mut Period,
+    with_u: bool,
+    arena: &'a Bump,
+    part: &mut StepPartials,
+) -> Sensitivity<'a> {
+    match (el.dofs(), el.state_len()) {
+        (1, 0) => run_sensitive_recorded::<0>(el, h, p, with_u, arena, part),
+        (1, 1) => run_sensitive_recorded::<1>(el, h, p, with_u, arena, part),
+        (1, 2) => run_sensitive_recorded::<2>(el, h, p, with_u, arena, part),
+        _ => run_sensitive_general(el, h, p, with_u, arena, part),
+    }
+}
+
+/// [`run_sensitive`] for any element: all columns advanced through each step's partials as the
+/// step is taken, with the sizes known only at run time.
+fn run_sensitive_general<'a>(
     el: &dyn HystereticElement,
     h: &Harmonics,
     p: &mut Period,
@@ -509,26 +530,35 @@ struct StepRecord<const M: usize> {
 }
 
 impl<const M: usize> StepRecord<M> {
-    const ZERO: Self = Self {
-        a: [[0.0; M]; M],
-        b0: [0.0; M],
-        b1: [0.0; M],
-        fs: [0.0; M],
-        f0: 0.0,
-        f1: 0.0,
-    };
-
     fn from_partials(p: &StepPartials) -> Self {
-        let mut r = Self::ZERO;
-        for (row, chunk) in r.a.iter_mut().zip(p.ds_ds0.chunks_exact(M.max(1))) {
-            row.copy_from_slice(chunk);
+        Self {
+            a: std::array::from_fn(|r| std::array::from_fn(|k| p.ds_ds0[r * M + k])),
+            b0: std::array::from_fn(|r| p.ds_du0[r]),
+            b1: std::array::from_fn(|r| p.ds_du1[r]),
+            fs: std::array::from_fn(|k| p.df_ds0[k]),
+            f0: p.df_du0[0],
+            f1: p.df_du1[0],
         }
-        r.b0.copy_from_slice(&p.ds_du0);
-        r.b1.copy_from_slice(&p.ds_du1);
-        r.fs.copy_from_slice(&p.df_ds0);
-        r.f0 = p.df_du0[0];
-        r.f1 = p.df_du1[0];
-        r
+    }
+
+    /// Force sensitivity at the step's end sample and the state sensitivity there, from the
+    /// state sensitivity `ds` at its start and the displacement sensitivities `e0`, `e1` of its
+    /// two samples.
+    #[inline(always)]
+    fn advance(&self, ds: &[f64; M], e0: f64, e1: f64) -> (f64, [f64; M]) {
+        let mut force = self.f0 * e0 + self.f1 * e1;
+        for k in 0..M {
+            force += self.fs[k] * ds[k];
+        }
+        let mut next = [0.0; M];
+        for r in 0..M {
+            let mut v = self.b0[r] * e0 + self.b1[r] * e1;
+            for k in 0..M {
+                v += self.a[r][k] * ds[k];
+            }
+            next[r] = v;
+        }
+        (force, next)
     }
 }
 
@@ -594,107 +624,35 @@ fn propagate_columns<const M: usize>(
     }
 }
 
-impl<const M: usize> StepRecord<M> {
-    /// Force sensitivity at the step's end sample and the state sensitivity there, from the
-    /// state sensitivity `ds` at its start and the displacement sensitivities `e0`, `e1` of its
-    /// two samples.
-    #[inline(always)]
-    fn advance(&self, ds: &[f64; M], e0: f64, e1: f64) -> (f64, [f64; M]) {
-        let mut force = self.f0 * e0 + self.f1 * e1;
-        for k in 0..M {
-            force += self.fs[k] * ds[k];
-        }
-        let mut next = [0.0; M];
-        for r in 0..M {
-            let mut v = self.b0[r] * e0 + self.b1[r] * e1;
-            for k in 0..M {
-                v += self.a[r][k] * ds[k];
-            }
-            next[r] = v;
-        }
-        (force, next)
-    }
-}
-
-/// One period from `p.s0` and its monodromy (`m × m`): column by column for a one-component
-/// element with at most two states, step by step otherwise.
-fn period_with_monodromy<'a>(
+/// [`run_sensitive`] for a one-component element with `M` states: the period is run once
+/// recording every step's partials ([`record_period`]), then the columns are carried through the
+/// recorded period ([`propagate_columns`]). Same columns, layout and values as
+/// [`run_sensitive_general`] (with one component the force sensitivities of sample `i` are row
+/// `i` of `N × ncol`), summed in another order.
+fn run_sensitive_recorded<'a, const M: usize>(
     el: &dyn HystereticElement,
     h: &Harmonics,
     p: &mut Period,
+    with_u: bool,
     arena: &'a Bump,
     part: &mut StepPartials,
-) -> &'a [f64] {
-    fn columns<'a, const M: usize>(
-        el: &dyn HystereticElement,
-        p: &mut Period,
-        arena: &'a Bump,
-        part: &mut StepPartials,
-    ) -> &'a [f64] {
-        let steps = record_period::<M>(el, p, arena, part);
-        let ds = arena.alloc_slice_fill_with(M, |j| {
-            let mut unit = [0.0; M];
-            unit[j] = 1.0;
-            unit
-        });
-        let t = zeros(arena, steps.len() * M);
-        propagate_columns(steps, &[], 0, ds, t);
-        // Φ[r][j] = ∂s_N,r/∂s_0,j: column j's end state.
-        arena.alloc_slice_fill_with(M * M, |idx| ds[idx % M][idx / M])
-    }
-    match (el.dofs(), el.state_len()) {
-        (1, 1) => columns::<1>(el, p, arena, part),
-        (1, 2) => columns::<2>(el, p, arena, part),
-        _ => run_sensitive(el, h, p, false, arena, part).ds_end,
-    }
-}
-
-/// [`element_jacobian`] for a one-component element with `M` states, over the recorded final
-/// period ([`propagate_columns`]): the same chain rule, implicit-function step and analysis.
-fn element_jacobian_1d<const M: usize>(
-    element: &dyn HystereticElement,
-    harmonics: &Harmonics,
-    cycle: &mut Cycle,
-    arena: &Bump,
-    part: &mut StepPartials,
-) -> Vec<f64> {
-    let (n, len) = (harmonics.n_time(), harmonics.len());
+) -> Sensitivity<'a> {
+    let (n, len) = (h.n_time(), if with_u { h.len() } else { 0 });
     let ncol = len + M;
-    let steps = record_period::<M>(element, &mut cycle.period, arena, part);
+    let steps = record_period::<M>(el, p, arena, part);
     // Columns: the harmonic coefficients (from zero), then the start states (from unit vectors).
     let ds = arena.alloc_slice_fill_with(ncol, |c| {
-        let mut v = [0.0; M];
-        if c >= len {
-            v[c - len] = 1.0;
-        }
-        v
+        std::array::from_fn::<f64, M, _>(|r| if c == len + r { 1.0 } else { 0.0 })
     });
-    // Force sensitivities, `N × ncol`.
-    let t = zeros(arena, n * ncol);
-    propagate_columns(steps, &harmonics.synthesis, len, ds, t);
-    // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start (`M × len`).
-    let phi: &[f64] = arena.alloc_slice_fill_with(M * M, |idx| ds[len + idx % M][idx / M]);
-    let ds0 = start_state_sensitivity(element, phi, |k, c| ds[c][k], cycle.ds_init, len, arena);
-    // Total force sensitivity of sample i, T_i = t_i,U + Σ_k t_i,s_k·ds0[k, ·], and its
-    // harmonics J[h, ·] = Σ_i D[h][i]·T_i.
-    let mut jac = vec![0.0; len * len];
-    let total = zeros(arena, len);
-    for i in 0..n {
-        let (tu, ts) = t[i * ncol..(i + 1) * ncol].split_at(len);
-        total.copy_from_slice(tu);
-        for (k, &tk) in ts.iter().enumerate() {
-            for (tv, dv) in total.iter_mut().zip(&ds0[k * len..(k + 1) * len]) {
-                *tv += tk * dv;
-            }
-        }
-        for hc in 0..len {
-            let w = harmonics.analysis[hc * n + i];
-            for (o, tv) in jac[hc * len..(hc + 1) * len].iter_mut().zip(total.iter()) {
-                *o += w * tv;
-            }
-        }
+    let df = zeros(arena, n * ncol);
+    propagate_columns(steps, &h.synthesis, len, ds, df);
+    let ds_end = arena.alloc_slice_fill_with(M * ncol, |idx| ds[idx % ncol][idx / ncol]);
+    Sensitivity {
+        ncol,
+        ds_end,
+        // Without the harmonics' columns only the monodromy is asked for.
+        df: if with_u { df } else { &[] },
     }
-    jac
 }
 
 /// `(I − Φ)⁺` in the element's state scales, returned unscaled (`m × m`, row-major).
@@ -818,9 +776,9 @@ fn periodic_cycle<'a>(
                 np
             }
             None => {
-                let phi = period_with_monodromy(el, h, &mut p, arena, part);
-                let pinv = periodic_pinv(phi, scales, m, arena);
-                let proj = projector(pinv, phi, m, arena);
+                let sens = run_sensitive(el, h, &mut p, false, arena, part);
+                let pinv = periodic_pinv(sens.ds_end, scales, m, arena);
+                let proj = projector(pinv, sens.ds_end, m, arena);
                 (pinv, proj)
             }
         };
@@ -944,62 +902,8 @@ pub fn evaluate_from(
     })
 }
 
-/// `ds0/dU` (`m × nu`, row-major) of the periodic cycle's start state, from the periodicity
-/// condition `(I − Φ)·ds0 = ∂s_N/∂U` (`ds_end_u(k, col)` = `∂s_N,k/∂U_col`, `Φ` the `m × m`
-/// monodromy), the monodromy's neutral directions taking the virgin start's derivative
-/// `ds_init` (`m × nu`).
-fn start_state_sensitivity<'a>(
-    element: &dyn HystereticElement,
-    phi: &[f64],
-    ds_end_u: impl Fn(usize, usize) -> f64,
-    ds_init: &[f64],
-    nu: usize,
-    arena: &'a Bump,
-) -> &'a [f64] {
-    let m = element.state_len();
-    let ds0 = zeros(arena, m * nu);
-    if m == 0 {
-        return ds0;
-    }
-    let scales = zeros(arena, m);
-    element.state_scales(scales);
-    for s in scales.iter_mut() {
-        *s = s.abs().max(f64::MIN_POSITIVE);
-    }
-    let pinv = periodic_pinv(phi, scales, m, arena);
-    let proj = projector(pinv, phi, m, arena);
-    for r in 0..m {
-        for col in 0..nu {
-            let mut v = 0.0;
-            for k in 0..m {
-                v += pinv[r * m + k] * ds_end_u(k, col);
-                let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
-                v += null * ds_init[k * nu + col];
-            }
-            ds0[r * nu + col] = v;
-        }
-    }
-    ds0
-}
-
 /// The exact Jacobian `∂forces/∂u` (`d·len × d·len`, row-major) of the periodic cycle found.
 fn element_jacobian(
-    element: &dyn HystereticElement,
-    harmonics: &Harmonics,
-    cycle: &mut Cycle,
-    arena: &Bump,
-    part: &mut StepPartials,
-) -> Vec<f64> {
-    match (element.dofs(), element.state_len()) {
-        (1, 0) => element_jacobian_1d::<0>(element, harmonics, cycle, arena, part),
-        (1, 1) => element_jacobian_1d::<1>(element, harmonics, cycle, arena, part),
-        (1, 2) => element_jacobian_1d::<2>(element, harmonics, cycle, arena, part),
-        _ => element_jacobian_general(element, harmonics, cycle, arena, part),
-    }
-}
-
-/// [`element_jacobian`] for any element: forward sensitivities of all columns step by step.
-fn element_jacobian_general(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     cycle: &mut Cycle,
@@ -1016,16 +920,29 @@ fn element_jacobian_general(
     let sens = run_sensitive(element, harmonics, &mut cycle.period, true, arena, part);
     let ncol = sens.ncol;
     // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
-    let phi: &[f64] =
-        arena.alloc_slice_fill_with(m * m, |idx| sens.ds_end[(idx / m) * ncol + nu + idx % m]);
-    let ds0 = start_state_sensitivity(
-        element,
-        phi,
-        |k, col| sens.ds_end[k * ncol + col],
-        cycle.ds_init,
-        nu,
-        arena,
-    );
+    let ds0 = zeros(arena, m * nu);
+    if m > 0 {
+        let phi: &[f64] =
+            arena.alloc_slice_fill_with(m * m, |idx| sens.ds_end[(idx / m) * ncol + nu + idx % m]);
+        let scales = zeros(arena, m);
+        element.state_scales(scales);
+        for s in scales.iter_mut() {
+            *s = s.abs().max(f64::MIN_POSITIVE);
+        }
+        let pinv = periodic_pinv(phi, scales, m, arena);
+        let proj = projector(pinv, phi, m, arena);
+        for r in 0..m {
+            for col in 0..nu {
+                let mut v = 0.0;
+                for k in 0..m {
+                    v += pinv[r * m + k] * sens.ds_end[k * ncol + col];
+                    let null = if k == r { 1.0 } else { 0.0 } - proj[r * m + k];
+                    v += null * cycle.ds_init[k * nu + col];
+                }
+                ds0[r * nu + col] = v;
+            }
+        }
+    }
     // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU, and its harmonics
     // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
     // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
@@ -1260,12 +1177,13 @@ mod tests {
         assert!(w < 1e-5, "jenkins contact: {w}");
     }
 
-    /// The monodromy and Jacobian of one-component elements over a recorded period
-    /// ([`period_with_monodromy`], [`element_jacobian_1d`]) against the general chain rule
-    /// ([`run_sensitive`], [`element_jacobian_general`]): the same derivatives, summed in
-    /// another order, so equal to 1e-12 of the largest entry.
+    /// The sensitivities of one-component elements over a recorded period
+    /// ([`run_sensitive_recorded`]) against the general chain rule ([`run_sensitive_general`]):
+    /// the same derivatives summed in another order, so equal to 1e-12 of the largest entry,
+    /// for the monodromy alone and with the displacement harmonics; the same forces and end
+    /// state; and the Jacobian built on them.
     #[test]
-    fn column_jacobian_of_one_component_elements_equals_the_general_one() {
+    fn recorded_sensitivities_equal_the_general_chain_rule() {
         let h = Harmonics::new(3, true, None).unwrap();
         let u_slip = [3e-5, 1e-5, 4e-6, -2e-6];
         let u_stick: Vec<f64> = u_slip.iter().map(|v| v * 0.1).collect();
@@ -1287,30 +1205,34 @@ mod tests {
             ("cubic spring", &CubicSpring { k3: 1e12 }),
             ("power-law damper", &damper),
         ];
+        let close = |name: &str, what: &str, a: &[f64], b: &[f64]| {
+            assert_eq!(a.len(), b.len(), "{name}: {what}");
+            let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() <= 1e-12 * scale, "{name}: {what} {x} vs {y}");
+            }
+        };
         for (name, el) in elements {
             for u in [&u_slip[..], &u_stick[..]] {
                 let (m, d) = (el.state_len(), el.dofs());
-                let (fast, general) = with_workspace(m, d, |arena, part| {
+                with_workspace(m, d, |arena, part| {
                     let s = AftSettings::default();
                     let mut cycle = periodic_cycle(el, &h, u, None, &s, arena, part);
                     assert!(cycle.periodic, "{name}");
-                    let phi = period_with_monodromy(el, &h, &mut cycle.period, arena, part);
-                    let general = run_sensitive(el, &h, &mut cycle.period, false, arena, part);
-                    for (a, b) in phi.iter().zip(general.ds_end) {
-                        assert!(
-                            (a - b).abs() <= 1e-12 * b.abs().max(1.0),
-                            "{name}: Φ {a} vs {b}"
-                        );
+                    let p = &mut cycle.period;
+                    for with_u in [false, true] {
+                        let fast = run_sensitive(el, &h, p, with_u, arena, part);
+                        let (f, s_end) = (p.f.to_vec(), p.s_end.to_vec());
+                        let general = run_sensitive_general(el, &h, p, with_u, arena, part);
+                        assert_eq!(fast.ncol, general.ncol, "{name}");
+                        close(name, "ds_end", fast.ds_end, general.ds_end);
+                        close(name, "df", fast.df, general.df);
+                        close(name, "forces", &f, p.f);
+                        close(name, "end state", &s_end, p.s_end);
                     }
-                    let fast = element_jacobian(el, &h, &mut cycle, arena, part);
-                    let general = element_jacobian_general(el, &h, &mut cycle, arena, part);
-                    (fast, general)
+                    let jac = element_jacobian(el, &h, &mut cycle, arena, part);
+                    assert!(jac.iter().any(|v| *v != 0.0), "{name}");
                 });
-                let scale = general.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                assert!(scale > 0.0, "{name}");
-                for (a, b) in fast.iter().zip(&general) {
-                    assert!((a - b).abs() <= 1e-12 * scale, "{name}: {a} vs {b}");
-                }
             }
         }
     }
