@@ -104,12 +104,9 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         report::write_elements_csv(&el, &system, r)?;
         let tol = system.aft.periodicity_tolerance;
         let non_periodic = r.branch.non_periodic_points(tol);
-        let worst = r
-            .branch
-            .points
-            .iter()
-            .map(|p| p.periodicity_error)
-            .fold(0.0, f64::max);
+        let worst = asperity::dynamics::aft::worst_periodicity_error(
+            r.branch.points.iter().map(|p| p.periodicity_error),
+        );
         if non_periodic > 0 {
             println!(
                 "warning: level {} N: at {non_periodic} of {} points an element's AFT state did not become periodic within {} periods (largest relative periodicity error {worst:.2e}, tolerance {tol:.0e}); their element forces are those of the last period integrated (column aft_periodicity_error)",

@@ -162,10 +162,9 @@ impl Receptance {
             d_omega,
             d_level,
             scale,
-            periodicity_error: forces
-                .iter()
-                .map(|f| f.periodicity_error)
-                .fold(0.0, f64::max),
+            periodicity_error: crate::dynamics::aft::worst_periodicity_error(
+                forces.iter().map(|f| f.periodicity_error),
+            ),
             non_periodic: forces.iter().filter(|f| !f.periodic).count(),
             element_states: crate::dynamics::hbm::element_states(&forces),
         }

@@ -824,10 +824,7 @@ pub(crate) fn element_states(forces: &[aft::ElementHarmonics]) -> Vec<Vec<f64>> 
 
 fn periodicity(forces: &[aft::ElementHarmonics]) -> (f64, usize) {
     (
-        forces
-            .iter()
-            .map(|f| f.periodicity_error)
-            .fold(0.0, f64::max),
+        aft::worst_periodicity_error(forces.iter().map(|f| f.periodicity_error)),
         forces.iter().filter(|f| !f.periodic).count(),
     )
 }
