@@ -36,12 +36,18 @@ pub enum Verdict {
 
 impl Verdict {
     /// The verdict of a change `d` against `tolerance` (see the module documentation). A
-    /// difference without an interval (one realisation) is judged on its value alone.
+    /// difference without an interval (one realisation) is undetermined: its value alone mixes
+    /// the effect with the surface's sampling noise — one realisation at 256² called the same
+    /// 5 MPa grid check converged or not converged depending on the seed (2026-11-28; with two
+    /// realisations it read undetermined).
     pub fn of(d: Difference, tolerance: f64) -> Self {
         if !d.mean.is_finite() {
             return Verdict::NotChecked;
         }
-        let h = if d.ci95.is_finite() { d.ci95 } else { 0.0 };
+        if !d.ci95.is_finite() {
+            return Verdict::Undetermined;
+        }
+        let h = d.ci95;
         if d.mean.abs() + h <= tolerance {
             Verdict::Converged
         } else if d.mean.abs() - h > tolerance {
@@ -124,7 +130,9 @@ mod tests {
         assert_eq!(Verdict::of(d(0.01, 0.02), 0.05), Verdict::Converged);
         assert_eq!(Verdict::of(d(-0.04, 0.02), 0.05), Verdict::Undetermined);
         assert_eq!(Verdict::of(d(0.10, 0.02), 0.05), Verdict::NotConverged);
-        assert_eq!(Verdict::of(d(0.01, f64::NAN), 0.05), Verdict::Converged);
+        // One realisation: no interval, no verdict either way.
+        assert_eq!(Verdict::of(d(0.01, f64::NAN), 0.05), Verdict::Undetermined);
+        assert_eq!(Verdict::of(d(0.50, f64::NAN), 0.05), Verdict::Undetermined);
         assert_eq!(Verdict::of(d(f64::NAN, 0.0), 0.05), Verdict::NotChecked);
         assert_eq!(
             Verdict::worst([
