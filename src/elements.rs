@@ -5,9 +5,23 @@
 //! [`crate::calibrate::table::CalibrationTable::interpolate`]) and its per-unit-area stiffnesses
 //! are scaled by the element's area: `kn = kn″(p)·A`, `E0 = E0″(p)·A`, `Et = Et″(p)·A` (N/m from
 //! N/m³ × m²); the shape parameter `k` and friction coefficient `mu` are taken as they are.
-//! Elements whose pressure lies outside the table's range get the end row's values (no
-//! extrapolation) and are flagged in the `out_of_range` column (−1 below, +1 above, 0 within) and
-//! counted in the summary.
+//! Elements whose pressure lies outside the table's range get the end pair's power law
+//! (`kn ∝ p^m`, see [`crate::calibrate::table`]; until 2026-11-28 the end row's values, which left
+//! a node at a tenth of the first row's pressure about four times too stiff), are flagged in the
+//! `out_of_range` column (−1 below, +1 above, 0 within) and counted in the summary.
+//!
+//! Not tabulated, or refused:
+//! - a node of **zero pressure** (a polynomial fit clamped at zero near a patch edge, or a node
+//!   off the contact) is an open contact: no preload, and the power law gives it no stiffness.
+//!   It is left out of the table and counted (`n_open`, `open_ids`, `open_area_m2`); the dynamic
+//!   solver's element reader refuses `N0 ≤ 0` anyway.
+//! - a join in which **no** loaded element lies within the table is refused: every value would
+//!   be extrapolated, and the usual cause is a pressure column in another unit (MPa for Pa: 10⁶)
+//!   or a table computed for another joint.
+//! - an element more than a decade of pressure **above** the table (`p > 10·p_last`) is refused:
+//!   a stiffening power law continued that far is a guess, not a calibration. Below the table the
+//!   law falls towards the open contact's zero, the direction of the physics, and is kept
+//!   however far.
 
 use crate::calibrate::table::{CalibrationTable, RangeFlag};
 use crate::error::{Error, Result};
@@ -33,10 +47,17 @@ pub struct ElementRow {
     pub out_of_range: i8,
 }
 
+/// Largest pressure, as a multiple of the table's last row, at which an element is accepted.
+pub const MAX_ABOVE_TABLE_FACTOR: f64 = 10.0;
+
 /// Counts and totals of a join.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ElementSummary {
     pub n_elements: usize,
+    /// Nodes of zero pressure (open contact), left out of the table.
+    pub n_open: usize,
+    pub open_ids: Vec<u64>,
+    pub open_area_m2: f64,
     pub n_below_range: usize,
     pub n_above_range: usize,
     /// Ids of the out-of-range elements (below, then above).
@@ -52,7 +73,9 @@ pub struct ElementSummary {
     pub element_pressure_max_pa: f64,
 }
 
-/// Join preloaded nodes with a calibration table: one element per node.
+/// Join preloaded nodes with a calibration table: one element per node of non-zero pressure
+/// (module documentation: open nodes left out, a join with no element within the table or one
+/// more than a decade above it refused).
 pub fn join(
     preloads: &[Preload],
     table: &CalibrationTable,
@@ -61,9 +84,18 @@ pub fn join(
     if preloads.is_empty() {
         return Err(Error::Data("no preloaded nodes to join".into()));
     }
-    let mut rows = Vec::with_capacity(preloads.len());
+    let (open, loaded): (Vec<&Preload>, Vec<&Preload>) =
+        preloads.iter().partition(|p| p.pressure_pa <= 0.0);
+    if loaded.is_empty() {
+        return Err(Error::Data(format!(
+            "all {} nodes have zero pressure (open contact): no element to tabulate",
+            preloads.len()
+        )));
+    }
+    let (tmin, tmax) = table.pressure_range();
+    let mut rows = Vec::with_capacity(loaded.len());
     let (mut below, mut above) = (Vec::new(), Vec::new());
-    for p in preloads {
+    for p in loaded {
         let v = table.interpolate(p.pressure_pa);
         let flag = match v.range {
             RangeFlag::Below => {
@@ -91,9 +123,31 @@ pub fn join(
             out_of_range: flag,
         });
     }
-    let (tmin, tmax) = table.pressure_range();
+    let (pmin, pmax) = rows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+            (lo.min(r.pressure_pa), hi.max(r.pressure_pa))
+        });
+    if below.len() + above.len() == rows.len() {
+        return Err(Error::Data(format!(
+            "none of the {} loaded nodes lies within the calibration table's pressure range ({tmin:.4e}–{tmax:.4e} Pa; nodes {pmin:.4e}–{pmax:.4e} Pa): every value would be extrapolated; is one of the pressure columns in another unit (MPa for Pa), or the table computed for another joint?",
+            rows.len()
+        )));
+    }
+    if let Some(p) = rows
+        .iter()
+        .find(|p| p.pressure_pa > MAX_ABOVE_TABLE_FACTOR * tmax)
+    {
+        return Err(Error::Data(format!(
+            "node {} at {:.4e} Pa lies more than {MAX_ABOVE_TABLE_FACTOR}× above the calibration table's last row ({tmax:.4e} Pa): its stiffness would be the table's power law continued over more than a decade; compute the table up to the nodes' pressures",
+            p.id, p.pressure_pa
+        )));
+    }
     let summary = ElementSummary {
         n_elements: rows.len(),
+        n_open: open.len(),
+        open_ids: open.iter().map(|p| p.id).collect(),
+        open_area_m2: open.iter().fold(0.0, |a, p| a + p.area_m2),
         n_below_range: below.len(),
         n_above_range: above.len(),
         below_range_ids: below,
@@ -102,14 +156,8 @@ pub fn join(
         total_load_n: rows.iter().map(|r| r.n0_n).sum(),
         table_pressure_min_pa: tmin,
         table_pressure_max_pa: tmax,
-        element_pressure_min_pa: rows
-            .iter()
-            .map(|r| r.pressure_pa)
-            .fold(f64::INFINITY, f64::min),
-        element_pressure_max_pa: rows
-            .iter()
-            .map(|r| r.pressure_pa)
-            .fold(f64::NEG_INFINITY, f64::max),
+        element_pressure_min_pa: pmin,
+        element_pressure_max_pa: pmax,
     };
     Ok((rows, summary))
 }
@@ -134,7 +182,7 @@ pub fn write_csv(path: &Path, rows: &[ElementRow]) -> Result<()> {
             "#   kn, E0, Et in N/m (per-area table values × area); k, mu dimensionless;"
         )
         .map_err(io)?;
-        writeln!(w, "#   out_of_range: -1 pressure below the calibration table (first row's values used), 0 within, +1 above (last row's values)").map_err(io)?;
+        writeln!(w, "#   out_of_range: -1 pressure below the calibration table, +1 above (values continued by the end pair's power law), 0 within; nodes of zero pressure (open) are not in the table").map_err(io)?;
         writeln!(w, "{COLUMNS}").map_err(io)?;
         for r in rows {
             writeln!(
@@ -240,6 +288,40 @@ mod tests {
     }
 
     #[test]
+    fn open_nodes_are_left_out_and_counted() {
+        let (rows, s) = join(
+            &[node(1, 2e6, 1e-6), node(2, 0.0, 3e-6), node(3, 1e6, 1e-6)],
+            &table(),
+        )
+        .unwrap();
+        assert_eq!(rows.iter().map(|r| r.id).collect::<Vec<_>>(), vec![1, 3]);
+        assert_eq!(
+            (s.n_open, s.open_ids.clone(), s.open_area_m2),
+            (1, vec![2], 3e-6)
+        );
+        assert_eq!(s.element_pressure_min_pa, 1e6);
+        let all_open = join(&[node(1, 0.0, 1e-6)], &table()).unwrap_err();
+        assert!(all_open.to_string().contains("zero pressure"), "{all_open}");
+    }
+
+    /// A preload in MPa read as Pa (or a table for another joint) leaves every node outside the
+    /// table: refused, not extrapolated; so is a node more than a decade above the table.
+    #[test]
+    fn a_join_with_no_node_in_the_table_or_far_above_it_is_refused() {
+        let err = join(&[node(1, 2.0, 1e-6), node(2, 3.0, 1e-6)], &table()).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("none of the 2 loaded nodes") && msg.contains("another unit"),
+            "{msg}"
+        );
+        // Within a decade above the last row (4 MPa): accepted and flagged.
+        let (rows, _) = join(&[node(1, 2e6, 1e-6), node(2, 39e6, 1e-6)], &table()).unwrap();
+        assert_eq!(rows[1].out_of_range, 1);
+        let err = join(&[node(1, 2e6, 1e-6), node(7, 41e6, 1e-6)], &table()).unwrap_err();
+        assert!(err.to_string().contains("node 7"), "{err}");
+    }
+
+    #[test]
     fn stiffnesses_scale_with_area_and_range_is_flagged() {
         let (rows, s) = join(
             &[node(1, 2e6, 1e-6), node(2, 0.5e6, 2e-6), node(3, 5e6, 1e-6)],
@@ -251,7 +333,8 @@ mod tests {
         assert!((rows[0].e0_n_per_m - 4e13 * 1e-6).abs() < 1e-6 * 4e7);
         assert_eq!(rows[0].out_of_range, 0);
         assert_eq!(rows[1].out_of_range, -1);
-        assert!((rows[1].kn_n_per_m - 1e13 * 2e-6).abs() < 1.0);
+        // Below the table: its first pair's power law (here kn ∝ p), times the area.
+        assert!((rows[1].kn_n_per_m - 0.5e13 * 2e-6).abs() < 1e-9 * 1e7);
         assert_eq!(rows[2].out_of_range, 1);
         assert_eq!((s.n_below_range, s.n_above_range), (1, 1));
         assert_eq!(s.below_range_ids, vec![2]);

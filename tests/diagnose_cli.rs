@@ -267,7 +267,7 @@ fn baseline_from_a_calibration_table() {
     let gap = json["final_effect_parameters"][0][2].as_f64().unwrap();
     assert_eq!(json["final_effect_parameters"][0][1], "gap (m)");
     assert!((gap / 5e-5 - 1.0).abs() < 0.05, "gap {gap}");
-    // A pressure outside the table is used at the end row, with a warning.
+    // A pressure outside the table is continued by the end rows' power law, with a warning.
     let o = run(&[
         rec.to_str().unwrap(),
         "--table",

@@ -377,8 +377,9 @@ class CalibrationTable:
     @overload
     def interpolate(self, pressure_pa: F64Array) -> Columns: ...
     def interpolate(self, pressure_pa: Any) -> Any:
-        """Monotone cubic in ln p; end row outside the table; ``range``: −1 below, 0 within,
-        +1 above."""
+        """Monotone cubic in ln p; outside the table the end pair's power law for kn, E0 and the
+        contact area ratio (Et keeps Et/E0, k and μ the end row's); ``range``: −1 below,
+        0 within, +1 above."""
     def __len__(self) -> int: ...
 
 def calibrate(
@@ -406,7 +407,8 @@ def join_elements(
 ) -> Tuple[Columns, Dict[str, Any]]:
     """One element per preloaded node: kn, E0, Et (N/m) = table values × area, k, μ; columns as
     in ``asperity elements``' CSV (id, x_m, y_m, area_m2, pressure_Pa, N0_N, kn_N_per_m,
-    E0_N_per_m, k, mu, Et_N_per_m, out_of_range) and a summary."""
+    E0_N_per_m, k, mu, Et_N_per_m, out_of_range) and a summary; nodes of zero pressure (open
+    contact) are left out and counted (``n_open``, ``open_ids``, ``open_area_m2``)."""
 
 def read_preloads(path: Path) -> Columns:
     """Preload CSV → columns id, x_m, y_m, area_m2, pressure_Pa, N0_N."""

@@ -87,7 +87,8 @@ impl CalibrationTable {
     }
 
     /// Element parameters at `pressure_pa` (Pa; a number or a float64 array): monotone cubic
-    /// (Fritsch–Carlson) in ln p inside the table, the end row outside it (no extrapolation).
+    /// (Fritsch–Carlson) in ln p inside the table; outside it kn, E0 and the contact area ratio
+    /// follow the end pair's power law (Et keeps Et/E0, k and μ the end row's values).
     /// Returns a dict with `pressure_Pa`, `contact_area_ratio`, `kn_N_per_m3`, `E0_N_per_m3`,
     /// `k`, `mu`, `Et_N_per_m3` and `range` (−1 below, 0 within, +1 above the table), as numbers
     /// or arrays like the argument.
@@ -239,7 +240,8 @@ fn element_columns<'py>(py: Python<'py>, rows: &[ElementRow]) -> PyResult<Bound<
 /// One row per contact element (`asperity elements`): each preloaded node (a dict of preload
 /// columns, as `film_preloads` or `read_preloads` return) joined with the table at its
 /// pressure; kn, E0, Et scaled by the node's area (N/m), k and μ as tabulated, out-of-range
-/// pressures flagged (−1/+1) and given the end row. Returns `(columns, summary)`; with
+/// pressures flagged (−1/+1) and continued by the end pair's power law, nodes of zero pressure
+/// (open contact) left out and counted. Returns `(columns, summary)`; with
 /// `out=path` the element CSV is written too (atomic).
 #[pyfunction]
 #[pyo3(signature = (preloads, table, out=None))]

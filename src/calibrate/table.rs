@@ -33,11 +33,20 @@
 //! through the rows, is C¹, and never overshoots: where a column is monotonic in the data it is
 //! monotonic in between, and it stays within the range of the two neighbouring rows.
 //!
-//! **Outside the table's range** the values are **clamped to the nearest end row** (no
-//! extrapolation: the element laws are not to be trusted where no BEM loop was computed) and the
-//! result is flagged ([`RangeFlag::Below`] / [`RangeFlag::Above`], `in_range = false`) so that the
-//! caller can count and report the nodes concerned. A non-positive or NaN pressure is treated as
-//! below the range.
+//! **Outside the table's range** the stiffnesses follow the power law of the two end rows, the
+//! form rough-surface contact stiffness takes over decades of pressure (`kn ∝ p^m`, `m` about 1
+//! in Persson's theory and 0.8–0.95 in Greenwood–Williamson's; Pohrt & Popov 2012,
+//! *Phys. Rev. Lett.* 108:104301, for the Boussinesq BEM): `v(p) = v_end·(p/p_end)^m` with
+//! `m = ln(v₂/v₁)/ln(p₂/p₁)` from the end pair, for `kn`, `E0` and the contact area ratio (at most
+//! 1); `Et` keeps the end row's ratio `Et/E0`, and the shape `k` and `μ` keep the end row's values.
+//! A column whose end values are not both positive, or that falls with pressure at that end
+//! (`m < 0`, not a contact stiffness), keeps its end value. So a node below the table is softer
+//! than the first row, not as stiff (at the low end of the reference table `kn ∝ p^0.62`: clamped
+//! to the first row, a node at 10 kPa would be 4.1× too stiff), and a zero pressure — an open
+//! contact — gives zero stiffness. The result is flagged ([`RangeFlag::Below`] /
+//! [`RangeFlag::Above`], `in_range = false`) so that the caller can count and report the nodes
+//! concerned: no BEM loop was computed there. A negative pressure reads as zero, NaN gives NaN.
+//! (Until 2026-11-28 the end row's values were used unchanged outside the range.)
 
 use crate::error::{Error, Result};
 use crate::output::write_atomic;
@@ -223,11 +232,11 @@ impl CalibrationRow {
 /// Where a queried pressure lies relative to the table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum RangeFlag {
-    /// Below the first row (or non-positive / NaN): values of the first row.
+    /// Below the first row (or non-positive / NaN): the first pair's power law.
     Below,
     /// Within `[p_first, p_last]`: interpolated.
     Within,
-    /// Above the last row: values of the last row.
+    /// Above the last row: the last pair's power law.
     Above,
 }
 
@@ -248,7 +257,8 @@ pub struct Interpolated {
     pub mu: f64,
     /// Valanis Et per unit area (N/m³).
     pub et_n_per_m3: f64,
-    /// True when the pressure lies within the table's range (values interpolated, not clamped).
+    /// True when the pressure lies within the table's range (values interpolated, not
+    /// extrapolated).
     pub in_range: bool,
     /// Which side of the table the pressure fell on.
     pub range: RangeFlag,
@@ -428,7 +438,7 @@ impl CalibrationTable {
     }
 
     /// Parameters at `pressure_pa`: monotone cubic (Fritsch–Carlson) in `ln p` within the range,
-    /// clamped to the end row and flagged outside it (see the module documentation).
+    /// the end pair's power law outside it, flagged (see the module documentation).
     pub fn interpolate(&self, pressure_pa: f64) -> Interpolated {
         let rows = &self.rows;
         assert!(
@@ -436,26 +446,18 @@ impl CalibrationTable {
             "interpolate on an empty calibration table"
         );
         let (p_lo, p_hi) = self.pressure_range();
-        let make = |r: &CalibrationRow, range: RangeFlag| Interpolated {
-            pressure_pa,
-            contact_area_ratio: r.contact_area_ratio,
-            kn_n_per_m3: r.kn_n_per_m3,
-            e0_n_per_m3: r.e0_n_per_m3,
-            k: r.k,
-            mu: r.mu,
-            et_n_per_m3: r.et_n_per_m3,
-            in_range: range == RangeFlag::Within,
-            range,
-        };
         if pressure_pa.is_nan() || pressure_pa < p_lo {
-            // Also NaN and non-positive pressures.
-            return make(&rows[0], RangeFlag::Below);
+            // Also non-positive pressures.
+            let pair = (&rows[0], rows.get(1));
+            return extrapolate(pair, pressure_pa, RangeFlag::Below);
         }
         if pressure_pa > p_hi {
-            return make(&rows[rows.len() - 1], RangeFlag::Above);
+            let n = rows.len();
+            let pair = (&rows[n - 1], n.checked_sub(2).map(|i| &rows[i]));
+            return extrapolate(pair, pressure_pa, RangeFlag::Above);
         }
         if rows.len() == 1 {
-            return make(&rows[0], RangeFlag::Within);
+            return extrapolate((&rows[0], None), pressure_pa, RangeFlag::Within);
         }
         let x: Vec<f64> = rows.iter().map(|r| r.pressure_pa.ln()).collect();
         let xq = pressure_pa.ln();
@@ -474,6 +476,61 @@ impl CalibrationTable {
             in_range: true,
             range: RangeFlag::Within,
         }
+    }
+}
+
+/// Power-law continuation `v(p) = v_end·(p/p_end)^m` of one column beyond the end row, `m` from
+/// the end pair `(p_end, v_end)`, `(p_next, v_next)`; the end value where the pair gives no
+/// stiffening power law (a value not positive, or `m < 0`). `p = 0` gives 0 for `m > 0`.
+pub fn power_law_beyond(end: (f64, f64), next: Option<(f64, f64)>, pressure_pa: f64) -> f64 {
+    let (p_end, v_end) = end;
+    match next {
+        Some((p_next, v_next)) if v_end > 0.0 && v_next > 0.0 => {
+            let m = (v_next / v_end).ln() / (p_next / p_end).ln();
+            if m >= 0.0 {
+                v_end * (pressure_pa.max(0.0) / p_end).powf(m)
+            } else {
+                v_end
+            }
+        }
+        _ => v_end,
+    }
+}
+
+/// The table's values at a pressure outside its range (or the only row's): power laws of the end
+/// pair `(end, next)` for `kn`, `E0` and the contact area ratio, `Et/E0`, `k` and `μ` of the end
+/// row (module documentation). NaN pressure gives NaN stiffnesses.
+fn extrapolate(
+    (end, next): (&CalibrationRow, Option<&CalibrationRow>),
+    pressure_pa: f64,
+    range: RangeFlag,
+) -> Interpolated {
+    let column = |f: fn(&CalibrationRow) -> f64| {
+        if pressure_pa.is_nan() {
+            return f64::NAN;
+        }
+        power_law_beyond(
+            (end.pressure_pa, f(end)),
+            next.map(|r| (r.pressure_pa, f(r))),
+            pressure_pa,
+        )
+    };
+    let e0 = column(|r| r.e0_n_per_m3);
+    let et_ratio = if end.e0_n_per_m3 > 0.0 {
+        end.et_n_per_m3 / end.e0_n_per_m3
+    } else {
+        0.0
+    };
+    Interpolated {
+        pressure_pa,
+        contact_area_ratio: column(|r| r.contact_area_ratio).min(1.0),
+        kn_n_per_m3: column(|r| r.kn_n_per_m3),
+        e0_n_per_m3: e0,
+        k: end.k,
+        mu: end.mu,
+        et_n_per_m3: et_ratio * e0,
+        in_range: range == RangeFlag::Within,
+        range,
     }
 }
 
@@ -584,18 +641,76 @@ mod tests {
         }
     }
 
+    /// A table drawn from power laws (`kn ∝ p^0.8`, `E0 ∝ p^0.9`, area ∝ p, the forms of
+    /// rough-contact stiffness and area at light load) is continued by those laws outside its
+    /// range, exactly; a zero pressure (open contact) has no stiffness.
     #[test]
-    fn outside_range_is_clamped_and_flagged() {
-        let t = table();
-        let lo = t.interpolate(1e3);
-        assert_eq!(lo.range, RangeFlag::Below);
-        assert!(!lo.in_range);
-        assert_eq!(lo.kn_n_per_m3, 1e12);
-        let hi = t.interpolate(1e9);
-        assert_eq!(hi.range, RangeFlag::Above);
-        assert_eq!(hi.e0_n_per_m3, 1e13);
-        assert_eq!(t.interpolate(0.0).range, RangeFlag::Below);
-        assert_eq!(t.interpolate(f64::NAN).range, RangeFlag::Below);
+    fn outside_range_the_end_pairs_power_law_is_followed_and_flagged() {
+        let law = |p: f64| CalibrationRow {
+            pressure_pa: p,
+            contact_area_ratio: 1e-9 * p,
+            kn_n_per_m3: 3e8 * p.powf(0.8),
+            e0_n_per_m3: 2e7 * p.powf(0.9),
+            k: 0.5 + 1e-8 * p,
+            mu: 0.6,
+            et_n_per_m3: 0.1 * 2e7 * p.powf(0.9),
+            fit_r2: 0.99,
+            energy_per_cycle_j_per_m2: 1e-3,
+        };
+        let t = CalibrationTable::new([1e5, 3e5, 1e6, 4e6, 1e7].map(law).to_vec()).unwrap();
+        let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+        for (p, flag) in [
+            (1e3, RangeFlag::Below),
+            (5e4, RangeFlag::Below),
+            (3e7, RangeFlag::Above),
+        ] {
+            let v = t.interpolate(p);
+            let truth = law(p);
+            assert_eq!(v.range, flag);
+            assert!(!v.in_range);
+            assert!(rel(v.kn_n_per_m3, truth.kn_n_per_m3) < 1e-12, "kn at {p}");
+            assert!(rel(v.e0_n_per_m3, truth.e0_n_per_m3) < 1e-12, "E0 at {p}");
+            assert!(rel(v.et_n_per_m3, truth.et_n_per_m3) < 1e-12, "Et at {p}");
+            assert!(rel(v.contact_area_ratio, truth.contact_area_ratio) < 1e-12);
+            // k and μ keep the end row's values.
+            let end = if flag == RangeFlag::Below {
+                &t.rows[0]
+            } else {
+                &t.rows[4]
+            };
+            assert_eq!((v.k, v.mu), (end.k, end.mu));
+        }
+        // Open contact: no stiffness, no area; a negative pressure reads as zero.
+        for p in [0.0, -1e3] {
+            let v = t.interpolate(p);
+            assert_eq!(v.range, RangeFlag::Below);
+            assert_eq!(
+                (v.kn_n_per_m3, v.e0_n_per_m3, v.et_n_per_m3),
+                (0.0, 0.0, 0.0)
+            );
+            assert_eq!(v.contact_area_ratio, 0.0);
+        }
+        let nan = t.interpolate(f64::NAN);
+        assert_eq!(nan.range, RangeFlag::Below);
+        assert!(nan.kn_n_per_m3.is_nan());
+        // The contact area ratio is a fraction: at most 1 however far above.
+        assert_eq!(t.interpolate(1e13).contact_area_ratio, 1.0);
+    }
+
+    /// A column that falls with pressure at an end (not a contact stiffness) or a one-row table
+    /// gives no power law: the end value is kept.
+    #[test]
+    fn without_a_stiffening_end_pair_the_end_value_is_kept() {
+        let t = table(); // E0: 5e12 at 2 MPa, 1e13 at 10 MPa; k falls 0.5 → 0.4 → 0.45
+        let mut rows = t.rows.clone();
+        rows[0].kn_n_per_m3 = 6e12; // kn falls from the first to the second row
+        let falling = CalibrationTable::new(rows).unwrap();
+        assert_eq!(falling.interpolate(1e3).kn_n_per_m3, 6e12);
+        let one = CalibrationTable::new(vec![t.rows[1]]).unwrap();
+        for p in [1e3, 1e6, 1e9] {
+            assert_eq!(one.interpolate(p).kn_n_per_m3, 5e12);
+        }
+        assert_eq!(one.interpolate(1e6).range, RangeFlag::Within);
     }
 
     #[test]

@@ -68,9 +68,9 @@ fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String
         let (lo, hi) = table.pressure_range();
         eprintln!(
             "warning: {p:.4e} Pa is outside the table's range [{lo:.4e}, {hi:.4e}] Pa; \
-             the end row is used"
+             the stiffnesses follow the end rows' power law, k and mu the end row"
         );
-        source += " (outside the table's range: end row used)";
+        source += " (outside the table's range: end rows' power law)";
     }
     Ok((
         BaselineSource::Given(Baseline {

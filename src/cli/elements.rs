@@ -73,7 +73,14 @@ pub fn run(args: ElementsArgs) -> Result<()> {
     let sidecar_staged = out.file(&sidecar, "the JSON sidecar of --out")?;
     let pre = read_preloads_csv(&args.preload)?;
     let table = CalibrationTable::read_csv(&args.table)?;
-    let (rows, summary) = join(&pre, &table)?;
+    let (rows, summary) = join(&pre, &table).map_err(|e| match e {
+        Error::Data(m) => Error::Data(format!(
+            "{} with {}: {m}",
+            args.preload.display(),
+            args.table.display()
+        )),
+        other => other,
+    })?;
     let inputs = vec![
         InputFile::new("preload", &args.preload)?,
         InputFile::new("calibration_table", &args.table)?,
@@ -102,8 +109,14 @@ pub fn run(args: ElementsArgs) -> Result<()> {
     );
     if summary.n_below_range + summary.n_above_range > 0 {
         println!(
-            "WARNING: {} elements below and {} above the calibration table's pressure range (end-row values used, flagged in out_of_range)",
+            "WARNING: {} elements below and {} above the calibration table's pressure range (values continued by the end rows' power law, flagged in out_of_range)",
             summary.n_below_range, summary.n_above_range
+        );
+    }
+    if summary.n_open > 0 {
+        println!(
+            "WARNING: {} nodes of zero pressure (open contact, {:.4e} m²) left out of the table (open_ids in the JSON sidecar)",
+            summary.n_open, summary.open_area_m2
         );
     }
     Ok(())
