@@ -17,7 +17,8 @@
 #
 # The same library code runs, composed here in Python: python/tests/test_example.py checks that
 # the table equals `asperity calibrate --grid 128` value for value. The CLI also runs the grid
-# and patch-size convergence checks, which do not enter the table. Units: SI.
+# and patch-size convergence checks, which add only the table's last column (`convergence`, the
+# verdict per row); this script does not run them. Units: SI.
 
 # %%
 import argparse

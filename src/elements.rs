@@ -10,6 +10,10 @@
 //! a node at a tenth of the first row's pressure about four times too stiff), are flagged in the
 //! `out_of_range` column (−1 below, +1 above, 0 within) and counted in the summary.
 //!
+//! A table written by `asperity calibrate` carries each row's convergence verdict; the elements
+//! whose values come from rows judged not converged (grid or patch size) or undetermined are
+//! listed in the summary (`not_converged_row_ids`, `undetermined_row_ids`) and counted on stdout.
+//!
 //! Not tabulated, or refused:
 //! - a node of **zero pressure** (a polynomial fit clamped at zero near a patch edge, or a node
 //!   off the contact) is an open contact: no preload, and the power law gives it no stiffness.
@@ -23,6 +27,7 @@
 //!   law falls towards the open contact's zero, the direction of the physics, and is kept
 //!   however far.
 
+use crate::calibrate::convergence::Verdict;
 use crate::calibrate::table::{CalibrationTable, RangeFlag};
 use crate::error::{Error, Result};
 use crate::film::nodes::Preload;
@@ -63,6 +68,11 @@ pub struct ElementSummary {
     /// Ids of the out-of-range elements (below, then above).
     pub below_range_ids: Vec<u64>,
     pub above_range_ids: Vec<u64>,
+    /// Elements whose values come from table rows the calibration judged not converged in grid
+    /// or patch size, and from rows it could not judge (undetermined); empty for a table
+    /// without verdicts ([`CalibrationTable::convergence_at`]).
+    pub not_converged_row_ids: Vec<u64>,
+    pub undetermined_row_ids: Vec<u64>,
     pub total_area_m2: f64,
     pub total_load_n: f64,
     /// Pressure range of the calibration table (Pa).
@@ -134,6 +144,16 @@ pub fn join(
             rows.len()
         )));
     }
+    let on_rows = |verdict: Verdict| -> Vec<u64> {
+        rows.iter()
+            .filter(|r| table.convergence_at(r.pressure_pa) == Some(verdict))
+            .map(|r| r.id)
+            .collect()
+    };
+    let (not_converged_row_ids, undetermined_row_ids) = (
+        on_rows(Verdict::NotConverged),
+        on_rows(Verdict::Undetermined),
+    );
     if let Some(p) = rows
         .iter()
         .find(|p| p.pressure_pa > MAX_ABOVE_TABLE_FACTOR * tmax)
@@ -152,6 +172,8 @@ pub fn join(
         n_above_range: above.len(),
         below_range_ids: below,
         above_range_ids: above,
+        not_converged_row_ids,
+        undetermined_row_ids,
         total_area_m2: rows.iter().map(|r| r.area_m2).sum(),
         total_load_n: rows.iter().map(|r| r.n0_n).sum(),
         table_pressure_min_pa: tmin,
@@ -285,6 +307,26 @@ mod tests {
             pressure_pa: p,
             n0_n: p * a,
         }
+    }
+
+    /// Elements resting on rows the calibration did not trust are listed (rows at 1, 2, 4 MPa).
+    #[test]
+    fn elements_on_unconverged_rows_are_listed() {
+        use Verdict::*;
+        let t = table()
+            .with_convergence(vec![Converged, Converged, NotConverged])
+            .unwrap();
+        let nodes = [
+            node(1, 1.5e6, 1e-6),
+            node(2, 2e6, 1e-6),
+            node(3, 3e6, 1e-6),
+            node(4, 8e6, 1e-6),
+        ];
+        let (_, s) = join(&nodes, &t).unwrap();
+        assert_eq!(s.not_converged_row_ids, vec![3, 4]);
+        assert!(s.undetermined_row_ids.is_empty());
+        let (_, s) = join(&nodes, &table()).unwrap();
+        assert!(s.not_converged_row_ids.is_empty());
     }
 
     #[test]

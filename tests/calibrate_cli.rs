@@ -149,13 +149,45 @@ fn reference_chain_on_a_coarse_grid_writes_table_plots_and_sidecar() {
     assert_eq!(hashes.len(), 3);
     assert!(hashes.iter().all(|h| h.as_str().unwrap().len() == 64));
     assert_ne!(hashes[0], hashes[1]);
-    assert_eq!(
-        sidecar["convergence"]["pressures"]
-            .as_array()
+    let pressures = sidecar["convergence"]["pressures"].as_array().unwrap();
+    assert_eq!(pressures.len(), 6);
+    // The table's last column carries each row's worse verdict of the report's two checks.
+    let verdicts = table.convergence.as_ref().expect("a convergence column");
+    let rank = |v: &str| {
+        ["converged", "not-checked", "undetermined", "not-converged"]
+            .iter()
+            .position(|&n| n == v)
             .unwrap()
-            .len(),
-        6
-    );
+    };
+    for (pc, v) in pressures.iter().zip(verdicts) {
+        let (g, p) = (
+            pc["grid_verdict"].as_str().unwrap(),
+            pc["patch_verdict"].as_str().unwrap(),
+        );
+        assert_eq!(v.name(), if rank(g) >= rank(p) { g } else { p }, "{pc}");
+    }
+    // A pressure whose element misses the BEM energy per cycle by more than a fifth at some
+    // amplitude (energy_vs_amplitude.csv) is warned about, and only such a pressure.
+    let energy = std::fs::read_to_string(out.join("energy_vs_amplitude.csv")).unwrap();
+    let warnings: Vec<&str> = sidecar["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    for p in [0.1, 0.2, 1.0, 2.0, 5.0, 10.0] {
+        let worst = energy
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|f| f[0].parse::<f64>().unwrap() == p * 1e6)
+            .map(|f| f[7].parse::<f64>().unwrap().abs())
+            .fold(0.0, f64::max);
+        let warned = warnings
+            .iter()
+            .any(|w| w.starts_with(&format!("{p} MPa: the fitted element's energy")));
+        assert_eq!(warned, worst > 0.2, "{p} MPa: worst energy error {worst}");
+    }
 }
 
 /// Issue 14: a coarse grid (contact spots 1–3 points across) is flagged, with the pressure.

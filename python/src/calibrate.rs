@@ -77,6 +77,11 @@ impl CalibrationTable {
                 d.set_item(*name, PyArray1::from_vec(py, iv.iter().map(f).collect()))?;
             }
         }
+        // A table written by `asperity calibrate`: each row's convergence verdict (strings).
+        if let Some(c) = &self.inner.convergence {
+            let names: Vec<&str> = c.iter().map(|v| v.name()).collect();
+            d.set_item(table::CONVERGENCE_COLUMN, names)?;
+        }
         Ok(d)
     }
 

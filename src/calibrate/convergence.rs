@@ -72,6 +72,29 @@ impl Verdict {
             .unwrap_or(Verdict::NotChecked)
     }
 
+    /// The name in files (`converged`, `undetermined`, `not-converged`, `not-checked`: the
+    /// serialised form).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Verdict::Converged => "converged",
+            Verdict::Undetermined => "undetermined",
+            Verdict::NotConverged => "not-converged",
+            Verdict::NotChecked => "not-checked",
+        }
+    }
+
+    /// The verdict of a [`Verdict::name`].
+    pub fn parse(name: &str) -> Option<Self> {
+        [
+            Verdict::Converged,
+            Verdict::Undetermined,
+            Verdict::NotConverged,
+            Verdict::NotChecked,
+        ]
+        .into_iter()
+        .find(|v| v.name() == name)
+    }
+
     /// Short text for tables and messages.
     pub fn as_str(&self) -> &'static str {
         match self {

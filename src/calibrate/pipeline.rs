@@ -749,10 +749,15 @@ pub fn assemble(
             patch_check.push(p);
         }
     }
-    let table = table_of(config, &main)?;
     let pressures: Vec<PressureConvergence> = (0..config.loading.pressures_pa.len())
         .map(|i| convergence_at(config, i, &main, &grid_check, &patch_check))
         .collect();
+    let table = table_of(config, &main)?.with_convergence(
+        pressures
+            .iter()
+            .map(|pc| Verdict::worst([pc.grid_verdict, pc.patch_verdict]))
+            .collect(),
+    )?;
     let surface_description = match source {
         SurfaceSource::Given { description, .. } => description.clone(),
         SurfaceSource::Generated => {
@@ -910,6 +915,36 @@ fn convergence_at(
     }
 }
 
+/// Relative difference between the fitted element's and the BEM loops' energy per cycle (means
+/// over the realisations) beyond which a pressure gets a warning: the dissipation, which sets a
+/// friction damper's damping, is then off by more than a fifth at that amplitude.
+pub const ENERGY_WARNING_REL: f64 = 0.2;
+
+/// Largest `|mean element energy / mean BEM energy − 1|` over the amplitudes at pressure `i`,
+/// with its amplitude factor (the `mean_rel_error` of `energy_vs_amplitude.csv`).
+fn worst_energy_error(config: &CalibrationConfig, main: &[Realisation], i: usize) -> (f64, f64) {
+    let mean = |f: &dyn Fn(&PressureCalibration) -> f64| {
+        main.iter().map(|r| f(&r.pressures[i])).sum::<f64>() / main.len() as f64
+    };
+    config
+        .loading
+        .amplitude_factors
+        .iter()
+        .enumerate()
+        .map(|(j, &f)| {
+            let bem = mean(&|pc| pc.amplitudes.loops[j].loop_area_j_per_m2);
+            let element = mean(&|pc| pc.fit.loops[j].energy_model);
+            (element / bem - 1.0, f)
+        })
+        .fold((0.0, f64::NAN), |worst, e| {
+            if e.0.abs() > worst.0.abs() {
+                e
+            } else {
+                worst
+            }
+        })
+}
+
 fn warnings_of(
     config: &CalibrationConfig,
     main: &[Realisation],
@@ -947,11 +982,23 @@ fn warnings_of(
                 pc.contact_spots.mean
             ));
         }
+        let (energy_error, factor) = worst_energy_error(config, main, i);
+        if energy_error.abs() > ENERGY_WARNING_REL || energy_error.is_nan() {
+            w.push(format!(
+                "{p}: the fitted element's energy per cycle differs from the BEM loops' by {:+.0} % at {factor} × the gross-slip displacement (ratio of the means over the realisations: mean_rel_error of energy_vs_amplitude.csv): one element does not carry the dissipation at every amplitude",
+                100.0 * energy_error
+            ));
+        }
+        let why_undetermined = if main.len() < 2 {
+            "one realisation gives no interval of the change"
+        } else {
+            "the 95 % interval of the change straddles the tolerance"
+        };
         for (what, v) in [("grid", pc.grid_verdict), ("patch size", pc.patch_verdict)] {
             match v {
                 Verdict::NotConverged => w.push(format!("{p}: NOT converged in {what}")),
                 Verdict::Undetermined => w.push(format!(
-                    "{p}: convergence in {what} undetermined (the 95 % interval of the change straddles the tolerance; more realisations would tell)"
+                    "{p}: convergence in {what} undetermined ({why_undetermined}; more realisations would tell)"
                 )),
                 Verdict::NotChecked | Verdict::Converged => {}
             }

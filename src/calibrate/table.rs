@@ -2,7 +2,7 @@
 //!
 //! # File format
 //!
-//! A CSV file with exactly these columns, in this order (units in the names, SI):
+//! A CSV file with these columns, in this order (units in the names, SI):
 //!
 //! ```text
 //! pressure_Pa,contact_area_ratio,kn_N_per_m3,E0_N_per_m3,k,mu,Et_N_per_m3,fit_R2,energy_per_cycle_J_per_m2
@@ -24,7 +24,13 @@
 //! ...,energy_per_cycle_J_per_m2,realisations,contact_area_ratio_ci95,kn_ci95_N_per_m3,E0_ci95_N_per_m3,k_ci95,Et_ci95_N_per_m3,energy_per_cycle_ci95_J_per_m2
 //! ```
 //!
-//! [`CalibrationTable::read_csv`] reads both forms; interpolation uses the means.
+//! A table written by `asperity calibrate` ends with one more column, `convergence`: the worse
+//! of the row's grid and patch-size verdicts ([`crate::calibrate::convergence`]: `converged`,
+//! `undetermined`, `not-converged`, `not-checked`), so that a row the calibration itself did not
+//! trust is known wherever the table goes (`asperity elements` counts the elements resting on
+//! such rows).
+//!
+//! [`CalibrationTable::read_csv`] reads every form; interpolation uses the means.
 //!
 //! # Interpolation
 //!
@@ -48,6 +54,7 @@
 //! concerned: no BEM loop was computed there. A negative pressure reads as zero, NaN gives NaN.
 //! (Until 2026-11-28 the end row's values were used unchanged outside the range.)
 
+use crate::calibrate::convergence::Verdict;
 use crate::error::{Error, Result};
 use crate::output::write_atomic;
 use std::path::Path;
@@ -75,6 +82,9 @@ pub const INTERVAL_COLUMNS: [&str; 7] = [
     "Et_ci95_N_per_m3",
     "energy_per_cycle_ci95_J_per_m2",
 ];
+
+/// The last column of a table written by `asperity calibrate`: the row's convergence verdict.
+pub const CONVERGENCE_COLUMN: &str = "convergence";
 
 /// Realisation count and 95 % interval half-widths of one row's means (same units as the row).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -272,6 +282,9 @@ pub struct CalibrationTable {
     /// Per row: realisation count and 95 % intervals of the means (tables over several
     /// realisations), or `None`.
     pub intervals: Option<Vec<RowInterval>>,
+    /// Per row: the worse of its grid and patch-size convergence verdicts, or `None` (a table
+    /// written without them).
+    pub convergence: Option<Vec<Verdict>>,
 }
 
 impl CalibrationTable {
@@ -280,9 +293,37 @@ impl CalibrationTable {
         let table = Self {
             rows,
             intervals: None,
+            convergence: None,
         };
         table.validate()?;
         Ok(table)
+    }
+
+    /// The table with a convergence verdict per row.
+    pub fn with_convergence(mut self, verdicts: Vec<Verdict>) -> Result<Self> {
+        if verdicts.len() != self.rows.len() {
+            return Err(Error::param(
+                "convergence",
+                format!("{} verdicts for {} rows", verdicts.len(), self.rows.len()),
+            ));
+        }
+        self.convergence = Some(verdicts);
+        Ok(self)
+    }
+
+    /// The worst convergence verdict of the rows a value at `pressure_pa` is taken from: the row
+    /// itself at a tabulated pressure, the two neighbours between rows, the end pair outside
+    /// (its power law). `None` for a table without verdicts.
+    pub fn convergence_at(&self, pressure_pa: f64) -> Option<Verdict> {
+        let verdicts = self.convergence.as_ref()?;
+        let n = self.rows.len();
+        let used = match self.rows.iter().position(|r| r.pressure_pa >= pressure_pa) {
+            Some(i) if self.rows[i].pressure_pa == pressure_pa => i..i + 1,
+            Some(0) => 0..n.min(2),
+            Some(i) => i - 1..i + 1,
+            None => n.saturating_sub(2)..n,
+        };
+        Some(Verdict::worst(verdicts[used].iter().copied()))
     }
 
     /// Build from rows of means and their intervals (one per row).
@@ -300,6 +341,7 @@ impl CalibrationTable {
         let table = Self {
             rows,
             intervals: Some(intervals),
+            convergence: None,
         };
         table.validate()?;
         Ok(table)
@@ -333,14 +375,16 @@ impl CalibrationTable {
             .map_err(|e| Error::parse(path, 1, format!("cannot read header: {e}")))?
             .clone();
         let got: Vec<&str> = headers.iter().collect();
+        let with_convergence = got.last() == Some(&CONVERGENCE_COLUMN);
+        let numeric = &got[..got.len() - usize::from(with_convergence)];
         let long: Vec<&str> = COLUMNS.iter().chain(&INTERVAL_COLUMNS).copied().collect();
-        let with_intervals = got == long;
-        if got != COLUMNS && !with_intervals {
+        let with_intervals = numeric == long;
+        if numeric != COLUMNS && !with_intervals {
             return Err(Error::parse(
                 path,
                 1,
                 format!(
-                    "header must be `{}` (optionally followed by `,{}`), got `{}`",
+                    "header must be `{}` (optionally followed by `,{}`, then optionally by `,{CONVERGENCE_COLUMN}`), got `{}`",
                     COLUMNS.join(","),
                     INTERVAL_COLUMNS.join(","),
                     got.join(",")
@@ -348,6 +392,7 @@ impl CalibrationTable {
             ));
         }
         let width = got.len();
+        let mut convergence: Vec<Verdict> = Vec::new();
         let mut rows: Vec<CalibrationRow> = Vec::new();
         let mut intervals: Vec<RowInterval> = Vec::new();
         for rec in rdr.records() {
@@ -362,8 +407,18 @@ impl CalibrationTable {
                     format!("expected {width} fields, found {}", rec.len()),
                 ));
             }
+            if with_convergence {
+                let field = &rec[width - 1];
+                convergence.push(Verdict::parse(field).ok_or_else(|| {
+                    Error::parse(
+                        path,
+                        line,
+                        format!("column `{CONVERGENCE_COLUMN}`: `{field}` is not one of converged, undetermined, not-converged, not-checked"),
+                    )
+                })?);
+            }
             let mut all = Vec::with_capacity(width);
-            for (j, field) in rec.iter().enumerate() {
+            for (j, field) in rec.iter().take(numeric.len()).enumerate() {
                 all.push(field.parse::<f64>().map_err(|_| {
                     Error::parse(
                         path,
@@ -402,6 +457,7 @@ impl CalibrationTable {
         Ok(Self {
             rows,
             intervals: with_intervals.then_some(intervals),
+            convergence: with_convergence.then_some(convergence),
         })
     }
 
@@ -411,16 +467,21 @@ impl CalibrationTable {
         write_atomic(path, |w| {
             let mut wtr = csv::Writer::from_writer(w);
             let io = |e: csv::Error| Error::Data(format!("{}: {e}", path.display()));
-            match &self.intervals {
-                None => wtr.write_record(COLUMNS).map_err(io)?,
-                Some(_) => wtr
-                    .write_record(COLUMNS.iter().chain(&INTERVAL_COLUMNS))
-                    .map_err(io)?,
+            let mut header: Vec<&str> = COLUMNS.to_vec();
+            if self.intervals.is_some() {
+                header.extend(INTERVAL_COLUMNS);
             }
+            if self.convergence.is_some() {
+                header.push(CONVERGENCE_COLUMN);
+            }
+            wtr.write_record(&header).map_err(io)?;
             for (i, r) in self.rows.iter().enumerate() {
                 let mut fields: Vec<String> = r.values().iter().map(|v| format!("{v}")).collect();
                 if let Some(iv) = &self.intervals {
                     fields.extend(iv[i].values().iter().map(|v| format!("{v}")));
+                }
+                if let Some(c) = &self.convergence {
+                    fields.push(c[i].name().to_string());
                 }
                 wtr.write_record(fields).map_err(io)?;
             }
@@ -711,6 +772,37 @@ mod tests {
             assert_eq!(one.interpolate(p).kn_n_per_m3, 5e12);
         }
         assert_eq!(one.interpolate(1e6).range, RangeFlag::Within);
+    }
+
+    #[test]
+    fn convergence_verdicts_round_trip_and_follow_the_rows_used() {
+        use Verdict::*;
+        let t = table()
+            .with_convergence(vec![Converged, NotConverged, Undetermined, Converged])
+            .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        t.write_csv(&p).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.lines().next().unwrap().ends_with(",convergence"));
+        assert!(text.lines().nth(2).unwrap().ends_with(",not-converged"));
+        assert_eq!(CalibrationTable::read_csv(&p).unwrap(), t);
+        // Rows at 0.1, 1, 2 and 10 MPa.
+        assert_eq!(t.convergence_at(1e5), Some(Converged)); // on a row: that row
+        assert_eq!(t.convergence_at(5e5), Some(NotConverged)); // between: the worse neighbour
+        assert_eq!(t.convergence_at(5e6), Some(Undetermined));
+        assert_eq!(t.convergence_at(1e7), Some(Converged));
+        assert_eq!(t.convergence_at(1e3), Some(NotConverged)); // below: the first pair
+        assert_eq!(t.convergence_at(3e7), Some(Undetermined)); // above: the last pair
+        assert_eq!(table().convergence_at(1e6), None);
+        assert!(table().with_convergence(vec![Converged]).is_err());
+        // An unknown verdict names the file, the line and the column.
+        std::fs::write(&p, text.replace(",not-converged", ",maybe")).unwrap();
+        let err = CalibrationTable::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            err.contains("t.csv:3") && err.contains("convergence"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -113,6 +113,24 @@ pub fn run(args: ElementsArgs) -> Result<()> {
             summary.n_below_range, summary.n_above_range
         );
     }
+    for (ids, what) in [
+        (
+            &summary.not_converged_row_ids,
+            "NOT converged in grid or patch size",
+        ),
+        (
+            &summary.undetermined_row_ids,
+            "of undetermined convergence (more realisations would tell)",
+        ),
+    ] {
+        if !ids.is_empty() {
+            println!(
+                "WARNING: {} of {} elements take their values from calibration-table rows {what} (ids in the JSON sidecar; the verdicts per pressure are in the calibration's report)",
+                ids.len(),
+                summary.n_elements
+            );
+        }
+    }
     if summary.n_open > 0 {
         println!(
             "WARNING: {} nodes of zero pressure (open contact, {:.4e} m²) left out of the table (open_ids in the JSON sidecar)",
