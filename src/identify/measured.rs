@@ -30,8 +30,9 @@
 //! # Errors
 //!
 //! Missing columns, non-numeric or non-finite values, a missing or non-positive force or
-//! response, duplicate or non-monotonic frequencies, and phases outside `[−2π, 2π]` in a column
-//! declared in radians (values in degrees) are errors naming the file and the line.
+//! response, duplicate or non-monotonic frequencies, and a column declared in radians whose
+//! values are degrees (a value beyond ±4π, or a span beyond 3π: radians unwrapped beyond ±2π are
+//! accepted, see [`MAX_RADIAN_PHASE_SPAN`]) are errors naming the file and the line.
 
 use crate::error::{Error, Result};
 use crate::input::{csv_reader, csv_record};
@@ -293,22 +294,7 @@ impl Sweep {
                     ),
                 ));
             }
-            let phase_rad = if degrees {
-                phase.to_radians()
-            } else {
-                if phase.abs() > TAU * (1.0 + 1e-9) {
-                    return Err(Error::parse(
-                        path,
-                        line,
-                        format!(
-                            "phase {phase} is outside [−2π, 2π] in a column declared in radians \
-                             (phase_rad): the values look like degrees; convert them or name the \
-                             column phase_deg"
-                        ),
-                    ));
-                }
-                phase
-            };
+            let phase_rad = if degrees { phase.to_radians() } else { phase };
             rows.push(Row {
                 line,
                 frequency_hz,
@@ -328,6 +314,9 @@ impl Sweep {
             ));
         }
         check_monotonic(path, &rows)?;
+        if !degrees {
+            check_radians(path, &rows)?;
+        }
         Ok(Self {
             path: path.to_path_buf(),
             sha256,
@@ -368,6 +357,68 @@ impl Sweep {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| self.path.display().to_string())
     }
+}
+
+/// Largest span (max − min) of a phase column in radians: more than this, the values are degrees.
+///
+/// The phase of one resonance sweep turns by about π (a single mode; two modes in the band, 2π);
+/// wrapped into any interval of width 2π the values span at most 2π, unwrapped they span the
+/// turn itself, whatever multiple of 2π the unwrapping started from. 3π leaves a π margin for
+/// noise and an extra mode. The same sweep in degrees spans tens to hundreds (the half-power
+/// band alone turns 90°), so a span beyond 3π (9.4) is degrees; a sweep whose degrees span less
+/// than 9.4° does not pass through a resonance and is refused later by the convention check.
+pub const MAX_RADIAN_PHASE_SPAN: f64 = 3.0 * PI;
+
+/// Largest magnitude of a phase in radians: unwrapped phases start within one turn of zero and a
+/// sweep adds at most [`MAX_RADIAN_PHASE_SPAN`], so values beyond 4π are degrees (this catches a
+/// column in degrees that spans little, e.g. −178…−170).
+pub const MAX_RADIAN_PHASE: f64 = 4.0 * PI;
+
+/// A `phase_rad` column holds radians, possibly unwrapped beyond ±2π: refused as degrees when a
+/// value exceeds [`MAX_RADIAN_PHASE`] (naming its line) or the column spans more than
+/// [`MAX_RADIAN_PHASE_SPAN`] (naming the line farthest from the column's median).
+fn check_radians(path: &Path, rows: &[Row]) -> Result<()> {
+    let hint = "in a column declared in radians (phase_rad): the values look like degrees; \
+                convert them or name the column phase_deg";
+    if let Some(r) = rows.iter().find(|r| r.phase_rad.abs() > MAX_RADIAN_PHASE) {
+        return Err(Error::parse(
+            path,
+            r.line,
+            format!("phase {} is outside [−4π, 4π] {hint}", r.phase_rad),
+        ));
+    }
+    let lo = rows
+        .iter()
+        .map(|r| r.phase_rad)
+        .fold(f64::INFINITY, f64::min);
+    let hi = rows
+        .iter()
+        .map(|r| r.phase_rad)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if hi - lo > MAX_RADIAN_PHASE_SPAN {
+        let mut sorted: Vec<f64> = rows.iter().map(|r| r.phase_rad).collect();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        let r = rows
+            .iter()
+            .max_by(|a, b| {
+                (a.phase_rad - median)
+                    .abs()
+                    .total_cmp(&(b.phase_rad - median).abs())
+            })
+            .expect("rows");
+        return Err(Error::parse(
+            path,
+            r.line,
+            format!(
+                "phase {} (the column's median is {median}): the column spans {:.2} rad, more \
+                 than the 3π of any resonance sweep, {hint}",
+                r.phase_rad,
+                hi - lo
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Frequencies strictly increasing or strictly decreasing over the whole file.
@@ -515,6 +566,34 @@ impl PhaseConvention {
             }
         )
     }
+}
+
+/// CSV text of a synthetic single-mode sweep (80 Hz, ζ = 1 %, unit force, 21 rows from `f0` Hz
+/// in steps of 0.4 Hz) of the quantity `data`, written under the column of `column` in the
+/// convention `conv`, phases in degrees if `degrees`.
+#[cfg(test)]
+pub(crate) fn synthetic_sweep_csv(
+    data: Quantity,
+    column: Quantity,
+    conv: PhaseConvention,
+    f0: f64,
+    degrees: bool,
+) -> String {
+    let (wn, z) = (TAU * 80.0, 0.01);
+    let mut text = format!(
+        "frequency_Hz,force_amplitude_N,{},{}\n",
+        column.column(),
+        if degrees { "phase_deg" } else { "phase_rad" }
+    );
+    for i in 0..21 {
+        let f = f0 + 0.4 * i as f64;
+        let w = TAU * f;
+        let h = data.from_displacement(w) / Complex64::new(wn * wn - w * w, 2.0 * z * wn * w);
+        let ph = conv.to_file_phase(h);
+        let ph = if degrees { ph.to_degrees() } else { ph };
+        text += &format!("{f},1,{},{ph}\n", h.norm());
+    }
+    text
 }
 
 #[cfg(test)]
@@ -684,5 +763,80 @@ mod tests {
                 }
             }
         }
+    }
+
+    fn sweep(dir: &Path, name: &str, text: &str) -> Sweep {
+        Sweep::read_csv(&write(dir, name, text)).unwrap()
+    }
+
+    /// Radians unwrapped beyond ±2π are radians; degrees are refused however they wrap.
+    #[test]
+    fn unwrapped_radians_are_accepted_and_degrees_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let a = Quantity::Acceleration;
+        let text = synthetic_sweep_csv(a, a, PhaseConvention::MODEL, 76.0, false);
+        let shift = |text: &str, by: f64, scale: f64| -> String {
+            let mut out = String::new();
+            for (k, l) in text.lines().enumerate() {
+                if k == 0 {
+                    out += l;
+                } else {
+                    let (head, ph) = l.rsplit_once(',').unwrap();
+                    let ph: f64 = ph.parse().unwrap();
+                    out += &format!("{head},{}", (ph + by) * scale);
+                }
+                out += "\n";
+            }
+            out
+        };
+        for by in [-TAU, TAU, -2.0 * TAU + 0.5] {
+            let s = sweep(d.path(), "u.csv", &shift(&text, by, 1.0));
+            assert_eq!(
+                PhaseConvention::detect(std::slice::from_ref(&s)).unwrap(),
+                PhaseConvention::MODEL,
+                "{by}"
+            );
+        }
+        // Degrees: all of them (the first value beyond 4π named), and degrees that span little
+        // far from zero (−178…−170).
+        let p = write(d.path(), "deg.csv", &shift(&text, 0.0, 180.0 / PI));
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("deg.csv:") && e.contains("look like degrees"),
+            "{e}"
+        );
+        let p = write(
+            d.path(),
+            "far.csv",
+            &rows(&[
+                "10,1,1,-178",
+                "11,1,2,-176",
+                "12,1,5,-174",
+                "13,1,2,-172",
+                "14,1,1,-170",
+            ]),
+        );
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("far.csv:3:") && e.contains("look like degrees"),
+            "{e}"
+        );
+        // A span of more than 3π without any value beyond 4π: the line farthest from the median.
+        let p = write(
+            d.path(),
+            "span.csv",
+            &rows(&[
+                "10,1,1,-1",
+                "11,1,2,-1.5",
+                "12,1,5,-2",
+                "13,1,2,9",
+                "14,1,1,-2.5",
+            ]),
+        );
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("span.csv:6:") && e.contains("spans 11.50 rad"),
+            "{e}"
+        );
     }
 }
