@@ -657,7 +657,7 @@ pub fn identify(
     let mut sweeps = sweeps;
     sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
     let fit_levels = choose_fit_levels(&sweeps, opts.fit_levels.as_deref())?;
-    let convention = PhaseConvention::detect(&sweeps)?;
+    let convention = PhaseConvention::detect_common(&sweeps)?;
     let frfs: Vec<Vec<Complex64>> = sweeps.iter().map(|s| s.frf(&convention)).collect();
     let data_backbone = backbone::from_data(&sweeps, &frfs)?;
     let scales = scales_from(&sweeps, &fit_levels, &data_backbone);

@@ -834,7 +834,7 @@ pub fn identify_reduced(
     let opts = &options.fit;
     let response_amplitudes = options.response_amplitudes.as_deref();
     let t0 = std::time::Instant::now();
-    let convention = PhaseConvention::detect(&sweeps)?;
+    let convention = PhaseConvention::detect_common(&sweeps)?;
     let levels: Vec<LevelData> = sweeps
         .iter()
         .map(|s| LevelData::new(s, &convention))
