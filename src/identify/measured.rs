@@ -234,13 +234,6 @@ impl Sweep {
         let mut rows: Vec<Row> = Vec::new();
         for rec in rdr.records() {
             let (rec, line) = csv_record(path, rec)?;
-            if rec.len() < header.len() {
-                return Err(Error::parse(
-                    path,
-                    line,
-                    format!("expected {} fields, found {}", header.len(), rec.len()),
-                ));
-            }
             let frequency_hz = field(path, &rec, line, c_f, "frequency_Hz")?;
             let force_n = field(path, &rec, line, c_force, "force_amplitude_N")?;
             let response = field(path, &rec, line, c_resp, quantity.column())?;
@@ -856,6 +849,17 @@ mod tests {
                 "not finite",
             ),
             (&["10,1,1,0", "11,1,1,0"], "b.csv", "at least 5"),
+            (
+                // A decimal comma: 7,6 read as two fields.
+                &["10,1,1,0", "11,1,1,0", "12,1,7,6,0", "13,1,1,0", "14,1,1,0"],
+                ":5:",
+                "expected 4 fields, found 5 (decimal comma?)",
+            ),
+            (
+                &["10,1,1,0", "11,1,1", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
+                ":4:",
+                "expected 4 fields, found 3",
+            ),
             (
                 // 1e9 m/s² at 11 Hz: a vibration of 2e5 m.
                 &["10,1,1,0", "11,1,1e9,0", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
