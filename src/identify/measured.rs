@@ -557,6 +557,7 @@ pub fn check_agree(
 /// How the phases of a file map onto the crate's convention (`e^{iωt}`, model sign):
 /// `phase_model = time_sign·phase_file + (π if inverted)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PhaseConvention {
     /// +1: the file uses `e^{iωt}` (phase falls through a resonance); −1: `e^{−iωt}`.
     pub time_sign: f64,
@@ -570,6 +571,19 @@ impl PhaseConvention {
         time_sign: 1.0,
         inverted: false,
     };
+
+    /// A convention read from a file is one of the four: `time_sign` ±1 (the error names the
+    /// field).
+    pub fn check(&self) -> std::result::Result<(), String> {
+        if self.time_sign == 1.0 || self.time_sign == -1.0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "time_sign = {}: must be 1 (e^{{iωt}}) or -1 (e^{{−iωt}})",
+                self.time_sign
+            ))
+        }
+    }
 
     /// Complex response per unit force from an amplitude ratio and the file's phase.
     pub fn to_model(&self, ratio: f64, phase_file: f64) -> Complex64 {
