@@ -685,7 +685,7 @@ impl PhaseConvention {
         let time_sign = if turn < 0.0 { 1.0 } else { -1.0 };
         let d = wrap(peak_phase_offset(sweep, time_sign));
         Err(Error::Data(format!(
-            "{at} where its phase is {d:+.2} rad from the resonance phase of {q} ({r:+.2} rad for \
+            "{at} where its phase is {d:+.2} rad from the resonance phase of a {q} ({r:+.2} rad for \
              the column `{c}`), neither ≈ 0 nor ≈ π: the column likely names another quantity \
              than the one measured (displacement, velocity and acceleration are π/2 apart), or \
              the phase is in another unit",
