@@ -8,16 +8,45 @@
 use crate::error::{Error, Result};
 use std::path::Path;
 
-/// Open a CSV file with a header row: fields trimmed, lines starting with `#` skipped, records
-/// of any length (callers check the field count against the header, naming the line).
+/// Open a CSV file with a header row: fields trimmed, lines starting with `#` skipped, every
+/// record with as many fields as the header (otherwise [`csv_record`] fails with
+/// `file:line: expected N fields, found M`). A row with more fields is refused rather than read
+/// by position: `79.55,0.44,7,6,-0.16` is a decimal comma (7.6), not a response of 7 and a
+/// phase of 6 rad.
 pub fn csv_reader(path: &Path) -> Result<csv::Reader<std::fs::File>> {
-    csv::ReaderBuilder::new()
-        .has_headers(true)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .comment(Some(b'#'))
+    builder(false)
         .from_path(path)
         .map_err(|e| csv_error(path, e))
+}
+
+/// [`csv_reader`] with records of any length, for a reader that checks the field count itself
+/// (the calibration table, which also skips lines of blanks; the measured records of
+/// `diagnose`, whose message names the mismatch its own way).
+pub fn csv_reader_any_length(path: &Path) -> Result<csv::Reader<std::fs::File>> {
+    builder(true)
+        .from_path(path)
+        .map_err(|e| csv_error(path, e))
+}
+
+fn builder(flexible: bool) -> csv::ReaderBuilder {
+    let mut b = csv::ReaderBuilder::new();
+    b.has_headers(true)
+        .flexible(flexible)
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'));
+    b
+}
+
+/// The message of a row whose field count differs from the header's.
+pub fn field_count_message(expected: usize, found: usize) -> String {
+    format!(
+        "expected {expected} fields, found {found}{}",
+        if found > expected {
+            " (decimal comma?)"
+        } else {
+            ""
+        }
+    )
 }
 
 /// A CSV error as an [`Error`] naming the file and, where known, the 1-based line.
@@ -34,7 +63,7 @@ fn csv_kind_message(kind: csv::ErrorKind) -> String {
         csv::ErrorKind::Utf8 { err, .. } => format!("invalid UTF-8: {err}"),
         csv::ErrorKind::UnequalLengths {
             expected_len, len, ..
-        } => format!("expected {expected_len} fields, found {len}"),
+        } => field_count_message(expected_len as usize, len as usize),
         csv::ErrorKind::Deserialize { err, .. } => err.to_string(),
         other => format!("{other:?}"),
     }
@@ -75,6 +104,26 @@ mod tests {
             .map(|r| csv_record(&p, r).unwrap().1)
             .collect();
         assert_eq!(lines, vec![3, 4]);
+        // A row with more or fewer fields than the header: refused with its line.
+        for (row, msg) in [
+            (
+                "79.55,0.44,7,6",
+                "t.csv:4: expected 3 fields, found 4 (decimal comma?)",
+            ),
+            ("1", "t.csv:4: expected 3 fields, found 1"),
+        ] {
+            std::fs::write(&p, format!("# c\na,b,c\n1,2,3\n{row}\n4,5,6\n")).unwrap();
+            let mut rdr = csv_reader(&p).unwrap();
+            let e = rdr
+                .records()
+                .map(|r| csv_record(&p, r).map(|_| ()))
+                .collect::<Result<Vec<()>>>()
+                .unwrap_err()
+                .to_string();
+            assert!(e.ends_with(msg), "{e}");
+            let mut any = csv_reader_any_length(&p).unwrap();
+            assert_eq!(any.records().count(), 3);
+        }
         let e = csv_reader(&dir.path().join("missing.csv")).unwrap_err();
         assert!(e.to_string().contains("missing.csv"), "{e}");
     }

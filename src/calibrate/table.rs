@@ -369,7 +369,7 @@ impl CalibrationTable {
     /// and the 1-based line: wrong header, wrong field count, unparsable number, unphysical
     /// value, pressures not strictly increasing, no rows.
     pub fn read_csv(path: &Path) -> Result<Self> {
-        let mut rdr = crate::input::csv_reader(path)?;
+        let mut rdr = crate::input::csv_reader_any_length(path)?;
         let headers = rdr
             .headers()
             .map_err(|e| Error::parse(path, 1, format!("cannot read header: {e}")))?
@@ -404,7 +404,7 @@ impl CalibrationTable {
                 return Err(Error::parse(
                     path,
                     line,
-                    format!("expected {width} fields, found {}", rec.len()),
+                    crate::input::field_count_message(width, rec.len()),
                 ));
             }
             if with_convergence {

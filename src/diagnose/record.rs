@@ -143,7 +143,7 @@ impl Record {
     /// |F| > [`MAX_FORCE_N`]: a unit or format error).
     pub fn read_csv(path: &Path, columns: &Columns) -> Result<Self> {
         crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
-        let mut rdr = crate::input::csv_reader(path)?;
+        let mut rdr = crate::input::csv_reader_any_length(path)?;
         let headers = rdr
             .headers()
             .map_err(|e| Error::parse(path, 1, e.to_string()))?

@@ -30,8 +30,9 @@
 //! # Errors
 //!
 //! Missing columns, non-numeric or non-finite values, a missing or non-positive force or
-//! response, duplicate or non-monotonic frequencies, and phases outside `[−2π, 2π]` in a column
-//! declared in radians (values in degrees) are errors naming the file and the line.
+//! response, duplicate or non-monotonic frequencies, and a column declared in radians whose
+//! values are degrees (a value beyond ±4π, or a span beyond 3π: radians unwrapped beyond ±2π are
+//! accepted, see [`MAX_RADIAN_PHASE_SPAN`]) are errors naming the file and the line.
 
 use crate::error::{Error, Result};
 use crate::input::{csv_reader, csv_record};
@@ -233,13 +234,6 @@ impl Sweep {
         let mut rows: Vec<Row> = Vec::new();
         for rec in rdr.records() {
             let (rec, line) = csv_record(path, rec)?;
-            if rec.len() < header.len() {
-                return Err(Error::parse(
-                    path,
-                    line,
-                    format!("expected {} fields, found {}", header.len(), rec.len()),
-                ));
-            }
             let frequency_hz = field(path, &rec, line, c_f, "frequency_Hz")?;
             let force_n = field(path, &rec, line, c_force, "force_amplitude_N")?;
             let response = field(path, &rec, line, c_resp, quantity.column())?;
@@ -293,22 +287,7 @@ impl Sweep {
                     ),
                 ));
             }
-            let phase_rad = if degrees {
-                phase.to_radians()
-            } else {
-                if phase.abs() > TAU * (1.0 + 1e-9) {
-                    return Err(Error::parse(
-                        path,
-                        line,
-                        format!(
-                            "phase {phase} is outside [−2π, 2π] in a column declared in radians \
-                             (phase_rad): the values look like degrees; convert them or name the \
-                             column phase_deg"
-                        ),
-                    ));
-                }
-                phase
-            };
+            let phase_rad = if degrees { phase.to_radians() } else { phase };
             rows.push(Row {
                 line,
                 frequency_hz,
@@ -328,6 +307,9 @@ impl Sweep {
             ));
         }
         check_monotonic(path, &rows)?;
+        if !degrees {
+            check_radians(path, &rows)?;
+        }
         Ok(Self {
             path: path.to_path_buf(),
             sha256,
@@ -353,6 +335,13 @@ impl Sweep {
             .expect("at least MIN_ROWS rows")
     }
 
+    /// Whether the amplitude (response per unit force) peaks inside the band: not on the first
+    /// or last row.
+    pub fn peak_inside_band(&self) -> bool {
+        let k = self.peak_row();
+        k > 0 && k + 1 < self.rows.len()
+    }
+
     /// Complex response per unit force of every row in the crate's convention.
     pub fn frf(&self, conv: &PhaseConvention) -> Vec<Complex64> {
         self.rows
@@ -368,6 +357,68 @@ impl Sweep {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| self.path.display().to_string())
     }
+}
+
+/// Largest span (max − min) of a phase column in radians: more than this, the values are degrees.
+///
+/// The phase of one resonance sweep turns by about π (a single mode; two modes in the band, 2π);
+/// wrapped into any interval of width 2π the values span at most 2π, unwrapped they span the
+/// turn itself, whatever multiple of 2π the unwrapping started from. 3π leaves a π margin for
+/// noise and an extra mode. The same sweep in degrees spans tens to hundreds (the half-power
+/// band alone turns 90°), so a span beyond 3π (9.4) is degrees; a sweep whose degrees span less
+/// than 9.4° does not pass through a resonance and is refused later by the convention check.
+pub const MAX_RADIAN_PHASE_SPAN: f64 = 3.0 * PI;
+
+/// Largest magnitude of a phase in radians: unwrapped phases start within one turn of zero and a
+/// sweep adds at most [`MAX_RADIAN_PHASE_SPAN`], so values beyond 4π are degrees (this catches a
+/// column in degrees that spans little, e.g. −178…−170).
+pub const MAX_RADIAN_PHASE: f64 = 4.0 * PI;
+
+/// A `phase_rad` column holds radians, possibly unwrapped beyond ±2π: refused as degrees when a
+/// value exceeds [`MAX_RADIAN_PHASE`] (naming its line) or the column spans more than
+/// [`MAX_RADIAN_PHASE_SPAN`] (naming the line farthest from the column's median).
+fn check_radians(path: &Path, rows: &[Row]) -> Result<()> {
+    let hint = "in a column declared in radians (phase_rad): the values look like degrees; \
+                convert them or name the column phase_deg";
+    if let Some(r) = rows.iter().find(|r| r.phase_rad.abs() > MAX_RADIAN_PHASE) {
+        return Err(Error::parse(
+            path,
+            r.line,
+            format!("phase {} is outside [−4π, 4π] {hint}", r.phase_rad),
+        ));
+    }
+    let lo = rows
+        .iter()
+        .map(|r| r.phase_rad)
+        .fold(f64::INFINITY, f64::min);
+    let hi = rows
+        .iter()
+        .map(|r| r.phase_rad)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if hi - lo > MAX_RADIAN_PHASE_SPAN {
+        let mut sorted: Vec<f64> = rows.iter().map(|r| r.phase_rad).collect();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        let r = rows
+            .iter()
+            .max_by(|a, b| {
+                (a.phase_rad - median)
+                    .abs()
+                    .total_cmp(&(b.phase_rad - median).abs())
+            })
+            .expect("rows");
+        return Err(Error::parse(
+            path,
+            r.line,
+            format!(
+                "phase {} (the column's median is {median}): the column spans {:.2} rad, more \
+                 than the 3π of any resonance sweep, {hint}",
+                r.phase_rad,
+                hi - lo
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Frequencies strictly increasing or strictly decreasing over the whole file.
@@ -413,9 +464,100 @@ pub fn wrap(a: f64) -> f64 {
     }
 }
 
+/// Unwrapped phase change of a sweep from its lowest to its highest frequency (rad).
+fn phase_turn(s: &Sweep) -> f64 {
+    let mut rows = s.rows.clone();
+    rows.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    rows.windows(2)
+        .map(|w| wrap(w[1].phase_rad - w[0].phase_rad))
+        .sum()
+}
+
+/// Phase at the response peak, with the time sign applied, minus the quantity's resonance
+/// phase (not wrapped).
+fn peak_phase_offset(s: &Sweep, time_sign: f64) -> f64 {
+    let r = &s.rows[s.peak_row()];
+    time_sign * r.phase_rad - s.quantity.resonance_phase()
+}
+
+/// The phase convention one file shows on its own ([`PhaseConvention::detect_file`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FileConvention {
+    Detected(PhaseConvention),
+    /// The file's amplitude peaks on its first or last row: the reason, naming the file.
+    NoResonance(String),
+}
+
+/// The convention most files show on their own (the first of equally many), if any shows one.
+pub fn most_common(own: &[FileConvention]) -> Option<PhaseConvention> {
+    let detected: Vec<PhaseConvention> = own
+        .iter()
+        .filter_map(|c| match c {
+            FileConvention::Detected(c) => Some(*c),
+            FileConvention::NoResonance(_) => None,
+        })
+        .collect();
+    detected.iter().copied().max_by_key(|c| {
+        // `max_by_key` keeps the last maximum: rank the earlier ones higher on ties.
+        let n = detected.iter().filter(|d| *d == c).count();
+        let first = detected.iter().position(|d| d == c).unwrap_or(0);
+        (n, usize::MAX - first)
+    })
+}
+
+/// Every file that shows a convention of its own shows `common`; otherwise an error naming each
+/// file's convention (and, where given, what `common` is: e.g. the model's saved convention).
+pub fn check_agree(
+    sweeps: &[Sweep],
+    own: &[FileConvention],
+    common_source: Option<&str>,
+    common: PhaseConvention,
+) -> Result<()> {
+    let odd: Vec<usize> = (0..sweeps.len())
+        .filter(|&i| matches!(own[i], FileConvention::Detected(c) if c != common))
+        .collect();
+    if odd.is_empty() {
+        return Ok(());
+    }
+    let list = sweeps
+        .iter()
+        .zip(own)
+        .map(|(s, c)| {
+            format!(
+                "{}: {}",
+                s.path.display(),
+                match c {
+                    FileConvention::Detected(c) => c.short(),
+                    FileConvention::NoResonance(_) => "none (no resonance inside the band)".into(),
+                }
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    let against = format!(
+        "{} ({})",
+        common_source.unwrap_or("of the other files"),
+        common.short()
+    );
+    Err(Error::Data(format!(
+        "{} {} not in the phase convention {against}. Each file's own convention: \
+         {list}. Measurements of one structure with one acquisition set-up share one convention: \
+         a response channel inverted or conjugated in some files (sensor orientation, export \
+         settings), or a response column naming another quantity than the one measured \
+         (displacement and acceleration are π apart), would be misread; correct the phases (or \
+         the column) of the odd file",
+        odd.iter()
+            .map(|&i| sweeps[i].path.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        if odd.len() == 1 { "is" } else { "are" }
+    )))
+}
+
 /// How the phases of a file map onto the crate's convention (`e^{iωt}`, model sign):
 /// `phase_model = time_sign·phase_file + (π if inverted)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PhaseConvention {
     /// +1: the file uses `e^{iωt}` (phase falls through a resonance); −1: `e^{−iωt}`.
     pub time_sign: f64,
@@ -429,6 +571,19 @@ impl PhaseConvention {
         time_sign: 1.0,
         inverted: false,
     };
+
+    /// A convention read from a file is one of the four: `time_sign` ±1 (the error names the
+    /// field).
+    pub fn check(&self) -> std::result::Result<(), String> {
+        if self.time_sign == 1.0 || self.time_sign == -1.0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "time_sign = {}: must be 1 (e^{{iωt}}) or -1 (e^{{−iωt}})",
+                self.time_sign
+            ))
+        }
+    }
 
     /// Complex response per unit force from an amplitude ratio and the file's phase.
     pub fn to_model(&self, ratio: f64, phase_file: f64) -> Complex64 {
@@ -455,14 +610,7 @@ impl PhaseConvention {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let mut turn = 0.0;
-        for s in sweeps {
-            let mut rows = s.rows.clone();
-            rows.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-            for w in rows.windows(2) {
-                turn += wrap(w[1].phase_rad - w[0].phase_rad);
-            }
-        }
+        let turn: f64 = sweeps.iter().map(phase_turn).sum();
         if turn.abs() < PI / 4.0 * sweeps.len() as f64 {
             return Err(Error::Data(format!(
                 "{}: the phase turns by only {:.2} rad per sweep across the band; the sweeps must \
@@ -474,8 +622,7 @@ impl PhaseConvention {
         let time_sign = if turn < 0.0 { 1.0 } else { -1.0 };
         let (mut c, mut s) = (0.0, 0.0);
         for sw in sweeps {
-            let r = &sw.rows[sw.peak_row()];
-            let d = time_sign * r.phase_rad - sw.quantity.resonance_phase();
+            let d = peak_phase_offset(sw, time_sign);
             c += d.cos();
             s += d.sin();
         }
@@ -498,7 +645,92 @@ impl PhaseConvention {
         })
     }
 
-    /// One-line description for reports.
+    /// The convention of one file on its own ([`Self::detect`] of that file), telling a file
+    /// that cannot show it (its amplitude peaks on its first or last row: no resonance inside the
+    /// band, [`FileConvention::NoResonance`]) from a file that peaks inside its band but whose
+    /// phase does not behave as a resonance's: the latter is an error naming the file and the
+    /// likely cause (the phase column's unit, or a response column naming another quantity).
+    pub fn detect_file(sweep: &Sweep) -> Result<FileConvention> {
+        let detected = Self::detect(std::slice::from_ref(sweep));
+        if detected.is_ok() {
+            return detected.map(FileConvention::Detected);
+        }
+        if !sweep.peak_inside_band() {
+            return Ok(FileConvention::NoResonance(format!(
+                "{}: the amplitude peaks on its {} row, no resonance inside the band",
+                sweep.name(),
+                if sweep.peak_row() == 0 {
+                    "first"
+                } else {
+                    "last"
+                }
+            )));
+        }
+        let peak = &sweep.rows[sweep.peak_row()];
+        let turn = phase_turn(sweep);
+        let at = format!(
+            "{}: the amplitude peaks inside the band (line {}, {} Hz)",
+            sweep.path.display(),
+            peak.line,
+            peak.frequency_hz
+        );
+        if turn.abs() < PI / 4.0 {
+            return Err(Error::Data(format!(
+                "{at} but the phase turns by only {turn:.2} rad across the band, where a \
+                 resonance turns it by about π: the phase column is likely in another unit than \
+                 its name says (radians in a `phase_deg` column?), or the file is not a resonance \
+                 sweep"
+            )));
+        }
+        let time_sign = if turn < 0.0 { 1.0 } else { -1.0 };
+        let d = wrap(peak_phase_offset(sweep, time_sign));
+        Err(Error::Data(format!(
+            "{at} where its phase is {d:+.2} rad from the resonance phase of a {q} ({r:+.2} rad for \
+             the column `{c}`), neither ≈ 0 nor ≈ π: the column likely names another quantity \
+             than the one measured (displacement, velocity and acceleration are π/2 apart), or \
+             the phase is in another unit",
+            q = sweep.quantity.frf_name(),
+            r = sweep.quantity.resonance_phase(),
+            c = sweep.quantity.column(),
+        )))
+    }
+
+    /// The one convention of a set of sweeps (identification, `predict`): [`Self::detect`] over
+    /// all of them (the same numbers as before files were checked one by one), and every file
+    /// whose amplitude peaks inside its band must show that convention on its own
+    /// ([`Self::detect_file`]); a file that disagrees is refused, naming each file's convention:
+    /// reading it with the others' would misread it silently.
+    pub fn detect_common(sweeps: &[Sweep]) -> Result<Self> {
+        let own: Vec<FileConvention> = sweeps
+            .iter()
+            .map(Self::detect_file)
+            .collect::<Result<_>>()?;
+        if let Some(most) = most_common(&own) {
+            check_agree(sweeps, &own, None, most)?;
+        }
+        let common = Self::detect(sweeps)?;
+        check_agree(sweeps, &own, None, common)?;
+        Ok(common)
+    }
+
+    /// A few words for lists: `e^{iωt}` or `e^{−iωt} (conjugated)`, and `channel inverted`.
+    pub fn short(&self) -> String {
+        format!(
+            "{}{}",
+            if self.time_sign > 0.0 {
+                "e^{iωt}"
+            } else {
+                "e^{−iωt} (conjugated)"
+            },
+            if self.inverted {
+                ", channel inverted"
+            } else {
+                ""
+            }
+        )
+    }
+
+    /// One-line description for reports.    /// One-line description for reports.
     pub fn describe(&self) -> String {
         format!(
             "{}{}",
@@ -515,6 +747,34 @@ impl PhaseConvention {
             }
         )
     }
+}
+
+/// CSV text of a synthetic single-mode sweep (80 Hz, ζ = 1 %, unit force, 21 rows from `f0` Hz
+/// in steps of 0.4 Hz) of the quantity `data`, written under the column of `column` in the
+/// convention `conv`, phases in degrees if `degrees`.
+#[cfg(test)]
+pub(crate) fn synthetic_sweep_csv(
+    data: Quantity,
+    column: Quantity,
+    conv: PhaseConvention,
+    f0: f64,
+    degrees: bool,
+) -> String {
+    let (wn, z) = (TAU * 80.0, 0.01);
+    let mut text = format!(
+        "frequency_Hz,force_amplitude_N,{},{}\n",
+        column.column(),
+        if degrees { "phase_deg" } else { "phase_rad" }
+    );
+    for i in 0..21 {
+        let f = f0 + 0.4 * i as f64;
+        let w = TAU * f;
+        let h = data.from_displacement(w) / Complex64::new(wn * wn - w * w, 2.0 * z * wn * w);
+        let ph = conv.to_file_phase(h);
+        let ph = if degrees { ph.to_degrees() } else { ph };
+        text += &format!("{f},1,{},{ph}\n", h.norm());
+    }
+    text
 }
 
 #[cfg(test)]
@@ -604,6 +864,17 @@ mod tests {
             ),
             (&["10,1,1,0", "11,1,1,0"], "b.csv", "at least 5"),
             (
+                // A decimal comma: 7,6 read as two fields.
+                &["10,1,1,0", "11,1,1,0", "12,1,7,6,0", "13,1,1,0", "14,1,1,0"],
+                ":5:",
+                "expected 4 fields, found 5 (decimal comma?)",
+            ),
+            (
+                &["10,1,1,0", "11,1,1", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
+                ":4:",
+                "expected 4 fields, found 3",
+            ),
+            (
                 // 1e9 m/s² at 11 Hz: a vibration of 2e5 m.
                 &["10,1,1,0", "11,1,1e9,0", "12,1,1,0", "13,1,1,0", "14,1,1,0"],
                 ":4:",
@@ -684,5 +955,210 @@ mod tests {
                 }
             }
         }
+    }
+
+    const PLAIN: PhaseConvention = PhaseConvention::MODEL;
+    const INVERTED: PhaseConvention = PhaseConvention {
+        time_sign: 1.0,
+        inverted: true,
+    };
+    const CONJUGATED: PhaseConvention = PhaseConvention {
+        time_sign: -1.0,
+        inverted: false,
+    };
+
+    fn sweep(dir: &Path, name: &str, text: &str) -> Sweep {
+        Sweep::read_csv(&write(dir, name, text)).unwrap()
+    }
+
+    /// A file in another convention among files in one is refused naming it and both
+    /// conventions (it was read with the others' convention: the joint detection is outvoted).
+    #[test]
+    fn a_file_in_another_convention_is_refused_naming_it() {
+        let d = tempfile::tempdir().unwrap();
+        let a = Quantity::Acceleration;
+        for (odd, odd_short) in [(PLAIN, "odd.csv: e^{iωt}."), (CONJUGATED, "(conjugated)")] {
+            let sweeps = vec![
+                sweep(
+                    d.path(),
+                    "a.csv",
+                    &synthetic_sweep_csv(a, a, INVERTED, 76.0, false),
+                ),
+                sweep(
+                    d.path(),
+                    "b.csv",
+                    &synthetic_sweep_csv(a, a, INVERTED, 76.4, false),
+                ),
+                sweep(
+                    d.path(),
+                    "odd.csv",
+                    &synthetic_sweep_csv(a, a, odd, 76.0, false),
+                ),
+            ];
+            // The joint detection alone takes the majority's convention for all three.
+            assert_eq!(PhaseConvention::detect(&sweeps).unwrap(), INVERTED);
+            let e = PhaseConvention::detect_common(&sweeps)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(
+                    "odd.csv is not in the phase convention of the other files \
+                            (e^{iωt}, channel inverted)"
+                ) && e.contains(odd_short)
+                    && e.contains("a.csv: e^{iωt}, channel inverted"),
+                "{e}"
+            );
+            assert_eq!(
+                PhaseConvention::detect_common(&sweeps[..2]).unwrap(),
+                INVERTED
+            );
+        }
+    }
+
+    /// Acceleration data under a velocity column among correct levels: the others outvote it in
+    /// the joint detection; its own phase at the peak (π/2 from a velocity's) refuses it, naming
+    /// the file and the column.
+    #[test]
+    fn a_mislabelled_quantity_is_refused_even_when_outvoted() {
+        let d = tempfile::tempdir().unwrap();
+        let (a, v) = (Quantity::Acceleration, Quantity::Velocity);
+        let sweeps = vec![
+            sweep(
+                d.path(),
+                "a.csv",
+                &synthetic_sweep_csv(a, a, PLAIN, 76.0, false),
+            ),
+            sweep(
+                d.path(),
+                "b.csv",
+                &synthetic_sweep_csv(a, a, PLAIN, 76.4, false),
+            ),
+            sweep(
+                d.path(),
+                "vel.csv",
+                &synthetic_sweep_csv(a, v, PLAIN, 76.0, false),
+            ),
+        ];
+        assert_eq!(PhaseConvention::detect(&sweeps).unwrap(), PLAIN);
+        let e = PhaseConvention::detect_common(&sweeps)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("vel.csv")
+                && e.contains("`velocity_amplitude_m_per_s`")
+                && e.contains("names another quantity"),
+            "{e}"
+        );
+    }
+
+    /// One file on its own: a band below the resonance (peak on the last row) cannot show a
+    /// convention; radians under `phase_deg` peak inside the band but hardly turn: refused.
+    #[test]
+    fn a_file_without_resonance_is_told_from_a_wrong_phase_unit() {
+        let d = tempfile::tempdir().unwrap();
+        let a = Quantity::Acceleration;
+        let below = sweep(
+            d.path(),
+            "below.csv",
+            &synthetic_sweep_csv(a, a, PLAIN, 70.0, false),
+        );
+        assert!(!below.peak_inside_band());
+        match PhaseConvention::detect_file(&below).unwrap() {
+            FileConvention::NoResonance(why) => {
+                assert!(
+                    why.contains("below.csv") && why.contains("last row"),
+                    "{why}"
+                )
+            }
+            c => panic!("{c:?}"),
+        }
+        let radians =
+            synthetic_sweep_csv(a, a, PLAIN, 76.0, false).replacen("phase_rad", "phase_deg", 1);
+        let s = sweep(d.path(), "rad.csv", &radians);
+        let e = PhaseConvention::detect_file(&s).unwrap_err().to_string();
+        assert!(
+            e.contains("rad.csv") && e.contains("radians in a `phase_deg` column?"),
+            "{e}"
+        );
+        let deg = sweep(
+            d.path(),
+            "deg.csv",
+            &synthetic_sweep_csv(a, a, CONJUGATED, 76.0, true),
+        );
+        assert_eq!(
+            PhaseConvention::detect_file(&deg).unwrap(),
+            FileConvention::Detected(CONJUGATED)
+        );
+    }
+
+    /// Radians unwrapped beyond ±2π are radians; degrees are refused however they wrap.
+    #[test]
+    fn unwrapped_radians_are_accepted_and_degrees_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let a = Quantity::Acceleration;
+        let text = synthetic_sweep_csv(a, a, PLAIN, 76.0, false);
+        let shift = |text: &str, by: f64, scale: f64| -> String {
+            let mut out = String::new();
+            for (k, l) in text.lines().enumerate() {
+                if k == 0 {
+                    out += l;
+                } else {
+                    let (head, ph) = l.rsplit_once(',').unwrap();
+                    let ph: f64 = ph.parse().unwrap();
+                    out += &format!("{head},{}", (ph + by) * scale);
+                }
+                out += "\n";
+            }
+            out
+        };
+        for by in [-TAU, TAU, -2.0 * TAU + 0.5] {
+            let s = sweep(d.path(), "u.csv", &shift(&text, by, 1.0));
+            assert_eq!(
+                PhaseConvention::detect_file(&s).unwrap(),
+                FileConvention::Detected(PLAIN),
+                "{by}"
+            );
+        }
+        // Degrees: all of them (the first value beyond 4π named), and degrees that span little
+        // far from zero (−178…−170).
+        let p = write(d.path(), "deg.csv", &shift(&text, 0.0, 180.0 / PI));
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("deg.csv:") && e.contains("look like degrees"),
+            "{e}"
+        );
+        let p = write(
+            d.path(),
+            "far.csv",
+            &rows(&[
+                "10,1,1,-178",
+                "11,1,2,-176",
+                "12,1,5,-174",
+                "13,1,2,-172",
+                "14,1,1,-170",
+            ]),
+        );
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("far.csv:3:") && e.contains("look like degrees"),
+            "{e}"
+        );
+        // A span of more than 3π without any value beyond 4π: the line farthest from the median.
+        let p = write(
+            d.path(),
+            "span.csv",
+            &rows(&[
+                "10,1,1,-1",
+                "11,1,2,-1.5",
+                "12,1,5,-2",
+                "13,1,2,9",
+                "14,1,1,-2.5",
+            ]),
+        );
+        let e = Sweep::read_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("span.csv:6:") && e.contains("spans 11.50 rad"),
+            "{e}"
+        );
     }
 }

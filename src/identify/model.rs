@@ -74,6 +74,7 @@ pub const IWAN_SLIDERS: usize = 16;
 /// Reference scales taken from the data, used to state bounds and the dimensionless effect
 /// parameters (saved with the model so that the parameters keep their meaning).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Scales {
     /// Reference frequency (Hz): the median measured resonance frequency of the fit levels.
     pub frequency_hz: f64,
@@ -84,6 +85,24 @@ pub struct Scales {
     pub amplitude_min_m: f64,
     /// Largest mean force of the fit levels (N).
     pub force_n: f64,
+}
+
+impl Scales {
+    /// Scales read from a file are finite and > 0 (the error names the field).
+    pub fn check(&self) -> std::result::Result<(), String> {
+        for (name, v) in [
+            ("frequency_hz", self.frequency_hz),
+            ("modal_mass_kg", self.modal_mass_kg),
+            ("amplitude_max_m", self.amplitude_max_m),
+            ("amplitude_min_m", self.amplitude_min_m),
+            ("force_n", self.force_n),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{name} = {v}: must be finite and > 0"));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A bounded physical parameter.
@@ -157,6 +176,7 @@ impl ParamSpec {
 
 /// Structure of a model: the joint family, the effects added and the scales.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModelSpec {
     /// Family of the baseline joint (a family effect replaces it).
     pub family: Family,
@@ -372,6 +392,7 @@ pub fn quadratic_stiffness_law(eps: f64, k: f64, a_ref: f64) -> f64 {
 
 /// A model with parameter values (physical units, in the order of [`ModelSpec::params`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Model {
     pub spec: ModelSpec,
     pub values: Vec<f64>,

@@ -8,14 +8,17 @@
 //!   the model's response per unit force is then `measured response / model force`, with the
 //!   model's phase.
 //!
-//! Both report the errors of [`super::report`]. The phase convention of the files is detected
-//! from them; where they do not pass through a resonance (detection fails) the convention saved
-//! with the model is used, and the report says so.
+//! Both report the errors of [`super::report`]. The phase convention is detected from each file
+//! on its own and must be the same for every file and the one saved with the model (a file in
+//! another convention is refused, naming each file's, rather than misread). A file whose
+//! amplitude peaks on its first or last row (no resonance inside its band) cannot show its
+//! convention and is read with the saved one, and the report says so; a file that peaks inside
+//! its band but whose phase does not turn as a resonance's is refused with the likely cause.
 
 use super::backbone;
 use super::fit::LevelData;
 use super::fit::Parametrised;
-use super::measured::{PhaseConvention, Sweep};
+use super::measured::{check_agree, most_common, FileConvention, PhaseConvention, Sweep};
 use super::model::{Drive, Model};
 use super::pipeline::SavedModel;
 use super::reduced::{ReducedModel, ReducedSpec, SavedReducedModel};
@@ -137,10 +140,7 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
     if sweeps.is_empty() {
         return Err(Error::param("files", "at least one measured file"));
     }
-    let (convention, source) = match PhaseConvention::detect(&sweeps) {
-        Ok(c) => (c, "detected from the files".to_string()),
-        Err(e) => (saved_convention, format!("saved with the model ({e})")),
-    };
+    let (convention, source) = files_convention(&sweeps, saved_convention)?;
     // A single-mode model describes the response near its natural frequency only: a file more
     // than a factor 2 away from it is another mode, or in another frequency unit.
     if let Predictor::Mode(m, _) = &model {
@@ -242,6 +242,48 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
         sweeps,
         model,
     })
+}
+
+/// The phase convention of the files to predict (see the module documentation): each file's
+/// own ([`PhaseConvention::detect_file`]), which must be one for all files and the model's saved
+/// convention; the saved convention where no file passes through a resonance inside its band.
+/// A file that peaks inside its band without the phase of a resonance is refused (never read
+/// with the saved convention), as is a file whose convention differs.
+fn files_convention(sweeps: &[Sweep], saved: PhaseConvention) -> Result<(PhaseConvention, String)> {
+    let own: Vec<FileConvention> = sweeps
+        .iter()
+        .map(PhaseConvention::detect_file)
+        .collect::<Result<_>>()?;
+    let without: Vec<&str> = own
+        .iter()
+        .filter_map(|c| match c {
+            FileConvention::NoResonance(why) => Some(why.as_str()),
+            FileConvention::Detected(_) => None,
+        })
+        .collect();
+    let Some(most) = most_common(&own) else {
+        return Ok((
+            saved,
+            format!("saved with the model ({})", without.join("; ")),
+        ));
+    };
+    check_agree(sweeps, &own, None, most)?;
+    check_agree(
+        sweeps,
+        &own,
+        Some("of the files the model was identified from, saved with it"),
+        saved,
+    )?;
+    let source = if without.is_empty() {
+        "detected from the files".to_string()
+    } else {
+        format!(
+            "detected from the files that pass through a resonance, the same as the model's \
+             saved convention; used for the others too ({})",
+            without.join("; ")
+        )
+    };
+    Ok((saved, source))
 }
 
 impl Prediction {
@@ -373,5 +415,74 @@ impl Prediction {
         write_string_atomic(&p, &self.text())?;
         written.push(p);
         Ok(written)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::measured::{synthetic_sweep_csv, Quantity};
+
+    /// Each file's own convention must be the model's; the saved one is used only for files
+    /// with no resonance inside their band, never for a file that peaks inside its band without
+    /// a resonance's phase (before, any failure of one joint detection fell back to it).
+    #[test]
+    fn every_file_shows_the_models_convention_or_none() {
+        let d = tempfile::tempdir().unwrap();
+        let (a, v) = (Quantity::Acceleration, Quantity::Velocity);
+        let inverted = PhaseConvention {
+            time_sign: 1.0,
+            inverted: true,
+        };
+        let file = |name: &str, column: Quantity, conv: PhaseConvention, f0: f64| {
+            let p = d.path().join(name);
+            std::fs::write(&p, synthetic_sweep_csv(a, column, conv, f0, false)).unwrap();
+            Sweep::read_csv(&p).unwrap()
+        };
+        let good = file("a.csv", a, inverted, 76.0);
+        let good2 = file("b.csv", a, inverted, 76.4);
+        let plain = file("plain.csv", a, PhaseConvention::MODEL, 76.0);
+        let below = file("below.csv", a, inverted, 70.0);
+        let as_velocity = file("as-velocity.csv", v, inverted, 76.0);
+        let (c, source) = files_convention(&[good.clone(), good2.clone()], inverted).unwrap();
+        assert_eq!((c, source.as_str()), (inverted, "detected from the files"));
+        let e = files_convention(&[good.clone(), good2, plain.clone()], inverted)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("plain.csv is not in the phase convention of the other files"),
+            "{e}"
+        );
+        let e = files_convention(std::slice::from_ref(&plain), inverted)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(
+                "plain.csv is not in the phase convention of the files the model was \
+                        identified from"
+            ) && e.contains("plain.csv: e^{iωt}.")
+                && e.contains("(e^{iωt}, channel inverted)"),
+            "{e}"
+        );
+        let (c, source) = files_convention(std::slice::from_ref(&below), inverted).unwrap();
+        assert!(
+            c == inverted
+                && source.contains(
+                    "saved with the model (below.csv: the amplitude peaks on its last row"
+                ),
+            "{source}"
+        );
+        let (c, source) = files_convention(&[good, below], inverted).unwrap();
+        assert!(
+            c == inverted && source.contains("used for the others too (below.csv"),
+            "{source}"
+        );
+        let e = files_convention(&[as_velocity], inverted)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("as-velocity.csv") && e.contains("`velocity_amplitude_m_per_s`"),
+            "{e}"
+        );
     }
 }

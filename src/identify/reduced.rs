@@ -834,7 +834,7 @@ pub fn identify_reduced(
     let opts = &options.fit;
     let response_amplitudes = options.response_amplitudes.as_deref();
     let t0 = std::time::Instant::now();
-    let convention = PhaseConvention::detect(&sweeps)?;
+    let convention = PhaseConvention::detect_common(&sweeps)?;
     let levels: Vec<LevelData> = sweeps
         .iter()
         .map(|s| LevelData::new(s, &convention))
@@ -1021,6 +1021,7 @@ pub const REDUCED_KIND: &str = "reduced";
 /// The saved updated model (`model.json` of a reduced-model identification): the response-model
 /// file (absolute path and SHA-256: a file changed since is refused) and the factors.
 #[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SavedReducedModel {
     pub kind: String,
     pub model_file: PathBuf,
@@ -1061,6 +1062,14 @@ impl SavedReducedModel {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let s: SavedReducedModel = serde_json::from_str(&text)
             .map_err(|e| Error::parse(path, e.line(), format!("not a reduced model file: {e}")))?;
+        s.phase_convention
+            .check()
+            .map_err(|e| Error::parse(path, 0, format!("phase_convention.{e}")))?;
+        if let Some(scales) = &s.scales {
+            scales
+                .check()
+                .map_err(|e| Error::parse(path, 0, format!("scales.{e}")))?;
+        }
         let bytes = std::fs::read(&s.model_file).map_err(|e| Error::io(&s.model_file, e))?;
         if sha256_hex(&bytes) != s.model_sha256 {
             return Err(Error::parse(

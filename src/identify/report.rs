@@ -59,6 +59,9 @@ pub struct RegionErrors {
     pub mean_phase_error_rad: f64,
 }
 
+/// Why a level has no resonance-frequency error ([`LevelErrors::resonance_error`]).
+pub const NO_RESONANCE_IN_BAND: &str = "no resonance inside the band";
+
 /// Errors of a model against one level.
 #[derive(Debug, Clone, Serialize)]
 pub struct LevelErrors {
@@ -68,7 +71,15 @@ pub struct LevelErrors {
     pub mean_force_n: f64,
     pub resonance_measured_hz: f64,
     pub resonance_model_hz: f64,
+    /// Model minus measured resonance frequency (Hz); NaN where not available (see
+    /// [`Self::resonance_error`]).
+    #[serde(skip)]
     pub resonance_error_hz: f64,
+    /// The resonance-frequency error, or why there is none: the measured amplitude peaks on the
+    /// first or last row, so the band holds no resonance and its edge row is no resonance
+    /// frequency (reported as an error of +0.000 Hz before). In JSON as `resonance_error_hz`.
+    #[serde(rename = "resonance_error_hz", serialize_with = "available_or_reason")]
+    pub resonance_error: std::result::Result<f64, String>,
     /// Phase resonance (quadrature) of the measured and modelled responses (Hz; NaN where the
     /// phase does not pass quadrature in the band) and their difference.
     pub phase_resonance_measured_hz: f64,
@@ -134,13 +145,25 @@ impl LevelErrors {
             });
         }
         let all: Vec<usize> = (0..f.len()).collect();
+        let peak = (0..am.len())
+            .max_by(|&a, &b| am[a].total_cmp(&am[b]))
+            .expect("rows");
+        let resonance_error = if peak == 0 || peak + 1 == am.len() {
+            Err(format!(
+                "{NO_RESONANCE_IN_BAND}: the measured amplitude peaks on the {} row",
+                if peak == 0 { "first" } else { "last" }
+            ))
+        } else {
+            Ok(fy - fm)
+        };
         Self {
             file: level.name.clone(),
             role: role.to_string(),
             mean_force_n: level.mean_force_n,
             resonance_measured_hz: fm,
             resonance_model_hz: fy,
-            resonance_error_hz: fy - fm,
+            resonance_error_hz: resonance_error.clone().unwrap_or(f64::NAN),
+            resonance_error,
             phase_resonance_measured_hz: f90m,
             phase_resonance_model_hz: f90y,
             phase_resonance_error_hz: f90y - f90m,
@@ -541,6 +564,11 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
         "RMS cplx bef→aft"
     );
     for (b, a) in rows {
+        let resonance_pair = match (&b.resonance_error, a.map(|a| &a.resonance_error)) {
+            (Err(_), _) | (_, Some(Err(_))) => "n/a (see below)".to_string(),
+            (Ok(x), None) => format!("{x:+.3}"),
+            (Ok(x), Some(Ok(y))) => format!("{x:+.3} → {y:+.3}"),
+        };
         let pair = |x: f64, y: Option<f64>, scale: f64, prec: usize| match y {
             Some(y) => format!("{:+.p$} → {:+.p$}", x * scale, y * scale, p = prec),
             None => format!("{:+.p$}", x * scale, p = prec),
@@ -551,12 +579,7 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
             b.role,
             b.mean_force_n,
             b.resonance_measured_hz,
-            pair(
-                b.resonance_error_hz,
-                a.map(|a| a.resonance_error_hz),
-                1.0,
-                3
-            ),
+            resonance_pair,
             b.phase_resonance_measured_hz,
             pair(
                 b.phase_resonance_error_hz,
@@ -571,12 +594,58 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
             }
         );
     }
+    for (b, _) in rows {
+        if let Err(why) = &b.resonance_error {
+            s += &format!("  {}: Δf_res n/a, {why}\n", b.file);
+        }
+    }
     s
 }
 
 #[cfg(test)]
 mod tests {
     use super::available_or_reason;
+    use super::*;
+    use crate::identify::measured::{synthetic_sweep_csv, Quantity, Sweep};
+
+    /// A sweep whose amplitude peaks on its last row holds no resonance: no resonance-frequency
+    /// error in text or JSON (before: the edge row was taken for the resonance, error +0.000).
+    #[test]
+    fn no_resonance_frequency_error_without_a_resonance_in_the_band() {
+        let d = tempfile::tempdir().unwrap();
+        let a = Quantity::Acceleration;
+        for (f0, inside) in [(70.0, false), (76.0, true)] {
+            let p = d.path().join("s.csv");
+            std::fs::write(
+                &p,
+                synthetic_sweep_csv(a, a, PhaseConvention::MODEL, f0, false),
+            )
+            .unwrap();
+            let level = LevelData::new(&Sweep::read_csv(&p).unwrap(), &PhaseConvention::MODEL);
+            let e = LevelErrors::new(&level, &level.measured, "predicted", 0);
+            let json = serde_json::to_value(&e).unwrap();
+            let text = errors_table("t", &[(&e, Some(&e))]);
+            if inside {
+                assert_eq!(e.resonance_error, Ok(0.0));
+                assert_eq!(json["resonance_error_hz"], 0.0);
+                assert!(
+                    text.contains("+0.000 → +0.000") && !text.contains("n/a"),
+                    "{text}"
+                );
+            } else {
+                assert!(e.resonance_error_hz.is_nan());
+                let why = json["resonance_error_hz"]["not_available"]
+                    .as_str()
+                    .unwrap();
+                assert!(why.contains("no resonance inside the band") && why.contains("last row"));
+                assert!(
+                    text.contains("n/a (see below)")
+                        && text.contains("s.csv: Δf_res n/a, no resonance inside the band"),
+                    "{text}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn unavailable_results_have_one_json_shape() {

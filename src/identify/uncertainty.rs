@@ -208,6 +208,7 @@ pub fn parameter_covariance<S: Parametrised>(
 /// Models of the fitted form that fit the fit levels about as well: draws from the posterior
 /// (physical values, equal weight), with the sampler's diagnostics.
 #[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Ensemble {
     /// Physical parameter values of each model (the model's parameter order).
     pub draws: Vec<Vec<f64>>,
