@@ -25,6 +25,12 @@
 //! `?`) removes everything staged. The same target twice (e.g. a sidecar that would overwrite
 //! its data file) is refused when it is staged.
 //!
+//! **Files of earlier runs.** A command whose file names depend on its input (one plot per
+//! level or per pressure) declares them with [`OutputSet::owns`]: after a commit, the files of
+//! the output directory that match such a name and that this run did not write are removed —
+//! otherwise a run with two levels would leave a three-level run's `predict-3.png` beside its
+//! own report. No other file of the directory is touched.
+//!
 //! **Interrupts.** [`install_interrupt_handler`] (called once by the CLI) handles SIGINT,
 //! SIGTERM and SIGHUP: it waits for a commit in progress to finish, removes every staging
 //! directory and temporary file of the process, and exits with status 130. So an interrupt
@@ -203,6 +209,9 @@ pub struct OutputSet {
     stagings: Vec<(PathBuf, PathBuf)>,
     /// Targets staged so far (as given), with the flag or role that named them.
     targets: Vec<(PathBuf, String)>,
+    /// File-name patterns `(prefix, suffix)` of the output directory that belong to this
+    /// command ([`OutputSet::owns`]).
+    owned: Vec<(String, String)>,
     committed: bool,
 }
 
@@ -261,6 +270,45 @@ impl OutputSet {
         set.staging_for(&with_dir(&dir.join("x")), flag)?;
         set.dir = Some((dir.to_path_buf(), flag.to_string()));
         Ok(set)
+    }
+
+    /// Declare the files of the output directory named `prefix…suffix` as this command's (one
+    /// per level, pressure, …): those of an earlier run that this commit does not write are
+    /// removed after it (module documentation). Only for a set made by [`OutputSet::in_dir`].
+    pub fn owns(&mut self, prefix: &str, suffix: &str) {
+        debug_assert!(self.dir.is_some(), "owns() needs an output directory");
+        self.owned.push((prefix.to_string(), suffix.to_string()));
+    }
+
+    /// Remove the owned files of the output directory that are not among `written`.
+    fn remove_stale(&self, written: &[PathBuf]) {
+        let Some((dir, _)) = &self.dir else { return };
+        if self.owned.is_empty() {
+            return;
+        }
+        let Ok(dir) = dir.canonicalize() else { return };
+        let fresh: std::collections::HashSet<std::ffi::OsString> = written
+            .iter()
+            .filter(|w| {
+                w.parent()
+                    .and_then(|p| p.canonicalize().ok())
+                    .is_some_and(|p| p == dir)
+            })
+            .filter_map(|w| w.file_name().map(|n| n.to_os_string()))
+            .collect();
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let Some(text) = name.to_str() else { continue };
+            let owned = self.owned.iter().any(|(pre, suf)| {
+                text.len() >= pre.len() + suf.len() && text.starts_with(pre) && text.ends_with(suf)
+            });
+            if owned && !fresh.contains(&name) && e.path().is_file() {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
     }
 
     /// A set of explicitly named files (named by `flag` in errors), all checked now: none is an
@@ -440,7 +488,9 @@ impl OutputSet {
             remove_path(staging);
             deregister(staging);
         }
-        Ok(moves.into_iter().map(|m| m.1).collect())
+        let written: Vec<PathBuf> = moves.into_iter().map(|m| m.1).collect();
+        self.remove_stale(&written);
+        Ok(written)
     }
 }
 
@@ -537,6 +587,48 @@ mod tests {
         assert!(e.to_string().contains("--out-dir"), "{e}");
         let e = OutputSet::in_dir(&out.join("old.csv").join("deeper"), "--out-dir").unwrap_err();
         assert!(e.to_string().contains("not a directory"), "{e}");
+    }
+
+    /// A second run with fewer levels leaves none of the first run's per-level files, and
+    /// touches nothing else in the directory.
+    #[test]
+    fn owned_files_of_an_earlier_run_are_removed_after_the_commit() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let run = |levels: usize| {
+            let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+            set.owns("level-", ".png");
+            for i in 1..=levels {
+                write_string_atomic(&set.path(&format!("level-{i}.png")).unwrap(), "png").unwrap();
+            }
+            write_string_atomic(&set.path("report.txt").unwrap(), "r").unwrap();
+            set.commit().unwrap();
+        };
+        run(3);
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
+        std::fs::write(out.join("level-notes.txt"), "mine too").unwrap();
+        run(2);
+        let mut names: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            vec![
+                "level-1.png",
+                "level-2.png",
+                "level-notes.txt",
+                "notes.txt",
+                "report.txt"
+            ]
+        );
+        // An uncommitted set removes nothing.
+        {
+            let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+            set.owns("level-", ".png");
+        }
+        assert!(out.join("level-2.png").exists());
     }
 
     #[test]

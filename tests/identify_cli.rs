@@ -530,7 +530,11 @@ fn identify_then_predict_both_controls() {
         "{}",
         json["prediction"]["stationarity"]
     );
-    // Force control on a level: the same model errors as in the identification report.
+    // Force control on a level: the same model errors as in the identification report. The
+    // directory holds a two-file run's second plot and a file of the user's: the stale plot
+    // goes, the user's file stays.
+    std::fs::write(pout.join("predict-2.png"), "an earlier run's plot").unwrap();
+    std::fs::write(pout.join("notes.txt"), "mine").unwrap();
     let o = run(
         "predict",
         &[
@@ -543,6 +547,7 @@ fn identify_then_predict_both_controls() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(pout.join("predict-1.png").exists() && pout.join("predict-rows.csv").exists());
+    assert!(!pout.join("predict-2.png").exists() && pout.join("notes.txt").exists());
     // The ensemble saved with the model gives the same 95 % band as the identification's report
     // for the level not used (same models).
     let id_band = &json_id["uncertainty"]["bands"][1]["peak"];

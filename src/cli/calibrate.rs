@@ -198,7 +198,9 @@ pub fn write_and_report(
     source: &ConfigSource,
     mut out: OutputSet,
 ) -> Result<()> {
-    // Every file is staged and appears at once (or not at all, on an error or an interrupt).
+    // Every file is staged and appears at once (or not at all, on an error or an interrupt);
+    // an earlier run's loop plots at pressures this run does not have are removed.
+    out.owns("loop_fit_", "Pa.png");
     let (_, output_s) = output::write_outputs(result, source, &out.staging_dir()?)?;
     let written = out.commit()?;
 

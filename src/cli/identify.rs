@@ -211,7 +211,8 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     opts.response_amplitudes = args.response_amplitude.clone();
     opts.rows = fit_rows(args.rows);
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
-    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.owns("identify-level", ".png");
     let sweeps = read_sweeps(&args.files)?;
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
@@ -257,7 +258,8 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     if args.starts > 0 {
         check_search(args)?;
     }
-    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.owns("identify-level", ".png");
     let spec = ReducedSpec::load(structure)?;
     let sweeps = read_sweeps(&args.files)?;
     let fit_levels =
@@ -327,7 +329,8 @@ pub fn run_predict(args: PredictArgs) -> Result<()> {
         ControlArg::Force => Control::Force,
         ControlArg::Response => Control::Response,
     };
-    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.owns("predict-", ".png");
     let sweeps = read_sweeps(&args.files)?;
     let p = predict(&args.model, sweeps, control)?;
     let written = write_all(out, |d| p.write(d))?;

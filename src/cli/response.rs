@@ -27,6 +27,13 @@ pub struct ResponseArgs {
 pub fn run(args: ResponseArgs) -> Result<()> {
     // Every output appears together or not at all; an unusable --out-dir is refused now.
     let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    for (prefix, suffix) in [
+        ("response_level_", ".csv"),
+        ("elements_level_", ".csv"),
+        ("frf_", ".png"),
+    ] {
+        out.owns(prefix, suffix);
+    }
     let model = model_file::load(&args.model)?;
     let f = &model.file;
     let harmonics = Harmonics::new(f.sweep.harmonics, f.sweep.odd_only, f.sweep.time_samples)
