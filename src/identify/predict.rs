@@ -99,6 +99,32 @@ pub struct FilePrediction {
     pub model_frf: Vec<Complex64>,
     /// Response control: the model's force per row (N).
     pub model_force_n: Option<Vec<f64>>,
+    /// Largest drive-point displacement amplitude of the file's rows (m).
+    pub peak_amplitude_m: f64,
+    /// Why the file lies outside the amplitudes the model was identified on (its peak more than
+    /// [`EXTRAPOLATION_FACTOR`] beyond the fit levels' peaks), or `None`.
+    pub extrapolation: Option<String>,
+}
+
+/// How far beyond the fit levels' peak amplitudes (above the largest, below the smallest) a
+/// file's peak may lie before its prediction is flagged as an extrapolation of the joint law.
+pub const EXTRAPOLATION_FACTOR: f64 = 2.0;
+
+/// The flag of a file whose peak displacement amplitude `peak` lies more than
+/// [`EXTRAPOLATION_FACTOR`] outside the identified peaks `[lo, hi]`.
+pub fn extrapolation_note(peak: f64, (lo, hi): (f64, f64)) -> Option<String> {
+    let beyond = if peak > EXTRAPOLATION_FACTOR * hi {
+        Some(format!("{:.1}× the largest", peak / hi))
+    } else if peak < lo / EXTRAPOLATION_FACTOR {
+        Some(format!("1/{:.1} of the smallest", lo / peak))
+    } else {
+        None
+    };
+    beyond.map(|b| {
+        format!(
+            "its peak amplitude {peak:.3e} m is {b} the model was identified on ({lo:.3e}–{hi:.3e} m): the joint law is extrapolated"
+        )
+    })
 }
 
 /// A prediction.
@@ -201,7 +227,22 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
                 / f.len() as f64)
                 .sqrt()
         });
+        let peak_amplitude_m = s
+            .rows
+            .iter()
+            .zip(&level.drives)
+            .map(|(r, d)| r.response / s.quantity.from_displacement(d.omega).norm())
+            .fold(0.0, f64::max);
+        let extrapolation = match &model {
+            Predictor::Mode(m, _) => extrapolation_note(
+                peak_amplitude_m,
+                (m.spec.scales.amplitude_min_m, m.spec.scales.amplitude_max_m),
+            ),
+            Predictor::Reduced(..) => None,
+        };
         files.push(FilePrediction {
+            peak_amplitude_m,
+            extrapolation,
             input: InputFile::of(s),
             errors: LevelErrors::new(&level, &y, "predicted", failed),
             force_rms_error,
@@ -310,6 +351,11 @@ impl Prediction {
                 s += &bands_table(b);
             }
             Err(why) => s += &format!("no 95 % bands: {why}\n"),
+        }
+        for f in &self.files {
+            if let Some(why) = &f.extrapolation {
+                s += &format!("  warning: {}: {why}\n", f.errors.file);
+            }
         }
         for f in &self.files {
             if let Some(e) = f.force_rms_error {
@@ -426,6 +472,18 @@ mod tests {
     /// Each file's own convention must be the model's; the saved one is used only for files
     /// with no resonance inside their band, never for a file that peaks inside its band without
     /// a resonance's phase (before, any failure of one joint detection fell back to it).
+    #[test]
+    fn a_file_far_outside_the_identified_amplitudes_is_flagged() {
+        let range = (1e-4, 3e-4);
+        assert_eq!(extrapolation_note(2e-4, range), None);
+        assert_eq!(extrapolation_note(5.9e-4, range), None);
+        assert_eq!(extrapolation_note(0.51e-4, range), None);
+        let above = extrapolation_note(1.4e-2, range).unwrap();
+        assert!(above.contains("46.7× the largest"), "{above}");
+        let below = extrapolation_note(2e-5, range).unwrap();
+        assert!(below.contains("1/5.0 of the smallest"), "{below}");
+    }
+
     #[test]
     fn every_file_shows_the_models_convention_or_none() {
         let d = tempfile::tempdir().unwrap();
