@@ -40,7 +40,26 @@ enum Command {
     Predict(cli::identify::PredictArgs),
 }
 
+/// Keep freed work arrays in the process instead of handing them back to the kernel after every
+/// use. glibc's defaults return blocks above 128 KiB (`munmap`, and `MADV_DONTNEED` when the
+/// thread arenas of rayon's workers are trimmed), so a solver that allocates its FFT grids per
+/// product faults them in again each time: `contact tangential --operator fft` on a zero-padded
+/// 128² Hertz case spent 6.4 of 11.4 s wall in the kernel (3.5 M page faults); with these two
+/// settings 0.5 of 5.7 s (BENCHMARKS.md, "Tangential contact"). The cost is up to 256 MiB of
+/// freed memory kept per arena; arrays above 32 MiB (glibc's ceiling for the threshold) are
+/// still mapped on their own. Called before any thread starts. The library does not do this (a
+/// host process such as Python owns its allocator).
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only changes allocator parameters; called once, before other threads.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 256 << 20);
+    }
+}
+
 fn main() {
+    keep_freed_memory();
     let cli = Cli::parse();
     // An interrupt removes staged and temporary files and exits 130 (asperity::output).
     asperity::output::install_interrupt_handler();
