@@ -322,6 +322,11 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
         shard::config_sha256(sweep)?,
         env!("CARGO_PKG_VERSION")
     );
+    for u in units {
+        if let Some(w) = window_edge_warning(u) {
+            let _ = writeln!(csv, "# warning: {w}");
+        }
+    }
     let mut rows = vec![[
         "surface",
         "pressure_Pa",
@@ -364,6 +369,32 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
     }
     csv.push_str(&csv_records(&rows)?);
     Ok(csv)
+}
+
+/// The warning for a surface whose contact reaches the edge of its non-periodic window at some
+/// pressures (contact points on the window's border rows/columns): there the surface is cut, so
+/// area and kn depend on the window, and refining the grid does not help. None otherwise.
+pub fn window_edge_warning(u: &UnitRecord<SurfaceResult>) -> Option<String> {
+    let at: Vec<String> = u
+        .result
+        .points
+        .iter()
+        .filter(|p| p.resolution.reaches_window_edge())
+        .map(|p| {
+            format!(
+                "{:e} Pa ({} of {} contact points)",
+                p.pressure_pa, p.resolution.border_contact_points, p.resolution.contact_points
+            )
+        })
+        .collect();
+    if at.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{}: the contact reaches the edge of the non-periodic window (contact points on its border rows/columns) at {}: the result depends on the window; enlarge the window (a finer grid does not help)",
+        u.label,
+        at.join(", ")
+    ))
 }
 
 /// Records as CSV text (fields quoted where needed, e.g. file paths holding commas).
@@ -538,7 +569,15 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
                 r.points_across_contact(),
                 r.points_across_free(),
                 p.iterations,
-                if !p.under_resolved() {
+                if r.reaches_window_edge() {
+                    // Free islands that look narrow are the window's cut, not the grid's; narrow
+                    // contact spots are still the grid's.
+                    if p.under_resolved() && r.points_across_contact() <= r.points_across_free() {
+                        "  (contact reaches the window's edge: enlarge the window; contact spots under-resolved: refine the grid)"
+                    } else {
+                        "  (contact reaches the window's edge: enlarge the window)"
+                    }
+                } else if !p.under_resolved() {
                     ""
                 } else if r.points_across_contact() <= r.points_across_free() {
                     "  (contact spots under-resolved: refine the grid)"
@@ -549,6 +588,9 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
         }
         if let Ok((beta, _)) = sweep::power_law_fit(&u.result.points) {
             println!("kn ∝ p^β fit over the sweep: β = {beta:.4}");
+        }
+        if let Some(w) = window_edge_warning(u) {
+            println!("warning: {w}");
         }
     }
     if units.len() > 1 {

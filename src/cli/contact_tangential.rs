@@ -226,6 +226,27 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         bar.inc(1);
         normals.push(sol);
     }
+    // A contact cut by the edge of a non-periodic window depends on the window (not the grid).
+    let edge: Vec<String> = pressures
+        .iter()
+        .zip(&normals)
+        .filter(|(_, n)| n.resolution.reaches_window_edge())
+        .map(|(p, n)| {
+            format!(
+                "{p:e} Pa ({} of {} contact points)",
+                n.resolution.border_contact_points, n.resolution.contact_points
+            )
+        })
+        .collect();
+    let edge_warning = (!edge.is_empty()).then(|| {
+        format!(
+            "the contact reaches the edge of the non-periodic window (contact points on its border rows/columns) at {}: the result depends on the window; enlarge the window (a finer grid does not help)",
+            edge.join(", ")
+        )
+    });
+    if let Some(w) = &edge_warning {
+        bar.suspend(|| eprintln!("warning: {w}"));
+    }
     let build = |pressure: &ndarray::Array2<f64>| {
         TangentialSolver::new(
             &TangentialProblem {
@@ -301,6 +322,9 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let _ = writeln!(head, "# assumption: {}", results[0].metadata.assumption);
     let _ = writeln!(head, "# surface: {source}");
     let _ = writeln!(head, "{}", super::grid_header(&surface));
+    if let Some(w) = &edge_warning {
+        let _ = writeln!(head, "# warning: {w}");
+    }
     let _ = writeln!(
         head,
         "# youngs_modulus_Pa = {:e}, poisson_ratio = {} (both bodies), friction_coefficient = {mu}",
