@@ -209,6 +209,29 @@ pub fn contact_pressures(
     )
 }
 
+/// Below this composite modulus (Pa) a solid's modulus was most likely given in the wrong unit
+/// (GPa or MPa read as Pa): the softest elastomers have E ≈ 1 MPa.
+pub const IMPLAUSIBLE_E_STAR_PA: f64 = 1e5;
+
+/// The likely cause of a pressure above the small-strain bound: the units. Names the modulus
+/// flag when `name` is a flag, and says so outright when E* itself is implausibly small.
+fn units_hint(name: &str, e_star_pa: f64) -> String {
+    let modulus = if name.starts_with("--") {
+        format!("--youngs-modulus-pa is in Pa (steel: 2.1e11), {name} in Pa")
+    } else {
+        format!("`youngs_modulus_pa` is in Pa (steel: 2.1e11), `{name}` in Pa")
+    };
+    if e_star_pa < IMPLAUSIBLE_E_STAR_PA {
+        format!(
+            " — check the units: E* = {} Pa is far below any solid's (a modulus in GPa or \
+             MPa given as Pa?); {modulus}",
+            num(e_star_pa)
+        )
+    } else {
+        format!(" (check the units: {modulus})")
+    }
+}
+
 /// [`contact_pressures`] for a surface known by its size `size_m` (larger side) and height
 /// range `height_range_m` (for a generated Gaussian surface, about 8 Rq), before it exists.
 pub fn contact_pressures_for(
@@ -225,10 +248,11 @@ pub fn contact_pressures_for(
                 name,
                 format!(
                     "{} Pa exceeds {} × E* = {} Pa: nominal strains above 1 % are outside \
-                     the linear-elastic half-space model",
+                     the linear-elastic half-space model{}",
                     num(p),
                     num(MAX_STRAIN),
-                    num(MAX_STRAIN * e_star_pa)
+                    num(MAX_STRAIN * e_star_pa),
+                    units_hint(name, e_star_pa)
                 ),
             ));
         }

@@ -40,7 +40,9 @@ pub struct NormalArgs {
     grid: Option<usize>,
     /// Nominal pressures (Pa), comma separated. Default: the reference sweep
     /// 0.1, 0.2, 1, 2, 5, 10 MPa.
-    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    /// One comma-separated list per flag; values starting with `-` are taken as values, so
+    /// that a negative pressure reaches the flag's own check, which names it.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pressures_pa: Option<Vec<f64>>,
     /// Young's modulus of both bodies (Pa).
     #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
