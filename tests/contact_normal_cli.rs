@@ -273,3 +273,44 @@ fn contact_reaching_the_window_edge_is_flagged() {
         "{csv}"
     );
 }
+
+/// Two --surface files are realisations of one surface (mean ± std), not two bodies as in
+/// `contact tangential`: the command says so. Two copies of one surface give a zero standard
+/// deviation and the single surface's mean.
+#[test]
+fn several_surfaces_are_named_realisations() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a.txt"), tmp.path().join("b.txt"));
+    write_wavy_matrix(&a, None);
+    write_wavy_matrix(&b, None);
+    let out = tmp.path().join("out");
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        a.to_str().unwrap(),
+        "--surface",
+        b.to_str().unwrap(),
+        "--pressures-pa",
+        "5e6",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("2 surfaces: treated as 2 realisations of one surface (mean ± std)")
+            && err.contains("composite surface (h1 − h2"),
+        "{err}"
+    );
+    let stats = std::fs::read_to_string(out.join("normal_sweep_statistics.csv")).unwrap();
+    let row: Vec<f64> = stats
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(row[1], 2.0);
+    assert_eq!(row[3], 0.0, "std of two identical surfaces: {stats}");
+}

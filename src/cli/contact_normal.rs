@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct NormalArgs {
     /// Surface height file (heights in m; the format is recognised from the extension). Repeat
-    /// the flag for several surfaces. Default: the reference generated surface (Rq 0.177 µm,
+    /// the flag for several surfaces: realisations of one surface, averaged (mean ± std), not
+    /// two bodies (give two bodies as their composite surface h1 − h2, `surface combine`). Default: the reference generated surface (Rq 0.177 µm,
     /// cl 6.6 µm, 250 µm, 1024², seed 1).
     #[arg(long, conflicts_with_all = ["seeds", "grid"])]
     surface: Vec<PathBuf>,
@@ -132,6 +133,15 @@ fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
             spec: GaussianSurfaceSpec { seed, ..spec },
         })
         .collect())
+}
+
+/// The meaning of several --surface files in `contact normal` (printed with them): realisations
+/// of one surface, averaged; not two bodies, as in `contact tangential`.
+pub fn realisations_note(n: usize) -> String {
+    format!(
+        "{n} surfaces: treated as {n} realisations of one surface (mean ± std); two bodies in \
+         contact: give their composite surface (h1 − h2, `asperity surface combine`) as one file"
+    )
 }
 
 /// The sweep from the flags, every input checked, errors naming the flag.
@@ -249,6 +259,11 @@ pub fn run(args: NormalArgs) -> Result<()> {
             String::new()
         }
     );
+    if args.surface.len() > 1 {
+        // `contact tangential` takes two --surface files as two bodies; here they are
+        // realisations. Say so, so that two bodies are not silently averaged.
+        eprintln!("{}", realisations_note(args.surface.len()));
+    }
     let per_unit = sweep.pressures_pa.len() as u64;
     let bar = super::progress_bar("normal contact", block.len() as u64 * per_unit);
     let mut done = 0;
