@@ -9,6 +9,7 @@
 //! |---|---|---|
 //! | [`tolerance`] | `0 < tol < 1` | a relative residual of 1 or more is met by the initial guess |
 //! | [`contact_surface`] | spacing in [[`MIN_SPACING_M`], [`MAX_SPACING_M`]], `max |h|` ≤ [`MAX_HEIGHT_M`], not flat | outside these the heights are in the wrong unit or the products overflow; a flat surface is in full contact at any load |
+//! | [`contact_file_grid`] | ≥ [`MIN_CONTACT_FILE_POINTS`] points per side | a profile or a stub read from a file is not an area whose contact the solvers resolve |
 //! | [`contact_pressures`] | `p ≤ MAX_STRAIN · E*` and `p·L/E* ≥ RESOLVABLE_FRACTION · (h_max − h_min)` | small-strain linear elasticity; an elastic displacement below the round-off of the heights cannot be resolved |
 //! | [`finite_result`] / [`positive_result`] | finite (and > 0) | a non-finite or non-positive stiffness, gap or error is never reported as a result |
 //! | [`magnitudes`] | `|v| ≤ max` | measured values beyond any instrument's range are a unit or format error |
@@ -39,6 +40,24 @@ pub const MAX_VIBRATION_AMPLITUDE_M: f64 = 1.0;
 /// Largest harmonic force amplitude (N) of a measured row or a model's excitation level: beyond
 /// any shaker or hammer.
 pub const MAX_FORCE_AMPLITUDE_N: f64 = 1e6;
+
+/// Fewest grid points per side of a contact surface read from a file: the contact commands'
+/// `--grid` floor (tangential: 8). Fewer points are a profile or a stub, not an area whose
+/// contact the half-space solvers can resolve (a 4 × 1 matrix gives kn ≈ 1e16 N/m³).
+pub const MIN_CONTACT_FILE_POINTS: usize = 8;
+
+/// A contact surface read from `source` (a file, named in the message) has at least
+/// [`MIN_CONTACT_FILE_POINTS`] points along x and along y.
+pub fn contact_file_grid(source: &str, nx: usize, ny: usize) -> Result<()> {
+    if nx < MIN_CONTACT_FILE_POINTS || ny < MIN_CONTACT_FILE_POINTS {
+        return Err(Error::Data(format!(
+            "{source}: {nx} x {ny} points (x by y); a contact surface needs at least \
+             {MIN_CONTACT_FILE_POINTS} points along each side (a profile or a few points do not \
+             resolve an area's contact)"
+        )));
+    }
+    Ok(())
+}
 
 /// Largest Coulomb friction coefficient accepted. Dry metal pairs measure 0.1–1.5 in air and
 /// clean surfaces in vacuum a few; a value of ten or more is a typing or unit error.
@@ -190,6 +209,29 @@ pub fn contact_pressures(
     )
 }
 
+/// Below this composite modulus (Pa) a solid's modulus was most likely given in the wrong unit
+/// (GPa or MPa read as Pa): the softest elastomers have E ≈ 1 MPa.
+pub const IMPLAUSIBLE_E_STAR_PA: f64 = 1e5;
+
+/// The likely cause of a pressure above the small-strain bound: the units. Names the modulus
+/// flag when `name` is a flag, and says so outright when E* itself is implausibly small.
+fn units_hint(name: &str, e_star_pa: f64) -> String {
+    let modulus = if name.starts_with("--") {
+        format!("--youngs-modulus-pa is in Pa (steel: 2.1e11), {name} in Pa")
+    } else {
+        format!("`youngs_modulus_pa` is in Pa (steel: 2.1e11), `{name}` in Pa")
+    };
+    if e_star_pa < IMPLAUSIBLE_E_STAR_PA {
+        format!(
+            " — check the units: E* = {} Pa is far below any solid's (a modulus in GPa or \
+             MPa given as Pa?); {modulus}",
+            num(e_star_pa)
+        )
+    } else {
+        format!(" (check the units: {modulus})")
+    }
+}
+
 /// [`contact_pressures`] for a surface known by its size `size_m` (larger side) and height
 /// range `height_range_m` (for a generated Gaussian surface, about 8 Rq), before it exists.
 pub fn contact_pressures_for(
@@ -206,10 +248,11 @@ pub fn contact_pressures_for(
                 name,
                 format!(
                     "{} Pa exceeds {} × E* = {} Pa: nominal strains above 1 % are outside \
-                     the linear-elastic half-space model",
+                     the linear-elastic half-space model{}",
                     num(p),
                     num(MAX_STRAIN),
-                    num(MAX_STRAIN * e_star_pa)
+                    num(MAX_STRAIN * e_star_pa),
+                    units_hint(name, e_star_pa)
                 ),
             ));
         }

@@ -55,6 +55,19 @@ fn f64s(v: impl IntoIterator<Item = f64>) -> Vec<u8> {
     v.into_iter().flat_map(f64::to_le_bytes).collect()
 }
 
+/// A rough `nx × ny` height matrix (heights in m, 1 µm spacing, non-periodic).
+fn matrix_text(nx: usize, ny: usize) -> Vec<u8> {
+    let mut t = String::from("# unit: m, dx_m: 1e-6, dy_m: 1e-6\n");
+    for j in 0..ny {
+        let row: Vec<String> = (0..nx)
+            .map(|i| format!("{:e}", 1e-8 * (((i * 37 + j * 11) % 17) as f64 - 8.0)))
+            .collect();
+        t += &row.join(",");
+        t.push('\n');
+    }
+    t.into()
+}
+
 fn sidecar(dx: f64) -> Vec<u8> {
     format!("{{\"unit\": \"m\", \"dx_m\": {dx:e}, \"dy_m\": {dx:e}, \"periodic\": false}}").into()
 }
@@ -280,6 +293,16 @@ fn catalogue() -> Vec<Case> {
         case("matrix all nan", "surface stats {d}/m.txt", &["m.txt", "missing"]).file("m.txt", "# unit: m, dx_m: 1e-6, dy_m: 1e-6\nnan,nan\nnan,nan\n"),
         case("profile positions not increasing", "surface stats {d}/p.csv", &["p.csv:4", "increase"]).file("p.csv", "x_um,height_nm\n0,1\n2,2\n1,3\n"),
         case("nan in a nonuniform profile", "surface stats {d}/p.csv", &["p.csv:4", "nonuniform"]).file("p.csv", "x_um,height_nm\n0,1\n0.3,2\n1.7,nan\n2,1\n"),
+        case("matrix periodic: yes", "surface stats {d}/m.txt", &["m.txt:1", "periodic: yes", "`true` or `false`"]).file("m.txt", "# unit: m, dx_m: 1e-6, dy_m: 1e-6, periodic: yes\n1,2\n3,4\n"),
+        case("matrix periodic: 1 (contact)", "contact normal --surface {d}/m.txt --out-dir {d}/out", &["m.txt:2", "periodic: 1"]).file("m.txt", "# asperity height matrix\n# unit: m, dx_m: 1e-6, dy_m: 1e-6, periodic: 1\n1,2\n3,4\n"),
+        case("profile periodic: yes", "surface stats {d}/p.csv", &["p.csv:1", "periodic: yes"]).file("p.csv", "# periodic: yes\nx_um,height_nm\n0,1\n1,2\n2,1\n"),
+        case("4 x 1 matrix (contact normal)", "contact normal --surface {d}/p.txt --out-dir {d}/out", &["p.txt", "4 x 1 points", "at least 8"]).file("p.txt", "# unit: m, dx_m: 1e-6, dy_m: 1e-6\n1e-7,3e-7,2e-7,1e-7\n"),
+        case("4 x 1 matrix (contact tangential)", "contact tangential --surface {d}/p.txt --out-dir {d}/out", &["p.txt", "4 x 1 points", "at least 8"]).file("p.txt", "# unit: m, dx_m: 1e-6, dy_m: 1e-6\n1e-7,3e-7,2e-7,1e-7\n"),
+        case("16 x 7 matrix (contact normal)", "contact normal --surface {d}/p.txt --out-dir {d}/out", &["p.txt", "16 x 7 points", "at least 8"]).file("p.txt", matrix_text(16, 7)),
+        case("--pressures-pa -1e6 (normal)", "contact normal --grid 128 --pressures-pa -1e6 --out-dir {d}/out", &["--pressures-pa", "got -1e6"]),
+        case("--pressures-pa -1e6,2e6 (tangential)", "contact tangential --grid 128 --pressures-pa -1e6,2e6 --out-dir {d}/out", &["--pressures-pa", "got -1e6"]),
+        case("--youngs-modulus-pa 210 (GPa meant)", "contact normal --grid 128 --youngs-modulus-pa 210 --pressures-pa 4.8e7 --out-dir {d}/out", &["--pressures-pa", "check the units", "--youngs-modulus-pa is in Pa"]),
+        case("--youngs-modulus-pa 210 (tangential)", "contact tangential --grid 128 --youngs-modulus-pa 210 --pressures-pa 4.8e7 --out-dir {d}/out", &["--pressures-pa", "check the units", "--youngs-modulus-pa is in Pa"]),
         case("profile without units", "surface stats {d}/p.csv", &["p.csv:1", "unit"]).file("p.csv", "x,height\n0,1\n1,2\n"),
         case("dektak without data", "surface stats {d}/d.csv", &["d.csv", "Scan Data"]).file("d.csv", "Scan Parameters\nLength,10 um\n"),
         case("binary junk", "surface stats {d}/j.dat", &["j.dat", "binary"]).file("j.dat", vec![0u8, 1, 2, 3, 0, 9]),

@@ -174,3 +174,143 @@ fn nan_surface_and_missing_file_fail_cleanly() {
     assert!(err.contains("absent.npy"), "{err}");
     assert_no_output(&out);
 }
+
+/// A Hertz sphere `h = −r²/(2R)` (R = 10 mm) on a non-periodic `n × n` window of side `l_m`,
+/// centred at point (n/2, n/2).
+fn write_hertz_window(path: &Path, n: usize, l_m: f64) {
+    let (r, dx) = (0.01, l_m / n as f64);
+    let c = (n / 2) as f64;
+    let mut text = format!(
+        "# asperity height matrix\n# unit: m, dx_m: {dx:e}, dy_m: {dx:e}, periodic: false\n"
+    );
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = ((i as f64 - c) * dx, (j as f64 - c) * dx);
+                format!("{:e}", -(x * x + y * y) / (2.0 * r))
+            })
+            .collect();
+        text.push_str(&row.join(","));
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// A Hertz contact inside its window matches Hertz and gives no window warning; loaded until its
+/// radius (Hertz: 130 µm) exceeds the half-window (100 µm), the contact is cut by the window:
+/// the sweep warns that it reaches the window's edge (console and CSV) and does not advise a
+/// finer grid, which would not help.
+#[test]
+fn contact_reaching_the_window_edge_is_flagged() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (n, l) = (32, 200e-6);
+    let surf = tmp.path().join("hertz.csv");
+    write_hertz_window(&surf, n, l);
+    let e_star = 210e9 / (2.0 * (1.0 - 0.09)); // two steel bodies
+                                               // Nominal pressures giving Hertz radii a = 60 µm and 130 µm: p = 4E*a³/(3R L²).
+    let p_of = |a: f64| 4.0 * e_star * a * a * a / (3.0 * 0.01 * l * l);
+    let (p_in, p_edge) = (p_of(60e-6), p_of(130e-6));
+    let out = tmp.path().join("out");
+    let (ok, stdout, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        surf.to_str().unwrap(),
+        "--pressures-pa",
+        &format!("{p_in:e},{p_edge:e}"),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let csv = std::fs::read_to_string(out.join("normal_sweep.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    // Inside the window: Hertz area π a² / L² and kn = 2E*a / L² (9.6 points per radius; the
+    // solver gives +1.2 % and −0.7 %).
+    let area: f64 = rows[0][2].parse().unwrap();
+    let kn: f64 = rows[0][4].parse().unwrap();
+    let a = 60e-6;
+    assert!(
+        (area / (std::f64::consts::PI * a * a / (l * l)) - 1.0).abs() < 0.05,
+        "{area}"
+    );
+    assert!(
+        (kn / (2.0 * e_star * a / (l * l)) - 1.0).abs() < 0.03,
+        "{kn}"
+    );
+    // Only the second pressure is flagged, in the console and in the CSV header.
+    let lines: Vec<&str> = stdout.lines().collect();
+    let row_of = |p: &str| {
+        *lines
+            .iter()
+            .find(|l| l.trim_start().starts_with(p))
+            .unwrap()
+    };
+    let edge_row = row_of(&format!("{:.4}", p_edge / 1e6));
+    assert!(edge_row.contains("reaches the window's edge"), "{stdout}");
+    assert!(!edge_row.contains("refine the grid"), "{stdout}");
+    assert!(
+        !row_of(&format!("{:.4}", p_in / 1e6)).contains("window"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("warning:") && stdout.contains("enlarge the window"),
+        "{stdout}"
+    );
+    let warning: Vec<&str> = csv
+        .lines()
+        .filter(|l| l.starts_with("# warning:"))
+        .collect();
+    assert_eq!(warning.len(), 1, "{csv}");
+    assert!(
+        warning[0].contains("edge of the non-periodic window")
+            && warning[0].contains(&format!("{p_edge:e} Pa"))
+            && !warning[0].contains(&format!("{p_in:e} Pa")),
+        "{csv}"
+    );
+}
+
+/// Two --surface files are realisations of one surface (mean ± std), not two bodies as in
+/// `contact tangential`: the command says so. Two copies of one surface give a zero standard
+/// deviation and the single surface's mean.
+#[test]
+fn several_surfaces_are_named_realisations() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a.txt"), tmp.path().join("b.txt"));
+    write_wavy_matrix(&a, None);
+    write_wavy_matrix(&b, None);
+    let out = tmp.path().join("out");
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        a.to_str().unwrap(),
+        "--surface",
+        b.to_str().unwrap(),
+        "--pressures-pa",
+        "5e6",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("2 surfaces: treated as 2 realisations of one surface (mean ± std)")
+            && err.contains("composite surface (h1 − h2"),
+        "{err}"
+    );
+    let stats = std::fs::read_to_string(out.join("normal_sweep_statistics.csv")).unwrap();
+    let row: Vec<f64> = stats
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(row[1], 2.0);
+    assert_eq!(row[3], 0.0, "std of two identical surfaces: {stats}");
+}

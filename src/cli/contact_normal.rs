@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct NormalArgs {
     /// Surface height file (heights in m; the format is recognised from the extension). Repeat
-    /// the flag for several surfaces. Default: the reference generated surface (Rq 0.177 µm,
+    /// the flag for several surfaces: realisations of one surface, averaged (mean ± std), not
+    /// two bodies (give two bodies as their composite surface h1 − h2, `surface combine`). Default: the reference generated surface (Rq 0.177 µm,
     /// cl 6.6 µm, 250 µm, 1024², seed 1).
     #[arg(long, conflicts_with_all = ["seeds", "grid"])]
     surface: Vec<PathBuf>,
@@ -40,7 +41,9 @@ pub struct NormalArgs {
     grid: Option<usize>,
     /// Nominal pressures (Pa), comma separated. Default: the reference sweep
     /// 0.1, 0.2, 1, 2, 5, 10 MPa.
-    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    /// One comma-separated list per flag; values starting with `-` are taken as values, so
+    /// that a negative pressure reaches the flag's own check, which names it.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pressures_pa: Option<Vec<f64>>,
     /// Young's modulus of both bodies (Pa).
     #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
@@ -130,6 +133,15 @@ fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
             spec: GaussianSurfaceSpec { seed, ..spec },
         })
         .collect())
+}
+
+/// The meaning of several --surface files in `contact normal` (printed with them): realisations
+/// of one surface, averaged; not two bodies, as in `contact tangential`.
+pub fn realisations_note(n: usize) -> String {
+    format!(
+        "{n} surfaces: treated as {n} realisations of one surface (mean ± std); two bodies in \
+         contact: give their composite surface (h1 − h2, `asperity surface combine`) as one file"
+    )
 }
 
 /// The sweep from the flags, every input checked, errors naming the flag.
@@ -247,6 +259,11 @@ pub fn run(args: NormalArgs) -> Result<()> {
             String::new()
         }
     );
+    if args.surface.len() > 1 {
+        // `contact tangential` takes two --surface files as two bodies; here they are
+        // realisations. Say so, so that two bodies are not silently averaged.
+        eprintln!("{}", realisations_note(args.surface.len()));
+    }
     let per_unit = sweep.pressures_pa.len() as u64;
     let bar = super::progress_bar("normal contact", block.len() as u64 * per_unit);
     let mut done = 0;
@@ -322,6 +339,11 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
         shard::config_sha256(sweep)?,
         env!("CARGO_PKG_VERSION")
     );
+    for u in units {
+        if let Some(w) = window_edge_warning(u) {
+            let _ = writeln!(csv, "# warning: {w}");
+        }
+    }
     let mut rows = vec![[
         "surface",
         "pressure_Pa",
@@ -364,6 +386,32 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
     }
     csv.push_str(&csv_records(&rows)?);
     Ok(csv)
+}
+
+/// The warning for a surface whose contact reaches the edge of its non-periodic window at some
+/// pressures (contact points on the window's border rows/columns): there the surface is cut, so
+/// area and kn depend on the window, and refining the grid does not help. None otherwise.
+pub fn window_edge_warning(u: &UnitRecord<SurfaceResult>) -> Option<String> {
+    let at: Vec<String> = u
+        .result
+        .points
+        .iter()
+        .filter(|p| p.resolution.reaches_window_edge())
+        .map(|p| {
+            format!(
+                "{:e} Pa ({} of {} contact points)",
+                p.pressure_pa, p.resolution.border_contact_points, p.resolution.contact_points
+            )
+        })
+        .collect();
+    if at.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{}: the contact reaches the edge of the non-periodic window (contact points on its border rows/columns) at {}: the result depends on the window; enlarge the window (a finer grid does not help)",
+        u.label,
+        at.join(", ")
+    ))
 }
 
 /// Records as CSV text (fields quoted where needed, e.g. file paths holding commas).
@@ -538,7 +586,15 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
                 r.points_across_contact(),
                 r.points_across_free(),
                 p.iterations,
-                if !p.under_resolved() {
+                if r.reaches_window_edge() {
+                    // Free islands that look narrow are the window's cut, not the grid's; narrow
+                    // contact spots are still the grid's.
+                    if p.under_resolved() && r.points_across_contact() <= r.points_across_free() {
+                        "  (contact reaches the window's edge: enlarge the window; contact spots under-resolved: refine the grid)"
+                    } else {
+                        "  (contact reaches the window's edge: enlarge the window)"
+                    }
+                } else if !p.under_resolved() {
                     ""
                 } else if r.points_across_contact() <= r.points_across_free() {
                     "  (contact spots under-resolved: refine the grid)"
@@ -549,6 +605,9 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
         }
         if let Ok((beta, _)) = sweep::power_law_fit(&u.result.points) {
             println!("kn ∝ p^β fit over the sweep: β = {beta:.4}");
+        }
+        if let Some(w) = window_edge_warning(u) {
+            println!("warning: {w}");
         }
     }
     if units.len() > 1 {

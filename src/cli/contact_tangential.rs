@@ -27,7 +27,9 @@ pub const DEFAULT_AMPLITUDE_FACTOR: f64 = 1.5;
 pub struct TangentialArgs {
     /// Nominal pressures (Pa), comma separated. Default: the reference sweep
     /// 0.1, 0.2, 1, 2, 5, 10 MPa.
-    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    /// One comma-separated list per flag; values starting with `-` are taken as values, so
+    /// that a negative pressure reaches the flag's own check, which names it.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pressures_pa: Option<Vec<f64>>,
     /// Coulomb friction coefficient μ (-).
     #[arg(long, default_value_t = 0.6, allow_hyphen_values = true)]
@@ -226,6 +228,27 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         bar.inc(1);
         normals.push(sol);
     }
+    // A contact cut by the edge of a non-periodic window depends on the window (not the grid).
+    let edge: Vec<String> = pressures
+        .iter()
+        .zip(&normals)
+        .filter(|(_, n)| n.resolution.reaches_window_edge())
+        .map(|(p, n)| {
+            format!(
+                "{p:e} Pa ({} of {} contact points)",
+                n.resolution.border_contact_points, n.resolution.contact_points
+            )
+        })
+        .collect();
+    let edge_warning = (!edge.is_empty()).then(|| {
+        format!(
+            "the contact reaches the edge of the non-periodic window (contact points on its border rows/columns) at {}: the result depends on the window; enlarge the window (a finer grid does not help)",
+            edge.join(", ")
+        )
+    });
+    if let Some(w) = &edge_warning {
+        bar.suspend(|| eprintln!("warning: {w}"));
+    }
     let build = |pressure: &ndarray::Array2<f64>| {
         TangentialSolver::new(
             &TangentialProblem {
@@ -301,6 +324,9 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let _ = writeln!(head, "# assumption: {}", results[0].metadata.assumption);
     let _ = writeln!(head, "# surface: {source}");
     let _ = writeln!(head, "{}", super::grid_header(&surface));
+    if let Some(w) = &edge_warning {
+        let _ = writeln!(head, "# warning: {w}");
+    }
     let _ = writeln!(
         head,
         "# youngs_modulus_Pa = {:e}, poisson_ratio = {} (both bodies), friction_coefficient = {mu}",

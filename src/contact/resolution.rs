@@ -38,6 +38,13 @@ pub struct ContactResolution {
     pub free_points: usize,
     /// Grid edges between a contact point and a free point (or the window's outside).
     pub interface_edges: usize,
+    /// Contact points on the border rows and columns of a non-periodic (zero-padded) window;
+    /// always 0 for a periodic patch. Any such point means the contact reaches the window's
+    /// edge: the surface is cut there and the solution depends on the window, not on the grid
+    /// spacing (see [`ContactResolution::reaches_window_edge`]). Absent in shard files written
+    /// before it existed (read as 0).
+    #[serde(default)]
+    pub border_contact_points: usize,
 }
 
 impl ContactResolution {
@@ -47,6 +54,7 @@ impl ContactResolution {
         let (nx, ny) = mask.dim();
         let contact_points = mask.iter().filter(|c| **c).count();
         let mut edges = 0usize;
+        let mut border = 0usize;
         for i in 0..nx {
             for j in 0..ny {
                 let c = mask[[i, j]];
@@ -74,6 +82,8 @@ impl ContactResolution {
                 if !periodic {
                     // Edges towards −x and −y at the window's border.
                     edges += usize::from(c && i == 0) + usize::from(c && j == 0);
+                    let on_border = i == 0 || j == 0 || i + 1 == nx || j + 1 == ny;
+                    border += usize::from(c && on_border);
                 }
             }
         }
@@ -81,7 +91,15 @@ impl ContactResolution {
             contact_points,
             free_points: nx * ny - contact_points,
             interface_edges: edges,
+            border_contact_points: border,
         }
+    }
+
+    /// True when contact points lie on the border rows/columns of a non-periodic window: the
+    /// contact is cut by the window, so area and kn depend on the window size (enlarge the
+    /// window); refining the grid does not help.
+    pub fn reaches_window_edge(&self) -> bool {
+        self.border_contact_points > 0
     }
 
     /// Mean width of a phase of `points` points, `4 points / P` (infinite without interface).
@@ -152,6 +170,24 @@ mod tests {
         assert_eq!(r.points_across_contact(), 4.0);
         let w = ContactResolution::of(&square(20, 4, (0, 0)), false);
         assert_eq!(w.interface_edges, 16);
+    }
+
+    /// Contact points on a non-periodic window's border rows/columns are counted (the 4 × 4
+    /// square at the corner has 7 of its 16 points on row 0 or column 0); inside the window, or
+    /// on a periodic patch (no edge), none.
+    #[test]
+    fn border_contact_counted_only_for_a_window() {
+        let corner = ContactResolution::of(&square(20, 4, (0, 0)), false);
+        assert_eq!(corner.border_contact_points, 7);
+        assert!(corner.reaches_window_edge());
+        let far = ContactResolution::of(&square(20, 4, (16, 16)), false);
+        assert_eq!(far.border_contact_points, 7);
+        let inside = ContactResolution::of(&square(20, 4, (5, 6)), false);
+        assert_eq!(inside.border_contact_points, 0);
+        assert!(!inside.reaches_window_edge());
+        let periodic = ContactResolution::of(&square(20, 4, (0, 0)), true);
+        assert_eq!(periodic.border_contact_points, 0);
+        assert!(!periodic.reaches_window_edge());
     }
 
     #[test]

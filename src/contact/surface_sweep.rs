@@ -87,6 +87,7 @@ impl SurfaceSource {
                     )));
                 }
                 let (grid, report) = crate::surface::missing::load_area(p, *fill)?;
+                crate::sanity::contact_file_grid(path, grid.nx(), grid.ny())?;
                 if let Some(r) = report {
                     eprintln!("{path}: {}", r.describe());
                 }

@@ -19,6 +19,9 @@
 //! ([`ContactResolution`]); when the narrower of the two spans fewer than
 //! [`crate::contact::resolution::RESOLVED_POINTS_ACROSS`] points, the grid does not resolve the
 //! contact at that load and the area ratio (and, less so, kn) is grid dependent: refine the grid.
+//! In a non-periodic window, contact points on the border rows/columns
+//! ([`ContactResolution::reaches_window_edge`]) mean the contact is cut by the window: the result
+//! depends on the window, not on the grid; enlarge the window.
 //! The smallest and median spot sizes are reported too.
 
 use super::normal::{NormalMethod, NormalSolution, NormalSolver};

@@ -8,7 +8,8 @@
 //! ```
 //!
 //! `unit` is the unit of the heights (`m`, `mm`, `um`, `nm`); `dx_m`, `dy_m` are the grid
-//! spacings in metres; `periodic` is optional (default false). A missing point is written
+//! spacings in metres; `periodic` is optional (`true` or `false`, default false; any other value is
+//! refused). A missing point is written
 //! `nan` (any case); a matrix with missing points is read as a
 //! [`MaskedGrid`](crate::surface::missing::MaskedGrid). As in Gwyddion and
 //! SurfaceTopography, each text row holds the heights at successive x for one y. The writer
@@ -18,7 +19,9 @@
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::output::write_atomic;
-use crate::surface::io::text::{comment_pairs, fields, height_or_missing, number, numbered_lines};
+use crate::surface::io::text::{
+    comment_pairs, fields, height_or_missing, number, numbered_lines, periodic_flag,
+};
 use crate::surface::io::units::metres_per_unit;
 use crate::surface::topography::Topography;
 use ndarray::Array2;
@@ -54,7 +57,7 @@ pub fn read(path: &Path, text: &str) -> Result<Topography> {
                     }
                     "dx_m" => dx = Some(number(path, ln, 1, &v)?),
                     "dy_m" => dy = Some(number(path, ln, 1, &v)?),
-                    "periodic" => periodic = v.eq_ignore_ascii_case("true"),
+                    "periodic" => periodic = periodic_flag(path, ln, &v)?,
                     _ => {}
                 }
             }

@@ -143,7 +143,8 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
 }
 
 /// The equivalent rough surface for the contact solvers from one or two topography files
-/// (areas; a profile is refused): one file is the equivalent surface itself; two files are
+/// (areas of at least [`crate::sanity::MIN_CONTACT_FILE_POINTS`] points per side; a profile is
+/// refused): one file is the equivalent surface itself; two files are
 /// body 1 and body 2 on the same grid, body 2's heights in the common frame (`z` from body 1
 /// towards body 2, as `asperity surface combine` takes them), reduced to `h1 − h2` by
 /// [`crate::surface::combine::equivalent_surface`] (periodic only when both are). Returns the
@@ -156,6 +157,7 @@ pub fn read_equivalent_surface(
     let area = |p: &Path| -> Result<(Grid2, String)> {
         let name = p.display().to_string();
         let (g, report) = crate::surface::missing::complete_area(read(p)?, &name, fill)?;
+        crate::sanity::contact_file_grid(&name, g.nx(), g.ny())?;
         Ok(match report {
             Some(r) => (
                 g,

@@ -19,6 +19,7 @@
 use crate::error::{Error, Result};
 use crate::surface::io::text::{
     comment_pairs, fields, height_or_missing, is_numeric_line, number, numbered_lines,
+    periodic_flag,
 };
 use crate::surface::io::units::unit_in_header;
 use crate::surface::topography::Profile;
@@ -138,7 +139,7 @@ pub fn read(path: &Path, text: &str) -> Result<Profile> {
                 for (k, v) in comment_pairs(l) {
                     match k.as_str() {
                         "dx_m" => dx_m = Some(number(path, ln, 1, &v)?),
-                        "periodic" => periodic = v.eq_ignore_ascii_case("true"),
+                        "periodic" => periodic = periodic_flag(path, ln, &v)?,
                         _ => {}
                     }
                 }

@@ -63,6 +63,22 @@ pub fn height_or_missing(path: &Path, line: usize, col: usize, field: &str) -> R
     }
 }
 
+/// The value of a `periodic:` header key: `true` or `false` (any case). Anything else (`yes`,
+/// `1`, ...) is an error naming file and line, never silently read as false.
+pub fn periodic_flag(path: &Path, line: usize, value: &str) -> Result<bool> {
+    if value.eq_ignore_ascii_case("true") {
+        Ok(true)
+    } else if value.eq_ignore_ascii_case("false") {
+        Ok(false)
+    } else {
+        Err(Error::parse(
+            path,
+            line,
+            format!("`periodic: {value}`: expected `true` or `false`"),
+        ))
+    }
+}
+
 /// Whether every field of a line parses as a number.
 pub fn is_numeric_line(line: &str) -> bool {
     let f = fields(line);
