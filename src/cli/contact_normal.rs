@@ -233,6 +233,10 @@ pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output; the files are staged and appear together
     // at the end (asperity::output::OutputSet).
     let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    if args.shard.is_none() {
+        // An earlier run's maps at pressures this run does not have are removed.
+        out.owns("pressure_map_", "Pa.png");
+    }
     let sweep = sweep_from_args(&args)?;
     let staged = out.staging_dir()?;
     let shard = match &args.shard {
