@@ -333,6 +333,31 @@ fn cli_writes_loops_on_a_small_grid() {
     assert_eq!(e.len(), 2);
     assert!(e[0] > 0.0 && e[1] > e[0], "{e:?}");
     assert!(image::open(out.join("tangential_loops.png")).is_ok());
+    // A rerun writes the same loops and energies byte for byte (wall times are in a file of
+    // their own).
+    let again = dir.path().join("t2");
+    let o = run_cli(&[
+        "--grid",
+        "128",
+        "--pressures-pa",
+        "1e6,1e7",
+        "--cycles",
+        "2",
+        "--steps-per-cycle",
+        "16",
+        "--out-dir",
+        again.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    for f in ["tangential_loops.csv", "tangential_energy.csv"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(again.join(f)).unwrap(),
+            "{f} differs between two runs"
+        );
+    }
+    let timings = std::fs::read_to_string(out.join("tangential_timings.csv")).unwrap();
+    assert!(timings.starts_with("pressure_Pa,setup_time_s,oscillation_wall_time_s"));
 }
 
 /// Energy per cycle (J) of the Mindlin–Deresiewicz loop under the displacement amplitude `da`:

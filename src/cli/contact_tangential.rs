@@ -2,7 +2,8 @@
 //! tangential displacement δ(t) = δa·sin(ωt) along x, one loop per nominal pressure.
 //!
 //! Writes `tangential_loops.csv` (every step, SI units in the column names),
-//! `tangential_energy.csv` (energy per cycle, J/m²), `tangential_loops.png` (mean shear stress vs
+//! `tangential_energy.csv` (energy per cycle, J/m²), `tangential_timings.csv` (wall times, s,
+//! kept apart so that the other files are reproducible), `tangential_loops.png` (mean shear stress vs
 //! displacement, all pressures) and `tangential_loops_normalised.png` (τ/(μ p̄), so that the
 //! low-pressure loops are visible too).
 
@@ -345,7 +346,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let mut loops = head.clone();
     let _ = writeln!(
         loops,
-        "pressure_Pa,cycle,step,displacement_m,mean_shear_stress_Pa,mean_shear_stress_y_Pa,force_N,stick_fraction,accumulated_slip_m,iterations,residual,wall_time_s"
+        "pressure_Pa,cycle,step,displacement_m,mean_shear_stress_Pa,mean_shear_stress_y_Pa,force_N,stick_fraction,accumulated_slip_m,iterations,residual"
     );
     let mut energy = head;
     let _ = writeln!(
@@ -354,15 +355,19 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     );
     let _ = writeln!(
         energy,
-        "pressure_Pa,cycle,dissipated_J_per_m2,dissipated_J,frictional_work_J,contact_area_ratio,contact_points,operator,setup_time_s,oscillation_wall_time_s"
+        "pressure_Pa,cycle,dissipated_J_per_m2,dissipated_J,frictional_work_J,contact_area_ratio,contact_points,operator"
     );
+    // Wall times in a file of their own, so that the loops and energies are reproducible byte
+    // for byte (as `contact normal` keeps its timings apart).
+    let mut timings =
+        String::from("pressure_Pa,setup_time_s,oscillation_wall_time_s,step_wall_time_max_s\n");
     let n = args.steps_per_cycle;
     for ((&p, r), sol) in pressures.iter().zip(&results).zip(&normals) {
         for (i, st) in r.steps.iter().enumerate() {
             let cycle = if i == 0 { 1 } else { (i - 1) / n + 1 };
             let _ = writeln!(
                 loops,
-                "{p:e},{cycle},{i},{:e},{:e},{:e},{:e},{:.6},{:e},{},{:e},{:.4}",
+                "{p:e},{cycle},{i},{:e},{:e},{:e},{:e},{:.6},{:e},{},{:e}",
                 st.shift_m[0],
                 st.mean_shear_pa[0],
                 st.mean_shear_pa[1],
@@ -371,13 +376,19 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 st.accumulated_slip_m,
                 st.iterations,
                 st.residual,
-                st.wall_time_s
             );
         }
+        let _ = writeln!(
+            timings,
+            "{p:e},{:.3},{:.3},{:.4}",
+            r.metadata.setup_time_s,
+            r.wall_time_s,
+            r.steps.iter().map(|s| s.wall_time_s).fold(0.0, f64::max)
+        );
         for c in &r.cycles {
             let _ = writeln!(
                 energy,
-                "{p:e},{},{:e},{:e},{:e},{:e},{},{:?},{:.3},{:.3}",
+                "{p:e},{},{:e},{:e},{:e},{:e},{},{:?}",
                 c.cycle,
                 c.dissipated_j_per_m2,
                 c.dissipated_j,
@@ -385,13 +396,12 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 sol.contact_area_ratio,
                 r.metadata.contact_points,
                 r.metadata.operator,
-                r.metadata.setup_time_s,
-                r.wall_time_s
             );
         }
     }
     asperity::output::write_string_atomic(&out.path("tangential_loops.csv")?, &loops)?;
     asperity::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
+    asperity::output::write_string_atomic(&out.path("tangential_timings.csv")?, &timings)?;
 
     let series = |norm: bool| -> Vec<Series> {
         pressures
