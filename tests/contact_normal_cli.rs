@@ -314,3 +314,59 @@ fn several_surfaces_are_named_realisations() {
     assert_eq!(row[1], 2.0);
     assert_eq!(row[3], 0.0, "std of two identical surfaces: {stats}");
 }
+
+/// Westergaard's sinusoid (periodic, `h = g·cos(2πx/λ)`) is in full contact above
+/// `p* = π E* g/λ`: there the half-space's normal stiffness is infinite, and the sweep says
+/// "full contact" instead of "kn is inf". Below `p*` it runs.
+#[test]
+fn full_contact_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let (n, dx, g) = (16usize, 1e-6, 0.02e-6);
+    let mut text = format!(
+        "# asperity height matrix\n# unit: m, dx_m: {dx:e}, dy_m: {dx:e}, periodic: true\n"
+    );
+    for _ in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                format!(
+                    "{:e}",
+                    g * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos()
+                )
+            })
+            .collect();
+        text += &row.join(",");
+        text.push('\n');
+    }
+    let wave = dir.path().join("wave.csv");
+    std::fs::write(&wave, text).unwrap();
+    let e_star = 210e9 / (1.0 - 0.3f64 * 0.3);
+    let p_star = std::f64::consts::PI * e_star * g / (n as f64 * dx);
+    let out = dir.path().join("full");
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        wave.to_str().unwrap(),
+        "--pressures-pa",
+        &format!("{:e}", 1.2 * p_star),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("full contact") && err.contains("wave.csv"),
+        "{err}"
+    );
+    assert_no_output(&out);
+    let out = dir.path().join("partial");
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        wave.to_str().unwrap(),
+        "--pressures-pa",
+        &format!("{:e}", 0.5 * p_star),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+}

@@ -268,6 +268,16 @@ impl SurfaceSweep {
         })?;
         for p in &sw.points {
             let at = |q: &str| format!("{label}: {q} at {} Pa", crate::error::num(p.pressure_pa));
+            if p.contact_area_ratio >= 1.0 {
+                // Full contact: the gap is closed everywhere and more load no longer moves the
+                // bodies together in the half-space model, so kn is infinite — a limit of the
+                // model, not a failed solve; say so rather than "kn is inf".
+                return Err(Error::Data(format!(
+                    "{label}: full contact at {} Pa (every point in contact, mean gap {:.3e} m): the half-space model's normal stiffness is infinite there; lower the pressure below the one that closes the last gap",
+                    crate::error::num(p.pressure_pa),
+                    p.mean_gap_m
+                )));
+            }
             crate::sanity::positive_result(&at("kn"), p.kn_n_per_m3)?;
             crate::sanity::finite_result(&at("the mean gap"), p.mean_gap_m)?;
             crate::sanity::finite_result(&at("the approach"), p.approach_m)?;
