@@ -88,6 +88,9 @@ impl SurfaceSource {
                 }
                 let (grid, report) = crate::surface::missing::load_area(p, *fill)?;
                 crate::sanity::contact_file_grid(path, grid.nx(), grid.ny())?;
+                if let Some(w) = crate::sanity::contact_surface_tilt(path, &grid) {
+                    eprintln!("warning: {w}");
+                }
                 if let Some(r) = report {
                     eprintln!("{path}: {}", r.describe());
                 }

@@ -174,12 +174,20 @@ pub fn read_equivalent_surface(
     match paths {
         [one] => {
             let (g, name) = area(one)?;
+            if let Some(w) = crate::sanity::contact_surface_tilt(&name, &g) {
+                eprintln!("warning: {w}");
+            }
             Ok((g, format!("measured surface {name}")))
         }
         [a, b] => {
             let ((g1, n1), (g2, n2)) = (area(a)?, area(b)?);
             let h = crate::surface::combine::equivalent_surface(&g1, &g2)
                 .map_err(|e| Error::Data(format!("{} and {}: {e}", a.display(), b.display())))?;
+            // The bodies' tilts count through their difference only.
+            let pair = format!("{} − {}", a.display(), b.display());
+            if let Some(w) = crate::sanity::contact_surface_tilt(&pair, &h) {
+                eprintln!("warning: {w}");
+            }
             Ok((
                 h,
                 format!("equivalent surface h1 - h2 of {n1} (body 1) and {n2} (body 2)"),
