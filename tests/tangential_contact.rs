@@ -419,3 +419,58 @@ fn energy_versus_amplitude_of_a_hertzian_asperity() {
         assert!(l.closure_error < 0.02, "{}", l.closure_error);
     }
 }
+
+/// The loops inherit the normal contact's resolution, and say so: a Hertz sphere
+/// (R = 10 mm, 64² over 200 µm, 3.1 µm spacing) at 48 MPa has a = 50 µm, 32 points across
+/// its contact — no warning; at 48 Pa its Hertz radius is 0.5 µm, under one grid spacing —
+/// the loops come from a contact of a point or two, and the run warns (console and CSV).
+#[test]
+fn loops_on_an_under_resolved_contact_are_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let (n, l, r) = (64usize, 200e-6, 0.01);
+    let dx = l / n as f64;
+    let c = (n / 2) as f64;
+    let mut text = format!(
+        "# asperity height matrix\n# unit: m, dx_m: {dx:e}, dy_m: {dx:e}, periodic: false\n"
+    );
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = ((i as f64 - c) * dx, (j as f64 - c) * dx);
+                format!("{:e}", -(x * x + y * y) / (2.0 * r))
+            })
+            .collect();
+        text += &row.join(",");
+        text.push('\n');
+    }
+    let sphere = dir.path().join("sphere.csv");
+    std::fs::write(&sphere, text).unwrap();
+    for (p, flagged) in [("4.8e7", false), ("48", true)] {
+        let out = dir.path().join(format!("t{p}"));
+        let o = run_cli(&[
+            "--surface",
+            sphere.to_str().unwrap(),
+            "--pressures-pa",
+            p,
+            "--cycles",
+            "1",
+            "--steps-per-cycle",
+            "8",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(
+            err.contains("does not resolve the normal contact"),
+            flagged,
+            "{p} Pa: {err}"
+        );
+        let csv = std::fs::read_to_string(out.join("tangential_loops.csv")).unwrap();
+        assert_eq!(
+            csv.contains("# warning: the grid does not resolve"),
+            flagged,
+            "{p} Pa"
+        );
+    }
+}

@@ -250,6 +250,35 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     if let Some(w) = &edge_warning {
         bar.suspend(|| eprintln!("warning: {w}"));
     }
+    // The loops come from the normal solve's contact: one that the grid does not resolve (as
+    // `contact normal` reports it) gives loops of a few points.
+    let coarse: Vec<String> = pressures
+        .iter()
+        .zip(&normals)
+        .filter(|(_, n)| !n.resolution.resolved())
+        .map(|(p, n)| {
+            format!(
+                "{p:e} Pa ({:.1} points across the {}, {} contact points)",
+                n.resolution.points_across(),
+                if n.resolution.points_across_contact() <= n.resolution.points_across_free() {
+                    "contact spots"
+                } else {
+                    "free islands"
+                },
+                n.resolution.contact_points
+            )
+        })
+        .collect();
+    let resolution_warning = (!coarse.is_empty()).then(|| {
+        format!(
+            "the grid does not resolve the normal contact (fewer than {} points across the narrower of contact spots and free islands) at {}: the loops come from an under-resolved contact; refine the grid",
+            asperity::contact::resolution::RESOLVED_POINTS_ACROSS,
+            coarse.join(", ")
+        )
+    });
+    if let Some(w) = &resolution_warning {
+        bar.suspend(|| eprintln!("warning: {w}"));
+    }
     let build = |pressure: &ndarray::Array2<f64>| {
         TangentialSolver::new(
             &TangentialProblem {
@@ -325,7 +354,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let _ = writeln!(head, "# assumption: {}", results[0].metadata.assumption);
     let _ = writeln!(head, "# surface: {source}");
     let _ = writeln!(head, "{}", super::grid_header(&surface));
-    if let Some(w) = &edge_warning {
+    for w in [&edge_warning, &resolution_warning].into_iter().flatten() {
         let _ = writeln!(head, "# warning: {w}");
     }
     let _ = writeln!(
