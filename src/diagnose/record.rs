@@ -272,11 +272,50 @@ impl Record {
             }
             lines.push(line);
         }
+        check_uniform_sampling(path, &columns.time, &t, &lines)?;
         Record::new(t, x, f, nf).map_err(|e| match e {
             Error::Data(m) => Error::parse(path, 0, m),
             other => other,
         })
     }
+}
+
+/// Largest time step a record may hold, as a multiple of its median step. The analysis
+/// (smoothing, block averaging, phases, the noise floor) works on sample indices and assumes
+/// uniform sampling; a DAQ's clock jitter stays within a few per cent of the step, so a step
+/// 1.5× the median means samples are missing (one dropped sample doubles the step).
+pub const MAX_TIME_STEP_OVER_MEDIAN: f64 = 1.5;
+
+/// Refuse a record with a gap in time (a step larger than [`MAX_TIME_STEP_OVER_MEDIAN`] × the
+/// median step), naming the line of the sample after the gap and the two times.
+fn check_uniform_sampling(path: &Path, column: &str, t: &[f64], lines: &[usize]) -> Result<()> {
+    if t.len() < 3 {
+        return Ok(());
+    }
+    let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut sorted = steps.clone();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    let median = sorted[sorted.len() / 2];
+    let (i, &largest) = steps
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .expect("at least two steps");
+    if largest > MAX_TIME_STEP_OVER_MEDIAN * median {
+        return Err(Error::parse(
+            path,
+            lines[i + 1],
+            format!(
+                "column `{column}`: time jumps from {} s to {} s, a step {:.1}× the median step \
+                 {median:.4e} s (more than {MAX_TIME_STEP_OVER_MEDIAN}×): samples are missing, \
+                 and the analysis needs uniform sampling",
+                crate::error::num(t[i]),
+                crate::error::num(t[i + 1]),
+                largest / median,
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A column named with a unit suffix (`_s`, `_ms`, `_m`, `_mm`, `_um`, `_N`, `_kN`, …) must carry
@@ -348,6 +387,62 @@ mod tests {
         );
         let e = read("friction_force_N", "friction_force_N").unwrap_err();
         assert!(e.contains("in N, this column must be in m"), "{e}");
+    }
+
+    /// Rows `t, x, F` of a Jenkins element (stiffness 2e6 N/m, slip force 100 N) driven by
+    /// x = 1 mm·sin(2πt), 200 samples per cycle, for `cycles` cycles.
+    fn jenkins_rows(cycles: f64) -> Vec<(f64, f64, f64)> {
+        let (k, fs, a) = (2e6, 100.0, 1e-3);
+        let n = (cycles * 200.0) as usize + 1;
+        let mut f = 0.0_f64;
+        let mut x_prev = 0.0;
+        (0..n)
+            .map(|i| {
+                let t = i as f64 / 200.0;
+                let x = a * (std::f64::consts::TAU * t).sin();
+                f = (f + k * (x - x_prev)).clamp(-fs, fs);
+                x_prev = x;
+                (t, x, f)
+            })
+            .collect()
+    }
+
+    fn write_rows(p: &Path, header: &str, rows: &[(f64, f64, f64)]) {
+        let mut s = format!("{header}\n");
+        for (t, x, f) in rows {
+            s += &format!("{t},{x},{f}\n");
+        }
+        std::fs::write(p, s).unwrap();
+    }
+
+    /// Uniform sampling is assumed by the analysis: 60 samples removed from a 200 Hz record
+    /// leave a 0.305 s step (61 × 5 ms) between 1.495 s and 1.8 s; the record is refused at the
+    /// line after the gap. Clock jitter of ±2 % of the step is not a gap.
+    #[test]
+    fn a_gap_in_time_is_refused_with_its_line_and_times() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("gap.csv");
+        let rows = jenkins_rows(6.5);
+        let mut gapped = rows[..300].to_vec();
+        gapped.extend_from_slice(&rows[360..]);
+        write_rows(&p, "time_s,displacement_m,friction_force_N", &gapped);
+        let e = Record::read_csv(&p, &Columns::default())
+            .unwrap_err()
+            .to_string();
+        // Header is line 1: row 300 (the first after the gap) is line 302.
+        assert!(e.contains("gap.csv:302"), "{e}");
+        assert!(
+            e.contains("1.495 s to 1.8 s") && e.contains("time_s"),
+            "{e}"
+        );
+        assert!(e.contains("61.0×"), "{e}");
+        let jittered: Vec<(f64, f64, f64)> = rows
+            .iter()
+            .enumerate()
+            .map(|(i, &(t, x, f))| (t + 1e-4 * if i % 2 == 0 { 1.0 } else { -1.0 }, x, f))
+            .collect();
+        write_rows(&p, "time_s,displacement_m,friction_force_N", &jittered);
+        assert!(Record::read_csv(&p, &Columns::default()).is_ok());
     }
 
     #[test]
