@@ -273,11 +273,52 @@ impl Record {
             lines.push(line);
         }
         check_uniform_sampling(path, &columns.time, &t, &lines)?;
-        Record::new(t, x, f, nf).map_err(|e| match e {
+        let record = Record::new(t, x, f, nf).map_err(|e| match e {
             Error::Data(m) => Error::parse(path, 0, m),
             other => other,
-        })
+        })?;
+        check_dissipation(path, &columns.force, &record)?;
+        Ok(record)
     }
+}
+
+/// A negative loop area counts as a reversed sign once it exceeds this fraction of the
+/// loop's bounding box ΔF·Δx per cycle: a nearly elastic record's ∮F dx is noise-sized and
+/// may take either sign, a friction loop with its force negated is clearly negative (a
+/// Jenkins loop's area is up to the whole box).
+pub const REVERSED_LOOP_FRACTION: f64 = 0.01;
+
+/// Refuse a record whose loops, taken over the complete cycles, generate energy
+/// (∮F dx < 0): the force column's sign convention is the reverse of the element's.
+/// Records without a complete cycle are left to the analysis, which reports them.
+fn check_dissipation(path: &Path, force_column: &str, record: &Record) -> Result<()> {
+    let (x, f) = (&record.displacement_m, &record.force_n);
+    let Ok(cycles) = super::cycles::segment(&record.time_s, x) else {
+        return Ok(());
+    };
+    let range = |v: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+                (a.min(y), b.max(y))
+            });
+        hi - lo
+    };
+    let area = super::cycles::energy_per_cycle(x, f, &cycles);
+    if area < -REVERSED_LOOP_FRACTION * range(f) * range(x) {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "column `{force_column}`: force sign convention reversed? (∮F dx = {area:.4e} J \
+                 per cycle over {} complete cycle(s)); a friction loop dissipates energy, \
+                 ∮F dx > 0: the force must have the sign of the displacement in slip \
+                 (negate the column)",
+                cycles.cycles.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Largest time step a record may hold, as a multiple of its median step. The analysis
@@ -442,6 +483,44 @@ mod tests {
             .map(|(i, &(t, x, f))| (t + 1e-4 * if i % 2 == 0 { 1.0 } else { -1.0 }, x, f))
             .collect();
         write_rows(&p, "time_s,displacement_m,friction_force_N", &jittered);
+        assert!(Record::read_csv(&p, &Columns::default()).is_ok());
+    }
+
+    /// A Jenkins loop dissipates 4·Fs·(A − Fs/k) = 4·100·(1e-3 − 5e-5) = 0.38 J per cycle; with
+    /// the force negated ∮F dx = −0.38 J and the record is refused, naming file and column. A
+    /// purely elastic record (∮F dx = 0 up to rounding) is not refused here.
+    #[test]
+    fn a_loop_that_generates_energy_is_refused_as_a_reversed_sign() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("neg.csv");
+        let rows = jenkins_rows(6.5);
+        let header = "time_s,displacement_m,friction_force_N";
+        write_rows(&p, header, &rows);
+        let r = Record::read_csv(&p, &Columns::default()).unwrap();
+        let c = crate::diagnose::cycles::segment(&r.time_s, &r.displacement_m).unwrap();
+        let area = crate::diagnose::cycles::energy_per_cycle(&r.displacement_m, &r.force_n, &c);
+        assert!((area - 0.38).abs() < 0.01 * 0.38, "{area}");
+        let negated: Vec<_> = rows.iter().map(|&(t, x, f)| (t, x, -f)).collect();
+        write_rows(&p, header, &negated);
+        let e = Record::read_csv(&p, &Columns::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("neg.csv")
+                && e.contains("`friction_force_N`")
+                && e.contains("force sign convention reversed? (∮F dx = ")
+                && e.contains("J per cycle"),
+            "{e}"
+        );
+        let reported: f64 = e
+            .split("∮F dx = ")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap();
+        assert!((reported + 0.38).abs() < 0.01 * 0.38, "{reported}");
+        let elastic: Vec<_> = rows.iter().map(|&(t, x, _)| (t, x, -2e4 * x)).collect();
+        write_rows(&p, header, &elastic);
         assert!(Record::read_csv(&p, &Columns::default()).is_ok());
     }
 
