@@ -359,13 +359,21 @@ fn check_uniform_sampling(path: &Path, column: &str, t: &[f64], lines: &[usize])
     Ok(())
 }
 
-/// A column named with a unit suffix (`_s`, `_ms`, `_m`, `_mm`, `_um`, `_N`, `_kN`, …) must carry
-/// the unit its role reads in (SI, no scaling is applied): a displacement column given as the
+/// A column named with a unit suffix (`_s`, `_ms`, `_m`, `_mm`, `_um`, `_in`, `_ft`, `_N`, `_kN`,
+/// `_kip`, `_lbf`, `_g`, `_V`, …) must carry the unit its role reads in (SI, no scaling is
+/// applied): a displacement column given as the
 /// force would otherwise be read as newtons. Names without a recognised suffix are taken as
 /// given.
 fn check_column_unit(path: &Path, name: &str, flag: &str, unit: &str) -> Result<()> {
-    const SUFFIXES: [&str; 12] = [
-        "s", "ms", "us", "m", "mm", "um", "µm", "nm", "N", "kN", "mN", "lbf",
+    // Units a rig's CSV may carry; none is converted, so each must be the role's SI unit.
+    const SUFFIXES: [&str; 37] = [
+        // time
+        "s", "ms", "us", "µs", "ns", "min", // length
+        "m", "mm", "um", "µm", "nm", "cm", "km", "in", "inch", "inches", "ft", "mil",
+        // force, mass, acceleration
+        "N", "kN", "MN", "mN", "uN", "µN", "lb", "lbs", "lbf", "kip", "kips", "kgf", "ozf", "kg",
+        "g", // raw transducer signals
+        "V", "mV", "uV", "counts",
     ];
     if let Some((quantity, per)) = name.split_once("_per_") {
         // A rate (velocity `m_per_s`, …): no role of a record is one.
@@ -522,6 +530,125 @@ mod tests {
         let elastic: Vec<_> = rows.iter().map(|&(t, x, _)| (t, x, -2e4 * x)).collect();
         write_rows(&p, header, &elastic);
         assert!(Record::read_csv(&p, &Columns::default()).is_ok());
+    }
+
+    /// Inches, kips, pounds, grams, volts, minutes are not converted: a column named in one of
+    /// them is refused, naming the column and the unit the role needs (m for the displacement,
+    /// N for the force, s for the time).
+    #[test]
+    fn a_column_in_a_non_si_unit_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("imperial.csv");
+        let names = [
+            "time_s",
+            "time_min",
+            "displacement_m",
+            "displacement_in",
+            "displacement_ft",
+            "friction_force_N",
+            "friction_force_kip",
+            "friction_force_lb",
+            "friction_force_g",
+            "friction_force_V",
+            "friction_force_mV",
+        ];
+        let mut s = names.join(",") + "\n";
+        for (t, x, f) in jenkins_rows(3.0) {
+            let row = [t, t / 60.0, x, x / 0.0254, x / 0.3048, f];
+            let mut v: Vec<String> = row.iter().map(|v| v.to_string()).collect();
+            v.extend(std::iter::repeat_n(f.to_string(), 5));
+            s += &(v.join(",") + "\n");
+        }
+        std::fs::write(&p, s).unwrap();
+        let read = |time: &str, displacement: &str, force: &str| {
+            Record::read_csv(
+                &p,
+                &Columns {
+                    time: time.into(),
+                    displacement: displacement.into(),
+                    force: force.into(),
+                    normal_force: None,
+                },
+            )
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+        };
+        assert!(read("time_s", "displacement_m", "friction_force_N").is_ok());
+        for (t, x, f, flag, column, unit) in [
+            (
+                "time_min",
+                "displacement_m",
+                "friction_force_N",
+                "--time-column",
+                "time_min",
+                "s",
+            ),
+            (
+                "time_s",
+                "displacement_in",
+                "friction_force_N",
+                "--displacement-column",
+                "displacement_in",
+                "m",
+            ),
+            (
+                "time_s",
+                "displacement_ft",
+                "friction_force_N",
+                "--displacement-column",
+                "displacement_ft",
+                "m",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_kip",
+                "--force-column",
+                "friction_force_kip",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_lb",
+                "--force-column",
+                "friction_force_lb",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_g",
+                "--force-column",
+                "friction_force_g",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_V",
+                "--force-column",
+                "friction_force_V",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_mV",
+                "--force-column",
+                "friction_force_mV",
+                "N",
+            ),
+        ] {
+            let e = read(t, x, f).unwrap_err();
+            assert!(
+                e.contains(flag)
+                    && e.contains(&format!("`{column}`"))
+                    && e.contains(&format!("must be in {unit}"))
+                    && e.contains("imperial.csv"),
+                "{e}"
+            );
+        }
     }
 
     #[test]
