@@ -9,8 +9,10 @@
 use super::cycles::Phase;
 use super::noise::NoiseFloor;
 use super::residual::PhaseStats;
-use super::select::{Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict};
-use super::stationarity::{Stationarity, Trend};
+use super::select::{
+    Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict, ADEQUATE_RATIO,
+};
+use super::stationarity::{Stationarity, Trend, MIN_DEGREES_OF_FREEDOM};
 use super::{Bound, Effect};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
@@ -92,6 +94,18 @@ fn length(v: f64) -> String {
 
 fn opt(v: Option<f64>, prec: usize) -> String {
     v.map_or("—".to_string(), |x| format!("{x:.prec$}"))
+}
+
+/// The share of the excess residual an effect explains, in words. `None`: the relevance test
+/// was not run (the model before it had no excess over the noise floor overall), so the share
+/// is not known — never "all".
+fn explained_words(fraction: Option<f64>) -> String {
+    fraction.map_or(
+        "share of the excess residual not tested (the model before it was at the noise floor \
+         overall)"
+            .to_string(),
+        |e| format!("explains {:.0} % of the excess residual", 100.0 * e),
+    )
 }
 
 impl Report {
@@ -180,12 +194,11 @@ impl Report {
             })
             .collect();
         format!(
-            "{} ({}; z = {:.0}, explains {} of the excess residual; {})",
+            "{} ({}; z = {:.0}, {}; {})",
             c.effect.id(),
             params.join(", "),
             c.evidence_z,
-            c.explained_fraction
-                .map_or("all".to_string(), |e| format!("{:.0} %", 100.0 * e)),
+            explained_words(c.explained_fraction),
             c.effect.meaning()
         )
     }
@@ -216,7 +229,9 @@ impl Report {
         let verdict = match self.verdict {
             Verdict::ModelAdequate => format!(
                 "model adequate: the baseline's held-out residual is {r:.2}× the noise floor \
-                 (σ = {sigma:.4e} N){}; no effect needed",
+                 (σ = {sigma:.4e} N){}; no effect larger than about {ADEQUATE_RATIO}σ RMS was \
+                 looked for (the candidate search runs only above {ADEQUATE_RATIO}× the noise \
+                 floor): smaller effects were not tested",
                 worst(after)
             ),
             Verdict::EffectsFound => format!(
@@ -265,7 +280,13 @@ impl Report {
                 } else if self.stationarity.testable {
                     "; no drift".to_string()
                 } else {
-                    "; drift not testable (fewer than 3 cycles)".to_string()
+                    let dof = self.stationarity.degrees_of_freedom();
+                    format!(
+                        "; drift not testable ({} steady cycle(s): the trend test has {dof} \
+                         degree(s) of freedom, {MIN_DEGREES_OF_FREEDOM} needed, i.e. {} cycles)",
+                        self.stationarity.cycles.len(),
+                        MIN_DEGREES_OF_FREEDOM + 2
+                    )
                 };
                 if !found.is_empty() {
                     s += &format!("; explained in part by {}", found.join("; then "));
@@ -646,4 +667,24 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         ],
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without a relevance test (no excess over the floor before the effect) the share an
+    /// effect explains is unknown: the report must say so, never "explains all".
+    #[test]
+    fn an_untested_share_is_not_all_of_the_excess() {
+        let none = explained_words(None);
+        assert!(
+            none.contains("not tested") && !none.contains("explains all"),
+            "{none}"
+        );
+        assert_eq!(
+            explained_words(Some(0.76)),
+            "explains 76 % of the excess residual"
+        );
+    }
 }

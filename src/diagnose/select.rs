@@ -40,7 +40,7 @@
 //!    macroslip, clearance, closing; the reversal phase only overall, see [`Character`]) that
 //!    holds at least 5 % of the held-out samples (a misfit concentrated in microslip is not
 //!    diluted by a long macroslip); then *effects found* (if any were accepted) or *model
-//!    adequate* (none needed). Otherwise *model inadequate, residual unexplained*, with where
+//!    adequate* (no effect larger than about 2σ RMS was looked for). Otherwise *model inadequate, residual unexplained*, with where
 //!    the residual sits, whether it rings, and the drift findings ([`super::residual`],
 //!    [`super::stationarity`]). No verdict says that no effect is needed while the residual is
 //!    above twice the noise floor.
