@@ -57,12 +57,33 @@ fn measured(name: &str) {
         "residual unexplained",
         "× the noise floor",
         "explained in part by",
-        "drift",
     ] {
         assert!(
             conclusion.contains(needle),
             "`{needle}` not in {conclusion}"
         );
+    }
+    // The drift clause: a trend test over n steady cycles has n − 2 degrees of freedom and
+    // no power below 3 (5 cycles); these loops hold 3 steady cycles, so drift cannot be judged
+    // and "no drift" would claim what the test cannot show.
+    let steady = json["stationarity"]["cycles"].as_array().unwrap().len();
+    let drift_clause = if steady < 5 {
+        "; drift not testable"
+    } else if json["stationarity"]["findings"]
+        .as_array()
+        .unwrap()
+        .is_empty()
+    {
+        "; no drift"
+    } else {
+        "; drifts: "
+    };
+    assert!(
+        conclusion.contains(drift_clause),
+        "`{drift_clause}` not in {conclusion} ({steady} steady cycles)"
+    );
+    if steady < 5 {
+        assert!(!conclusion.contains("; no drift"), "{conclusion}");
     }
     // The free play is seen in the measured force itself, model-free, in most half-cycles,
     // and the clearance is among the effects that explain part of the residual.

@@ -7,7 +7,7 @@
 //! load is known (a measured normal-force column, or a calibration table's `N = p·A`).
 
 use super::cycles::Phase;
-use super::noise::NoiseFloor;
+use super::noise::{NoiseFloor, CYCLES_FOR_DRIFT_FREE_FLOOR};
 use super::residual::PhaseStats;
 use super::select::{
     Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict, ADEQUATE_RATIO,
@@ -226,6 +226,16 @@ impl Report {
         } else {
             String::new()
         };
+        let short_floor = if self.noise.from_first_differences() {
+            format!(
+                "; note: the noise floor compares only two cycles (first differences), in which \
+                 a drift does not cancel, so σ may be too large; {} complete cycles at the same \
+                 stroke are needed to tell noise from drift",
+                CYCLES_FOR_DRIFT_FREE_FLOOR
+            )
+        } else {
+            String::new()
+        };
         let verdict = match self.verdict {
             Verdict::ModelAdequate => format!(
                 "model adequate: the baseline's held-out residual is {r:.2}× the noise floor \
@@ -233,6 +243,17 @@ impl Report {
                  looked for (the candidate search runs only above {ADEQUATE_RATIO}× the noise \
                  floor): smaller effects were not tested",
                 worst(after)
+            ),
+            Verdict::RecordTooShort => format!(
+                "record too short to tell noise from drift: the noise floor (σ = {sigma:.4e} N) \
+                 comes from first differences across two cycles, in which a drift from cycle to \
+                 cycle does not cancel, so σ may be inflated by drift; against it the \
+                 baseline's held-out residual is {r:.2}×{}; {} complete cycles at the same \
+                 stroke are needed (the record has {}); no verdict on adequacy, and no effect \
+                 search",
+                worst(after),
+                CYCLES_FOR_DRIFT_FREE_FLOOR,
+                self.complete_cycles
             ),
             Verdict::EffectsFound => format!(
                 "effect(s) found: {}; the held-out residual is now {r:.2}× the noise floor \
@@ -294,7 +315,12 @@ impl Report {
                 s
             }
         };
-        verdict + &caveat
+        let short_floor = if self.verdict == Verdict::RecordTooShort {
+            String::new()
+        } else {
+            short_floor
+        };
+        verdict + &caveat + &short_floor
     }
 
     /// Findings beside the verdict: drift, clearance, noise notes.
