@@ -170,6 +170,14 @@ fn record(force_scale: f64) -> Vec<u8> {
     s.into_bytes()
 }
 
+/// [`record`] (scale 100 N) without the data rows `rows` (0-based): a gap in time.
+fn record_without_rows(rows: std::ops::Range<usize>) -> String {
+    let text = String::from_utf8(record(100.0)).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.drain(rows.start + 1..rows.end + 1);
+    lines.join("\n") + "\n"
+}
+
 const TABLE: &str = "pressure_Pa,contact_area_ratio,kn_N_per_m3,E0_N_per_m3,k,mu,Et_N_per_m3,fit_R2,energy_per_cycle_J_per_m2\n\
 1e6,0.001,1e13,6e12,0.5,0.6,0,0.99,0.01\n2e6,0.002,2e13,1e13,0.3,0.6,0,0.99,0.02\n";
 
@@ -327,6 +335,10 @@ fn catalogue() -> Vec<Case> {
         case("record without the force column", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:1", "friction_force_N"]).file("r.csv", "time_s,displacement_m\n0,0\n"),
         case("record with text", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:3", "not a number"]).file("r.csv", "time_s,displacement_m,friction_force_N\n0,0,0\n1,x,1\n"),
         case("record displacement in um as m", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:2", "displacement_m", "exceeds"]).file("r.csv", "time_s,displacement_m,friction_force_N\n0,50000,1\n1,1,1\n"),
+        case("record with a gap in time (10 samples missing)", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:102", "time_s", "0.99 s to 1.1 s"]).file("r.csv", record_without_rows(100..110)),
+        case("record with the force sign reversed", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv", "`friction_force_N`", "force sign convention reversed? (∮F dx = -"]).file("r.csv", record(-100.0)),
+        case("record displacement in inches", "diagnose {d}/r.csv --displacement-column displacement_in --out-dir {d}/out", &["r.csv", "--displacement-column", "`displacement_in`", "must be in m"]).file("r.csv", String::from_utf8(record(100.0)).unwrap().replacen("displacement_m", "displacement_in", 1)),
+        case("record force in kip", "diagnose {d}/r.csv --force-column friction_force_kip --out-dir {d}/out", &["r.csv", "--force-column", "`friction_force_kip`", "must be in N"]).file("r.csv", String::from_utf8(record(100.0)).unwrap().replacen("friction_force_N", "friction_force_kip", 1)),
         // --- Configuration keys
         case("config unknown key", "calibrate {d}/c.toml --out-dir {d}/out", &["c.toml:", "unknown field"]).file("c.toml", config(("[fit]\n", "[fit]\nk_start = 0.5\n"))),
         case("config TOML syntax", "calibrate {d}/c.toml --out-dir {d}/out", &["c.toml:"]).file("c.toml", "[surface\nrq_m = 1"),

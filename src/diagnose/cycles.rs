@@ -171,6 +171,22 @@ pub fn segment(time_s: &[f64], displacement_m: &[f64]) -> Result<Cycles> {
     })
 }
 
+/// Energy the loop dissipates, ∮F dx (J), averaged over the complete cycles (trapezoidal
+/// rule). A friction contact dissipates, so a measured loop has ∮F dx > 0 when the force and
+/// the displacement share the element's sign convention.
+pub fn energy_per_cycle(x: &[f64], f: &[f64], cycles: &Cycles) -> f64 {
+    let per: f64 = cycles
+        .cycles
+        .iter()
+        .map(|&(a, b)| {
+            (a..b)
+                .map(|i| 0.5 * (f[i] + f[i + 1]) * (x[i + 1] - x[i]))
+                .sum::<f64>()
+        })
+        .sum();
+    per / cycles.cycles.len().max(1) as f64
+}
+
 /// Phase of the contact within a half-cycle.
 ///
 /// The first four are classified from a model force ([`classify_phases`]); `Clearance` (the

@@ -74,6 +74,19 @@ pub struct NoiseFloor {
     pub notes: Vec<String>,
 }
 
+impl NoiseFloor {
+    /// Whether the adopted floor is the first-difference fallback across two cycles, in which a
+    /// drift from cycle to cycle does not cancel (it inflates σ): the record is then too short
+    /// to tell noise from drift.
+    pub fn from_first_differences(&self) -> bool {
+        self.across_cycles < 3 && self.repeatability_samples >= MIN_COMPARISONS
+    }
+}
+
+/// Complete cycles at the same stroke the drift-free (second-difference) floor needs: each
+/// half-cycle is compared with the next two in the same direction.
+pub const CYCLES_FOR_DRIFT_FREE_FLOOR: usize = 3;
+
 /// Robust scale: 1.4826 × median absolute deviation from the median.
 pub fn robust_sigma(v: &[f64]) -> f64 {
     if v.is_empty() {

@@ -272,20 +272,108 @@ impl Record {
             }
             lines.push(line);
         }
-        Record::new(t, x, f, nf).map_err(|e| match e {
+        check_uniform_sampling(path, &columns.time, &t, &lines)?;
+        let record = Record::new(t, x, f, nf).map_err(|e| match e {
             Error::Data(m) => Error::parse(path, 0, m),
             other => other,
-        })
+        })?;
+        check_dissipation(path, &columns.force, &record)?;
+        Ok(record)
     }
 }
 
-/// A column named with a unit suffix (`_s`, `_ms`, `_m`, `_mm`, `_um`, `_N`, `_kN`, …) must carry
-/// the unit its role reads in (SI, no scaling is applied): a displacement column given as the
+/// A negative loop area counts as a reversed sign once it exceeds this fraction of the
+/// loop's bounding box ΔF·Δx per cycle: a nearly elastic record's ∮F dx is noise-sized and
+/// may take either sign, a friction loop with its force negated is clearly negative (a
+/// Jenkins loop's area is up to the whole box).
+pub const REVERSED_LOOP_FRACTION: f64 = 0.01;
+
+/// Refuse a record whose loops, taken over the complete cycles, generate energy
+/// (∮F dx < 0): the force column's sign convention is the reverse of the element's.
+/// Records without a complete cycle are left to the analysis, which reports them.
+fn check_dissipation(path: &Path, force_column: &str, record: &Record) -> Result<()> {
+    let (x, f) = (&record.displacement_m, &record.force_n);
+    let Ok(cycles) = super::cycles::segment(&record.time_s, x) else {
+        return Ok(());
+    };
+    let range = |v: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+                (a.min(y), b.max(y))
+            });
+        hi - lo
+    };
+    let area = super::cycles::energy_per_cycle(x, f, &cycles);
+    if area < -REVERSED_LOOP_FRACTION * range(f) * range(x) {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "column `{force_column}`: force sign convention reversed? (∮F dx = {area:.4e} J \
+                 per cycle over {} complete cycle(s)); a friction loop dissipates energy, \
+                 ∮F dx > 0: the force must have the sign of the displacement in slip \
+                 (negate the column)",
+                cycles.cycles.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Largest time step a record may hold, as a multiple of its median step. The analysis
+/// (smoothing, block averaging, phases, the noise floor) works on sample indices and assumes
+/// uniform sampling; a DAQ's clock jitter stays within a few per cent of the step, so a step
+/// 1.5× the median means samples are missing (one dropped sample doubles the step).
+pub const MAX_TIME_STEP_OVER_MEDIAN: f64 = 1.5;
+
+/// Refuse a record with a gap in time (a step larger than [`MAX_TIME_STEP_OVER_MEDIAN`] × the
+/// median step), naming the line of the sample after the gap and the two times.
+fn check_uniform_sampling(path: &Path, column: &str, t: &[f64], lines: &[usize]) -> Result<()> {
+    if t.len() < 3 {
+        return Ok(());
+    }
+    let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut sorted = steps.clone();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    let median = sorted[sorted.len() / 2];
+    let (i, &largest) = steps
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .expect("at least two steps");
+    if largest > MAX_TIME_STEP_OVER_MEDIAN * median {
+        return Err(Error::parse(
+            path,
+            lines[i + 1],
+            format!(
+                "column `{column}`: time jumps from {} s to {} s, a step {:.1}× the median step \
+                 {median:.4e} s (more than {MAX_TIME_STEP_OVER_MEDIAN}×): samples are missing, \
+                 and the analysis needs uniform sampling",
+                crate::error::num(t[i]),
+                crate::error::num(t[i + 1]),
+                largest / median,
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A column named with a unit suffix (`_s`, `_ms`, `_m`, `_mm`, `_um`, `_in`, `_ft`, `_N`, `_kN`,
+/// `_kip`, `_lbf`, `_g`, `_V`, …) must carry the unit its role reads in (SI, no scaling is
+/// applied): a displacement column given as the
 /// force would otherwise be read as newtons. Names without a recognised suffix are taken as
 /// given.
 fn check_column_unit(path: &Path, name: &str, flag: &str, unit: &str) -> Result<()> {
-    const SUFFIXES: [&str; 12] = [
-        "s", "ms", "us", "m", "mm", "um", "µm", "nm", "N", "kN", "mN", "lbf",
+    // Units a rig's CSV may carry; none is converted, so each must be the role's SI unit.
+    const SUFFIXES: [&str; 37] = [
+        // time
+        "s", "ms", "us", "µs", "ns", "min", // length
+        "m", "mm", "um", "µm", "nm", "cm", "km", "in", "inch", "inches", "ft", "mil",
+        // force, mass, acceleration
+        "N", "kN", "MN", "mN", "uN", "µN", "lb", "lbs", "lbf", "kip", "kips", "kgf", "ozf", "kg",
+        "g", // raw transducer signals
+        "V", "mV", "uV", "counts",
     ];
     if let Some((quantity, per)) = name.split_once("_per_") {
         // A rate (velocity `m_per_s`, …): no role of a record is one.
@@ -348,6 +436,219 @@ mod tests {
         );
         let e = read("friction_force_N", "friction_force_N").unwrap_err();
         assert!(e.contains("in N, this column must be in m"), "{e}");
+    }
+
+    /// Rows `t, x, F` of a Jenkins element (stiffness 2e6 N/m, slip force 100 N) driven by
+    /// x = 1 mm·sin(2πt), 200 samples per cycle, for `cycles` cycles.
+    fn jenkins_rows(cycles: f64) -> Vec<(f64, f64, f64)> {
+        let (k, fs, a) = (2e6, 100.0, 1e-3);
+        let n = (cycles * 200.0) as usize + 1;
+        let mut f = 0.0_f64;
+        let mut x_prev = 0.0;
+        (0..n)
+            .map(|i| {
+                let t = i as f64 / 200.0;
+                let x = a * (std::f64::consts::TAU * t).sin();
+                f = (f + k * (x - x_prev)).clamp(-fs, fs);
+                x_prev = x;
+                (t, x, f)
+            })
+            .collect()
+    }
+
+    fn write_rows(p: &Path, header: &str, rows: &[(f64, f64, f64)]) {
+        let mut s = format!("{header}\n");
+        for (t, x, f) in rows {
+            s += &format!("{t},{x},{f}\n");
+        }
+        std::fs::write(p, s).unwrap();
+    }
+
+    /// Uniform sampling is assumed by the analysis: 60 samples removed from a 200 Hz record
+    /// leave a 0.305 s step (61 × 5 ms) between 1.495 s and 1.8 s; the record is refused at the
+    /// line after the gap. Clock jitter of ±2 % of the step is not a gap.
+    #[test]
+    fn a_gap_in_time_is_refused_with_its_line_and_times() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("gap.csv");
+        let rows = jenkins_rows(6.5);
+        let mut gapped = rows[..300].to_vec();
+        gapped.extend_from_slice(&rows[360..]);
+        write_rows(&p, "time_s,displacement_m,friction_force_N", &gapped);
+        let e = Record::read_csv(&p, &Columns::default())
+            .unwrap_err()
+            .to_string();
+        // Header is line 1: row 300 (the first after the gap) is line 302.
+        assert!(e.contains("gap.csv:302"), "{e}");
+        assert!(
+            e.contains("1.495 s to 1.8 s") && e.contains("time_s"),
+            "{e}"
+        );
+        assert!(e.contains("61.0×"), "{e}");
+        let jittered: Vec<(f64, f64, f64)> = rows
+            .iter()
+            .enumerate()
+            .map(|(i, &(t, x, f))| (t + 1e-4 * if i % 2 == 0 { 1.0 } else { -1.0 }, x, f))
+            .collect();
+        write_rows(&p, "time_s,displacement_m,friction_force_N", &jittered);
+        assert!(Record::read_csv(&p, &Columns::default()).is_ok());
+    }
+
+    /// A Jenkins loop dissipates 4·Fs·(A − Fs/k) = 4·100·(1e-3 − 5e-5) = 0.38 J per cycle; with
+    /// the force negated ∮F dx = −0.38 J and the record is refused, naming file and column. A
+    /// purely elastic record (∮F dx = 0 up to rounding) is not refused here.
+    #[test]
+    fn a_loop_that_generates_energy_is_refused_as_a_reversed_sign() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("neg.csv");
+        let rows = jenkins_rows(6.5);
+        let header = "time_s,displacement_m,friction_force_N";
+        write_rows(&p, header, &rows);
+        let r = Record::read_csv(&p, &Columns::default()).unwrap();
+        let c = crate::diagnose::cycles::segment(&r.time_s, &r.displacement_m).unwrap();
+        let area = crate::diagnose::cycles::energy_per_cycle(&r.displacement_m, &r.force_n, &c);
+        assert!((area - 0.38).abs() < 0.01 * 0.38, "{area}");
+        let negated: Vec<_> = rows.iter().map(|&(t, x, f)| (t, x, -f)).collect();
+        write_rows(&p, header, &negated);
+        let e = Record::read_csv(&p, &Columns::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("neg.csv")
+                && e.contains("`friction_force_N`")
+                && e.contains("force sign convention reversed? (∮F dx = ")
+                && e.contains("J per cycle"),
+            "{e}"
+        );
+        let reported: f64 = e
+            .split("∮F dx = ")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap();
+        assert!((reported + 0.38).abs() < 0.01 * 0.38, "{reported}");
+        let elastic: Vec<_> = rows.iter().map(|&(t, x, _)| (t, x, -2e4 * x)).collect();
+        write_rows(&p, header, &elastic);
+        assert!(Record::read_csv(&p, &Columns::default()).is_ok());
+    }
+
+    /// Inches, kips, pounds, grams, volts, minutes are not converted: a column named in one of
+    /// them is refused, naming the column and the unit the role needs (m for the displacement,
+    /// N for the force, s for the time).
+    #[test]
+    fn a_column_in_a_non_si_unit_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("imperial.csv");
+        let names = [
+            "time_s",
+            "time_min",
+            "displacement_m",
+            "displacement_in",
+            "displacement_ft",
+            "friction_force_N",
+            "friction_force_kip",
+            "friction_force_lb",
+            "friction_force_g",
+            "friction_force_V",
+            "friction_force_mV",
+        ];
+        let mut s = names.join(",") + "\n";
+        for (t, x, f) in jenkins_rows(3.0) {
+            let row = [t, t / 60.0, x, x / 0.0254, x / 0.3048, f];
+            let mut v: Vec<String> = row.iter().map(|v| v.to_string()).collect();
+            v.extend(std::iter::repeat_n(f.to_string(), 5));
+            s += &(v.join(",") + "\n");
+        }
+        std::fs::write(&p, s).unwrap();
+        let read = |time: &str, displacement: &str, force: &str| {
+            Record::read_csv(
+                &p,
+                &Columns {
+                    time: time.into(),
+                    displacement: displacement.into(),
+                    force: force.into(),
+                    normal_force: None,
+                },
+            )
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+        };
+        assert!(read("time_s", "displacement_m", "friction_force_N").is_ok());
+        for (t, x, f, flag, column, unit) in [
+            (
+                "time_min",
+                "displacement_m",
+                "friction_force_N",
+                "--time-column",
+                "time_min",
+                "s",
+            ),
+            (
+                "time_s",
+                "displacement_in",
+                "friction_force_N",
+                "--displacement-column",
+                "displacement_in",
+                "m",
+            ),
+            (
+                "time_s",
+                "displacement_ft",
+                "friction_force_N",
+                "--displacement-column",
+                "displacement_ft",
+                "m",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_kip",
+                "--force-column",
+                "friction_force_kip",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_lb",
+                "--force-column",
+                "friction_force_lb",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_g",
+                "--force-column",
+                "friction_force_g",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_V",
+                "--force-column",
+                "friction_force_V",
+                "N",
+            ),
+            (
+                "time_s",
+                "displacement_m",
+                "friction_force_mV",
+                "--force-column",
+                "friction_force_mV",
+                "N",
+            ),
+        ] {
+            let e = read(t, x, f).unwrap_err();
+            assert!(
+                e.contains(flag)
+                    && e.contains(&format!("`{column}`"))
+                    && e.contains(&format!("must be in {unit}"))
+                    && e.contains("imperial.csv"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

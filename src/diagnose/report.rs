@@ -7,10 +7,12 @@
 //! load is known (a measured normal-force column, or a calibration table's `N = p·A`).
 
 use super::cycles::Phase;
-use super::noise::NoiseFloor;
+use super::noise::{NoiseFloor, CYCLES_FOR_DRIFT_FREE_FLOOR};
 use super::residual::PhaseStats;
-use super::select::{Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict};
-use super::stationarity::{Stationarity, Trend};
+use super::select::{
+    Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict, ADEQUATE_RATIO,
+};
+use super::stationarity::{Stationarity, Trend, MIN_DEGREES_OF_FREEDOM};
 use super::{Bound, Effect};
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_string_atomic};
@@ -92,6 +94,18 @@ fn length(v: f64) -> String {
 
 fn opt(v: Option<f64>, prec: usize) -> String {
     v.map_or("—".to_string(), |x| format!("{x:.prec$}"))
+}
+
+/// The share of the excess residual an effect explains, in words. `None`: the relevance test
+/// was not run (the model before it had no excess over the noise floor overall), so the share
+/// is not known — never "all".
+fn explained_words(fraction: Option<f64>) -> String {
+    fraction.map_or(
+        "share of the excess residual not tested (the model before it was at the noise floor \
+         overall)"
+            .to_string(),
+        |e| format!("explains {:.0} % of the excess residual", 100.0 * e),
+    )
 }
 
 impl Report {
@@ -180,12 +194,11 @@ impl Report {
             })
             .collect();
         format!(
-            "{} ({}; z = {:.0}, explains {} of the excess residual; {})",
+            "{} ({}; z = {:.0}, {}; {})",
             c.effect.id(),
             params.join(", "),
             c.evidence_z,
-            c.explained_fraction
-                .map_or("all".to_string(), |e| format!("{:.0} %", 100.0 * e)),
+            explained_words(c.explained_fraction),
             c.effect.meaning()
         )
     }
@@ -213,11 +226,34 @@ impl Report {
         } else {
             String::new()
         };
+        let short_floor = if self.noise.from_first_differences() {
+            format!(
+                "; note: the noise floor compares only two cycles (first differences), in which \
+                 a drift does not cancel, so σ may be too large; {} complete cycles at the same \
+                 stroke are needed to tell noise from drift",
+                CYCLES_FOR_DRIFT_FREE_FLOOR
+            )
+        } else {
+            String::new()
+        };
         let verdict = match self.verdict {
             Verdict::ModelAdequate => format!(
                 "model adequate: the baseline's held-out residual is {r:.2}× the noise floor \
-                 (σ = {sigma:.4e} N){}; no effect needed",
+                 (σ = {sigma:.4e} N){}; no effect larger than about {ADEQUATE_RATIO}σ RMS was \
+                 looked for (the candidate search runs only above {ADEQUATE_RATIO}× the noise \
+                 floor): smaller effects were not tested",
                 worst(after)
+            ),
+            Verdict::RecordTooShort => format!(
+                "record too short to tell noise from drift: the noise floor (σ = {sigma:.4e} N) \
+                 comes from first differences across two cycles, in which a drift from cycle to \
+                 cycle does not cancel, so σ may be inflated by drift; against it the \
+                 baseline's held-out residual is {r:.2}×{}; {} complete cycles at the same \
+                 stroke are needed (the record has {}); no verdict on adequacy, and no effect \
+                 search",
+                worst(after),
+                CYCLES_FOR_DRIFT_FREE_FLOOR,
+                self.complete_cycles
             ),
             Verdict::EffectsFound => format!(
                 "effect(s) found: {}; the held-out residual is now {r:.2}× the noise floor \
@@ -265,7 +301,13 @@ impl Report {
                 } else if self.stationarity.testable {
                     "; no drift".to_string()
                 } else {
-                    "; drift not testable (fewer than 3 cycles)".to_string()
+                    let dof = self.stationarity.degrees_of_freedom();
+                    format!(
+                        "; drift not testable ({} steady cycle(s): the trend test has {dof} \
+                         degree(s) of freedom, {MIN_DEGREES_OF_FREEDOM} needed, i.e. {} cycles)",
+                        self.stationarity.cycles.len(),
+                        MIN_DEGREES_OF_FREEDOM + 2
+                    )
                 };
                 if !found.is_empty() {
                     s += &format!("; explained in part by {}", found.join("; then "));
@@ -273,7 +315,12 @@ impl Report {
                 s
             }
         };
-        verdict + &caveat
+        let short_floor = if self.verdict == Verdict::RecordTooShort {
+            String::new()
+        } else {
+            short_floor
+        };
+        verdict + &caveat + &short_floor
     }
 
     /// Findings beside the verdict: drift, clearance, noise notes.
@@ -646,4 +693,24 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
         ],
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without a relevance test (no excess over the floor before the effect) the share an
+    /// effect explains is unknown: the report must say so, never "explains all".
+    #[test]
+    fn an_untested_share_is_not_all_of_the_excess() {
+        let none = explained_words(None);
+        assert!(
+            none.contains("not tested") && !none.contains("explains all"),
+            "{none}"
+        );
+        assert_eq!(
+            explained_words(Some(0.76)),
+            "explains 76 % of the excess residual"
+        );
+    }
 }

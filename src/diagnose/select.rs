@@ -40,7 +40,10 @@
 //!    macroslip, clearance, closing; the reversal phase only overall, see [`Character`]) that
 //!    holds at least 5 % of the held-out samples (a misfit concentrated in microslip is not
 //!    diluted by a long macroslip); then *effects found* (if any were accepted) or *model
-//!    adequate* (none needed). Otherwise *model inadequate, residual unexplained*, with where
+//!    adequate* (no effect larger than about 2σ RMS was looked for) — unless the noise floor
+//!    is the two-cycle first-difference fallback ([`NoiseFloor::from_first_differences`]), in
+//!    which a drift inflates σ: then *record too short* (noise and drift cannot be told
+//!    apart). Otherwise *model inadequate, residual unexplained*, with where
 //!    the residual sits, whether it rings, and the drift findings ([`super::residual`],
 //!    [`super::stationarity`]). No verdict says that no effect is needed while the residual is
 //!    above twice the noise floor.
@@ -544,6 +547,10 @@ pub enum Verdict {
     ModelAdequate,
     /// The residual stays above twice the noise floor (effects may have explained part of it).
     ModelInadequate,
+    /// The baseline is within twice a noise floor that comes from first differences across
+    /// two cycles, in which a drift does not cancel: noise and drift cannot be told apart, so
+    /// neither "adequate" nor "no effect needed" can be said.
+    RecordTooShort,
 }
 
 impl Verdict {
@@ -552,6 +559,7 @@ impl Verdict {
             Verdict::EffectsFound => "effect(s) found",
             Verdict::ModelAdequate => "model adequate",
             Verdict::ModelInadequate => "model inadequate, residual unexplained",
+            Verdict::RecordTooShort => "undecided, record too short to tell noise from drift",
         }
     }
 }
@@ -1020,6 +1028,8 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
         Verdict::ModelInadequate
     } else if added {
         Verdict::EffectsFound
+    } else if prep.noise.from_first_differences() {
+        Verdict::RecordTooShort
     } else {
         Verdict::ModelAdequate
     };

@@ -15,8 +15,13 @@
 //! - it matters: the change over the record `|b|·(n−1)` is at least [`MIN_RELATIVE_CHANGE`]
 //!   (5 %) of the trend line's value at the first cycle.
 //!
-//! A perfectly linear series (`s_b = 0`) with a relevant change counts as significant. With
-//! fewer than 3 cycles there is no test (reported as such).
+//! A perfectly linear series (`s_b = 0`) with a relevant change counts as significant.
+//!
+//! **Power.** The test has `n − 2` degrees of freedom. Below [`MIN_DEGREES_OF_FREEDOM`] (3, i.e.
+//! fewer than 5 cycles) it has no useful power: Student's t then has no finite variance and its
+//! 1 % critical value is 63.7 (1 degree of freedom, 3 cycles) or 9.9 (2), so a 5 % drift goes
+//! undetected unless the cycles scatter by well under 1 %. A trend found there is still
+//! reported, but the absence of one is "drift not testable", never "no drift".
 
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -25,6 +30,9 @@ use statrs::distribution::{ContinuousCDF, StudentsT};
 pub const SIGNIFICANCE: f64 = 0.01;
 /// Smallest change over the record, relative to its start, reported as drift.
 pub const MIN_RELATIVE_CHANGE: f64 = 0.05;
+/// Fewest degrees of freedom (`cycles − 2`) for the absence of a trend to mean "no drift"
+/// (module documentation).
+pub const MIN_DEGREES_OF_FREEDOM: usize = 3;
 
 /// Trend of one descriptor over the cycles.
 #[derive(Debug, Clone, Serialize)]
@@ -116,7 +124,8 @@ pub struct Stationarity {
     pub loop_area: Trend,
     /// One sentence per drifting descriptor (empty: stationary, or not testable).
     pub findings: Vec<String>,
-    /// Whether the test could be made (at least 3 complete cycles).
+    /// Whether the test has power: at least [`MIN_DEGREES_OF_FREEDOM`] degrees of freedom
+    /// (5 complete cycles at the steady amplitude).
     pub testable: bool,
 }
 
@@ -171,8 +180,13 @@ impl Stationarity {
             stiffness,
             loop_area,
             findings,
-            testable: n >= 3,
+            testable: n >= MIN_DEGREES_OF_FREEDOM + 2,
         }
+    }
+
+    /// Degrees of freedom of the trend test (`cycles − 2`, 0 below 2 cycles).
+    pub fn degrees_of_freedom(&self) -> usize {
+        self.cycles.len().saturating_sub(2)
     }
 
     /// Whether any descriptor drifts.
@@ -219,5 +233,23 @@ mod tests {
             "{:?}",
             s.findings
         );
+    }
+
+    /// Three cycles whose slip force truly grows 8 % (1.00, 1.05, 1.08: a drift with 1 %
+    /// scatter) pass the trend test unnoticed: with 1 degree of freedom the 1 % critical value
+    /// is 63.657 (tables). Such a record is "not testable", not "stationary"; from 5 cycles
+    /// (3 degrees of freedom, critical value 5.841) the test counts.
+    #[test]
+    fn drift_is_testable_only_with_three_degrees_of_freedom() {
+        let three = Stationarity::new(&[0, 1, 2], &[100.0, 105.0, 108.0], &[1e6; 3], &[1.0; 3]);
+        assert!((three.slip_force.t_critical.unwrap() - 63.657).abs() < 1e-3);
+        assert!(!three.drifts(), "{:?}", three.findings);
+        assert!(!three.testable && three.degrees_of_freedom() == 1);
+        let four = Stationarity::new(&[0, 1, 2, 3], &[1.0; 4], &[1.0; 4], &[1.0; 4]);
+        assert!((four.slip_force.t_critical.unwrap() - 9.925).abs() < 1e-3);
+        assert!(!four.testable);
+        let five = Stationarity::new(&[0, 1, 2, 3, 4], &[1.0; 5], &[1.0; 5], &[1.0; 5]);
+        assert!((five.slip_force.t_critical.unwrap() - 5.841).abs() < 1e-3);
+        assert!(five.testable && five.degrees_of_freedom() == 3);
     }
 }
