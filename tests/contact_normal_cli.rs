@@ -4,6 +4,10 @@
 use std::path::Path;
 use std::process::Command;
 
+#[path = "support/hertz_window.rs"]
+mod hertz_window;
+use hertz_window::write_hertz_window;
+
 fn asperity(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
         .args(args)
@@ -173,27 +177,6 @@ fn nan_surface_and_missing_file_fail_cleanly() {
     assert!(!ok);
     assert!(err.contains("absent.npy"), "{err}");
     assert_no_output(&out);
-}
-
-/// A Hertz sphere `h = −r²/(2R)` (R = 10 mm) on a non-periodic `n × n` window of side `l_m`,
-/// centred at point (n/2, n/2).
-fn write_hertz_window(path: &Path, n: usize, l_m: f64) {
-    let (r, dx) = (0.01, l_m / n as f64);
-    let c = (n / 2) as f64;
-    let mut text = format!(
-        "# asperity height matrix\n# unit: m, dx_m: {dx:e}, dy_m: {dx:e}, periodic: false\n"
-    );
-    for j in 0..n {
-        let row: Vec<String> = (0..n)
-            .map(|i| {
-                let (x, y) = ((i as f64 - c) * dx, (j as f64 - c) * dx);
-                format!("{:e}", -(x * x + y * y) / (2.0 * r))
-            })
-            .collect();
-        text.push_str(&row.join(","));
-        text.push('\n');
-    }
-    std::fs::write(path, text).unwrap();
 }
 
 /// A Hertz contact inside its window matches Hertz and gives no window warning; loaded until its

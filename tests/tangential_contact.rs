@@ -25,6 +25,9 @@ const P: f64 = 9.1954;
 const MU: f64 = 0.4;
 
 /// Both bodies: shear modulus G, Poisson's ratio `nu`.
+#[path = "support/hertz_window.rs"]
+mod hertz_window;
+
 fn material_with(nu: f64) -> Material {
     Material {
         youngs_modulus_pa: 2.0 * G * (1.0 + nu),
@@ -427,24 +430,8 @@ fn energy_versus_amplitude_of_a_hertzian_asperity() {
 #[test]
 fn loops_on_an_under_resolved_contact_are_flagged() {
     let dir = tempfile::tempdir().unwrap();
-    let (n, l, r) = (64usize, 200e-6, 0.01);
-    let dx = l / n as f64;
-    let c = (n / 2) as f64;
-    let mut text = format!(
-        "# asperity height matrix\n# unit: m, dx_m: {dx:e}, dy_m: {dx:e}, periodic: false\n"
-    );
-    for j in 0..n {
-        let row: Vec<String> = (0..n)
-            .map(|i| {
-                let (x, y) = ((i as f64 - c) * dx, (j as f64 - c) * dx);
-                format!("{:e}", -(x * x + y * y) / (2.0 * r))
-            })
-            .collect();
-        text += &row.join(",");
-        text.push('\n');
-    }
     let sphere = dir.path().join("sphere.csv");
-    std::fs::write(&sphere, text).unwrap();
+    hertz_window::write_hertz_window(&sphere, 64, 200e-6);
     for (p, flagged) in [("4.8e7", false), ("48", true)] {
         let out = dir.path().join(format!("t{p}"));
         let o = run_cli(&[
