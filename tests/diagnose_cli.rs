@@ -99,6 +99,14 @@ fn measured(name: &str) {
         .any(|e| e == "backlash"));
     let text = std::fs::read_to_string(out.join("diagnose.txt")).unwrap();
     assert!(text.contains("verdict: model inadequate"), "{text}");
+    // Direction-dependent friction moves both slip plateaus by d·F_slip, as a load-cell zero
+    // offset would: wherever it is accepted the report names that alias, and only there.
+    let asymmetric = added.iter().any(|e| e == "directional_friction");
+    assert_eq!(
+        text.contains("alias: a load-cell zero offset"),
+        asymmetric,
+        "{text}"
+    );
     assert!(!text.contains("-0.0000e0"), "{text}");
     // No friction coefficient without a normal load.
     assert!(json["baseline"]["friction_coefficient"].is_null());

@@ -341,7 +341,31 @@ impl Report {
             ));
         }
         v.extend(self.noise.notes.iter().map(|n| format!("noise: {n}")));
+        if let Some(alias) = self.offset_alias() {
+            v.push(alias);
+        }
         v
+    }
+
+    /// Direction-dependent friction `c_d = 1 + d·sign(ẋ)` moves both slip plateaus by
+    /// `d·F_slip`, which is what a load-cell zero offset `F₀ = d·F_slip` does in macroslip; the
+    /// two differ only in stick and microslip (the offset shifts them too, the asymmetry does
+    /// not). An offset is not a candidate (it would be chosen about as often: with it, the
+    /// measured 1.5 in record took an offset of 1076 N before the asymmetry, 2026-11-28), so
+    /// the report names the alias wherever the asymmetry is accepted.
+    fn offset_alias(&self) -> Option<String> {
+        let c = self
+            .accepted()
+            .into_iter()
+            .find(|c| c.effect == Effect::DirectionalFriction)?;
+        let d = c.parameters.first()?.1;
+        Some(format!(
+            "alias: a load-cell zero offset of d·F_slip = {:.3e} N would look the same in \
+             macroslip (both move the two slip plateaus by that force); only the stick and \
+             microslip phases tell them apart, and an offset is not among the candidates: \
+             check the force channel's zero before reading d = {d:.3} as friction",
+            d * self.baseline.slip_force_n
+        ))
     }
 
     /// Human-readable report.
