@@ -304,6 +304,22 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
         }
         let file: StoredShard<S> = serde_json::from_str(&read_text(path)?)
             .map_err(|e| Error::parse(path, e.line(), format!("malformed shard file: {e}")))?;
+        // The `shard` field is not covered by the configuration's hash: an edited i/n must not
+        // index out of range (a panic) or size the shard table (a count of 1e15 aborted).
+        Shard::new(file.shard.index, file.shard.count)
+            .map_err(|e| Error::parse(path, 0, format!("`shard`: {e}")))?;
+        let units = file.config.unit_labels().len();
+        if file.shard.count > units.max(paths.len()) {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "`shard` {}: more shards than the sweep's {units} units and the {} file(s)                      given: the file was edited",
+                    file.shard,
+                    paths.len()
+                ),
+            ));
+        }
         let recomputed = config_sha256(&file.config)?;
         if recomputed != file.config_sha256 {
             return Err(Error::parse(
@@ -569,6 +585,22 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("edited.json") && e.contains("hashes to"), "{e}");
+        // An edited `shard` field (not covered by the hash): refused naming the file, never
+        // an out-of-range index or a table sized by a huge count.
+        for (index, count) in [(0u64, 3u64), (5, 3), (1, 0), (1, 1_000_000_000_000_000)] {
+            let mut json: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&p[0]).unwrap()).unwrap();
+            json["shard"] = serde_json::json!({"index": index, "count": count});
+            let edited = dir.path().join("shard-edited.json");
+            std::fs::write(&edited, json.to_string()).unwrap();
+            let e = merge::<Squares>(&[edited, p[1].clone(), p[2].clone()])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("shard-edited.json") && e.contains("`shard`"),
+                "{index}/{count}: {e}"
+            );
+        }
         // Not a shard file.
         let junk = dir.path().join("junk.json");
         std::fs::write(&junk, "{\"a\": 1}").unwrap();

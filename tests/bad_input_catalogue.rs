@@ -331,6 +331,7 @@ fn catalogue() -> Vec<Case> {
         case("calibration table pressures unsorted", "elements --preload {d}/p.csv --table {d}/t.csv --out {d}/e.csv", &["t.csv:3", "increase"]).file("p.csv", PRELOAD).file("t.csv", TABLE.replace("2e6,0.002", "5e5,0.002")),
         case("calibration table in MPa (no node within it)", "elements --preload {d}/p.csv --table {d}/t.csv --out {d}/e.csv", &["t.csv", "none of the 2 loaded nodes", "another unit"]).file("p.csv", PRELOAD).file("t.csv", TABLE.replace("\n1e6,", "\n1,").replace("\n2e6,", "\n2,")),
         case("preload far above the table", "elements --preload {d}/p.csv --table {d}/t.csv --out {d}/e.csv", &["node 2", "above the calibration table"]).file("p.csv", PRELOAD.replace("2,1e-3,0,1e-6,1.5e6,1.5", "2,1e-3,0,1e-6,3e7,30")).file("t.csv", TABLE),
+        case("pressure maps with --shard", "contact normal --grid 128 --pressures-pa 1e6 --shard 1/2 --pressure-maps --out-dir {d}/out", &["--pressure-maps", "--shard"]),
         case("preload area negative", "elements --preload {d}/p.csv --table {d}/t.csv --out {d}/e.csv", &["p.csv:2", "area"]).file("p.csv", "id,x_m,y_m,area_m2,pressure_Pa,N0_N\n1,0,0,-1,1e6,1\n").file("t.csv", TABLE),
         case("record without the force column", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:1", "friction_force_N"]).file("r.csv", "time_s,displacement_m\n0,0\n"),
         case("record with text", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:3", "not a number"]).file("r.csv", "time_s,displacement_m,friction_force_N\n0,0,0\n1,x,1\n"),

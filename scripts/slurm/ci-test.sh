@@ -35,16 +35,18 @@ fi
 work=$(mktemp -d /tmp/asperity-slurm-ci.XXXXXX)
 mkdir -p "$work/state" "$work/spool" "$work/log"
 our_pids=()
+own_cluster=0
 ok=0
 cleanup() {
     local status=$?
-    if command -v squeue >/dev/null && [ -n "${SLURM_CONF:-}" ]; then
+    # Only the jobs of the cluster this script started (never a caller's real cluster).
+    if [ "$own_cluster" = 1 ] && command -v squeue >/dev/null; then
         for j in $(squeue -h -o %A 2>/dev/null || true); do scancel "$j" 2>/dev/null || true; done
     fi
     for pidfile in "$work/slurmd.pid" "$work/slurmctld.pid"; do
         [ -s "$pidfile" ] && kill "$(cat "$pidfile")" 2>/dev/null || true
     done
-    for pid in "${our_pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+    for pid in ${our_pids[@]+"${our_pids[@]}"}; do kill "$pid" 2>/dev/null || true; done
     sleep 1
     for pidfile in "$work/slurmd.pid" "$work/slurmctld.pid"; do
         [ -s "$pidfile" ] && kill -9 "$(cat "$pidfile")" 2>/dev/null || true
@@ -112,6 +114,7 @@ NodeName=localhost NodeAddr=127.0.0.1 CPUs=$(nproc) RealMemory=$mem_mb State=UNK
 PartitionName=ci Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 CONF
 export SLURM_CONF=$work/slurm.conf
+own_cluster=1
 slurmctld -f "$SLURM_CONF"
 slurmd -f "$SLURM_CONF" -N localhost
 for _ in $(seq 100); do

@@ -38,7 +38,10 @@ done
 shift $((OPTIND - 1))
 [ "${1:-}" = "--" ] && shift
 if [ -z "$shards" ] || [ -z "$out" ] || [ $# -eq 0 ]; then usage; fi
-case "$shards" in ''|*[!0-9]*|0) echo "error: -n must be a positive integer, got '$shards'" >&2; exit 2 ;; esac
+case "$shards" in ''|*[!0-9]*) echo "error: -n must be a positive integer, got '$shards'" >&2; exit 2 ;; esac
+# Base 10 whatever the leading zeros: the shard files are named `…-of-8.json` for -n 08 too.
+shards=$((10#$shards))
+[ "$shards" -gt 0 ] || { echo "error: -n must be a positive integer, got 0" >&2; exit 2; }
 for a in "$@"; do
     case "$a" in --out-dir|--out-dir=*|--shard|--shard=*)
         echo "error: '$a' is set by this script; remove it from the sweep arguments" >&2; exit 2 ;;
@@ -50,19 +53,28 @@ if [ -z "$bin" ]; then
 fi
 [ -x "$bin" ] || { echo "error: asperity binary '$bin' not found or not executable (-b)" >&2; exit 2; }
 bin=$(realpath "$bin")
+if [ -d "$out/shards" ] && [ -n "$(ls -A "$out/shards")" ]; then
+    # Shards of an earlier sweep would make the merge job fail after the whole array ran.
+    echo "error: $out/shards is not empty (an earlier sweep's shards); use another -o or empty it" >&2
+    exit 2
+fi
 mkdir -p "$out/shards" "$out/logs"
 out=$(realpath "$out")
+# Every task runs this copy: a rebuild of the binary while tasks wait in the queue would
+# otherwise mix two builds in one merged result (the shard files record only the crate version).
+cp "$bin" "$out/asperity"
+bin="$out/asperity"
 
 common=()
 [ -n "$time_limit" ] && common+=(--time="$time_limit")
 [ -n "$partition" ] && common+=(--partition="$partition")
 
-array_id=$(sbatch --parsable "${common[@]}" \
+array_id=$(sbatch --parsable ${common[@]+"${common[@]}"} \
     --job-name=asperity-shard --array="1-$shards" --cpus-per-task="$cpus" --ntasks=1 \
     --output="$out/logs/shard-%a.out" \
     "$here/shard.sbatch" "$shards" "$out/shards" "$bin" "$@")
 array_id=${array_id%%;*}
-merge_id=$(sbatch --parsable "${common[@]}" \
+merge_id=$(sbatch --parsable ${common[@]+"${common[@]}"} \
     --job-name=asperity-merge --dependency="afterok:$array_id" --kill-on-invalid-dep=yes \
     --cpus-per-task=1 --ntasks=1 --output="$out/logs/merge.out" \
     "$here/merge.sbatch" "$shards" "$out/shards" "$out" "$bin")

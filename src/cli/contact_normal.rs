@@ -232,6 +232,14 @@ fn write_pressure_maps(
 pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output; the files are staged and appear together
     // at the end (asperity::output::OutputSet).
+    if args.shard.is_some() && args.pressure_maps {
+        // `merge` rebuilds the sweep's tables and plots from the shard files, which hold no
+        // pressure fields: a merged run would lack the maps a single run writes.
+        return Err(asperity::Error::param(
+            "--pressure-maps",
+            "not with --shard: the shard files hold no pressure fields, so `asperity merge`              cannot give the maps a single run writes; draw them in a run without --shard of              the pressures wanted",
+        ));
+    }
     let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     if args.shard.is_none() {
         // An earlier run's maps at pressures this run does not have are removed.
