@@ -294,18 +294,21 @@ fn cli_rejects_bad_parameters() {
 fn cli_writes_loops_on_a_small_grid() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("t");
-    let o = run_cli(&[
-        "--grid",
-        "128",
-        "--pressures-pa",
-        "1e6,1e7",
-        "--cycles",
-        "2",
-        "--steps-per-cycle",
-        "16",
-        "--out-dir",
-        out.to_str().unwrap(),
-    ]);
+    let run_into = |out: &std::path::Path| {
+        run_cli(&[
+            "--grid",
+            "128",
+            "--pressures-pa",
+            "1e6,1e7",
+            "--cycles",
+            "2",
+            "--steps-per-cycle",
+            "16",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = run_into(&out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     let csv = std::fs::read_to_string(out.join("tangential_loops.csv")).unwrap();
@@ -339,19 +342,7 @@ fn cli_writes_loops_on_a_small_grid() {
     // A rerun writes the same loops and energies byte for byte (wall times are in a file of
     // their own).
     let again = dir.path().join("t2");
-    let o = run_cli(&[
-        "--grid",
-        "128",
-        "--pressures-pa",
-        "1e6,1e7",
-        "--cycles",
-        "2",
-        "--steps-per-cycle",
-        "16",
-        "--out-dir",
-        again.to_str().unwrap(),
-    ]);
-    assert!(o.status.success());
+    assert!(run_into(&again).status.success());
     for f in ["tangential_loops.csv", "tangential_energy.csv"] {
         assert_eq!(
             std::fs::read(out.join(f)).unwrap(),
