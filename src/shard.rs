@@ -314,7 +314,8 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
                 path,
                 0,
                 format!(
-                    "`shard` {}: more shards than the sweep's {units} units and the {} file(s)                      given: the file was edited",
+                    "`shard` {}: more shards than the sweep's {units} units and the {} file(s) \
+                     given: the file was edited",
                     file.shard,
                     paths.len()
                 ),

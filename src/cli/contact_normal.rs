@@ -237,7 +237,9 @@ pub fn run(args: NormalArgs) -> Result<()> {
         // pressure fields: a merged run would lack the maps a single run writes.
         return Err(asperity::Error::param(
             "--pressure-maps",
-            "not with --shard: the shard files hold no pressure fields, so `asperity merge`              cannot give the maps a single run writes; draw them in a run without --shard of              the pressures wanted",
+            "not with --shard: the shard files hold no pressure fields, so `asperity merge` \
+             cannot give the maps a single run writes; draw them in a run without --shard of \
+             the pressures wanted",
         ));
     }
     let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
