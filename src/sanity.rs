@@ -75,35 +75,21 @@ pub fn contact_surface_tilt(source: &str, grid: &crate::grid::Grid2) -> Option<S
     })
 }
 
-/// `(|b|·Lx + |c|·Ly, Rq of h − plane)` of the least-squares plane `h ≈ a + b·x + c·y`.
+/// `(rise of the least-squares plane between the window's outermost samples, Rq of h − plane)`,
+/// the plane from the surface statistics' detrending ([`crate::surface::stats::Detrend::Plane`]).
 pub fn plane_tilt(grid: &crate::grid::Grid2) -> (f64, f64) {
-    let h = &grid.heights;
-    let (nx, ny) = h.dim();
-    let xc = |i: usize, n: usize, d: f64| (i as f64 - (n as f64 - 1.0) / 2.0) * d;
-    let mean = h.mean().unwrap_or(0.0);
-    let (mut sxh, mut syh, mut sxx, mut syy) = (0.0, 0.0, 0.0, 0.0);
-    for ((i, j), &v) in h.indexed_iter() {
-        let (x, y) = (xc(i, nx, grid.dx), xc(j, ny, grid.dy));
-        sxh += x * (v - mean);
-        syh += y * (v - mean);
-        sxx += x * x;
-        syy += y * y;
-    }
-    let b = if sxx > 0.0 { sxh / sxx } else { 0.0 };
-    let c = if syy > 0.0 { syh / syy } else { 0.0 };
-    let rq = (h
-        .indexed_iter()
-        .map(|((i, j), &v)| {
-            let r = v - mean - b * xc(i, nx, grid.dx) - c * xc(j, ny, grid.dy);
-            r * r
-        })
-        .sum::<f64>()
-        / (nx * ny) as f64)
-        .sqrt();
-    (
-        b.abs() * nx as f64 * grid.dx + c.abs() * ny as f64 * grid.dy,
-        rq,
-    )
+    use crate::surface::stats::{detrend_area, Detrend};
+    let level = detrend_area(&grid.heights, Detrend::Plane);
+    // The plane alone: mean-removed heights minus plane-removed ones; its range is its rise
+    // between the window's corners.
+    let plane = detrend_area(&grid.heights, Detrend::Mean) - &level;
+    let (lo, hi) = plane
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let rq = (level.iter().map(|v| v * v).sum::<f64>() / level.len() as f64).sqrt();
+    (hi - lo, rq)
 }
 
 /// Largest Coulomb friction coefficient accepted. Dry metal pairs measure 0.1–1.5 in air and

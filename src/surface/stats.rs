@@ -208,7 +208,7 @@ fn detrend_uniform_line(h: &[f64], detrend: Detrend) -> Vec<f64> {
 
 /// Heights of an area with the mean or least-squares plane removed (uniform grid: the centred
 /// coordinates are orthogonal, so the plane coefficients decouple).
-fn detrend_area(h: &Array2<f64>, detrend: Detrend) -> Array2<f64> {
+pub(crate) fn detrend_area(h: &Array2<f64>, detrend: Detrend) -> Array2<f64> {
     let (nx, ny) = h.dim();
     let n = (nx * ny) as f64;
     let mean = h.sum() / n;
