@@ -277,40 +277,13 @@ fn fits_csv(run: &CalibrationRun) -> String {
     s
 }
 
-/// Per pressure × amplitude: (amplitude factor, BEM energy summary, element energy summary).
-fn energy_summaries(
-    run: &CalibrationRun,
-    i: usize,
-) -> Vec<(
-    f64,
-    crate::calibrate::statistics::Summary,
-    crate::calibrate::statistics::Summary,
-)> {
-    let factors = &run.config.loading.amplitude_factors;
-    (0..factors.len())
-        .map(|j| {
-            let bem: Vec<f64> = run
-                .realisations
-                .iter()
-                .map(|r| r.pressures[i].amplitudes.loops[j].loop_area_j_per_m2)
-                .collect();
-            let el: Vec<f64> = run
-                .realisations
-                .iter()
-                .map(|r| r.pressures[i].fit.loops[j].energy_model)
-                .collect();
-            (factors[j], summarise(&bem), summarise(&el))
-        })
-        .collect()
-}
-
 /// `energy_vs_amplitude.csv`.
 fn energy_csv(run: &CalibrationRun) -> String {
     let mut s = String::from(
         "pressure_Pa,amplitude_factor,realisations,energy_bem_J_per_m2,energy_bem_ci95_J_per_m2,energy_element_J_per_m2,energy_element_ci95_J_per_m2,mean_rel_error\n",
     );
     for (i, &p) in run.config.loading.pressures_pa.iter().enumerate() {
-        for (f, bem, el) in energy_summaries(run, i) {
+        for (f, bem, el) in super::pipeline::energy_summaries(&run.config, &run.realisations, i) {
             let _ = writeln!(
                 s,
                 "{p},{f},{},{:e},{:e},{:e},{:e},{:e}",

@@ -920,22 +920,31 @@ fn convergence_at(
 /// friction damper's damping, is then off by more than a fifth at that amplitude.
 pub const ENERGY_WARNING_REL: f64 = 0.2;
 
+/// Per amplitude at pressure `i`: (amplitude factor, BEM energy per cycle summary, element
+/// energy per cycle summary) over the realisations (J/m²; `energy_vs_amplitude.csv`).
+pub(crate) fn energy_summaries(
+    config: &CalibrationConfig,
+    realisations: &[Realisation],
+    i: usize,
+) -> Vec<(f64, Summary, Summary)> {
+    let factors = &config.loading.amplitude_factors;
+    (0..factors.len())
+        .map(|j| {
+            let bem = values(realisations, i, |pc| {
+                pc.amplitudes.loops[j].loop_area_j_per_m2
+            });
+            let el = values(realisations, i, |pc| pc.fit.loops[j].energy_model);
+            (factors[j], summarise(&bem), summarise(&el))
+        })
+        .collect()
+}
+
 /// Largest `|mean element energy / mean BEM energy − 1|` over the amplitudes at pressure `i`,
 /// with its amplitude factor (the `mean_rel_error` of `energy_vs_amplitude.csv`).
 fn worst_energy_error(config: &CalibrationConfig, main: &[Realisation], i: usize) -> (f64, f64) {
-    let mean = |f: &dyn Fn(&PressureCalibration) -> f64| {
-        main.iter().map(|r| f(&r.pressures[i])).sum::<f64>() / main.len() as f64
-    };
-    config
-        .loading
-        .amplitude_factors
-        .iter()
-        .enumerate()
-        .map(|(j, &f)| {
-            let bem = mean(&|pc| pc.amplitudes.loops[j].loop_area_j_per_m2);
-            let element = mean(&|pc| pc.fit.loops[j].energy_model);
-            (element / bem - 1.0, f)
-        })
+    energy_summaries(config, main, i)
+        .into_iter()
+        .map(|(f, bem, el)| (el.mean / bem.mean - 1.0, f))
         .fold((0.0, f64::NAN), |worst, e| {
             if e.0.abs() > worst.0.abs() {
                 e
