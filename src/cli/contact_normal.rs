@@ -406,26 +406,13 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
 /// pressures (contact points on the window's border rows/columns): there the surface is cut, so
 /// area and kn depend on the window, and refining the grid does not help. None otherwise.
 pub fn window_edge_warning(u: &UnitRecord<SurfaceResult>) -> Option<String> {
-    let at: Vec<String> = u
-        .result
-        .points
-        .iter()
-        .filter(|p| p.resolution.reaches_window_edge())
-        .map(|p| {
-            format!(
-                "{:e} Pa ({} of {} contact points)",
-                p.pressure_pa, p.resolution.border_contact_points, p.resolution.contact_points
-            )
-        })
-        .collect();
-    if at.is_empty() {
-        return None;
-    }
-    Some(format!(
-        "{}: the contact reaches the edge of the non-periodic window (contact points on its border rows/columns) at {}: the result depends on the window; enlarge the window (a finer grid does not help)",
-        u.label,
-        at.join(", ")
-    ))
+    asperity::contact::resolution::ContactResolution::window_edge_warning(
+        u.result
+            .points
+            .iter()
+            .map(|p| (p.pressure_pa, &p.resolution)),
+    )
+    .map(|w| format!("{}: {w}", u.label))
 }
 
 /// Records as CSV text (fields quoted where needed, e.g. file paths holding commas).

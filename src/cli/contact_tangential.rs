@@ -230,23 +230,12 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         normals.push(sol);
     }
     // A contact cut by the edge of a non-periodic window depends on the window (not the grid).
-    let edge: Vec<String> = pressures
-        .iter()
-        .zip(&normals)
-        .filter(|(_, n)| n.resolution.reaches_window_edge())
-        .map(|(p, n)| {
-            format!(
-                "{p:e} Pa ({} of {} contact points)",
-                n.resolution.border_contact_points, n.resolution.contact_points
-            )
-        })
-        .collect();
-    let edge_warning = (!edge.is_empty()).then(|| {
-        format!(
-            "the contact reaches the edge of the non-periodic window (contact points on its border rows/columns) at {}: the result depends on the window; enlarge the window (a finer grid does not help)",
-            edge.join(", ")
-        )
-    });
+    let edge_warning = asperity::contact::resolution::ContactResolution::window_edge_warning(
+        pressures
+            .iter()
+            .copied()
+            .zip(normals.iter().map(|n| &n.resolution)),
+    );
     if let Some(w) = &edge_warning {
         bar.suspend(|| eprintln!("warning: {w}"));
     }

@@ -95,6 +95,32 @@ impl ContactResolution {
         }
     }
 
+    /// The warning for the pressures `(p̄ in Pa, resolution)` at which the contact reaches the
+    /// edge of a non-periodic window ([`Self::reaches_window_edge`]), or `None` when it reaches
+    /// it at none.
+    pub fn window_edge_warning<'a>(
+        points: impl IntoIterator<Item = (f64, &'a ContactResolution)>,
+    ) -> Option<String> {
+        let at: Vec<String> = points
+            .into_iter()
+            .filter(|(_, r)| r.reaches_window_edge())
+            .map(|(p, r)| {
+                format!(
+                    "{p:e} Pa ({} of {} contact points)",
+                    r.border_contact_points, r.contact_points
+                )
+            })
+            .collect();
+        (!at.is_empty()).then(|| {
+            format!(
+                "the contact reaches the edge of the non-periodic window (contact points on its \
+                 border rows/columns) at {}: the result depends on the window; enlarge the window \
+                 (a finer grid does not help)",
+                at.join(", ")
+            )
+        })
+    }
+
     /// True when contact points lie on the border rows/columns of a non-periodic window: the
     /// contact is cut by the window, so area and kn depend on the window size (enlarge the
     /// window); refining the grid does not help.
