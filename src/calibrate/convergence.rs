@@ -167,4 +167,19 @@ mod tests {
         );
         assert_eq!(Verdict::worst([]), Verdict::NotChecked);
     }
+
+    /// The table's names are the report's (serde) names, and read back.
+    #[test]
+    fn names_are_the_serialised_ones_and_parse_back() {
+        for v in [
+            Verdict::Converged,
+            Verdict::Undetermined,
+            Verdict::NotConverged,
+            Verdict::NotChecked,
+        ] {
+            assert_eq!(serde_json::to_value(v).unwrap(), v.name());
+            assert_eq!(Verdict::parse(v.name()), Some(v));
+        }
+        assert_eq!(Verdict::parse("NOT converged"), None);
+    }
 }
