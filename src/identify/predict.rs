@@ -195,21 +195,23 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
             }
             e => e,
         };
+        // Drive-point displacement amplitude of every row (m): the targets under response
+        // control, and the file's peak against the identified amplitudes.
+        let om: Vec<f64> = level.drives.iter().map(|d| d.omega).collect();
+        let amplitudes_m: Vec<f64> = s
+            .rows
+            .iter()
+            .zip(&om)
+            .map(|(r, &w)| r.response / s.quantity.from_displacement(w).norm())
+            .collect();
         let (y, failed, forces) = match control {
             Control::Force => {
                 let (y, failed) = model.frf(&level).map_err(named)?;
                 (y, failed, None)
             }
             Control::Response => {
-                let om: Vec<f64> = level.drives.iter().map(|d| d.omega).collect();
-                let targets: Vec<f64> = s
-                    .rows
-                    .iter()
-                    .zip(&om)
-                    .map(|(r, &w)| r.response / s.quantity.from_displacement(w).norm())
-                    .collect();
                 let (f, x) = model
-                    .response_controlled(&om, &targets, level.mean_force_n)
+                    .response_controlled(&om, &amplitudes_m, level.mean_force_n)
                     .map_err(named)?;
                 let y: Vec<Complex64> = x
                     .iter()
@@ -227,12 +229,7 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
                 / f.len() as f64)
                 .sqrt()
         });
-        let peak_amplitude_m = s
-            .rows
-            .iter()
-            .zip(&level.drives)
-            .map(|(r, d)| r.response / s.quantity.from_displacement(d.omega).norm())
-            .fold(0.0, f64::max);
+        let peak_amplitude_m = amplitudes_m.iter().copied().fold(0.0, f64::max);
         let extrapolation = match &model {
             Predictor::Mode(m, _) => extrapolation_note(
                 peak_amplitude_m,
