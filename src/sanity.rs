@@ -70,7 +70,7 @@ pub fn contact_surface_tilt(source: &str, grid: &crate::grid::Grid2) -> Option<S
     let (tilt, rq) = plane_tilt(grid);
     (!grid.periodic && tilt > rq).then(|| {
         format!(
-            "{source}: the least-squares plane of the heights rises {tilt:.3e} m across the window, more than the roughness left without it (Rq {rq:.3e} m); the contact solvers use the heights as given, so the tilt loads one side: level the surface first if the tilt is not part of the contact"
+            "{source}: the least-squares plane of the heights rises {tilt:.3e} m across the window, more than the roughness left without it (Rq {rq:.3e} m); the contact solvers use the heights as given, so the tilt loads one side: if the tilt is not part of the contact, level the surface first (`asperity surface convert <file> --detrend plane -o <levelled file>`, for two bodies each of them)"
         )
     })
 }
@@ -342,7 +342,9 @@ mod tests {
         assert!(level_tilt < 0.1 * level_rq);
         let w = contact_surface_tilt("x.csv", &grid(1e-2, false)).unwrap();
         assert!(
-            w.starts_with("x.csv:") && w.contains("level the surface"),
+            w.starts_with("x.csv:")
+                && w.contains("level the surface")
+                && w.contains("--detrend plane"),
             "{w}"
         );
         assert!(contact_surface_tilt("x.csv", &grid(0.0, false)).is_none());

@@ -67,6 +67,12 @@ pub struct ConvertArgs {
     /// Fill missing points before writing: `harmonic` (Laplace interpolation) or `nearest`.
     #[arg(long)]
     fill: Option<Fill>,
+    /// Remove the mean height (`mean`) or the least-squares plane (`plane`, fitted to the
+    /// measured points, after --fill) before writing; without it the heights are written as
+    /// read. A plane removed from one period of a periodic surface leaves a seam: the output is
+    /// then non-periodic.
+    #[arg(long)]
+    detrend: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -727,6 +733,12 @@ fn convert(a: ConvertArgs) -> Result<()> {
     for p in &a.out {
         surface::io::check_writable_format(p).map_err(|e| super::rename_param(e, "--out"))?;
     }
+    let detrend: Option<Detrend> = a
+        .detrend
+        .as_deref()
+        .map(str::parse)
+        .transpose()
+        .map_err(|e| super::rename_param(e, "--detrend"))?;
     let mut out = OutputSet::for_files(&a.out, "--out")?;
     let (topo, fill) = read_filled(&a.input, a.fill)?;
     if let Topography::Profile(_) = topo {
@@ -735,6 +747,14 @@ fn convert(a: ConvertArgs) -> Result<()> {
             a.input.display()
         )));
     }
+    let topo = match detrend {
+        Some(d) => {
+            let (levelled, removed) = surface::stats::detrend_topography(&topo, d);
+            eprintln!("{}: {removed}", a.input.display());
+            levelled
+        }
+        None => topo,
+    };
     if let Some(r) = &fill {
         eprintln!("{}: {}", a.input.display(), r.describe());
     } else if topo.missing() > 0 {

@@ -848,6 +848,62 @@ fn profile_column(h: &[f64]) -> Array2<f64> {
     Array2::from_shape_vec((h.len(), 1), h.to_vec()).expect("shape matches")
 }
 
+/// An area topography with the mean (or the least-squares plane) of its measured points removed
+/// (`asperity surface convert --detrend`), and a sentence saying what was removed. A plane
+/// removed from one period of a periodic surface leaves a seam, so the result is then
+/// non-periodic ([`Detrend::periodic`]). Profiles are returned unchanged (the writers write
+/// areas only).
+pub fn detrend_topography(topo: &Topography, detrend: Detrend) -> (Topography, String) {
+    let (heights, dx, dy, periodic) = match topo {
+        Topography::Area(g) => (&g.heights, g.dx, g.dy, g.periodic),
+        Topography::MaskedArea(m) => (&m.heights, m.dx, m.dy, m.periodic),
+        Topography::Profile(_) => return (topo.clone(), "a profile is not detrended".into()),
+    };
+    let levelled = masked_detrend(heights, detrend);
+    let periodic_out = detrend.periodic(periodic);
+    // What was removed: the mean, and the plane's rise between the outermost measured points.
+    let removed: Vec<f64> = heights
+        .iter()
+        .zip(&levelled)
+        .filter(|(h, _)| !h.is_nan())
+        .map(|(h, l)| h - l)
+        .collect();
+    let mean = removed.iter().sum::<f64>() / removed.len() as f64;
+    let (lo, hi) = removed
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let what = match detrend {
+        Detrend::Mean => format!("removed the mean height {mean:.4e} m of the measured points"),
+        Detrend::Plane => format!(
+            "removed the least-squares plane of the measured points (mean {mean:.4e} m, rise \
+             {:.4e} m across the window){}",
+            hi - lo,
+            if periodic && !periodic_out {
+                "; the input was periodic, the levelled output is not (the plane leaves a seam)"
+            } else {
+                ""
+            }
+        ),
+    };
+    let out = match topo {
+        Topography::Area(_) => Topography::Area(Grid2 {
+            heights: levelled,
+            dx,
+            dy,
+            periodic: periodic_out,
+        }),
+        _ => Topography::MaskedArea(MaskedGrid {
+            heights: levelled,
+            dx,
+            dy,
+            periodic: periodic_out,
+        }),
+    };
+    (out, what)
+}
+
 /// Heights with the mean (or the least-squares plane) of the measured points removed; missing
 /// points stay NaN. Works for profiles (`ny == 1`) too.
 fn masked_detrend(h: &Array2<f64>, detrend: Detrend) -> Array2<f64> {
@@ -1137,6 +1193,76 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
 mod tests {
     use super::*;
     use crate::surface::generate::{generate, GaussianSurfaceSpec};
+
+    /// `surface convert --detrend plane`: a plane `a + b·i + c·j` added to a zero-mean,
+    /// plane-free pattern (a checkerboard on an even grid: orthogonal to 1, i and j) is removed
+    /// exactly; a pure plane with missing points is removed exactly from the measured points and
+    /// the missing ones stay missing; the description gives the plane's rise
+    /// `|b|(nx−1) + |c|(ny−1)`.
+    #[test]
+    fn detrending_a_topography_removes_the_plane_of_its_measured_points() {
+        let (nx, ny) = (16, 12);
+        let (a, b, c) = (3e-6, 2e-8, -5e-9);
+        let plane = |i: usize, j: usize| a + b * i as f64 + c * j as f64;
+        let pattern = |i: usize, j: usize| {
+            if (i + j).is_multiple_of(2) {
+                1e-9
+            } else {
+                -1e-9
+            }
+        };
+        let rough = Array2::from_shape_fn((nx, ny), |(i, j)| plane(i, j) + pattern(i, j));
+        let topo = Topography::Area(Grid2::new(rough, 1e-7, 1e-7, false).unwrap());
+        let (Topography::Area(g), what) = detrend_topography(&topo, Detrend::Plane) else {
+            panic!("an area")
+        };
+        for ((i, j), v) in g.heights.indexed_iter() {
+            assert!((v - pattern(i, j)).abs() < 1e-15, "({i}, {j}): {v}");
+        }
+        let mut h = Array2::from_shape_fn((nx, ny), |(i, j)| plane(i, j));
+        h[[3, 4]] = f64::NAN;
+        h[[0, 11]] = f64::NAN;
+        let topo = Topography::MaskedArea(MaskedGrid::new(h, 1e-7, 1e-7, false).unwrap());
+        let (Topography::MaskedArea(m), masked_what) = detrend_topography(&topo, Detrend::Plane)
+        else {
+            panic!("still masked")
+        };
+        assert!(!m.periodic);
+        for ((i, j), v) in m.heights.indexed_iter() {
+            if (i, j) == (3, 4) || (i, j) == (0, 11) {
+                assert!(v.is_nan());
+            } else {
+                assert!(v.abs() < 1e-18, "({i}, {j}): {v}");
+            }
+        }
+        // Its rise is taken over the measured points.
+        assert!(masked_what.contains("rise"), "{masked_what}");
+        let rise = b.abs() * (nx - 1) as f64 + c.abs() * (ny - 1) as f64;
+        assert!(what.contains(&format!("rise {rise:.4e} m")), "{what}");
+        // `mean` keeps the tilt and the periodicity.
+        let periodic = Topography::Area(
+            Grid2::new(
+                Array2::from_shape_fn((4, 4), |(i, _)| i as f64),
+                1.0,
+                1.0,
+                true,
+            )
+            .unwrap(),
+        );
+        let (Topography::Area(g), _) = detrend_topography(&periodic, Detrend::Mean) else {
+            panic!("an area")
+        };
+        assert!(g.periodic);
+        assert_eq!(g.heights[[0, 0]], -1.5);
+        let (Topography::Area(g), what) = detrend_topography(&periodic, Detrend::Plane) else {
+            panic!("an area")
+        };
+        assert!(
+            !g.periodic && what.contains("the levelled output is not"),
+            "{what}"
+        );
+        assert!(g.heights.iter().all(|v| v.abs() < 1e-15));
+    }
 
     /// Removing a plane from one period of a periodic surface leaves a seam: the statistics are
     /// then those of the same heights taken as non-periodic (SurfaceTopography's rule). On
