@@ -15,6 +15,7 @@
 //! (time, displacement, force) reach `diagnose`, which fits its own baseline.
 
 use asperity::diagnose::effects::Drive;
+use asperity::diagnose::select::SwappedSplit;
 use asperity::diagnose::{
     diagnose, Baseline, BaselineSource, Effect, Model, Options, Record, Verdict,
 };
@@ -112,6 +113,10 @@ struct Outcome {
     worst_phase: Option<(&'static str, f64)>,
     nrms_before: f64,
     nrms_after: f64,
+    /// Held-out RMS / σ before and after.
+    held_out: (f64, f64),
+    /// Swapped split (refitted on the held-out cycles, scored on the training ones).
+    swapped: Option<SwappedSplit>,
 }
 
 fn run(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) -> Vec<Outcome> {
@@ -131,6 +136,11 @@ fn run(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) -> Vec<O
                 worst_phase: d.after.worst_phase.map(|(p, r)| (p.name(), r)),
                 nrms_before: d.errors_before.nrms,
                 nrms_after: d.errors_after.nrms,
+                held_out: (
+                    d.errors_before.held_out_rms_over_noise,
+                    d.errors_after.held_out_rms_over_noise,
+                ),
+                swapped: d.swapped_split,
             }
         })
         .collect()
@@ -144,14 +154,15 @@ fn check_with(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) {
     let out = run(effect, baseline, normal);
     for o in &out {
         eprintln!(
-            "injected {:?}: first {:?}, {:?}, nrms {:.4} -> {:.4}, held-out {:.2}σ, worst phase {:?}",
+            "injected {:?}: first {:?}, {:?}, nrms {:.4} -> {:.4}, held-out {:.2}σ, worst phase {:?}, swapped {:?}",
             effect.map(|e| e.id()),
             o.first.map(|e| e.id()),
             o.verdict,
             o.nrms_before,
             o.nrms_after,
             o.held_out_over_noise,
-            o.worst_phase
+            o.worst_phase,
+            o.swapped
         );
         assert!(
             o.verdict == Verdict::ModelInadequate || o.held_out_over_noise <= 2.0,
@@ -178,6 +189,23 @@ fn check_with(effect: Option<Effect>, baseline: &BaselineSource, normal: bool) {
                 effect,
                 o.nrms_before,
                 o.nrms_after
+            );
+            // A real effect is not an artefact of the cycles that chose it: on the swapped split
+            // (refitted on the held-out cycles, scored on the training cycles) it keeps at
+            // least half of its held-out gain.
+            let sw = o.swapped.expect("an effect was added");
+            let (held_gain, swapped_gain) = (
+                o.held_out.0 - o.held_out.1,
+                sw.before_rms_over_noise - sw.after_rms_over_noise,
+            );
+            assert!(
+                swapped_gain >= 0.5 * held_gain,
+                "{:?}: held-out {:.2}σ → {:.2}σ, swapped {:.2}σ → {:.2}σ",
+                effect,
+                o.held_out.0,
+                o.held_out.1,
+                sw.before_rms_over_noise,
+                sw.after_rms_over_noise
             );
         }
     }

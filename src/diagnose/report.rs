@@ -10,7 +10,7 @@ use super::cycles::Phase;
 use super::noise::{NoiseFloor, CYCLES_FOR_DRIFT_FREE_FLOOR};
 use super::residual::PhaseStats;
 use super::select::{
-    Candidate, Character, Diagnosis, Errors, FitInfo, Round, Verdict, ADEQUATE_RATIO,
+    Candidate, Character, Diagnosis, Errors, FitInfo, Round, SwappedSplit, Verdict, ADEQUATE_RATIO,
 };
 use super::stationarity::{Stationarity, Trend, MIN_DEGREES_OF_FREEDOM};
 use super::{Bound, Effect};
@@ -82,6 +82,9 @@ pub struct Report {
     pub parameters_after: usize,
     pub errors_before: Errors,
     pub errors_after: Errors,
+    /// Baseline and final model refitted on the held-out cycles, scored on the training cycles
+    /// (which chose nothing); `None` when no effect was added.
+    pub swapped_split: Option<SwappedSplit>,
     /// 1 − nrms_after / nrms_before.
     pub nrms_reduction: f64,
 }
@@ -164,6 +167,7 @@ impl Report {
             parameters_after: d.n_parameters_after,
             errors_before: d.errors_before,
             errors_after: d.errors_after,
+            swapped_split: d.swapped_split,
             nrms_reduction: 1.0 - d.errors_after.nrms / d.errors_before.nrms,
         };
         r.conclusion = r.conclusion_text();
@@ -344,7 +348,19 @@ impl Report {
         if let Some(alias) = self.offset_alias() {
             v.push(alias);
         }
+        if let Some(w) = self.swapped_split_warning() {
+            v.push(w);
+        }
         v
+    }
+
+    /// The swapped split's warning for this report ([`selection_warning`]).
+    fn swapped_split_warning(&self) -> Option<String> {
+        selection_warning(
+            self.errors_before.held_out_rms_over_noise,
+            self.errors_after.held_out_rms_over_noise,
+            self.swapped_split?,
+        )
     }
 
     /// Direction-dependent friction `c_d = 1 + d·sign(ẋ)` moves both slip plateaus by
@@ -501,6 +517,7 @@ impl Report {
              energy-per-cycle error      {:>11.4e} {:>11.4e}\n\
              held-out normalised RMS     {:>11.4e} {:>11.4e}\n\
              held-out RMS / noise floor  {:>11.2} {:>11.2}\n\
+             {}\
              parameters                  {:>11} {:>11}\n\
              RMS error reduction: {:.1} %\n",
             self.errors_before.nrms,
@@ -513,6 +530,11 @@ impl Report {
             self.errors_after.held_out_nrms,
             self.errors_before.held_out_rms_over_noise,
             self.errors_after.held_out_rms_over_noise,
+            self.swapped_split.map_or(String::new(), |sw| format!(
+                "swapped split RMS / noise   {:>11.2} {:>11.2}   (refitted on the held-out \
+                 cycles, scored on the training cycles; the held-out cycles chose the effects)\n",
+                sw.before_rms_over_noise, sw.after_rms_over_noise
+            )),
             self.parameters_before,
             self.parameters_after,
             100.0 * self.nrms_reduction
@@ -523,6 +545,30 @@ impl Report {
         }
         s
     }
+}
+
+/// The held-out cycles chose the effects and also give the "after" error, so that error is
+/// optimistic; the swapped split ([`SwappedSplit`]) is not. Where the gain the swapped split
+/// shows (in RMS over the noise floor) is less than a quarter of the held-out gain
+/// `held_before − held_after`, a finding says so.
+fn selection_warning(held_before: f64, held_after: f64, sw: SwappedSplit) -> Option<String> {
+    let held_gain = held_before - held_after;
+    let swapped_gain = sw.before_rms_over_noise - sw.after_rms_over_noise;
+    if swapped_gain >= 0.25 * held_gain {
+        return None;
+    }
+    let how = if swapped_gain <= 0.0 {
+        "does not carry over"
+    } else {
+        "carries over only in part"
+    };
+    Some(format!(
+        "selection: the effects' gain on the held-out cycles that chose them ({held_before:.2}σ \
+         → {held_after:.2}σ) {how} to the swapped split (refitted on those cycles, scored on the \
+         training cycles: {:.2}σ → {:.2}σ); read the effects as fitted to this record, not as \
+         established",
+        sw.before_rms_over_noise, sw.after_rms_over_noise
+    ))
 }
 
 /// ", at most 1.4× in any phase" / ", 3.1× in microslip".
@@ -722,6 +768,27 @@ pub fn write(d: &Diagnosis, report: &Report, out: &Outputs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The swapped split's warning: none when at least a quarter of the held-out gain carries
+    /// over, "only in part" below that, "does not carry over" with no gain or a loss.
+    #[test]
+    fn selection_warning_follows_the_share_of_the_gain_that_carries_over() {
+        let sw = |b, a| SwappedSplit {
+            before_rms_over_noise: b,
+            after_rms_over_noise: a,
+        };
+        // Held-out gain 4σ (8 → 4).
+        assert!(selection_warning(8.0, 4.0, sw(9.0, 7.0)).is_none());
+        assert!(selection_warning(8.0, 4.0, sw(9.0, 8.0)).is_none()); // exactly a quarter
+        let w = selection_warning(8.0, 4.0, sw(9.0, 8.5)).unwrap();
+        assert!(w.contains("carries over only in part"), "{w}");
+        assert!(
+            w.contains("8.00σ → 4.00σ") && w.contains("9.00σ → 8.50σ"),
+            "{w}"
+        );
+        let w = selection_warning(8.0, 4.0, sw(9.0, 9.2)).unwrap();
+        assert!(w.contains("does not carry over"), "{w}");
+    }
 
     /// Without a relevance test (no excess over the floor before the effect) the share an
     /// effect explains is unknown: the report must say so, never "explains all".
