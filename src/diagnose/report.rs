@@ -411,10 +411,15 @@ impl Report {
         let nf = &self.noise;
         s += &format!(
             "noise floor σ = {:.4e} N (cycle-to-cycle repeatability, {} differences across {} \
-             cycles); high-pass cross-check {:.4e} N; noise lag-1 autocorrelation {:.2}\n",
+             cycles{}); high-pass cross-check {:.4e} N; noise lag-1 autocorrelation {:.2}\n",
             nf.sigma_n,
             nf.repeatability_samples,
             nf.across_cycles,
+            nf.relative_standard_error
+                .map_or(String::new(), |se| format!(
+                    ", standard error ±{:.0} %",
+                    100.0 * se
+                )),
             nf.high_pass_n,
             nf.lag1_autocorrelation
         );
