@@ -19,7 +19,8 @@
 //!   contact"). Sums are accumulated in double precision with fused multiply-adds, in a fixed
 //!   order, with AVX2 where the CPU has it (bit-identical to the portable code; tested).
 //! - [`FftCompliance`] (`Operator::Fft`): scatter to the grid, FFT convolution with the three
-//!   Cerruti spectra, gather, `O(N log N)`.
+//!   Cerruti spectra, gather, `O(N log N)`, in work arrays held by the operator (a product
+//!   allocates nothing).
 //!
 //! Both give the same product to round-off (tested).
 
@@ -586,7 +587,10 @@ impl KernelTable {
 /// Measured on the 1024² reference patch at 10 MPa (BENCHMARKS.md, "Tangential contact"): the
 /// direct summation ≈ 0.35 ns per pair of contact points (`n²` pairs: 5–6 ms at n = 4029),
 /// the FFT product (two forward and two inverse real transforms, six spectral products)
-/// ≈ 3.5 ns per `N log2 N` (`N` = FFT grid points: 72 ms at 1024² periodic).
+/// ≈ 3.5 ns per `N log2 N` (`N` = FFT grid points: 72 ms at 1024² periodic). The FFT figure
+/// is that of the product that allocated its arrays at every call; the allocation-free product
+/// costs less (BENCHMARKS.md, "allocation-free FFT compliance products"), not yet remeasured on
+/// an idle machine, so `Auto` still leans towards the dense operator.
 fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
     const DENSE_NS_PER_PAIR: f64 = 0.35;
     const FFT_NS_PER_POINT_LOG: f64 = 3.5;
