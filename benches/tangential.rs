@@ -6,7 +6,9 @@
 //! contact set), then one cycle of `ASPERITY_BENCH_STEPS` (default 40) displacement steps at
 //! 1.5 × the gross-slip displacement, with each compliance operator (dense restricted matrix and
 //! FFT; `ASPERITY_BENCH_OPERATORS=dense,fft`). Prints one line per run: grid, contact points,
-//! operator, set-up time, cycle time, iterations. Units: s, m, Pa.
+//! operator, set-up time, cycle time, iterations, and the process CPU time and minor page faults
+//! of the cycle (Linux; the library path: this bench does not set the binary's allocator options,
+//! `keep_freed_memory` in src/main.rs). Units: s, m, Pa.
 //!
 //! Run: `cargo bench --bench tangential` (2 cores: `RAYON_NUM_THREADS=2`).
 
@@ -19,6 +21,24 @@ use asperity::halfspace::Boundary;
 use asperity::surface::combine::{composite_modulus, Material};
 use asperity::surface::generate::{generate, GaussianSurfaceSpec};
 use std::time::Instant;
+
+/// Minor page faults of the process so far (Linux; 0 elsewhere).
+fn minor_faults() -> i64 {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // SAFETY: getrusage writes into the zeroed struct passed to it.
+        let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut ru) } == 0 {
+            return ru.ru_minflt;
+        }
+    }
+    0
+}
+
+/// Process CPU time (s, all threads).
+fn cpu_seconds() -> f64 {
+    cpu_time::ProcessTime::now().as_duration().as_secs_f64()
+}
 
 fn env_list<T: std::str::FromStr>(name: &str, default: &str) -> Vec<T> {
     std::env::var(name)
@@ -45,7 +65,7 @@ fn main() {
         "threads {} | pressure {pressure:e} Pa | μ {mu} | one cycle of {steps} steps",
         rayon::current_num_threads()
     );
-    println!("grid  contact_points  operator  setup_s  cycle_s  per_step_s  mean_iterations  energy_J_per_m2  tolerance");
+    println!("grid  contact_points  operator  setup_s  cycle_s  per_step_s  mean_iterations  energy_J_per_m2  tolerance  cycle_cpu_s  cycle_minor_faults");
     for &n in &grids {
         let mut spec = GaussianSurfaceSpec::reference();
         spec.nx = n;
@@ -94,7 +114,7 @@ fn main() {
             let setup = t0.elapsed().as_secs_f64();
             let a = *amplitude
                 .get_or_insert_with(|| 1.5 * s.gross_slip_displacement([1.0, 0.0]).unwrap());
-            let t1 = Instant::now();
+            let (t1, cpu1, faults1) = (Instant::now(), cpu_seconds(), minor_faults());
             let r = oscillate(
                 &mut s,
                 &Oscillation {
@@ -106,9 +126,10 @@ fn main() {
             )
             .unwrap();
             let cycle = t1.elapsed().as_secs_f64();
+            let (cpu, faults) = (cpu_seconds() - cpu1, minor_faults() - faults1);
             let its: usize = r.steps.iter().map(|s| s.iterations).sum();
             println!(
-                "{n:>5}  {:>14}  {:>8}  {setup:>7.2}  {cycle:>7.2}  {:>10.4}  {:>15.1}  {:>15.9}  {:e}",
+                "{n:>5}  {:>14}  {:>8}  {setup:>7.2}  {cycle:>7.2}  {:>10.4}  {:>15.1}  {:>15.9}  {:e}  {cpu:>11.2}  {faults:>18}",
                 s.metadata().contact_points,
                 op,
                 cycle / steps as f64,

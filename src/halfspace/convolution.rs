@@ -534,6 +534,210 @@ impl<T: FftReal> FftPlan<T> {
     }
 }
 
+/// Reusable work arrays for [`FftPlan::convolve_pair`]: the row transforms of both fields and
+/// one set of transform scratch per parallel task, so that a product allocates nothing.
+///
+/// The work is split into a fixed number of tasks (twice the rayon threads when the workspace
+/// is made), each with its own scratch, instead of rayon's `for_each_init` (which allocates
+/// its state for every piece of work it splits off). Every row and every y-frequency is
+/// transformed on its own, so the result does not depend on the split.
+#[derive(Debug, Clone)]
+pub struct PairWorkspace {
+    /// Row transforms of `f_x` and `f_y`, laid out as [`ConvolutionWorkspace`]'s; rows `nx..`
+    /// (zero padding) stay zero.
+    rows: [Vec<Complex64>; 2],
+    tasks: Vec<PairScratch>,
+}
+
+/// One task's scratch of [`FftPlan::convolve_pair`].
+#[derive(Debug, Clone)]
+struct PairScratch {
+    /// A real row of each field (length `nfy`).
+    real: [Vec<f64>; 2],
+    r2c: Vec<Complex64>,
+    c2r: Vec<Complex64>,
+    /// x-transforms (forward and inverse).
+    fft: Vec<Complex64>,
+    /// [`COLUMNS`] y-frequencies of each field, row stride `padded_row_length(nfx)`.
+    block: [Vec<Complex64>; 2],
+}
+
+impl FftPlan<f64> {
+    /// Work arrays for [`FftPlan::convolve_pair`].
+    pub fn pair_workspace(&self) -> PairWorkspace {
+        let nh = self.nfy / 2 + 1;
+        let (sh, sx) = (
+            padded_row_length::<f64>(nh),
+            padded_row_length::<f64>(self.nfx),
+        );
+        let fft = self
+            .fwd
+            .get_inplace_scratch_len()
+            .max(self.inv.get_inplace_scratch_len());
+        let task = PairScratch {
+            real: [vec![0.0; self.nfy], vec![0.0; self.nfy]],
+            r2c: self.r2c.make_scratch_vec(),
+            c2r: self.c2r.make_scratch_vec(),
+            fft: vec![Complex64::default(); fft],
+            block: [
+                vec![Complex64::default(); COLUMNS * sx],
+                vec![Complex64::default(); COLUMNS * sx],
+            ],
+        };
+        let rows = vec![Complex64::default(); self.nfx * sh];
+        PairWorkspace {
+            rows: [rows.clone(), rows],
+            tasks: vec![task; 2 * rayon::current_num_threads().max(1)],
+        }
+    }
+
+    /// `[u_x, u_y] = K ⊛ [f_x, f_y]` with the symmetric 2 × 2 kernel
+    /// `K = [[K_xx, K_xy], [K_xy, K_yy]]` (`kernels = [K_xx, K_xy, K_yy]`; the tangential
+    /// half-space compliance), without allocating:
+    ///
+    /// 1. for every grid row `i` (in parallel): `load(i, f_x row, f_y row)` writes row `i` of the
+    ///    two fields (length `ny`, zero on entry); the rows are transformed at once
+    ///    (real-to-complex along y);
+    /// 2. per block of [`COLUMNS`] y-frequencies: x-transforms,
+    ///    `û_x = K̂_xx f̂_x + K̂_xy f̂_y`, `û_y = K̂_yy f̂_y + K̂_xy f̂_x`, inverse x-transforms, the
+    ///    `nx` rows that are kept scattered back;
+    /// 3. for every grid row `i`: inverse real transforms, scaled, passed to
+    ///    `store(i, u_x row, u_y row)`.
+    ///
+    /// The same transforms and products in the same order as [`FftPlan::forward`], the
+    /// spectral products and [`FftPlan::inverse`], so the result is the same bit for bit.
+    pub fn convolve_pair(
+        &self,
+        kernels: [&KernelSpectrum; 3],
+        ws: &mut PairWorkspace,
+        load: impl Fn(usize, &mut [f64], &mut [f64]) + Sync,
+        store: impl Fn(usize, &[f64], &[f64]) + Sync,
+    ) {
+        let (nx, ny, nfx, nfy) = (self.nx, self.ny, self.nfx, self.nfy);
+        let nh = nfy / 2 + 1;
+        for k in kernels {
+            assert_eq!(k.values.dim(), (nh, nfx), "convolve_pair: kernel shape");
+        }
+        let (sh, sx) = (padded_row_length::<f64>(nh), padded_row_length::<f64>(nfx));
+        let PairWorkspace {
+            rows: [rows_x, rows_y],
+            tasks,
+        } = ws;
+        assert_eq!(rows_x.len(), nfx * sh, "convolve_pair: workspace shape");
+        assert_eq!(rows_y.len(), nfx * sh, "convolve_pair: workspace shape");
+        // Contiguous ranges of grid rows, one per task.
+        let per_task = nx.div_ceil(tasks.len()).max(1);
+        // 1. Load and real-transform the nx data rows.
+        rows_x[..nx * sh]
+            .par_chunks_mut(per_task * sh)
+            .zip(rows_y[..nx * sh].par_chunks_mut(per_task * sh))
+            .zip(tasks.par_iter_mut())
+            .enumerate()
+            .for_each(|(b, ((chunk_x, chunk_y), task))| {
+                let [fx, fy] = &mut task.real;
+                for (di, (out_x, out_y)) in chunk_x
+                    .chunks_mut(sh)
+                    .zip(chunk_y.chunks_mut(sh))
+                    .enumerate()
+                {
+                    fx.fill(0.0);
+                    fy.fill(0.0);
+                    load(b * per_task + di, &mut fx[..ny], &mut fy[..ny]);
+                    for (f, out) in [(&mut *fx, out_x), (&mut *fy, out_y)] {
+                        self.r2c
+                            .process_with_scratch(f, &mut out[..nh], &mut task.r2c)
+                            .expect("r2c sizes match the plan");
+                    }
+                }
+            });
+        // 2. Per block of COLUMNS y-frequencies: gather the columns, x-transform, kernel
+        // product, inverse x-transform, scatter the kept rows back.
+        let [kxx, kxy, kyy] = kernels.map(|k| k.values.as_slice().expect("standard layout"));
+        let blocks = nh.div_ceil(COLUMNS);
+        let per_task_blocks = blocks.div_ceil(tasks.len()).max(1);
+        let (shared_x, shared_y) = (SharedMut::new(rows_x), SharedMut::new(rows_y));
+        tasks.par_iter_mut().enumerate().for_each(|(t, task)| {
+            let [bx, by] = &mut task.block;
+            let first = (t * per_task_blocks).min(blocks);
+            let last = ((t + 1) * per_task_blocks).min(blocks);
+            for b in first..last {
+                let m0 = b * COLUMNS;
+                let mb = COLUMNS.min(nh - m0);
+                for (rows, block) in [(&shared_x, &mut *bx), (&shared_y, &mut *by)] {
+                    for k in 0..nfx {
+                        // SAFETY: columns m0..m0 + mb are read and written by this task only.
+                        let src = unsafe { rows.get(k * sh + m0, mb) };
+                        for (dm, v) in src.iter().enumerate() {
+                            block[dm * sx + k] = *v;
+                        }
+                    }
+                }
+                for dm in 0..mb {
+                    let m = m0 + dm;
+                    let x = &mut bx[dm * sx..dm * sx + nfx];
+                    let y = &mut by[dm * sx..dm * sx + nfx];
+                    self.fwd.process_with_scratch(x, &mut task.fft);
+                    self.fwd.process_with_scratch(y, &mut task.fft);
+                    let (kxx, kxy, kyy) = (
+                        &kxx[m * nfx..(m + 1) * nfx],
+                        &kxy[m * nfx..(m + 1) * nfx],
+                        &kyy[m * nfx..(m + 1) * nfx],
+                    );
+                    for k in 0..nfx {
+                        let (a, c) = (x[k], y[k]);
+                        x[k] = a * kxx[k] + c * kxy[k];
+                        y[k] = c * kyy[k] + a * kxy[k];
+                    }
+                    self.inv.process_with_scratch(x, &mut task.fft);
+                    self.inv.process_with_scratch(y, &mut task.fft);
+                }
+                // Only the nx rows of the grid are kept (zero-padded rows stay zero).
+                for (rows, block) in [(&shared_x, &*bx), (&shared_y, &*by)] {
+                    for k in 0..nx {
+                        // SAFETY: as above.
+                        let dst = unsafe { rows.get(k * sh + m0, mb) };
+                        for (dm, v) in dst.iter_mut().enumerate() {
+                            *v = block[dm * sx + k];
+                        }
+                    }
+                }
+            }
+        });
+        // 3. Inverse real transforms of the nx rows that are kept, scale, store.
+        let scale = 1.0 / (nfx * nfy) as f64;
+        rows_x[..nx * sh]
+            .par_chunks_mut(per_task * sh)
+            .zip(rows_y[..nx * sh].par_chunks_mut(per_task * sh))
+            .zip(tasks.par_iter_mut())
+            .enumerate()
+            .for_each(|(b, ((chunk_x, chunk_y), task))| {
+                let [ux, uy] = &mut task.real;
+                for (di, (in_x, in_y)) in chunk_x
+                    .chunks_mut(sh)
+                    .zip(chunk_y.chunks_mut(sh))
+                    .enumerate()
+                {
+                    for (row, u) in [(in_x, &mut *ux), (in_y, &mut *uy)] {
+                        let row = &mut row[..nh];
+                        // Imaginary parts of the DC (and Nyquist) terms of a real signal are
+                        // round-off; realfft insists they are zero.
+                        row[0].im = 0.0;
+                        if nfy.is_multiple_of(2) {
+                            row[nfy / 2].im = 0.0;
+                        }
+                        self.c2r
+                            .process_with_scratch(row, u, &mut task.c2r)
+                            .expect("c2r sizes match the plan");
+                        for v in &mut u[..ny] {
+                            *v *= scale;
+                        }
+                    }
+                    store(b * per_task + di, &ux[..ny], &uy[..ny]);
+                }
+            });
+    }
+}
+
 /// Raw pointer to a buffer whose disjoint parts are written by parallel calls: rows of a field
 /// (the solvers' work arrays, [`FftPlan::convolve_into`]'s output), columns of the row
 /// transforms ([`FftPlan::convolve_fused`]'s column blocks).

@@ -4,4 +4,4 @@
 pub mod convolution;
 pub mod influence;
 
-pub use convolution::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum};
+pub use convolution::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum, PairWorkspace};

@@ -19,17 +19,19 @@
 //!   contact"). Sums are accumulated in double precision with fused multiply-adds, in a fixed
 //!   order, with AVX2 where the CPU has it (bit-identical to the portable code; tested).
 //! - [`FftCompliance`] (`Operator::Fft`): scatter to the grid, FFT convolution with the three
-//!   Cerruti spectra, gather, `O(N log N)`.
+//!   Cerruti spectra, gather, `O(N log N)`, in work arrays held by the operator (a product
+//!   allocates nothing).
 //!
 //! Both give the same product to round-off (tested).
 
 use super::Operator;
-use crate::halfspace::convolution::{multiply_in_place, Boundary, FftPlan};
+use crate::halfspace::convolution::{Boundary, FftPlan, PairWorkspace, SharedMut};
 use crate::halfspace::influence::{
     cerruti_spectra, cerruti_uxx, cerruti_uxy, cerruti_uyy, CerrutiConstants, CerrutiSpectra,
 };
 use ndarray::Array2;
 use rayon::prelude::*;
+use std::sync::{Mutex, TryLockError};
 
 /// `u = C q` on the contact points, `q` and `u` as `[x, y]` pairs in the point order (row-major
 /// grid order).
@@ -65,11 +67,7 @@ impl Compliance {
         if fft {
             let plan = FftPlan::new(shape.0, shape.1, boundary);
             let spectra = cerruti_spectra(&plan, dx, dy, k);
-            Compliance::Fft(Box::new(FftCompliance {
-                plan,
-                spectra,
-                points: points.to_vec(),
-            }))
+            Compliance::Fft(Box::new(FftCompliance::new(plan, spectra, points)))
         } else {
             Compliance::Dense(Box::new(DirectCompliance::new(
                 boundary, shape, points, dx, dy, k,
@@ -421,39 +419,90 @@ fn wrap(a: usize, b: usize, n: usize) -> usize {
 }
 
 /// The FFT path of [`Compliance`].
+///
+/// A product allocates nothing: the row transforms and the transforms' scratch live in a
+/// [`PairWorkspace`] made with the operator ([`FftPlan::convolve_pair`]). The grid-sized work
+/// arrays of the earlier product (fields, spectra, outputs: 1–8 MiB each) were allocated and
+/// freed at every product, and glibc hands blocks of that size back to the kernel, so every
+/// product faulted them in again (BENCHMARKS.md, "Tangential contact").
+///
+/// The workspace is behind a mutex because the product takes `&self`. The solver calls it from
+/// one thread at a time (its own parallelism is inside the product), so the lock is never
+/// contended there; a second caller that finds it held gets a fresh workspace for its product
+/// instead of waiting (same result, the allocation cost of the earlier code), so concurrent use
+/// stays correct and never serialises. A per-thread workspace (`thread_local`) would have
+/// been sized for one grid and kept for the thread's life; the workspace belongs to the
+/// operator and goes with it.
 pub(super) struct FftCompliance {
     plan: FftPlan,
     spectra: CerrutiSpectra,
     points: Vec<(usize, usize)>,
+    /// The points of grid row `i` are `row_starts[i]..row_starts[i + 1]` (`nx + 1` entries).
+    row_starts: Vec<usize>,
+    workspace: Mutex<PairWorkspace>,
 }
 
 impl FftCompliance {
-    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
-        let (plan, spectra, points) = (&self.plan, &self.spectra, &self.points);
-        let shape = plan.grid_shape();
-        let mut fx = Array2::<f64>::zeros(shape);
-        let mut fy = Array2::<f64>::zeros(shape);
-        for (k, &(i, j)) in points.iter().enumerate() {
-            fx[[i, j]] = q[k][0];
-            fy[[i, j]] = q[k][1];
+    fn new(plan: FftPlan, spectra: CerrutiSpectra, points: &[(usize, usize)]) -> Self {
+        let nx = plan.grid_shape().0;
+        let mut row_starts = vec![0; nx + 1];
+        for &(i, _) in points {
+            row_starts[i + 1] += 1;
         }
-        let sx = plan.forward(&fx);
-        let sy = plan.forward(&fy);
-        // ũ_x = K_xx q̃_x + K_xy q̃_y,  ũ_y = K_xy q̃_x + K_yy q̃_y.
-        let mut ux = sx.clone();
-        multiply_in_place(&mut ux, &spectra.xx.values);
-        let mut t = sy.clone();
-        multiply_in_place(&mut t, &spectra.xy.values);
-        ux += &t;
-        let mut uy = sy;
-        multiply_in_place(&mut uy, &spectra.yy.values);
-        let mut t = sx;
-        multiply_in_place(&mut t, &spectra.xy.values);
-        uy += &t;
-        let ux = plan.inverse(ux);
-        let uy = plan.inverse(uy);
-        for (k, &(i, j)) in points.iter().enumerate() {
-            u[k] = [ux[[i, j]], uy[[i, j]]];
+        for i in 0..nx {
+            row_starts[i + 1] += row_starts[i];
+        }
+        assert!(
+            points.windows(2).all(|w| w[0] < w[1]),
+            "contact points in row-major order"
+        );
+        let workspace = Mutex::new(plan.pair_workspace());
+        Self {
+            plan,
+            spectra,
+            points: points.to_vec(),
+            row_starts,
+            workspace,
+        }
+    }
+
+    fn apply(&self, q: &[[f64; 2]], u: &mut [[f64; 2]]) {
+        assert_eq!(q.len(), self.points.len(), "one traction per contact point");
+        assert_eq!(
+            u.len(),
+            self.points.len(),
+            "one displacement per contact point"
+        );
+        let (points, rows) = (&self.points, &self.row_starts);
+        let spectra = &self.spectra;
+        let kernels = [&spectra.xx, &spectra.xy, &spectra.yy];
+        let out = SharedMut::new(u);
+        let run = |ws: &mut PairWorkspace| {
+            self.plan.convolve_pair(
+                kernels,
+                ws,
+                |i, fx, fy| {
+                    for k in rows[i]..rows[i + 1] {
+                        let j = points[k].1;
+                        (fx[j], fy[j]) = (q[k][0], q[k][1]);
+                    }
+                },
+                |i, ux, uy| {
+                    let (start, end) = (rows[i], rows[i + 1]);
+                    // SAFETY: the points of row i are written by this call only.
+                    let u = unsafe { out.get(start, end - start) };
+                    for (o, &(_, j)) in u.iter_mut().zip(&points[start..end]) {
+                        *o = [ux[j], uy[j]];
+                    }
+                },
+            )
+        };
+        match self.workspace.try_lock() {
+            Ok(mut ws) => run(&mut ws),
+            // A panic in an earlier product leaves nothing behind that matters: the data rows
+            // are rewritten by every product, the padding rows are never written.
+            Err(TryLockError::Poisoned(e)) => run(&mut e.into_inner()),
+            Err(TryLockError::WouldBlock) => run(&mut self.plan.pair_workspace()),
         }
     }
 }
@@ -538,7 +587,10 @@ impl KernelTable {
 /// Measured on the 1024² reference patch at 10 MPa (BENCHMARKS.md, "Tangential contact"): the
 /// direct summation ≈ 0.35 ns per pair of contact points (`n²` pairs: 5–6 ms at n = 4029),
 /// the FFT product (two forward and two inverse real transforms, six spectral products)
-/// ≈ 3.5 ns per `N log2 N` (`N` = FFT grid points: 72 ms at 1024² periodic).
+/// ≈ 3.5 ns per `N log2 N` (`N` = FFT grid points: 72 ms at 1024² periodic). The FFT figure
+/// is that of the product that allocated its arrays at every call; the allocation-free product
+/// costs less (BENCHMARKS.md, "allocation-free FFT compliance products"), not yet remeasured on
+/// an idle machine, so `Auto` still leans towards the dense operator.
 fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
     const DENSE_NS_PER_PAIR: f64 = 0.35;
     const FFT_NS_PER_POINT_LOG: f64 = 3.5;
@@ -637,6 +689,121 @@ mod tests {
             for (k, (v, w)) in simd.iter().zip(&portable).enumerate() {
                 assert_eq!(v[0].to_bits(), w[0].to_bits(), "run {t:?} point {k}");
                 assert_eq!(v[1].to_bits(), w[1].to_bits(), "run {t:?} point {k}");
+            }
+        }
+    }
+
+    /// The product as it was computed before the workspace (whole-grid transforms, allocated
+    /// at every call): the allocation-free one must give the same bits.
+    fn allocating_product(f: &FftCompliance, q: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        use crate::halfspace::convolution::multiply_in_place;
+        let (plan, spectra) = (&f.plan, &f.spectra);
+        let mut fx = Array2::<f64>::zeros(plan.grid_shape());
+        let mut fy = Array2::<f64>::zeros(plan.grid_shape());
+        for (k, &(i, j)) in f.points.iter().enumerate() {
+            fx[[i, j]] = q[k][0];
+            fy[[i, j]] = q[k][1];
+        }
+        let sx = plan.forward(&fx);
+        let sy = plan.forward(&fy);
+        let mut ux = sx.clone();
+        multiply_in_place(&mut ux, &spectra.xx.values);
+        let mut t = sy.clone();
+        multiply_in_place(&mut t, &spectra.xy.values);
+        ux += &t;
+        let mut uy = sy;
+        multiply_in_place(&mut uy, &spectra.yy.values);
+        let mut t = sx;
+        multiply_in_place(&mut t, &spectra.xy.values);
+        uy += &t;
+        let (ux, uy) = (plan.inverse(ux), plan.inverse(uy));
+        f.points
+            .iter()
+            .map(|&(i, j)| [ux[[i, j]], uy[[i, j]]])
+            .collect()
+    }
+
+    /// The FFT product against the direct double sum `u_i = Σ_j K(p_j − p_i) q_j` with the
+    /// kernel in double precision (element coefficients, or the exact periodic kernel), to
+    /// 1e-12 of the largest displacement; bit for bit against the earlier allocating product;
+    /// the same bits when the workspace is reused, used from pools of other sizes, or held
+    /// elsewhere (a fresh one is made). Odd and even sizes, rows without contact points.
+    #[test]
+    fn fft_product_equals_direct_sum_and_the_allocating_product() {
+        let k = CerrutiConstants::two_bodies(80e9, 0.3, 50e9, 0.25);
+        let (dx, dy) = (1e-6, 1.3e-6);
+        for (shape, boundary) in [
+            ((9, 7), Boundary::Periodic),
+            ((12, 10), Boundary::Periodic),
+            ((9, 7), Boundary::ZeroPadded),
+            ((20, 17), Boundary::ZeroPadded),
+        ] {
+            let pts: Vec<(usize, usize)> = (0..shape.0)
+                .flat_map(|i| (0..shape.1).map(move |j| (i, j)))
+                .filter(|&(i, j)| i != 3 && ((i * 5 + j * 3) % 4 != 0 || j == 6))
+                .collect();
+            let plan = FftPlan::new(shape.0, shape.1, boundary);
+            let spectra = cerruti_spectra(&plan, dx, dy, k);
+            let f = FftCompliance::new(plan, spectra, &pts);
+            let table = KernelTable::new(boundary, shape, (shape.0 - 1, shape.1 - 1), dx, dy, k);
+            for round in 0..2 {
+                let q: Vec<[f64; 2]> = (0..pts.len())
+                    .map(|m| {
+                        let m = (m + 7 * round) as f64;
+                        [(m * 0.7).sin() * 1e6, (m * 1.3).cos() * 1e6]
+                    })
+                    .collect();
+                let mut u = vec![[0.0; 2]; pts.len()];
+                f.apply(&q, &mut u);
+                let expected: Vec<[f64; 2]> = pts
+                    .iter()
+                    .map(|&(i, j)| {
+                        let mut e = [0.0; 2];
+                        for (b, &(i2, j2)) in pts.iter().enumerate() {
+                            let (kxx, kxy, kyy) =
+                                table.get(i2 as isize - i as isize, j2 as isize - j as isize);
+                            e[0] += kxx * q[b][0] + kxy * q[b][1];
+                            e[1] += kxy * q[b][0] + kyy * q[b][1];
+                        }
+                        e
+                    })
+                    .collect();
+                let scale = expected
+                    .iter()
+                    .map(|e| e[0].abs().max(e[1].abs()))
+                    .fold(0.0, f64::max);
+                assert!(scale > 0.0);
+                for (a, (got, e)) in u.iter().zip(&expected).enumerate() {
+                    for c in 0..2 {
+                        assert!(
+                            (got[c] - e[c]).abs() <= 1e-12 * scale,
+                            "{boundary:?} {shape:?} point {a} comp {c}: {} vs {}",
+                            got[c],
+                            e[c]
+                        );
+                    }
+                }
+                let bits = |u: &[[f64; 2]]| -> Vec<u64> {
+                    u.iter()
+                        .flat_map(|v| [v[0].to_bits(), v[1].to_bits()])
+                        .collect()
+                };
+                let want = bits(&allocating_product(&f, &q));
+                assert_eq!(bits(&u), want, "{boundary:?} {shape:?}: allocating product");
+                for threads in [1, 3] {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    let mut v = vec![[0.0; 2]; pts.len()];
+                    pool.install(|| f.apply(&q, &mut v));
+                    assert_eq!(bits(&v), want, "{boundary:?} {shape:?}: {threads} threads");
+                }
+                let held = f.workspace.lock().unwrap();
+                let mut v = vec![[0.0; 2]; pts.len()];
+                f.apply(&q, &mut v);
+                drop(held);
+                assert_eq!(bits(&v), want, "{boundary:?} {shape:?}: fresh workspace");
             }
         }
     }
