@@ -291,6 +291,29 @@ fn missing_duplicated_or_foreign_shards_are_refused() {
         ],
         &out,
     );
+    // All shards of one other build: merged (they agree), with a warning that this build
+    // writes the outputs.
+    let others: Vec<PathBuf> = paths
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut j = read(p);
+            j["build"] = c["build"].clone();
+            let q = tmp.path().join(format!("other-build-{}-of-3.json", i + 1));
+            std::fs::write(&q, j.to_string()).unwrap();
+            q
+        })
+        .collect();
+    let merged_other = tmp.path().join("merged-other-build");
+    let (ok, _, err) = merge(&others, &merged_other);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("warning: the shards were computed by")
+            && err.contains("commit 0123456789ab")
+            && err.contains(&source[..12]),
+        "{err}"
+    );
+    assert!(merged_other.join("normal_sweep.csv").is_file());
     // A file of the format v1 (which recorded only the crate version).
     let mut v1 = read(&paths[2]);
     let obj = v1.as_object_mut().unwrap();
