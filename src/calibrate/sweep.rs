@@ -165,7 +165,7 @@ mod tests {
         }
     }
 
-    /// The chain `chain` of realisation `r` as the pipeline would label it (no pressure: the
+    /// The chain `chain` of realisation `r` as the pipeline records it (no pressure: the
     /// identity is checked before the pressures).
     fn chain(sweep: &CalibrationSweep, chain: Chain, r: usize) -> Realisation {
         let spec = pipeline::chain_spec(&sweep.config, chain, r).expect("the check runs");
