@@ -15,6 +15,7 @@
 //! Units: SI throughout (m, Pa, N). File headers, CSV columns and CLI flags name their units.
 //! Grids follow the [`grid::Grid2`] convention: shape `(nx, ny)`, `[[i, j]]` at `(i·dx, j·dy)`.
 
+pub mod build_info;
 pub mod calibrate;
 pub mod contact;
 pub mod diagnose;

@@ -27,12 +27,17 @@
 //! check that every shard ran).
 //!
 //! # Checks at merge ([`merge`])
-//! Every file must parse, be of the expected kind and format, carry a configuration whose
-//! SHA-256 matches the one it records, share that hash with every other file (same inputs,
-//! same crate version), agree on `n`, and hold exactly its block of units with the expected
-//! labels; every shard `1..=n` must be present exactly once; every unit's result must pass the
-//! sweep's own physical check ([`ShardedSweep::check_unit`]). Each failure names the files.
-//! Nothing is written unless all checks pass.
+//! Every file must parse, be of the expected kind and format ([`FORMAT`]; files of the format
+//! v1, which recorded no build, are refused), carry a configuration whose SHA-256 matches the
+//! one it records, have been written by the same build as every other file ([`BuildId`]: crate
+//! version, git commit and uncommitted changes, source hash, compiler, target, profile — a
+//! unit's result is bit-identical only for the same code), share the configuration hash with
+//! every other file (same inputs, same crate version), agree on `n`, and hold exactly its block
+//! of units with the expected labels; every shard `1..=n` must be present exactly once; every
+//! unit's result must pass the sweep's own check ([`ShardedSweep::check_unit`]: physical, and
+//! computed from what the configuration prescribes for that unit). Each failure names the
+//! files. Nothing is written unless all checks pass. The build of the shards is returned
+//! ([`Merged::build`]); the merge itself may run another build (the CLI warns).
 //!
 //! # Adding a sharded sweep
 //! Implement [`ShardedSweep`] for the sweep's configuration (serialisable, with one label per
@@ -41,6 +46,7 @@
 //! [`run_units`] with [`Shard::WHOLE`] and its output writer), and add the kind to `asperity
 //! merge`, which calls [`merge`] and the same output writer.
 
+use crate::build_info::BuildId;
 use crate::error::{Error, Result};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -48,8 +54,12 @@ use sha2::{Digest, Sha256};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// Format tag written into every shard file.
-pub const FORMAT: &str = "asperity-shard-v1";
+/// Format tag written into every shard file. v2 (2026-11-28) records the build
+/// ([`ShardFile::build`]) where v1 recorded only the crate version.
+pub const FORMAT: &str = "asperity-shard-v2";
+
+/// The previous format, refused with its own message (it cannot say which build wrote it).
+const FORMAT_V1: &str = "asperity-shard-v1";
 
 /// A sweep whose units can be computed independently.
 pub trait ShardedSweep: Serialize + DeserializeOwned {
@@ -61,8 +71,10 @@ pub trait ShardedSweep: Serialize + DeserializeOwned {
     fn unit_labels(&self) -> Vec<String>;
     /// Check one unit's result as read back from a shard file: the configuration is protected
     /// by its hash, the results are not, so an edited result (a negative stiffness, an area
-    /// ratio above 1) would otherwise be merged as if computed. The message names the field;
-    /// [`merge`] adds the file and the unit.
+    /// ratio above 1) would otherwise be merged as if computed. Where the result records what
+    /// it was computed from (a seed, a grid, a surface source), that must be what the
+    /// configuration prescribes for unit `unit.id`: results moved between units (their labels
+    /// kept) are refused. The message names the field; [`merge`] adds the file and the unit.
     fn check_unit(&self, unit: &UnitRecord<Self::Unit>) -> std::result::Result<(), String>;
 }
 
@@ -146,8 +158,8 @@ pub struct ShardFile<C, R> {
     pub format: String,
     /// [`ShardedSweep::KIND`].
     pub kind: String,
-    /// Version of the crate that computed the results.
-    pub crate_version: String,
+    /// The build that computed the results ([`BuildId::current`] of the shard's process).
+    pub build: BuildId,
     /// [`config_sha256`] of `config`.
     pub config_sha256: String,
     /// Which shard this is.
@@ -229,7 +241,7 @@ pub fn write_shard<S: ShardedSweep>(
     let file = ShardFile {
         format: FORMAT.to_string(),
         kind: S::KIND.to_string(),
-        crate_version: env!("CARGO_PKG_VERSION").to_string(),
+        build: BuildId::current(),
         config_sha256: config_sha256(sweep)?,
         shard,
         units_total: total,
@@ -263,6 +275,17 @@ fn read_text(path: &Path) -> Result<String> {
 pub fn read_kind(path: &Path) -> Result<String> {
     let h: ShardHeader = serde_json::from_str(&read_text(path)?)
         .map_err(|e| Error::parse(path, e.line(), format!("not an asperity shard file: {e}")))?;
+    if h.format == FORMAT_V1 {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "shard format `{FORMAT_V1}` records no build identity, so this asperity \
+                 (format `{FORMAT}`) cannot check that all shards were computed by one build; \
+                 rerun the shards with this binary"
+            ),
+        ));
+    }
     if h.format != FORMAT {
         return Err(Error::parse(
             path,
@@ -281,6 +304,8 @@ type StoredShard<S> = ShardFile<S, UnitRecord<<S as ShardedSweep>::Unit>>;
 pub struct Merged<S: ShardedSweep> {
     pub config: S,
     pub config_sha256: String,
+    /// The build that computed every shard (they agree).
+    pub build: BuildId,
     pub shards: usize,
     pub units: Vec<UnitRecord<S::Unit>>,
 }
@@ -342,15 +367,26 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
     check_labels(&labels)?;
     let mut by_index: Vec<Option<usize>> = vec![None; count];
     for (f, (path, file)) in files.iter().enumerate() {
+        if file.build != first.build {
+            return Err(Error::Data(format!(
+                "shards of different builds: {} was computed by {}; {} by {}. A unit's results \
+                 are the same bit for bit only for the same code: rerun the shards with one \
+                 binary (scripts/slurm/submit-sweep.sh copies it for the whole array)",
+                first_path.display(),
+                first.build.describe(),
+                path.display(),
+                file.build.describe()
+            )));
+        }
         if file.config_sha256 != first.config_sha256 {
             return Err(Error::Data(format!(
                 "shards of different configurations: {} has configuration {} (asperity {}), {} has {} (asperity {}); rerun the shards with identical inputs",
                 first_path.display(),
                 &first.config_sha256[..12],
-                first.crate_version,
+                first.build.crate_version,
                 path.display(),
                 &file.config_sha256[..12],
-                file.crate_version
+                file.build.crate_version
             )));
         }
         if file.shard.count != count {
@@ -438,6 +474,7 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
         )));
     }
     let config_sha256 = first.config_sha256.clone();
+    let build = first.build.clone();
     files.sort_by_key(|(_, f)| f.shard.index);
     let mut units = Vec::with_capacity(labels.len());
     let mut config = None;
@@ -448,6 +485,7 @@ pub fn merge<S: ShardedSweep>(paths: &[PathBuf]) -> Result<Merged<S>> {
     Ok(Merged {
         config: config.expect("at least one shard"),
         config_sha256,
+        build,
         shards: count,
         units,
     })
@@ -638,6 +676,83 @@ mod tests {
         let e = merge::<Squares>(&p).unwrap_err().to_string();
         assert!(
             e.contains("units_total = 5") && e.contains("4 units") && !e.contains("holds"),
+            "{e}"
+        );
+    }
+
+    /// Shards of two builds (here: one file's build edited to another commit, as a rebuilt
+    /// binary writes it) are refused naming both files and both builds; a v1 file (no build
+    /// recorded) is refused saying so.
+    #[test]
+    fn shards_of_different_builds_and_v1_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let sweep = Squares {
+            values: vec![1.0, 2.0, 3.0],
+        };
+        let p: Vec<PathBuf> = (1..=2)
+            .map(|i| run_shard(dir.path(), &sweep, Shard::new(i, 2).unwrap()))
+            .collect();
+        let merged = merge::<Squares>(&p).unwrap();
+        assert_eq!(merged.build, BuildId::current());
+        let text = std::fs::read_to_string(&p[1]).unwrap();
+        let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(json["format"], FORMAT);
+        let ours = BuildId::current();
+        let other = BuildId {
+            git_commit: Some("0123456789abcdef0123456789abcdef01234567".into()),
+            git_dirty: Some(false),
+            source_sha256: "cd".repeat(32),
+            ..ours.clone()
+        };
+        json["build"] = serde_json::to_value(&other).unwrap();
+        let rebuilt = dir.path().join("rebuilt.json");
+        std::fs::write(&rebuilt, json.to_string()).unwrap();
+        let e = merge::<Squares>(&[p[0].clone(), rebuilt.clone()])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("different builds"), "{e}");
+        assert!(
+            e.contains("squares.shard-1-of-2.json") && e.contains("rebuilt.json"),
+            "{e}"
+        );
+        assert!(
+            e.contains(&ours.describe()) && e.contains(&other.describe()),
+            "{e}"
+        );
+        assert!(
+            e.contains("0123456789ab") && e.contains("cdcdcdcdcdcd"),
+            "{e}"
+        );
+        // Any field counts: the same commit built by another compiler is another build.
+        json["build"] = serde_json::to_value(BuildId {
+            rustc: "rustc 1.0.0".into(),
+            ..ours.clone()
+        })
+        .unwrap();
+        std::fs::write(&rebuilt, json.to_string()).unwrap();
+        let e = merge::<Squares>(&[p[0].clone(), rebuilt.clone()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("different builds") && e.contains("rustc 1.0.0"),
+            "{e}"
+        );
+        // A v1 file: the crate version where v2 has the build.
+        let mut v1: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let obj = v1.as_object_mut().unwrap();
+        obj.remove("build");
+        obj.insert("crate_version".into(), serde_json::json!("0.1.0"));
+        obj.insert("format".into(), serde_json::json!("asperity-shard-v1"));
+        let old = dir.path().join("old.json");
+        std::fs::write(&old, v1.to_string()).unwrap();
+        let e = merge::<Squares>(&[p[0].clone(), old])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("old.json")
+                && e.contains("asperity-shard-v1")
+                && e.contains("no build")
+                && e.contains("rerun the shards"),
             "{e}"
         );
     }

@@ -239,6 +239,99 @@ fn missing_duplicated_or_foreign_shards_are_refused() {
         &["different configurations", foreign.to_str().unwrap()],
         &out,
     );
+    // Results swapped between two shard files, their labels kept (shard 1 holds seed 2,
+    // shard 2 seeds 3 and 4, all on the same grid): refused naming the file, the unit and
+    // both surfaces.
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (mut a, mut b) = (read(&paths[0]), read(&paths[1]));
+    assert_eq!(a["units"][0]["label"], "seed-2");
+    assert_eq!(b["units"][0]["label"], "seed-3");
+    std::mem::swap(&mut a["units"][0]["result"], &mut b["units"][0]["result"]);
+    let swapped = [
+        tmp.path().join("swapped-1.json"),
+        tmp.path().join("swapped-2.json"),
+    ];
+    std::fs::write(&swapped[0], a.to_string()).unwrap();
+    std::fs::write(&swapped[1], b.to_string()).unwrap();
+    assert_fails_without_output(
+        merge(
+            &[swapped[0].clone(), swapped[1].clone(), paths[2].clone()],
+            &out,
+        ),
+        &[
+            "swapped-1.json",
+            "unit 0 (`seed-2`)",
+            "`surface`",
+            "seed 3)",
+            "seed 2)",
+        ],
+        &out,
+    );
+    // A shard of another build (as a rebuilt binary writes it: another commit and sources):
+    // refused naming both files and both builds.
+    let mut c = read(&paths[2]);
+    let ours = c["build"].clone();
+    assert_eq!(ours["crate_version"], env!("CARGO_PKG_VERSION"));
+    c["build"]["git_commit"] = "0123456789abcdef0123456789abcdef01234567".into();
+    c["build"]["source_sha256"] = "cd".repeat(32).into();
+    let rebuilt = tmp.path().join("rebuilt-3-of-3.json");
+    std::fs::write(&rebuilt, c.to_string()).unwrap();
+    let source = ours["source_sha256"].as_str().unwrap();
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), paths[1].clone(), rebuilt.clone()], &out),
+        &[
+            "different builds",
+            "contact-normal.shard-1-of-3.json",
+            "rebuilt-3-of-3.json",
+            "commit 0123456789ab",
+            "sources cdcdcdcdcdcd",
+            &source[..12],
+        ],
+        &out,
+    );
+    // All shards of one other build: merged (they agree), with a warning that this build
+    // writes the outputs.
+    let others: Vec<PathBuf> = paths
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut j = read(p);
+            j["build"] = c["build"].clone();
+            let q = tmp.path().join(format!("other-build-{}-of-3.json", i + 1));
+            std::fs::write(&q, j.to_string()).unwrap();
+            q
+        })
+        .collect();
+    let merged_other = tmp.path().join("merged-other-build");
+    let (ok, _, err) = merge(&others, &merged_other);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("warning: the shards were computed by")
+            && err.contains("commit 0123456789ab")
+            && err.contains(&source[..12]),
+        "{err}"
+    );
+    assert!(merged_other.join("normal_sweep.csv").is_file());
+    // A file of the format v1 (which recorded only the crate version).
+    let mut v1 = read(&paths[2]);
+    let obj = v1.as_object_mut().unwrap();
+    obj.remove("build");
+    obj.insert("crate_version".into(), env!("CARGO_PKG_VERSION").into());
+    obj.insert("format".into(), "asperity-shard-v1".into());
+    let old = tmp.path().join("old-3-of-3.json");
+    std::fs::write(&old, v1.to_string()).unwrap();
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), paths[1].clone(), old], &out),
+        &[
+            "old-3-of-3.json",
+            "asperity-shard-v1",
+            "no build identity",
+            "rerun the shards",
+        ],
+        &out,
+    );
     // Not a shard file, and a missing file.
     let junk = tmp.path().join("junk.json");
     std::fs::write(&junk, "[1, 2]").unwrap();
@@ -463,6 +556,46 @@ fn missing_duplicated_or_foreign_calibration_shards_are_refused() {
         ],
         &out,
     );
+    // Two realisations' results swapped between shard files, their labels kept: refused
+    // naming the file, the unit and the seeds (realisation 0 is seed 1, realisation 1 seed 2).
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (mut a, mut b) = (read(&paths[0]), read(&paths[1]));
+    std::mem::swap(&mut a["units"][0]["result"], &mut b["units"][0]["result"]);
+    let swapped = [
+        tmp.path().join("swapped-calibrate-1.json"),
+        tmp.path().join("swapped-calibrate-2.json"),
+    ];
+    std::fs::write(&swapped[0], a.to_string()).unwrap();
+    std::fs::write(&swapped[1], b.to_string()).unwrap();
+    assert_fails_without_output(
+        merge(
+            &[swapped[0].clone(), swapped[1].clone(), paths[2].clone()],
+            &out,
+        ),
+        &[
+            "swapped-calibrate-1.json",
+            "unit 0 (`seed-1`)",
+            "main chain: computed from seed 2,",
+            "prescribes seed 1,",
+        ],
+        &out,
+    );
+    // The grid check's chain pasted into the main chain's place (same seed, 64² not 128²).
+    let mut c = read(&paths[1]);
+    c["units"][0]["result"]["main"] = c["units"][0]["result"]["grid_check"].clone();
+    let pasted = tmp.path().join("pasted-calibrate.json");
+    std::fs::write(&pasted, c.to_string()).unwrap();
+    assert_fails_without_output(
+        merge(&[paths[0].clone(), pasted, paths[2].clone()], &out),
+        &[
+            "pasted-calibrate.json",
+            "main chain: computed from seed 2, 64 x 64 points",
+            "128 x 128 points",
+        ],
+        &out,
+    );
     // A normal-sweep shard is another kind.
     let (ok, _, err) = asperity(
         &[
@@ -595,4 +728,128 @@ fn edited_shard_results_and_blocked_outputs_are_refused() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert_eq!(left, vec!["kn.png"], "files left behind");
+}
+
+/// A shard file records the build of the binary that wrote it: in a git checkout, the commit
+/// checked out now (build.rs reruns when HEAD or its branch moves) and whether the build
+/// inputs have uncommitted changes; always the hash of the sources and the compiler.
+#[test]
+fn shard_files_record_the_build() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("shards");
+    let (ok, _, err) = asperity(
+        &[
+            "contact",
+            "normal",
+            "--seeds",
+            "1",
+            "--grid",
+            "128",
+            "--pressures-pa=1e6",
+            "--shard",
+            "2/2",
+            "--out-dir",
+            dir.to_str().unwrap(),
+        ],
+        1,
+    );
+    assert!(ok, "{err}");
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("contact-normal.shard-2-of-2.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(json["format"], "asperity-shard-v2");
+    let build = &json["build"];
+    assert_eq!(build["crate_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(
+        build["source_sha256"].as_str().unwrap().len(),
+        64,
+        "{build}"
+    );
+    assert!(
+        build["rustc"].as_str().unwrap().starts_with("rustc "),
+        "{build}"
+    );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let git = |args: &[&str]| -> Option<String> {
+        let out = Command::new("git")
+            .arg("-C")
+            .arg(root)
+            .args(args)
+            .output()
+            .ok()?;
+        out.status
+            .success()
+            .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    };
+    let top = git(&["rev-parse", "--show-toplevel"]);
+    let in_checkout =
+        top.is_some_and(|t| Path::new(&t).canonicalize().ok() == root.canonicalize().ok());
+    if !in_checkout {
+        // A tarball: no commit, the source hash identifies the build.
+        assert!(
+            build["git_commit"].is_null() && build["git_dirty"].is_null(),
+            "{build}"
+        );
+        return;
+    }
+    // The checkout must still be the one built: a build input, HEAD or its branch changed
+    // after the binary was linked (an edit or a commit while the tests run) is no failure of
+    // build.rs. Cargo rebuilt the binary before the tests if any of them was newer.
+    let binary = std::fs::metadata(env!("CARGO_BIN_EXE_asperity"))
+        .and_then(|m| m.modified())
+        .unwrap();
+    let mut watched: Vec<PathBuf> = ["build.rs", "Cargo.toml", "Cargo.lock"]
+        .iter()
+        .map(|f| root.join(f))
+        .collect();
+    let branch = git(&["symbolic-ref", "-q", "HEAD"]);
+    for p in ["HEAD", "packed-refs"].into_iter().chain(branch.as_deref()) {
+        if let Some(path) = git(&["rev-parse", "--git-path", p]) {
+            watched.push(root.join(path));
+        }
+    }
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, out);
+            }
+            out.push(p);
+        }
+    }
+    walk(&root.join("src"), &mut watched);
+    let newer: Vec<&PathBuf> = watched
+        .iter()
+        .filter(|p| {
+            std::fs::metadata(p)
+                .and_then(|m| m.modified())
+                .is_ok_and(|t| t > binary)
+        })
+        .collect();
+    if !newer.is_empty() {
+        eprintln!("skipped: changed since the build: {newer:?}");
+        return;
+    }
+    assert_eq!(
+        build["git_commit"].as_str(),
+        git(&["rev-parse", "HEAD"]).as_deref(),
+        "the binary's commit is not the checkout's: build.rs did not rerun"
+    );
+    let status = git(&[
+        "status",
+        "--porcelain",
+        "--untracked-files=all",
+        "--",
+        "src",
+        "build.rs",
+        "Cargo.toml",
+        "Cargo.lock",
+    ])
+    .unwrap();
+    assert_eq!(
+        build["git_dirty"].as_bool(),
+        Some(!status.is_empty()),
+        "{status}"
+    );
 }

@@ -14,9 +14,10 @@
 #
 # The shards write OUT_DIR/shards/<kind>.shard-<i>-of-<N>.json (logs in OUT_DIR/logs/); the
 # merge job writes into OUT_DIR exactly the files a single run of the sweep writes, after
-# checking that every shard is present once and all come from the same configuration. Do not
-# pass --out-dir or --shard in the sweep arguments: this script sets them. Each task uses
-# RAYON_NUM_THREADS = its --cpus-per-task; results do not depend on the thread count.
+# checking that every shard is present once and all come from the same configuration and the
+# same build. Do not pass --out-dir or --shard in the sweep arguments: this script sets them.
+# Each task uses RAYON_NUM_THREADS = its --cpus-per-task; results do not depend on the thread
+# count.
 # Prints the two job ids.
 set -euo pipefail
 
@@ -61,7 +62,8 @@ fi
 mkdir -p "$out/shards" "$out/logs"
 out=$(realpath "$out")
 # Every task runs this copy: a rebuild of the binary while tasks wait in the queue would
-# otherwise mix two builds in one merged result (the shard files record only the crate version).
+# otherwise mix two builds, and the merge refuses shards of different builds (each shard file
+# records the build: git commit, source hash, compiler), after the whole array ran.
 cp "$bin" "$out/asperity"
 bin="$out/asperity"
 

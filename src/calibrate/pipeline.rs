@@ -344,6 +344,65 @@ fn check_specs(
     (grid, patch, notes)
 }
 
+/// The chains of a realisation ([`RealisationChains`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Chain {
+    /// The main surface.
+    Main,
+    /// The same seed on the grid with half the points per side.
+    GridCheck,
+    /// The independent surface of the half-size patch.
+    PatchCheck,
+}
+
+impl Chain {
+    /// The three chains, in the order of [`RealisationChains`].
+    pub const ALL: [Chain; 3] = [Chain::Main, Chain::GridCheck, Chain::PatchCheck];
+
+    /// Name in messages (`main`, `grid check`, `patch check`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Chain::Main => "main",
+            Chain::GridCheck => "grid check",
+            Chain::PatchCheck => "patch check",
+        }
+    }
+}
+
+/// The generated surface of `chain` of realisation `r` (0-based) of a calibration over generated
+/// surfaces: the main surface has seed `surface.seed + r`, the grid check the same seed at half
+/// the points per side, the patch check seed `surface.seed + realisations.count + r` on the
+/// half-size patch; `None` for a check that does not run (its spec is not admissible). What
+/// [`run_realisations`] generates, and what a sharded calibration's merge checks each chain's
+/// seed, grid and patch against.
+pub fn chain_spec(
+    config: &CalibrationConfig,
+    chain: Chain,
+    r: usize,
+) -> Option<GaussianSurfaceSpec> {
+    let (grid, patch, _) = check_specs(config);
+    chain_spec_of(config, grid, patch, chain, r)
+}
+
+/// [`chain_spec`] with the check specs computed once.
+fn chain_spec_of(
+    config: &CalibrationConfig,
+    grid: Option<GaussianSurfaceSpec>,
+    patch: Option<GaussianSurfaceSpec>,
+    chain: Chain,
+    r: usize,
+) -> Option<GaussianSurfaceSpec> {
+    let base = match chain {
+        Chain::Main => Some(config.surface),
+        Chain::GridCheck => grid,
+        Chain::PatchCheck => patch,
+    }?;
+    Some(GaussianSurfaceSpec {
+        seed: base.seed.wrapping_add(r as u64),
+        ..base
+    })
+}
+
 /// Number of realisations: `realisations.count` generated surfaces, or one given surface.
 pub fn realisation_count(config: &CalibrationConfig, source: &SurfaceSource) -> usize {
     match source {
@@ -647,24 +706,13 @@ pub fn run_realisations(
         jobs.extend(realisations.clone().map(Job::Patch));
     }
     let spec_of = |job: Job| -> GaussianSurfaceSpec {
-        let s = config.surface;
-        match job {
-            Job::Main(r) => GaussianSurfaceSpec {
-                seed: s.seed.wrapping_add(r as u64),
-                ..s
-            },
-            Job::Grid(r) => GaussianSurfaceSpec {
-                seed: s.seed.wrapping_add(r as u64),
-                ..grid_spec.expect("grid spec")
-            },
-            Job::Patch(r) => {
-                let p = patch_spec.expect("patch spec");
-                GaussianSurfaceSpec {
-                    seed: p.seed.wrapping_add(r as u64),
-                    ..p
-                }
-            }
-        }
+        let (chain, r) = match job {
+            Job::Main(r) => (Chain::Main, r),
+            Job::Grid(r) => (Chain::GridCheck, r),
+            Job::Patch(r) => (Chain::PatchCheck, r),
+        };
+        chain_spec_of(config, grid_spec, patch_spec, chain, r)
+            .expect("a job for every chain that runs")
     };
     let run_job = |job: Job| -> Result<Realisation> {
         let t = Lap::start();

@@ -3,6 +3,7 @@
 //! configuration and every result read must be physical (see [`asperity::shard::merge`] and
 //! each sweep's `check_unit`); the outputs appear together or not at all.
 
+use asperity::build_info::BuildId;
 use asperity::calibrate::sweep::CalibrationSweep;
 use asperity::contact::surface_sweep::SurfaceSweep;
 use asperity::output::OutputSet;
@@ -20,6 +21,20 @@ pub struct MergeArgs {
     out_dir: PathBuf,
 }
 
+/// The shards agree on their build ([`shard::merge`] refuses otherwise); a merge by another
+/// build still combines their results, but the files are written by this build's code, so the
+/// outputs may differ from a single run of the shards' build: say so.
+fn warn_other_build(shards: &BuildId) {
+    let ours = BuildId::current();
+    if *shards != ours {
+        eprintln!(
+            "warning: the shards were computed by {}; this merge runs {}: the outputs are written by this build's code and may differ from a single run of the shards' build",
+            shards.describe(),
+            ours.describe()
+        );
+    }
+}
+
 pub fn run(args: MergeArgs) -> Result<()> {
     // Refused now, before any shard is read: an --out-dir that is a file or not writable.
     let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
@@ -27,6 +42,7 @@ pub fn run(args: MergeArgs) -> Result<()> {
     match kind.as_str() {
         SurfaceSweep::KIND => {
             let merged = shard::merge::<SurfaceSweep>(&args.shards)?;
+            warn_other_build(&merged.build);
             let staged = out.staging_dir()?;
             super::contact_normal::write_outputs(&merged.config, &merged.units, &staged)?;
             out.commit()?;
@@ -42,6 +58,7 @@ pub fn run(args: MergeArgs) -> Result<()> {
         }
         CalibrationSweep::KIND => {
             let merged = shard::merge::<CalibrationSweep>(&args.shards)?;
+            warn_other_build(&merged.build);
             // The run's wall time: the realisations' chains summed (they ran in other jobs).
             let chains_s = merged.units.iter().map(|u| u.wall_time_s).sum();
             let run = merged.config.assemble(&merged.units, chains_s)?;

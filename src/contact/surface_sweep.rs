@@ -126,9 +126,14 @@ pub struct GridInfo {
     pub periodic: bool,
 }
 
-/// Result of one surface: its grid and one point per pressure.
+/// Result of one surface: the surface it was computed from, its grid and one point per
+/// pressure.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SurfaceResult {
+    /// The surface (as the sweep's configuration gives it) this result was computed from: a
+    /// sharded sweep's merge checks it against the configuration's surface of the unit, so a
+    /// result moved to another unit is refused (the grids of a sweep are usually all alike).
+    pub surface: SurfaceSource,
     pub grid: GridInfo,
     pub points: Vec<SweepPoint>,
 }
@@ -140,11 +145,25 @@ impl ShardedSweep for SurfaceSweep {
         self.surfaces.iter().map(SurfaceSource::label).collect()
     }
 
-    /// One surface read back from a shard: its grid is the one its configuration generates
+    /// One surface read back from a shard: it was computed from the configuration's surface of
+    /// this unit (`surface`: the seed and statistics of a generated one, the path, SHA-256 and
+    /// fill of a file), its grid is the one its configuration generates
     /// (every shard of a sweep shares the configuration, so the grids agree across shards; a
     /// measured file's grid is not re-read here), it holds exactly the configuration's
     /// pressures, and every point is physical ([`SweepPoint::check_physical`]).
     fn check_unit(&self, u: &UnitRecord<SurfaceResult>) -> std::result::Result<(), String> {
+        match self.surfaces.get(u.id) {
+            Some(s) if *s == u.result.surface => {}
+            Some(s) => {
+                return Err(format!(
+                    "`surface`: computed from {}, but the configuration's surface of this unit \
+                     is {} (the result of another unit?)",
+                    u.result.surface.describe(),
+                    s.describe()
+                ))
+            }
+            None => return Err(format!("the configuration has no surface {}", u.id)),
+        }
         let g = u.result.grid;
         if g.nx == 0
             || g.ny == 0
@@ -288,6 +307,7 @@ impl SurfaceSweep {
         }
         Ok((
             SurfaceResult {
+                surface: source.clone(),
                 grid: GridInfo {
                     nx: surface.nx(),
                     ny: surface.ny(),
@@ -397,6 +417,46 @@ mod tests {
             material: Material::STEEL,
             options: NormalOptions::default(),
         }
+    }
+
+    /// A result moved to another unit (its label kept) is refused: the grids of the sweep's
+    /// surfaces are alike, only the recorded surface tells them apart.
+    #[test]
+    fn results_must_be_the_units_own() {
+        let sweep = small_sweep(&[1, 2]);
+        let result = |k: usize| {
+            let SurfaceSource::Generated { spec } = &sweep.surfaces[k] else {
+                unreachable!()
+            };
+            UnitRecord {
+                id: k,
+                label: sweep.unit_labels()[k].clone(),
+                wall_time_s: 0.0,
+                result: SurfaceResult {
+                    surface: sweep.surfaces[k].clone(),
+                    grid: GridInfo {
+                        nx: spec.nx,
+                        ny: spec.ny,
+                        dx_m: spec.dx(),
+                        dy_m: spec.dy(),
+                        periodic: true,
+                    },
+                    points: Vec::new(),
+                },
+            }
+        };
+        // Its own: past the identity and grid checks (then no point at the pressures).
+        let e = sweep.check_unit(&result(1)).unwrap_err();
+        assert!(e.starts_with("`points` hold the pressures []"), "{e}");
+        // Unit 0's result in unit 1's place.
+        let mut swapped = result(1);
+        swapped.result = result(0).result;
+        let e = sweep.check_unit(&swapped).unwrap_err();
+        assert!(
+            e.starts_with("`surface`: computed from generated") && e.contains("seed 1)"),
+            "{e}"
+        );
+        assert!(e.contains("seed 2)") && e.contains("another unit"), "{e}");
     }
 
     #[test]
