@@ -794,3 +794,68 @@ fn polygon_roi_and_jpeg_input() {
     assert!((dj - 8e-3).abs() < 0.2e-3, "{dj}");
     assert!((pj - pp).abs() < 0.01 * pp, "{pj} vs {pp}");
 }
+
+/// A second patch of one flat colour (the 5.31 MPa row, 1.5 mm radius at (16.5, 4.5) mm)
+/// added to the setup's film: two regions.
+fn two_patch_film(st: &Setup) -> PathBuf {
+    let mut img = image::open(&st.image).unwrap().to_rgb8();
+    for (c, r, px) in img.enumerate_pixels_mut() {
+        let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - r) as f64 * PIXEL_MM);
+        if (x - 16.5).hypot(y - 4.5) <= 1.5 {
+            *px = image::Rgb([255, 142, 142]);
+        }
+    }
+    let path = st.root.join("two-patches.png");
+    img.save(&path).unwrap();
+    path
+}
+
+/// Re-using an --out-dir: the files of an earlier run that this run does not write (a reduced
+/// preload file, the plots of a region that no longer exists, the preloads of a run with
+/// nodes) are removed, so that `elements` cannot read a stale `preload_reduced.csv`; a file
+/// that is not film's stays. Before the fix every one of them was left in place.
+#[test]
+fn a_rerun_into_the_same_out_dir_leaves_no_stale_file() {
+    let st = setup();
+    let out = st.root.join("reused");
+    let two = two_patch_film(&st);
+    let nodes = s(&st.nodes);
+    let placed = ["--nodes", nodes, "--node-offset-mm", "10,10"];
+    let mut first = placed.to_vec();
+    first.extend(["--nodes-region", "1", "--reduce-mesh-size-mm", "1"]);
+    let o = film_at_0_1_mm(&two, &st.table, &out, &first);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    for f in [
+        "preload.csv",
+        "preload_reduced.csv",
+        "region_1_fitted.png",
+        "region_2_fitted.png",
+        "region_2_residual.png",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // One region, no reduction.
+    let o = film_at_0_1_mm(&st.image, &st.table, &out, &placed);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "preload_reduced.csv",
+        "region_2_fitted.png",
+        "region_2_residual.png",
+    ] {
+        assert!(!out.join(f).exists(), "{f} of the first run left behind");
+    }
+    for f in [
+        "preload.csv",
+        "region_1_fitted.png",
+        "notes.txt",
+        "film.json",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // No nodes: no preload file.
+    let o = film_at_0_1_mm(&st.image, &st.table, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!out.join("preload.csv").exists());
+    assert!(out.join("notes.txt").exists() && out.join("regions.csv").exists());
+}

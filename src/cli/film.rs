@@ -259,11 +259,34 @@ fn check_flags(a: &FilmOptions) -> Result<()> {
     Ok(())
 }
 
+/// The files of fixed name `asperity film` writes into --out-dir (some only with --nodes or
+/// --reduce-mesh-size-mm); besides them, `region_<id>_fitted.png` and `region_<id>_residual.png`.
+const FIXED_OUTPUTS: [&str; 9] = [
+    "regions.csv",
+    "pressure_map.csv",
+    "pressure_map_Pa.npy",
+    "pressure_map_Pa.npy.json",
+    "pressure_map.png",
+    "fit_coefficients.csv",
+    "preload.csv",
+    "preload_reduced.csv",
+    "film.json",
+];
+
 pub fn run(args: FilmArgs) -> Result<()> {
     let args = *args.opts;
     check_flags(&args)?;
     // Refused now, before any work: an --out-dir that is a file or not writable.
     let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    // Every file film writes is its own: one of an earlier run into the same --out-dir that this
+    // run does not write (a `preload_reduced.csv` of a run with --reduce-mesh-size-mm, the
+    // plots of a region that no longer exists) is removed after the commit, so that no reader
+    // (`asperity elements`) picks up a stale file.
+    for name in FIXED_OUTPUTS {
+        out.owns(name, "");
+    }
+    out.owns("region_", "_fitted.png");
+    out.owns("region_", "_residual.png");
     let (mut reader, table_path) = match (&args.colour_table, &args.density_calibration) {
         (Some(t), None) => (
             ColourToPressure::Table(ColourTable::read_csv(t, args.max_colour_distance)?),
