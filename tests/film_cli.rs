@@ -859,3 +859,91 @@ fn a_rerun_into_the_same_out_dir_leaves_no_stale_file() {
     assert!(!out.join("preload.csv").exists());
     assert!(out.join("notes.txt").exists() && out.join("regions.csv").exists());
 }
+
+/// Pressures in Pa under an MPa header, or under no header (the vendor convention is MPa),
+/// would be read 10⁶ times too high (before the fix: silently, a total load of 1.9e8 N).
+/// Refused, naming the file and the line of the largest pressure, with the fix (a
+/// pressure_Pa header); the same for a density calibration.
+#[test]
+fn calibrations_in_pa_read_as_mpa_are_refused() {
+    let st = setup();
+    let out = st.root.join("out-pa");
+    let in_pa: String = LW_TABLE
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let (p, rgb) = l.split_once(',').unwrap();
+            format!("{},{rgb}\n", p.parse::<f64>().unwrap() * 1e6)
+        })
+        .collect();
+    let headerless = st.root.join("ct-pa-headerless.csv");
+    std::fs::write(&headerless, &in_pa).unwrap();
+    let o = film_at_0_1_mm(&st.image, &headerless, &out, &[]);
+    assert_fails(
+        &o,
+        &[
+            "ct-pa-headerless.csv:11",
+            "1 GPa",
+            "no header",
+            "pressure_Pa",
+        ],
+    );
+    let mpa_header = st.root.join("ct-pa-under-mpa.csv");
+    std::fs::write(&mpa_header, format!("pressure_MPa,R,G,B\n{in_pa}")).unwrap();
+    let o = film_at_0_1_mm(&st.image, &mpa_header, &out, &[]);
+    assert_fails(
+        &o,
+        &["ct-pa-under-mpa.csv:12", "1 GPa", "line 1", "pressure_Pa"],
+    );
+    // With the header that names the unit, the same values are read right.
+    let pa_header = st.root.join("ct-pa.csv");
+    std::fs::write(&pa_header, format!("pressure_Pa,R,G,B\n{in_pa}")).unwrap();
+    let o = film_at_0_1_mm(&st.image, &pa_header, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    use asperity::film::colour::DensityCalibration;
+    let d = st.root.join("dc.csv");
+    std::fs::write(&d, "density,pressure_MPa\n0.25,2.5e6\n0.9,1e7\n").unwrap();
+    let e = DensityCalibration::read_csv(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("dc.csv:3") && e.contains("1 GPa") && e.contains("pressure_Pa"),
+        "{e}"
+    );
+    std::fs::write(&d, "density,pressure_Pa\n0.25,2.5e6\n0.9,1e7\n").unwrap();
+    assert_eq!(
+        DensityCalibration::read_csv(&d).unwrap().range_pa(),
+        (2.5e6, 1e7)
+    );
+}
+
+/// A UTF-8 byte-order mark in front of a colour table or a density calibration (as
+/// spreadsheets write them) is not part of the first field: before the fix the table read
+/// "unknown pressure column `\u{feff};`".
+#[test]
+fn a_byte_order_mark_is_ignored() {
+    let st = setup();
+    let bom = st.root.join("bom.csv");
+    std::fs::write(&bom, format!("\u{feff}{LW_TABLE}")).unwrap();
+    let (out_bom, out_plain) = (st.root.join("out-bom"), st.root.join("out-plain"));
+    let o = film_at_0_1_mm(&st.image, &bom, &out_bom, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = film_at_0_1_mm(&st.image, &st.table, &out_plain, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(out_bom.join("regions.csv")).unwrap(),
+        std::fs::read_to_string(out_plain.join("regions.csv")).unwrap()
+    );
+    // A header row behind the mark is read as the header.
+    let bom_header = st.root.join("bom-header.csv");
+    std::fs::write(
+        &bom_header,
+        "\u{feff}pressure_MPa,R,G,B\n0,255,255,255\n2.5,255,227,227\n9.06,255,28,28\n",
+    )
+    .unwrap();
+    let t = asperity::film::colour::ColourTable::read_csv(&bom_header, 20.0).unwrap();
+    assert_eq!(t.range_pa(), (2.5e6, 9.06e6));
+    let d = st.root.join("dc-bom.csv");
+    std::fs::write(&d, "\u{feff}density,pressure_MPa\n0.25,2.5\n0.9,10\n").unwrap();
+    let c = asperity::film::colour::DensityCalibration::read_csv(&d).unwrap();
+    assert_eq!(c.range_pa(), (2.5e6, 1e7));
+}
