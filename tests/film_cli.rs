@@ -947,3 +947,153 @@ fn a_byte_order_mark_is_ignored() {
     let c = asperity::film::colour::DensityCalibration::read_csv(&d).unwrap();
     assert_eq!(c.range_pa(), (2.5e6, 1e7));
 }
+
+/// LW colour of a pressure inside the range 2.5–9.06 MPa (linear along the pink scale).
+fn lw_colour(p: f64) -> [u8; 3] {
+    let rows = [
+        (2.50e6, 227.0),
+        (3.44e6, 198.0),
+        (4.38e6, 170.0),
+        (5.31e6, 142.0),
+        (6.25e6, 113.0),
+        (7.19e6, 85.0),
+        (8.13e6, 57.0),
+        (9.06e6, 28.0),
+    ];
+    let k = rows.windows(2).position(|w| p <= w[1].0).unwrap();
+    let (a, b) = (rows[k], rows[k + 1]);
+    let g = (a.1 + (p - a.0) / (b.0 - a.0) * (b.1 - a.1)).round() as u8;
+    [255, g, g]
+}
+
+/// A Hertz-like disc `p = 14·√(1 − (r/R)²)` MPa (R = 4.5 mm, 0.1 mm pixels) on LW film: its
+/// core is above the range (yellow), its edge below (green). Nodes (the setup's, a disc of
+/// 3.5 mm) placed on its centre lie mostly on the saturated core, where the order-4 fit of the
+/// in-range ring reads 6–9.6 MPa although the film says ≥ 9.06 MPa (R² 0.9985). Before the fix
+/// nothing said so; now a warning gives the count and the contradiction, preload.csv marks
+/// each node's pixel class, film.json counts them, and regions.csv gives the saturated share.
+#[test]
+fn nodes_on_saturated_film_are_counted_flagged_and_warned_about() {
+    let st = setup();
+    let n = 120u32;
+    let img = image::RgbImage::from_fn(n, n, |c, r| {
+        let d = (c as f64 - 60.0).hypot(r as f64 - 60.0);
+        if d >= 45.0 {
+            return image::Rgb([255, 255, 255]);
+        }
+        let p = 14e6 * (1.0 - (d / 45.0).powi(2)).sqrt();
+        image::Rgb(if p < 2.5e6 {
+            [0, 255, 0]
+        } else if p > 9.06e6 {
+            [255, 255, 0]
+        } else {
+            lw_colour(p)
+        })
+    });
+    let sat = st.root.join("saturated.png");
+    img.save(&sat).unwrap();
+    let out = st.root.join("out-sat");
+    let o = film_at_0_1_mm(
+        &sat,
+        &st.table,
+        &out,
+        &["--nodes", s(&st.nodes), "--node-offset-mm", "6,6"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("nodes lie on pixels above the film's range (≥ 9.060 MPa)")
+            && err.contains("lower bound at best")
+            && err.contains("below the range's top"),
+        "{err}"
+    );
+    assert!(
+        err.contains("region 1: 60.") && err.contains("saturated"),
+        "{err}"
+    );
+    let pre = read_rows(&out.join("preload.csv"));
+    let above = pre
+        .iter()
+        .filter(|r| r["pixel_class"] == "above_range")
+        .count();
+    assert!(above > pre.len() / 2, "{above} of {}", pre.len());
+    assert!(pre
+        .iter()
+        .all(|r| ["in_range", "above_range", "below_range", "hole"]
+            .contains(&r["pixel_class"].as_str())));
+    // No silent clamping: the fit's readings below the range's top are kept.
+    assert!(pre
+        .iter()
+        .any(|r| r["pixel_class"] == "above_range" && num(r, "pressure_Pa") < 9.06e6));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("film.json")).unwrap()).unwrap();
+    let classes = &json["summary"]["nodes"]["pixel_classes"];
+    assert_eq!(classes["above_range"]["n_nodes"], above);
+    assert_eq!(
+        classes["in_range"]["n_nodes"].as_u64().unwrap() as usize
+            + above
+            + classes["below_range"]["n_nodes"].as_u64().unwrap() as usize
+            + classes["hole"]["n_nodes"].as_u64().unwrap() as usize,
+        pre.len()
+    );
+    let regions = read_rows(&out.join("regions.csv"));
+    let f = num(&regions[0], "saturated_fraction");
+    let expected = num(&regions[0], "n_above_range")
+        / (num(&regions[0], "n_above_range") + num(&regions[0], "n_in_range"));
+    assert!((f - expected).abs() < 1e-6 && f > 0.5, "{f} vs {expected}");
+    // The preload file with its class column still feeds `elements`.
+    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("calib/calibration_table.csv");
+    let o = run(&[
+        "elements",
+        "--preload",
+        s(&out.join("preload.csv")),
+        "--table",
+        s(&reference),
+        "--out",
+        s(&st.root.join("el.csv")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// A region of interest holds white film as well as the patch: nodes are read only on its
+/// stained pixels (and the holes they enclose), as on an automatic patch. Before the fix a node
+/// on white film inside an ROI read the polynomial's extrapolation, and the error for a node
+/// off an automatic patch suggested an ROI as the way round the check.
+#[test]
+fn a_region_of_interest_reads_nodes_only_on_its_stain() {
+    let st = setup();
+    let roi = ["--roi-rect-mm", "4,4,16,16"];
+    // The setup's nodes (radius 3.5 mm) on the patch (radius 4 mm): fine.
+    let mut ok = roi.to_vec();
+    ok.extend(["--nodes", s(&st.nodes), "--node-offset-mm", "10,10"]);
+    let out = st.root.join("out-roi");
+    let o = film_at_0_1_mm(&st.image, &st.table, &out, &ok);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // One node 5 mm from the patch centre: inside the ROI, on white film.
+    let white = st.root.join("nodes-white.csv");
+    std::fs::write(&white, "id,x_m,y_m\n1,0,0\n2,1e-3,0\n3,0,1e-3\n4,5e-3,0\n").unwrap();
+    let out_w = st.root.join("out-roi-white");
+    let mut bad = roi.to_vec();
+    bad.extend(["--nodes", s(&white), "--node-offset-mm", "10,10"]);
+    let o = film_at_0_1_mm(&st.image, &st.table, &out_w, &bad);
+    assert_fails(
+        &o,
+        &[
+            "nodes-white.csv",
+            "node 4 (line 5)",
+            "unstained and not enclosed by its stain",
+            "would extrapolate",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("--roi"), "{err}");
+    assert!(!out_w.exists());
+    // The same node off an automatic patch: the same refusal, with no ROI suggested.
+    let auto = ["--nodes", s(&white), "--node-offset-mm", "10,10"];
+    let o = film_at_0_1_mm(&st.image, &st.table, &out_w, &auto);
+    assert_fails(
+        &o,
+        &["node 4 (line 5)", "off region 1", "would extrapolate"],
+    );
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("--roi"));
+}
