@@ -1097,3 +1097,26 @@ fn a_region_of_interest_reads_nodes_only_on_its_stain() {
     );
     assert!(!String::from_utf8_lossy(&o.stderr).contains("--roi"));
 }
+
+/// A colour table without a 0-pressure row does not say what unstained paper looks like:
+/// before the fix, white paper was read as "stained below range" (94.7 % of a film) and every
+/// patch grew by a rim of white film (+33 % area). Refused, naming the file and the fix.
+#[test]
+fn a_colour_table_without_the_paper_colour_is_refused() {
+    let st = setup();
+    let no_paper = st.root.join("ct-no-paper.csv");
+    let text: String = LW_TABLE
+        .lines()
+        .filter(|l| !l.starts_with("0.00,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_eq!(text.lines().count(), LW_TABLE.lines().count() - 1);
+    std::fs::write(&no_paper, text).unwrap();
+    let out = st.root.join("out-no-paper");
+    let o = film_at_0_1_mm(&st.image, &no_paper, &out, &[]);
+    assert_fails(
+        &o,
+        &["ct-no-paper.csv", "no row at pressure 0", "0,255,255,255"],
+    );
+    assert!(!out.exists());
+}

@@ -28,7 +28,8 @@
 //! [`MARKER_STEP_FACTOR`] × the median step breaks the curve, and the longest unbroken run of rows
 //! is the graded curve. Rows before it are below-range markers, rows after it above-range markers.
 //! The measuring range is therefore `[first graded pressure, last graded pressure]`. A marker row
-//! at pressure 0 is the colour of unstained film.
+//! at pressure 0 is the colour of unstained film; a table must have one (as its first row):
+//! without it unstained paper could not be told from stain below the range.
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -210,6 +211,19 @@ impl ColourTable {
                     k + 2
                 )));
             }
+        }
+        // The paper's colour is what tells unstained film from stain below the range: without
+        // it every pixel paler than the palest graded colour, white paper included, would be
+        // "stained below range" (94.7 % of a test image), and the rim joined to each patch
+        // would grow into white film (+33 % area). Guessing "near white" instead would misread
+        // tinted paper, a grey scanner lid, or a sensitive film's faint graded colours.
+        if rows[0].pressure_pa != 0.0 {
+            return Err(Error::Data(format!(
+                "{source}: no row at pressure 0: a colour table must give the colour of \
+                 unstained film as its first row, `0,R,G,B` (e.g. `0,255,255,255` for white \
+                 paper, or the paper's colour sampled from the scan); without it unstained \
+                 paper would read as stain below the film's range"
+            )));
         }
         let graded = if rows.len() > 1 && rows[0].pressure_pa == 0.0 && rows.len() < 3 {
             1..1
@@ -794,7 +808,7 @@ mod tests {
         // The same values in MPa, and in Pa, are fine.
         std::fs::write(
             &p,
-            "pressure_MPa,R,G,B\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
+            "pressure_MPa,R,G,B\n0,255,255,255\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
         )
         .unwrap();
         assert_eq!(
@@ -803,7 +817,7 @@ mod tests {
         );
         std::fs::write(
             &p,
-            "pressure_Pa,R,G,B\n2.5e6,255,227,227\n5e6,255,100,100\n1e7,255,0,0\n",
+            "pressure_Pa,R,G,B\n0,255,255,255\n2.5e6,255,227,227\n5e6,255,100,100\n1e7,255,0,0\n",
         )
         .unwrap();
         assert!(ColourTable::read_csv(&p, 20.0).is_ok());
