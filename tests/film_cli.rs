@@ -1120,3 +1120,104 @@ fn a_colour_table_without_the_paper_colour_is_refused() {
     );
     assert!(!out.exists());
 }
+
+/// An uncompressed 8-bit RGB TIFF of `w × h` pixels (`px(column, row from the top)`) declaring
+/// `Orientation = orientation` and 254 dpi.
+fn write_tiff(path: &Path, w: u32, h: u32, px: impl Fn(u32, u32) -> [u8; 3], orientation: u16) {
+    let mut data = Vec::new();
+    for r in 0..h {
+        for c in 0..w {
+            data.extend_from_slice(&px(c, r));
+        }
+    }
+    let off_data = 8u32;
+    let off_bps = off_data + data.len() as u32;
+    let off_xres = off_bps + 6;
+    let off_yres = off_xres + 8;
+    let off_ifd = off_yres + 8;
+    // (tag, type, count, value): type 3 SHORT, 4 LONG, 5 RATIONAL.
+    let tags: [(u16, u16, u32, u32); 13] = [
+        (256, 3, 1, w),
+        (257, 3, 1, h),
+        (258, 3, 3, off_bps),
+        (259, 3, 1, 1),
+        (262, 3, 1, 2),
+        (273, 4, 1, off_data),
+        (274, 3, 1, orientation as u32),
+        (277, 3, 1, 3),
+        (278, 3, 1, h),
+        (279, 4, 1, data.len() as u32),
+        (282, 5, 1, off_xres),
+        (283, 5, 1, off_yres),
+        (296, 3, 1, 2),
+    ];
+    let mut out = b"II*\0".to_vec();
+    out.extend(off_ifd.to_le_bytes());
+    out.extend(&data);
+    for v in [8u16, 8, 8] {
+        out.extend(v.to_le_bytes());
+    }
+    for _ in 0..2 {
+        out.extend(254u32.to_le_bytes());
+        out.extend(1u32.to_le_bytes());
+    }
+    out.extend((tags.len() as u16).to_le_bytes());
+    for (tag, typ, count, value) in tags {
+        out.extend(tag.to_le_bytes());
+        out.extend(typ.to_le_bytes());
+        out.extend(count.to_le_bytes());
+        if typ == 3 && count == 1 {
+            out.extend((value as u16).to_le_bytes());
+            out.extend(0u16.to_le_bytes());
+        } else {
+            out.extend(value.to_le_bytes());
+        }
+    }
+    out.extend(0u32.to_le_bytes());
+    std::fs::write(path, out).unwrap();
+}
+
+/// A TIFF whose pixels are stored 200 × 100 with a disc at column 40, row 30, tagged
+/// Orientation = 6 (display rotated 90° clockwise: 100 × 200, the disc at column 69, row 40).
+/// The film frame is the displayed image: the patch is found there. Before the fix the tag was
+/// ignored and the patch came out at the stored position (4.0, 6.9) mm, not (6.9, 15.9) mm.
+#[test]
+fn the_exif_orientation_of_an_image_is_applied() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("lw.csv");
+    std::fs::write(&table, LW_TABLE).unwrap();
+    let disc = |c: u32, r: u32| {
+        if (c as f64 - 40.0).hypot(r as f64 - 30.0) < 20.0 {
+            [255, 142, 142]
+        } else {
+            [255, 255, 255]
+        }
+    };
+    let centre = |orientation: u16| {
+        let tif = dir.path().join(format!("o{orientation}.tif"));
+        write_tiff(&tif, 200, 100, disc, orientation);
+        let out = dir.path().join(format!("out{orientation}"));
+        let o = film_at_0_1_mm(&tif, &table, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        let r = read_rows(&out.join("regions.csv"));
+        assert_eq!(r.len(), 1);
+        (
+            num(&r[0], "centre_x_m") * 1e3,
+            num(&r[0], "centre_y_m") * 1e3,
+            err,
+        )
+    };
+    let (x1, y1, e1) = centre(1);
+    assert!(e1.contains("200 × 100 px"), "{e1}");
+    assert!(
+        (x1 - 4.0).abs() < 0.05 && (y1 - 6.9).abs() < 0.05,
+        "{x1} {y1}"
+    );
+    let (x6, y6, e6) = centre(6);
+    assert!(e6.contains("100 × 200 px"), "{e6}");
+    assert!(
+        (x6 - 6.9).abs() < 0.05 && (y6 - 15.9).abs() < 0.05,
+        "{x6} {y6}"
+    );
+}
