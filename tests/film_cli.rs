@@ -794,3 +794,430 @@ fn polygon_roi_and_jpeg_input() {
     assert!((dj - 8e-3).abs() < 0.2e-3, "{dj}");
     assert!((pj - pp).abs() < 0.01 * pp, "{pj} vs {pp}");
 }
+
+/// A second patch of one flat colour (the 5.31 MPa row, 1.5 mm radius at (16.5, 4.5) mm)
+/// added to the setup's film: two regions.
+fn two_patch_film(st: &Setup) -> PathBuf {
+    let mut img = image::open(&st.image).unwrap().to_rgb8();
+    for (c, r, px) in img.enumerate_pixels_mut() {
+        let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - r) as f64 * PIXEL_MM);
+        if (x - 16.5).hypot(y - 4.5) <= 1.5 {
+            *px = image::Rgb([255, 142, 142]);
+        }
+    }
+    let path = st.root.join("two-patches.png");
+    img.save(&path).unwrap();
+    path
+}
+
+/// Re-using an --out-dir: the files of an earlier run that this run does not write (a reduced
+/// preload file, the plots of a region that no longer exists, the preloads of a run with
+/// nodes) are removed, so that `elements` cannot read a stale `preload_reduced.csv`; a file
+/// that is not film's stays. Before the fix every one of them was left in place.
+#[test]
+fn a_rerun_into_the_same_out_dir_leaves_no_stale_file() {
+    let st = setup();
+    let out = st.root.join("reused");
+    let two = two_patch_film(&st);
+    let nodes = s(&st.nodes);
+    let placed = ["--nodes", nodes, "--node-offset-mm", "10,10"];
+    let mut first = placed.to_vec();
+    first.extend(["--nodes-region", "1", "--reduce-mesh-size-mm", "1"]);
+    let o = film_at_0_1_mm(&two, &st.table, &out, &first);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    for f in [
+        "preload.csv",
+        "preload_reduced.csv",
+        "region_1_fitted.png",
+        "region_2_fitted.png",
+        "region_2_residual.png",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // One region, no reduction.
+    let o = film_at_0_1_mm(&st.image, &st.table, &out, &placed);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "preload_reduced.csv",
+        "region_2_fitted.png",
+        "region_2_residual.png",
+    ] {
+        assert!(!out.join(f).exists(), "{f} of the first run left behind");
+    }
+    for f in [
+        "preload.csv",
+        "region_1_fitted.png",
+        "notes.txt",
+        "film.json",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // No nodes: no preload file.
+    let o = film_at_0_1_mm(&st.image, &st.table, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!out.join("preload.csv").exists());
+    assert!(out.join("notes.txt").exists() && out.join("regions.csv").exists());
+}
+
+/// Pressures in Pa under an MPa header, or under no header (the vendor convention is MPa),
+/// would be read 10⁶ times too high (before the fix: silently, a total load of 1.9e8 N).
+/// Refused, naming the file and the line of the largest pressure, with the fix (a
+/// pressure_Pa header); the same for a density calibration.
+#[test]
+fn calibrations_in_pa_read_as_mpa_are_refused() {
+    let st = setup();
+    let out = st.root.join("out-pa");
+    let in_pa: String = LW_TABLE
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let (p, rgb) = l.split_once(',').unwrap();
+            format!("{},{rgb}\n", p.parse::<f64>().unwrap() * 1e6)
+        })
+        .collect();
+    let headerless = st.root.join("ct-pa-headerless.csv");
+    std::fs::write(&headerless, &in_pa).unwrap();
+    let o = film_at_0_1_mm(&st.image, &headerless, &out, &[]);
+    assert_fails(
+        &o,
+        &[
+            "ct-pa-headerless.csv:11",
+            "1 GPa",
+            "no header",
+            "pressure_Pa",
+        ],
+    );
+    let mpa_header = st.root.join("ct-pa-under-mpa.csv");
+    std::fs::write(&mpa_header, format!("pressure_MPa,R,G,B\n{in_pa}")).unwrap();
+    let o = film_at_0_1_mm(&st.image, &mpa_header, &out, &[]);
+    assert_fails(
+        &o,
+        &["ct-pa-under-mpa.csv:12", "1 GPa", "line 1", "pressure_Pa"],
+    );
+    // With the header that names the unit, the same values are read right.
+    let pa_header = st.root.join("ct-pa.csv");
+    std::fs::write(&pa_header, format!("pressure_Pa,R,G,B\n{in_pa}")).unwrap();
+    let o = film_at_0_1_mm(&st.image, &pa_header, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    use asperity::film::colour::DensityCalibration;
+    let d = st.root.join("dc.csv");
+    std::fs::write(&d, "density,pressure_MPa\n0.25,2.5e6\n0.9,1e7\n").unwrap();
+    let e = DensityCalibration::read_csv(&d).unwrap_err().to_string();
+    assert!(
+        e.contains("dc.csv:3") && e.contains("1 GPa") && e.contains("pressure_Pa"),
+        "{e}"
+    );
+    std::fs::write(&d, "density,pressure_Pa\n0.25,2.5e6\n0.9,1e7\n").unwrap();
+    assert_eq!(
+        DensityCalibration::read_csv(&d).unwrap().range_pa(),
+        (2.5e6, 1e7)
+    );
+}
+
+/// A UTF-8 byte-order mark in front of a colour table or a density calibration (as
+/// spreadsheets write them) is not part of the first field: before the fix the table read
+/// "unknown pressure column `\u{feff};`".
+#[test]
+fn a_byte_order_mark_is_ignored() {
+    let st = setup();
+    let bom = st.root.join("bom.csv");
+    std::fs::write(&bom, format!("\u{feff}{LW_TABLE}")).unwrap();
+    let (out_bom, out_plain) = (st.root.join("out-bom"), st.root.join("out-plain"));
+    let o = film_at_0_1_mm(&st.image, &bom, &out_bom, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = film_at_0_1_mm(&st.image, &st.table, &out_plain, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(out_bom.join("regions.csv")).unwrap(),
+        std::fs::read_to_string(out_plain.join("regions.csv")).unwrap()
+    );
+    // A header row behind the mark is read as the header.
+    let bom_header = st.root.join("bom-header.csv");
+    std::fs::write(
+        &bom_header,
+        "\u{feff}pressure_MPa,R,G,B\n0,255,255,255\n2.5,255,227,227\n9.06,255,28,28\n",
+    )
+    .unwrap();
+    let t = asperity::film::colour::ColourTable::read_csv(&bom_header, 20.0).unwrap();
+    assert_eq!(t.range_pa(), (2.5e6, 9.06e6));
+    let d = st.root.join("dc-bom.csv");
+    std::fs::write(&d, "\u{feff}density,pressure_MPa\n0.25,2.5\n0.9,10\n").unwrap();
+    let c = asperity::film::colour::DensityCalibration::read_csv(&d).unwrap();
+    assert_eq!(c.range_pa(), (2.5e6, 1e7));
+}
+
+/// LW colour of a pressure inside the range 2.5–9.06 MPa (linear along the pink scale).
+fn lw_colour(p: f64) -> [u8; 3] {
+    let rows = [
+        (2.50e6, 227.0),
+        (3.44e6, 198.0),
+        (4.38e6, 170.0),
+        (5.31e6, 142.0),
+        (6.25e6, 113.0),
+        (7.19e6, 85.0),
+        (8.13e6, 57.0),
+        (9.06e6, 28.0),
+    ];
+    let k = rows.windows(2).position(|w| p <= w[1].0).unwrap();
+    let (a, b) = (rows[k], rows[k + 1]);
+    let g = (a.1 + (p - a.0) / (b.0 - a.0) * (b.1 - a.1)).round() as u8;
+    [255, g, g]
+}
+
+/// A Hertz-like disc `p = 14·√(1 − (r/R)²)` MPa (R = 4.5 mm, 0.1 mm pixels) on LW film: its
+/// core is above the range (yellow), its edge below (green). Nodes (the setup's, a disc of
+/// 3.5 mm) placed on its centre lie mostly on the saturated core, where the order-4 fit of the
+/// in-range ring reads 6–9.6 MPa although the film says ≥ 9.06 MPa (R² 0.9985). Before the fix
+/// nothing said so; now a warning gives the count and the contradiction, preload.csv marks
+/// each node's pixel class, film.json counts them, and regions.csv gives the saturated share.
+#[test]
+fn nodes_on_saturated_film_are_counted_flagged_and_warned_about() {
+    let st = setup();
+    let n = 120u32;
+    let img = image::RgbImage::from_fn(n, n, |c, r| {
+        let d = (c as f64 - 60.0).hypot(r as f64 - 60.0);
+        if d >= 45.0 {
+            return image::Rgb([255, 255, 255]);
+        }
+        let p = 14e6 * (1.0 - (d / 45.0).powi(2)).sqrt();
+        image::Rgb(if p < 2.5e6 {
+            [0, 255, 0]
+        } else if p > 9.06e6 {
+            [255, 255, 0]
+        } else {
+            lw_colour(p)
+        })
+    });
+    let sat = st.root.join("saturated.png");
+    img.save(&sat).unwrap();
+    let out = st.root.join("out-sat");
+    let o = film_at_0_1_mm(
+        &sat,
+        &st.table,
+        &out,
+        &["--nodes", s(&st.nodes), "--node-offset-mm", "6,6"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("nodes lie on pixels above the film's range (≥ 9.060 MPa)")
+            && err.contains("lower bound at best")
+            && err.contains("below the range's top"),
+        "{err}"
+    );
+    assert!(
+        err.contains("region 1: 60.") && err.contains("saturated"),
+        "{err}"
+    );
+    let pre = read_rows(&out.join("preload.csv"));
+    let above = pre
+        .iter()
+        .filter(|r| r["pixel_class"] == "above_range")
+        .count();
+    assert!(above > pre.len() / 2, "{above} of {}", pre.len());
+    assert!(pre
+        .iter()
+        .all(|r| ["in_range", "above_range", "below_range", "hole"]
+            .contains(&r["pixel_class"].as_str())));
+    // No silent clamping: the fit's readings below the range's top are kept.
+    assert!(pre
+        .iter()
+        .any(|r| r["pixel_class"] == "above_range" && num(r, "pressure_Pa") < 9.06e6));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("film.json")).unwrap()).unwrap();
+    let classes = &json["summary"]["nodes"]["pixel_classes"];
+    assert_eq!(classes["above_range"]["n_nodes"], above);
+    assert_eq!(
+        classes["in_range"]["n_nodes"].as_u64().unwrap() as usize
+            + above
+            + classes["below_range"]["n_nodes"].as_u64().unwrap() as usize
+            + classes["hole"]["n_nodes"].as_u64().unwrap() as usize,
+        pre.len()
+    );
+    let regions = read_rows(&out.join("regions.csv"));
+    let f = num(&regions[0], "saturated_fraction");
+    let expected = num(&regions[0], "n_above_range")
+        / (num(&regions[0], "n_above_range") + num(&regions[0], "n_in_range"));
+    assert!((f - expected).abs() < 1e-6 && f > 0.5, "{f} vs {expected}");
+    // The preload file with its class column still feeds `elements`.
+    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("calib/calibration_table.csv");
+    let o = run(&[
+        "elements",
+        "--preload",
+        s(&out.join("preload.csv")),
+        "--table",
+        s(&reference),
+        "--out",
+        s(&st.root.join("el.csv")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// A region of interest holds white film as well as the patch: nodes are read only on its
+/// stained pixels (and the holes they enclose), as on an automatic patch. Before the fix a node
+/// on white film inside an ROI read the polynomial's extrapolation, and the error for a node
+/// off an automatic patch suggested an ROI as the way round the check.
+#[test]
+fn a_region_of_interest_reads_nodes_only_on_its_stain() {
+    let st = setup();
+    let roi = ["--roi-rect-mm", "4,4,16,16"];
+    // The setup's nodes (radius 3.5 mm) on the patch (radius 4 mm): fine.
+    let mut ok = roi.to_vec();
+    ok.extend(["--nodes", s(&st.nodes), "--node-offset-mm", "10,10"]);
+    let out = st.root.join("out-roi");
+    let o = film_at_0_1_mm(&st.image, &st.table, &out, &ok);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // One node 5 mm from the patch centre: inside the ROI, on white film.
+    let white = st.root.join("nodes-white.csv");
+    std::fs::write(&white, "id,x_m,y_m\n1,0,0\n2,1e-3,0\n3,0,1e-3\n4,5e-3,0\n").unwrap();
+    let out_w = st.root.join("out-roi-white");
+    let mut bad = roi.to_vec();
+    bad.extend(["--nodes", s(&white), "--node-offset-mm", "10,10"]);
+    let o = film_at_0_1_mm(&st.image, &st.table, &out_w, &bad);
+    assert_fails(
+        &o,
+        &[
+            "nodes-white.csv",
+            "node 4 (line 5)",
+            "unstained and not enclosed by its stain",
+            "would extrapolate",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("--roi"), "{err}");
+    assert!(!out_w.exists());
+    // The same node off an automatic patch: the same refusal, with no ROI suggested.
+    let auto = ["--nodes", s(&white), "--node-offset-mm", "10,10"];
+    let o = film_at_0_1_mm(&st.image, &st.table, &out_w, &auto);
+    assert_fails(
+        &o,
+        &["node 4 (line 5)", "off region 1", "would extrapolate"],
+    );
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("--roi"));
+}
+
+/// A colour table without a 0-pressure row does not say what unstained paper looks like:
+/// before the fix, white paper was read as "stained below range" (94.7 % of a film) and every
+/// patch grew by a rim of white film (+33 % area). Refused, naming the file and the fix.
+#[test]
+fn a_colour_table_without_the_paper_colour_is_refused() {
+    let st = setup();
+    let no_paper = st.root.join("ct-no-paper.csv");
+    let text: String = LW_TABLE
+        .lines()
+        .filter(|l| !l.starts_with("0.00,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_eq!(text.lines().count(), LW_TABLE.lines().count() - 1);
+    std::fs::write(&no_paper, text).unwrap();
+    let out = st.root.join("out-no-paper");
+    let o = film_at_0_1_mm(&st.image, &no_paper, &out, &[]);
+    assert_fails(
+        &o,
+        &["ct-no-paper.csv", "no row at pressure 0", "0,255,255,255"],
+    );
+    assert!(!out.exists());
+}
+
+/// An uncompressed 8-bit RGB TIFF of `w × h` pixels (`px(column, row from the top)`) declaring
+/// `Orientation = orientation` and 254 dpi.
+fn write_tiff(path: &Path, w: u32, h: u32, px: impl Fn(u32, u32) -> [u8; 3], orientation: u16) {
+    let mut data = Vec::new();
+    for r in 0..h {
+        for c in 0..w {
+            data.extend_from_slice(&px(c, r));
+        }
+    }
+    let off_data = 8u32;
+    let off_bps = off_data + data.len() as u32;
+    let off_xres = off_bps + 6;
+    let off_yres = off_xres + 8;
+    let off_ifd = off_yres + 8;
+    // (tag, type, count, value): type 3 SHORT, 4 LONG, 5 RATIONAL.
+    let tags: [(u16, u16, u32, u32); 13] = [
+        (256, 3, 1, w),
+        (257, 3, 1, h),
+        (258, 3, 3, off_bps),
+        (259, 3, 1, 1),
+        (262, 3, 1, 2),
+        (273, 4, 1, off_data),
+        (274, 3, 1, orientation as u32),
+        (277, 3, 1, 3),
+        (278, 3, 1, h),
+        (279, 4, 1, data.len() as u32),
+        (282, 5, 1, off_xres),
+        (283, 5, 1, off_yres),
+        (296, 3, 1, 2),
+    ];
+    let mut out = b"II*\0".to_vec();
+    out.extend(off_ifd.to_le_bytes());
+    out.extend(&data);
+    for v in [8u16, 8, 8] {
+        out.extend(v.to_le_bytes());
+    }
+    for _ in 0..2 {
+        out.extend(254u32.to_le_bytes());
+        out.extend(1u32.to_le_bytes());
+    }
+    out.extend((tags.len() as u16).to_le_bytes());
+    for (tag, typ, count, value) in tags {
+        out.extend(tag.to_le_bytes());
+        out.extend(typ.to_le_bytes());
+        out.extend(count.to_le_bytes());
+        if typ == 3 && count == 1 {
+            out.extend((value as u16).to_le_bytes());
+            out.extend(0u16.to_le_bytes());
+        } else {
+            out.extend(value.to_le_bytes());
+        }
+    }
+    out.extend(0u32.to_le_bytes());
+    std::fs::write(path, out).unwrap();
+}
+
+/// A TIFF whose pixels are stored 200 × 100 with a disc at column 40, row 30, tagged
+/// Orientation = 6 (display rotated 90° clockwise: 100 × 200, the disc at column 69, row 40).
+/// The film frame is the displayed image: the patch is found there. Before the fix the tag was
+/// ignored and the patch came out at the stored position (4.0, 6.9) mm, not (6.9, 15.9) mm.
+#[test]
+fn the_exif_orientation_of_an_image_is_applied() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("lw.csv");
+    std::fs::write(&table, LW_TABLE).unwrap();
+    let disc = |c: u32, r: u32| {
+        if (c as f64 - 40.0).hypot(r as f64 - 30.0) < 20.0 {
+            [255, 142, 142]
+        } else {
+            [255, 255, 255]
+        }
+    };
+    let centre = |orientation: u16| {
+        let tif = dir.path().join(format!("o{orientation}.tif"));
+        write_tiff(&tif, 200, 100, disc, orientation);
+        let out = dir.path().join(format!("out{orientation}"));
+        let o = film_at_0_1_mm(&tif, &table, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        let r = read_rows(&out.join("regions.csv"));
+        assert_eq!(r.len(), 1);
+        (
+            num(&r[0], "centre_x_m") * 1e3,
+            num(&r[0], "centre_y_m") * 1e3,
+            err,
+        )
+    };
+    let (x1, y1, e1) = centre(1);
+    assert!(e1.contains("200 × 100 px"), "{e1}");
+    assert!(
+        (x1 - 4.0).abs() < 0.05 && (y1 - 6.9).abs() < 0.05,
+        "{x1} {y1}"
+    );
+    let (x6, y6, e6) = centre(6);
+    assert!(e6.contains("100 × 200 px"), "{e6}");
+    assert!(
+        (x6 - 6.9).abs() < 0.05 && (y6 - 15.9).abs() < 0.05,
+        "{x6} {y6}"
+    );
+}

@@ -4,7 +4,10 @@ use asperity::elements::{provenance_json, InputFile};
 use asperity::film::colour::{
     ColourTable, ColourToPressure, DensityCalibration, DEFAULT_MAX_COLOUR_DISTANCE,
 };
-use asperity::film::nodes::{preloads, read_nodes_csv, write_preloads_csv, Placement, Preload};
+use asperity::film::nodes::{
+    preloads, read_nodes_csv, write_preloads_csv, write_preloads_csv_with_classes, Placement,
+    Preload,
+};
 use asperity::film::polyfit::{self, PolyFit2};
 use asperity::film::reduce::reduce;
 use asperity::film::regions::{
@@ -13,7 +16,7 @@ use asperity::film::regions::{
     DEFAULT_MIN_SOLIDITY, DEFAULT_RIM_PIXELS,
 };
 use asperity::film::scan::{self, Channel};
-use asperity::film::FittedRegion;
+use asperity::film::{FittedRegion, NodePixel};
 use asperity::output::write_string_atomic;
 use asperity::plot::{heatmap, HeatMap};
 use asperity::{Error, Result};
@@ -259,11 +262,138 @@ fn check_flags(a: &FilmOptions) -> Result<()> {
     Ok(())
 }
 
+/// A fitted region more than this share of whose pressure-bearing pixels is above the film's
+/// range (saturated) is named in a warning beside its R².
+const SATURATED_WARNING_FRACTION: f64 = 0.01;
+
+/// Count the nodes by the film pixel under them, warn about those on saturated or below-range
+/// pixels (where the fit, made from in-range pixels, reads anything: a 6 MPa fit where the film
+/// says ≥ 9.06 MPa) and on holes; the counts and the fit's readings per class for film.json.
+fn node_pixel_report(
+    pre: &[Preload],
+    classes: &[NodePixel],
+    fit: &PolyFit2,
+    lo: f64,
+    hi: f64,
+) -> serde_json::Value {
+    let fitted = |c: NodePixel| -> Vec<f64> {
+        pre.iter()
+            .zip(classes)
+            .filter(|(_, k)| **k == c)
+            .map(|(p, _)| fit.eval(p.x_m, p.y_m))
+            .collect()
+    };
+    let span = |v: &[f64]| {
+        v.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            })
+    };
+    let mut json = serde_json::Map::new();
+    for c in [
+        NodePixel::InRange,
+        NodePixel::AboveRange,
+        NodePixel::BelowRange,
+        NodePixel::Hole,
+    ] {
+        let v = fitted(c);
+        let (a, b) = span(&v);
+        json.insert(
+            c.name().to_string(),
+            serde_json::json!({
+                "n_nodes": v.len(),
+                "fitted_pressure_min_pa": (!v.is_empty()).then_some(a),
+                "fitted_pressure_max_pa": (!v.is_empty()).then_some(b),
+            }),
+        );
+        if v.is_empty() {
+            continue;
+        }
+        match c {
+            NodePixel::InRange => {}
+            NodePixel::AboveRange => {
+                let short = v.iter().filter(|&&p| p < hi).count();
+                eprintln!(
+                    "warning: {} nodes lie on pixels above the film's range (≥ {:.3} MPa), where \
+                     the fit reads {:.2}–{:.2} MPa{}: the preload there is a lower bound at best; \
+                     use a film of a higher range (pixel_class in preload.csv)",
+                    v.len(),
+                    hi / 1e6,
+                    a / 1e6,
+                    b / 1e6,
+                    if short > 0 {
+                        format!(
+                            " ({short} of them below the range's top, by up to {:.2} MPa)",
+                            (hi - a) / 1e6
+                        )
+                    } else {
+                        String::new()
+                    }
+                );
+            }
+            NodePixel::BelowRange => {
+                let over = v.iter().filter(|&&p| p >= lo).count();
+                eprintln!(
+                    "warning: {} nodes lie on stained pixels below the film's range (< {:.3} MPa), \
+                     where the fit reads {:.2}–{:.2} MPa{}: the preload there is an upper bound at \
+                     best; use a film of a lower range (pixel_class in preload.csv)",
+                    v.len(),
+                    lo / 1e6,
+                    a / 1e6,
+                    b / 1e6,
+                    if over > 0 {
+                        format!(
+                            " ({over} of them at or above the range's bottom, by up to {:.2} MPa)",
+                            (b - lo) / 1e6
+                        )
+                    } else {
+                        String::new()
+                    }
+                );
+            }
+            NodePixel::Hole => {
+                eprintln!(
+                    "note: {} nodes lie on unstained or rejected pixels enclosed by the stain \
+                     (holes: contact below the film's range, or ink), where the fit reads \
+                     {:.2}–{:.2} MPa (pixel_class hole in preload.csv)",
+                    v.len(),
+                    a / 1e6,
+                    b / 1e6
+                );
+            }
+        }
+    }
+    serde_json::Value::Object(json)
+}
+
+/// The files of fixed name `asperity film` writes into --out-dir (some only with --nodes or
+/// --reduce-mesh-size-mm); besides them, `region_<id>_fitted.png` and `region_<id>_residual.png`.
+const FIXED_OUTPUTS: [&str; 9] = [
+    "regions.csv",
+    "pressure_map.csv",
+    "pressure_map_Pa.npy",
+    "pressure_map_Pa.npy.json",
+    "pressure_map.png",
+    "fit_coefficients.csv",
+    "preload.csv",
+    "preload_reduced.csv",
+    "film.json",
+];
+
 pub fn run(args: FilmArgs) -> Result<()> {
     let args = *args.opts;
     check_flags(&args)?;
     // Refused now, before any work: an --out-dir that is a file or not writable.
     let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    // Every file film writes is its own: one of an earlier run into the same --out-dir that this
+    // run does not write (a `preload_reduced.csv` of a run with --reduce-mesh-size-mm, the
+    // plots of a region that no longer exists) is removed after the commit, so that no reader
+    // (`asperity elements`) picks up a stale file.
+    for name in FIXED_OUTPUTS {
+        out.owns(name, "");
+    }
+    out.owns("region_", "_fitted.png");
+    out.owns("region_", "_residual.png");
     let (mut reader, table_path) = match (&args.colour_table, &args.density_calibration) {
         (Some(t), None) => (
             ColourToPressure::Table(ColourTable::read_csv(t, args.max_colour_distance)?),
@@ -551,6 +681,23 @@ pub fn run(args: FilmArgs) -> Result<()> {
                         pts[0].2 / 1e6
                     );
                 }
+                if s.saturated_fraction > SATURATED_WARNING_FRACTION {
+                    eprintln!(
+                        "warning: region {}: {:.1} % of its pressure-bearing pixels ({} of {}) are \
+                         above the film's range (≥ {:.3} MPa, saturated); its fit (R² {}) is made \
+                         from the in-range pixels only and does not know the pressure there, \
+                         which is at least the range's top: use a film of a higher range",
+                        r.id,
+                        100.0 * s.saturated_fraction,
+                        s.counts.above_range,
+                        s.counts.in_range + s.counts.above_range,
+                        hi / 1e6,
+                        match f.r_squared_text(4).as_str() {
+                            "" => "undefined".to_string(),
+                            t => t.to_string(),
+                        }
+                    );
+                }
                 fits.push(Some(f))
             }
             Err(why) => {
@@ -575,7 +722,12 @@ pub fn run(args: FilmArgs) -> Result<()> {
         InputFile::new("colour_calibration", &table_path)?,
     ];
     let mut node_summary = serde_json::Value::Null;
-    type NodeOutputs = (Vec<Preload>, String, Option<(Vec<Preload>, String)>);
+    type NodeOutputs = (
+        Vec<Preload>,
+        Vec<NodePixel>,
+        String,
+        Option<(Vec<Preload>, String)>,
+    );
     let mut node_outputs: Option<NodeOutputs> = None;
     if let Some(nodes_path) = &args.nodes {
         inputs.push(InputFile::new("nodes", nodes_path)?);
@@ -620,6 +772,13 @@ pub fn run(args: FilmArgs) -> Result<()> {
         // Errors about the nodes (their positions, their triangulation) name the nodes file.
         let (pre, psum) = preloads(&nodes, &placement, pressure_at, args.total_load_n)
             .map_err(|e| e.in_file(nodes_path))?;
+        // What the film says under each node: the fit is made from in-range pixels, and reads
+        // anything on saturated (above-range) or below-range pixels; say so, never clamp.
+        let classes: Vec<NodePixel> = pre
+            .iter()
+            .map(|p| field.pixel_at(p.x_m, p.y_m))
+            .collect::<Result<_>>()?;
+        let pixel_classes = node_pixel_report(&pre, &classes, fit, lo, hi);
         let pre_comment = format!(
             "asperity {} node preloads N0 = sigma_fit(x, y) * area from {} (region {}, order-{} fit)",
             env!("CARGO_PKG_VERSION"),
@@ -680,11 +839,12 @@ pub fn run(args: FilmArgs) -> Result<()> {
                 "total_load_n": r.nodes.iter().map(|p| p.n0_n).sum::<f64>(),
             });
         }
-        node_outputs = Some((pre, pre_comment, reduced_rows));
+        node_outputs = Some((pre, classes, pre_comment, reduced_rows));
         node_summary = serde_json::json!({
             "region": region.id,
             "placement": placement,
             "preloads": psum,
+            "pixel_classes": pixel_classes,
             "reduction": reduced,
         });
     }
@@ -763,10 +923,10 @@ pub fn run(args: FilmArgs) -> Result<()> {
         )?;
     }
 
-    println!("id,centre_x_mm,centre_y_mm,diameter_mm,area_mm2,mean_pressure_MPa,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_R2");
+    println!("id,centre_x_mm,centre_y_mm,diameter_mm,area_mm2,mean_pressure_MPa,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_R2,saturated_fraction");
     for (s, f) in &pairs {
         println!(
-            "{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{},{},{},{}",
+            "{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{},{},{},{},{}",
             s.id,
             s.centre_x_m * 1e3,
             s.centre_y_m * 1e3,
@@ -778,12 +938,17 @@ pub fn run(args: FilmArgs) -> Result<()> {
             s.counts.below_range,
             s.counts.above_range,
             s.counts.off_curve,
-            f.map(|f| f.r_squared_text(4)).unwrap_or_default()
+            f.map(|f| f.r_squared_text(4)).unwrap_or_default(),
+            if s.saturated_fraction.is_finite() {
+                format!("{:.4}", s.saturated_fraction)
+            } else {
+                String::new()
+            }
         );
     }
 
-    if let Some((pre, pre_comment, reduced_rows)) = &node_outputs {
-        write_preloads_csv(&out_dir.join("preload.csv"), pre, pre_comment)?;
+    if let Some((pre, classes, pre_comment, reduced_rows)) = &node_outputs {
+        write_preloads_csv_with_classes(&out_dir.join("preload.csv"), pre, classes, pre_comment)?;
         if let Some((rows, comment)) = reduced_rows {
             write_preloads_csv(&out_dir.join("preload_reduced.csv"), rows, comment)?;
         }

@@ -28,7 +28,8 @@
 //! [`MARKER_STEP_FACTOR`] × the median step breaks the curve, and the longest unbroken run of rows
 //! is the graded curve. Rows before it are below-range markers, rows after it above-range markers.
 //! The measuring range is therefore `[first graded pressure, last graded pressure]`. A marker row
-//! at pressure 0 is the colour of unstained film.
+//! at pressure 0 is the colour of unstained film; a table must have one (as its first row):
+//! without it unstained paper could not be told from stain below the range.
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -50,11 +51,24 @@ pub const DEFAULT_MAX_COLOUR_DISTANCE: f64 = 20.0;
 /// says (MPa values under a `pressure_Pa` header), and would read every patch as ≈ 0 MPa.
 pub const MIN_PLAUSIBLE_CALIBRATION_PA: f64 = 1e3;
 
-/// Refuse a calibration file whose largest pressure (Pa) is below
-/// [`MIN_PLAUSIBLE_CALIBRATION_PA`]; `unit_line` is the line declaring the unit (0: none).
-fn check_plausible_pressures(path: &Path, max_pa: f64, unit: f64, unit_line: usize) -> Result<()> {
+/// Largest plausible pressure of a film calibration (Pa). The highest-range films (Prescale
+/// HHS) end at 300 MPa; a calibration reaching beyond 1 GPa was written in Pa under an MPa
+/// header (or under none: the vendor convention is MPa), and would read every patch 10⁶ times
+/// too high (a total load of 1.9e8 N for a 190 N contact).
+pub const MAX_PLAUSIBLE_CALIBRATION_PA: f64 = 1e9;
+
+/// Refuse a calibration file whose largest pressure `max_pa` (Pa, on line `max_line`) is below
+/// [`MIN_PLAUSIBLE_CALIBRATION_PA`] or above [`MAX_PLAUSIBLE_CALIBRATION_PA`]; `unit` is the
+/// factor to Pa and `unit_line` the line declaring it (0: none, the MPa default).
+fn check_plausible_pressures(
+    path: &Path,
+    max_pa: f64,
+    max_line: usize,
+    unit: f64,
+    unit_line: usize,
+) -> Result<()> {
+    let unit_name = if unit == 1.0 { "Pa" } else { "MPa" };
     if max_pa < MIN_PLAUSIBLE_CALIBRATION_PA {
-        let unit_name = if unit == 1.0 { "Pa" } else { "MPa" };
         return Err(Error::parse(
             path,
             unit_line,
@@ -62,6 +76,24 @@ fn check_plausible_pressures(path: &Path, max_pa: f64, unit: f64, unit_line: usi
                 "every pressure is below 1 kPa (largest {} {unit_name} = {} Pa), but pressure \
                  films measure about 0.005–300 MPa: are the values in MPa under a {unit_name} \
                  header? Name the column pressure_MPa",
+                crate::error::num(max_pa / unit),
+                crate::error::num(max_pa)
+            ),
+        ));
+    }
+    if max_pa > MAX_PLAUSIBLE_CALIBRATION_PA {
+        let header = if unit_line == 0 {
+            "no header (the vendor convention: MPa)".to_string()
+        } else {
+            format!("the {unit_name} header of line {unit_line}")
+        };
+        return Err(Error::parse(
+            path,
+            max_line,
+            format!(
+                "pressure {} read as {unit_name} is {} Pa, above 1 GPa, but pressure films \
+                 measure about 0.005–300 MPa: are the values in Pa under {header}? Name the \
+                 column pressure_Pa",
                 crate::error::num(max_pa / unit),
                 crate::error::num(max_pa)
             ),
@@ -180,6 +212,19 @@ impl ColourTable {
                 )));
             }
         }
+        // The paper's colour is what tells unstained film from stain below the range: without
+        // it every pixel paler than the palest graded colour, white paper included, would be
+        // "stained below range" (94.7 % of a test image), and the rim joined to each patch
+        // would grow into white film (+33 % area). Guessing "near white" instead would misread
+        // tinted paper, a grey scanner lid, or a sensitive film's faint graded colours.
+        if rows[0].pressure_pa != 0.0 {
+            return Err(Error::Data(format!(
+                "{source}: no row at pressure 0: a colour table must give the colour of \
+                 unstained film as its first row, `0,R,G,B` (e.g. `0,255,255,255` for white \
+                 paper, or the paper's colour sampled from the scan); without it unstained \
+                 paper would read as stain below the film's range"
+            )));
+        }
         let graded = if rows.len() > 1 && rows[0].pressure_pa == 0.0 && rows.len() < 3 {
             1..1
         } else {
@@ -201,6 +246,9 @@ impl ColourTable {
     pub fn read_csv(path: &Path, max_distance: f64) -> Result<Self> {
         crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        // A byte-order mark (spreadsheets write one in front of UTF-8 CSV) is no part of the
+        // first field: without this, a header read "unknown pressure column `\u{feff};`".
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         let mut unit = 1e6; // vendor convention: MPa
         let mut rows = Vec::new();
         let mut seen_header = false;
@@ -286,8 +334,8 @@ impl ColourTable {
                 line_no,
             ));
         }
-        if let Some((last, _)) = rows.last() {
-            check_plausible_pressures(path, last.pressure_pa, unit, unit_line)?;
+        if let Some((last, line)) = rows.last() {
+            check_plausible_pressures(path, last.pressure_pa, *line, unit, unit_line)?;
         }
         let source = path.display().to_string();
         Self::from_rows(
@@ -516,9 +564,13 @@ impl DensityCalibration {
     pub fn read_csv(path: &Path) -> Result<Self> {
         crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        // A byte-order mark (spreadsheets write one in front of UTF-8 CSV) is no part of the
+        // first field.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         let mut unit = None;
         let mut unit_line = 0;
         let mut pts = Vec::new();
+        let mut lines = Vec::new();
         for (k, raw) in text.lines().enumerate() {
             let line = raw.trim();
             if line.is_empty() || line.starts_with('#') || line.starts_with(';') {
@@ -575,10 +627,10 @@ impl DensityCalibration {
                 ));
             }
             pts.push((d, p * unit.unwrap_or(1e6)));
+            lines.push(k + 1);
         }
-        if !pts.is_empty() {
-            let max = pts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
-            check_plausible_pressures(path, max, unit.unwrap_or(1e6), unit_line)?;
+        if let Some(at) = (0..pts.len()).max_by(|&a, &b| pts[a].1.total_cmp(&pts[b].1)) {
+            check_plausible_pressures(path, pts[at].1, lines[at], unit.unwrap_or(1e6), unit_line)?;
         }
         Self::new(pts, &path.display().to_string())
     }
@@ -756,7 +808,7 @@ mod tests {
         // The same values in MPa, and in Pa, are fine.
         std::fs::write(
             &p,
-            "pressure_MPa,R,G,B\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
+            "pressure_MPa,R,G,B\n0,255,255,255\n2.5,255,227,227\n5,255,100,100\n10,255,0,0\n",
         )
         .unwrap();
         assert_eq!(
@@ -765,7 +817,7 @@ mod tests {
         );
         std::fs::write(
             &p,
-            "pressure_Pa,R,G,B\n2.5e6,255,227,227\n5e6,255,100,100\n1e7,255,0,0\n",
+            "pressure_Pa,R,G,B\n0,255,255,255\n2.5e6,255,227,227\n5e6,255,100,100\n1e7,255,0,0\n",
         )
         .unwrap();
         assert!(ColourTable::read_csv(&p, 20.0).is_ok());

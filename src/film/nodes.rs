@@ -401,6 +401,34 @@ pub fn preloads(
 
 /// Write preloads as CSV with a units header.
 pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Result<()> {
+    write_preloads(path, rows, None, comment)
+}
+
+/// Write preloads as [`write_preloads_csv`] with one more column, `pixel_class`: what the film
+/// says under each node (`in_range`, `above_range`, `below_range`, `hole`; see
+/// [`crate::film::NodePixel`]). [`read_preloads_csv`] reads such a file too.
+pub fn write_preloads_csv_with_classes(
+    path: &Path,
+    rows: &[Preload],
+    classes: &[crate::film::NodePixel],
+    comment: &str,
+) -> Result<()> {
+    if classes.len() != rows.len() {
+        return Err(Error::Data(format!(
+            "{} pixel classes for {} preloads",
+            classes.len(),
+            rows.len()
+        )));
+    }
+    write_preloads(path, rows, Some(classes), comment)
+}
+
+fn write_preloads(
+    path: &Path,
+    rows: &[Preload],
+    classes: Option<&[crate::film::NodePixel]>,
+    comment: &str,
+) -> Result<()> {
     crate::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         for line in comment.lines() {
@@ -411,13 +439,30 @@ pub fn write_preloads_csv(path: &Path, rows: &[Preload], comment: &str) -> Resul
             "# units: x_m, y_m in m (film frame), area_m2 in m², pressure_Pa in Pa, N0_N in N"
         )
         .map_err(io)?;
-        writeln!(w, "id,x_m,y_m,area_m2,pressure_Pa,N0_N").map_err(io)?;
-        for p in rows {
+        if classes.is_some() {
             writeln!(
+                w,
+                "# pixel_class: the film under the node: in_range; above_range (saturated: the \
+                 pressure is at least the film's range, the fit there a lower bound at best); \
+                 below_range (stained below the range: the fit an upper bound at best); hole \
+                 (unstained pixel enclosed by the stain)"
+            )
+            .map_err(io)?;
+            writeln!(w, "id,x_m,y_m,area_m2,pressure_Pa,N0_N,pixel_class").map_err(io)?;
+        } else {
+            writeln!(w, "id,x_m,y_m,area_m2,pressure_Pa,N0_N").map_err(io)?;
+        }
+        for (k, p) in rows.iter().enumerate() {
+            write!(
                 w,
                 "{},{:.12e},{:.12e},{:.15e},{:.12e},{:.15e}",
                 p.id, p.x_m, p.y_m, p.area_m2, p.pressure_pa, p.n0_n
             )
+            .map_err(io)?;
+            match classes {
+                Some(c) => writeln!(w, ",{}", c[k].name()),
+                None => writeln!(w),
+            }
             .map_err(io)?;
         }
         Ok(())

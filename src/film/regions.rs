@@ -644,6 +644,10 @@ pub struct RegionSummary {
     /// below- and above-range pixels carry unknown pressure.
     pub in_range_load_n: f64,
     pub counts: ClassCounts,
+    /// Above-range (saturated) pixels over the pressure-bearing ones (in range + above range):
+    /// the share of the contact whose pressure the fit, made from in-range pixels only, does
+    /// not know (at least the film's range there). NaN when the region has neither.
+    pub saturated_fraction: f64,
 }
 
 /// Summarise a region. Errors when the region holds no pixel.
@@ -680,6 +684,11 @@ pub fn summarise(map: &FilmMap, region: &Region) -> Result<RegionSummary> {
         },
         max_pressure_pa: pmax,
         in_range_load_n: sp * s * s,
+        saturated_fraction: if counts.in_range + counts.above_range > 0 {
+            counts.above_range as f64 / (counts.in_range + counts.above_range) as f64
+        } else {
+            f64::NAN
+        },
         counts,
     })
 }
@@ -715,7 +724,7 @@ pub fn write_region_pixels_csv(path: &Path, map: &FilmMap, regions: &[Region]) -
 }
 
 /// Column header of the region summary CSV.
-pub const SUMMARY_COLUMNS: &str = "id,centre_x_m,centre_y_m,equivalent_diameter_m,area_m2,mean_pressure_Pa,max_pressure_Pa,in_range_load_N,n_pixels,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_order,fit_R2,fit_rms_residual_Pa";
+pub const SUMMARY_COLUMNS: &str = "id,centre_x_m,centre_y_m,equivalent_diameter_m,area_m2,mean_pressure_Pa,max_pressure_Pa,in_range_load_N,n_pixels,n_in_range,n_unstained,n_below_range,n_above_range,n_off_curve,fit_order,fit_R2,fit_rms_residual_Pa,saturated_fraction";
 
 /// Write region summaries (with their fit quality, if any) as CSV.
 pub fn write_summary_csv(
@@ -724,7 +733,7 @@ pub fn write_summary_csv(
 ) -> Result<()> {
     crate::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
-        writeln!(w, "# film regions: centre in m (film frame, y up), area in m², pressures in Pa, load in N; mean/max over in-range pixels; counts in pixels").map_err(io)?;
+        writeln!(w, "# film regions: centre in m (film frame, y up), area in m², pressures in Pa, load in N; mean/max over in-range pixels; counts in pixels; saturated_fraction = n_above_range / (n_in_range + n_above_range), the share the fit (from in-range pixels) does not know").map_err(io)?;
         writeln!(w, "{SUMMARY_COLUMNS}").map_err(io)?;
         for (s, f) in summaries {
             let c = s.counts;
@@ -738,7 +747,7 @@ pub fn write_summary_csv(
             };
             writeln!(
                 w,
-                "{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{},{fo},{fr},{fe}",
+                "{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{},{fo},{fr},{fe},{}",
                 s.id,
                 s.centre_x_m,
                 s.centre_y_m,
@@ -752,7 +761,12 @@ pub fn write_summary_csv(
                 c.unstained,
                 c.below_range,
                 c.above_range,
-                c.off_curve
+                c.off_curve,
+                if s.saturated_fraction.is_finite() {
+                    format!("{:.6}", s.saturated_fraction)
+                } else {
+                    String::new()
+                }
             )
             .map_err(io)?;
         }

@@ -7,7 +7,8 @@
 //!
 //! - [`read_rgb`]: the image in the film frame (x right, y up), 0–255 per channel (16-bit images
 //!   keep their precision); its size is checked against [`crate::limits::MAX_IMAGE_PIXELS`] and
-//!   the available memory **before** it is decoded.
+//!   the available memory **before** it is decoded. An EXIF/TIFF `Orientation` is applied: the
+//!   film frame is the image as a viewer displays it.
 //! - [`resolution`]: the pixel size the image declares: PNG `pHYs` (pixels per metre), TIFF
 //!   `XResolution`/`YResolution` with `ResolutionUnit` (inch or cm), JPEG JFIF density (dots
 //!   per inch or cm). Non-square pixels are refused.
@@ -102,9 +103,16 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(budget.max(1 << 20));
     r.limits(limits);
-    let img = r
-        .decode()
-        .map_err(|e| Error::parse(path, 0, format!("cannot read image: {e}")))?;
+    let cannot = |e: image::ImageError| Error::parse(path, 0, format!("cannot read image: {e}"));
+    let mut decoder = r.into_decoder().map_err(cannot)?;
+    // The orientation a camera, phone or scanner app declares (EXIF / TIFF Orientation): the
+    // film frame is the image as displayed, so the pixels are turned or mirrored as a viewer
+    // shows them. Ignored, a scan tagged "rotate 90°" gave a film rotated against the one the
+    // user sees, and nodes placed from the displayed image landed on other pixels.
+    use image::ImageDecoder;
+    let orientation = decoder.orientation().map_err(cannot)?;
+    let mut img = image::DynamicImage::from_decoder(decoder).map_err(cannot)?;
+    img.apply_orientation(orientation);
     let (w, h) = (img.width() as usize, img.height() as usize);
     if w == 0 || h == 0 {
         return Err(Error::parse(path, 0, "the image has no pixels"));
