@@ -584,16 +584,19 @@ impl KernelTable {
 
 /// Estimated cost of one product with each operator `(dense, fft)`, in ns (2 threads).
 ///
-/// Measured on the 1024² reference patch at 10 MPa (BENCHMARKS.md, "Tangential contact"): the
-/// direct summation ≈ 0.35 ns per pair of contact points (`n²` pairs: 5–6 ms at n = 4029),
-/// the FFT product (two forward and two inverse real transforms, six spectral products)
-/// ≈ 3.5 ns per `N log2 N` (`N` = FFT grid points: 72 ms at 1024² periodic). The FFT figure
-/// is that of the product that allocated its arrays at every call; the allocation-free product
-/// costs less (BENCHMARKS.md, "allocation-free FFT compliance products"), not yet remeasured on
-/// an idle machine, so `Auto` still leans towards the dense operator.
+/// Measured on the reference statistics' periodic patch (`cargo bench --bench tangential`,
+/// 2 threads, idle machine, 2026-11-28, after the FFT product stopped allocating; BENCHMARKS.md,
+/// "Tangential contact"): the direct summation costs 0.12–0.25 ns per pair of contact points
+/// (`n²` pairs; less per pair as `n` grows: 0.18 at n = 3391 on 512², 0.12 at 13 222 on
+/// 1024²), the FFT product (two forward and two inverse real transforms, six spectral
+/// products) 0.28–0.36 ns per `N log2 N` (`N` = FFT grid points: 6.8–7.5 ms at 1024²). With
+/// 0.18 and 0.33 the choice is right in all four measured cases (dense at 1194 of 512² and
+/// 4612 of 1024² contact points, FFT at 3391 and 13 222), where the former constants (0.35 and
+/// 3.5, from the product that allocated its arrays) took the dense operator in the last two,
+/// 1.3× and 2.8× slower. The crossover lies near n ≈ 2300 on 512² and n ≈ 6200 on 1024².
 fn estimated_costs(n: usize, plan_points: usize) -> (f64, f64) {
-    const DENSE_NS_PER_PAIR: f64 = 0.35;
-    const FFT_NS_PER_POINT_LOG: f64 = 3.5;
+    const DENSE_NS_PER_PAIR: f64 = 0.18;
+    const FFT_NS_PER_POINT_LOG: f64 = 0.33;
     let dense = DENSE_NS_PER_PAIR * (n as f64).powi(2);
     let nf = plan_points as f64;
     let fft = FFT_NS_PER_POINT_LOG * nf * nf.log2().max(1.0);
