@@ -645,6 +645,33 @@ pub(super) fn largest_eigenvalue(c: &Compliance, n: usize) -> f64 {
 mod tests {
     use super::*;
 
+    /// The product by direct double summation over the kernel table, and its largest
+    /// component (the scale of the comparison tolerances).
+    fn direct_sum(
+        table: &KernelTable,
+        pts: &[(usize, usize)],
+        q: &[[f64; 2]],
+    ) -> (Vec<[f64; 2]>, f64) {
+        let expected: Vec<[f64; 2]> = pts
+            .iter()
+            .map(|&(i, j)| {
+                let mut e = [0.0; 2];
+                for (b, &(i2, j2)) in pts.iter().enumerate() {
+                    let (kxx, kxy, kyy) =
+                        table.get(i2 as isize - i as isize, j2 as isize - j as isize);
+                    e[0] += kxx * q[b][0] + kxy * q[b][1];
+                    e[1] += kxy * q[b][0] + kyy * q[b][1];
+                }
+                e
+            })
+            .collect();
+        let scale = expected
+            .iter()
+            .map(|e| e[0].abs().max(e[1].abs()))
+            .fold(0.0, f64::max);
+        (expected, scale)
+    }
+
     #[test]
     fn runs_group_consecutive_points_of_a_row() {
         let pts = [(0, 1), (0, 2), (0, 3), (0, 5), (1, 0), (1, 1), (3, 7)];
@@ -758,23 +785,7 @@ mod tests {
                     .collect();
                 let mut u = vec![[0.0; 2]; pts.len()];
                 f.apply(&q, &mut u);
-                let expected: Vec<[f64; 2]> = pts
-                    .iter()
-                    .map(|&(i, j)| {
-                        let mut e = [0.0; 2];
-                        for (b, &(i2, j2)) in pts.iter().enumerate() {
-                            let (kxx, kxy, kyy) =
-                                table.get(i2 as isize - i as isize, j2 as isize - j as isize);
-                            e[0] += kxx * q[b][0] + kxy * q[b][1];
-                            e[1] += kxy * q[b][0] + kyy * q[b][1];
-                        }
-                        e
-                    })
-                    .collect();
-                let scale = expected
-                    .iter()
-                    .map(|e| e[0].abs().max(e[1].abs()))
-                    .fold(0.0, f64::max);
+                let (expected, scale) = direct_sum(&table, &pts, &q);
                 assert!(scale > 0.0);
                 for (a, (got, e)) in u.iter().zip(&expected).enumerate() {
                     for c in 0..2 {
@@ -831,23 +842,7 @@ mod tests {
                 .collect();
             let mut u = vec![[0.0; 2]; pts.len()];
             c.apply(&q, &mut u);
-            let expected: Vec<[f64; 2]> = pts
-                .iter()
-                .map(|&(i, j)| {
-                    let mut e = [0.0; 2];
-                    for (b, &(i2, j2)) in pts.iter().enumerate() {
-                        let (kxx, kxy, kyy) =
-                            table.get(i2 as isize - i as isize, j2 as isize - j as isize);
-                        e[0] += kxx * q[b][0] + kxy * q[b][1];
-                        e[1] += kxy * q[b][0] + kyy * q[b][1];
-                    }
-                    e
-                })
-                .collect();
-            let scale = expected
-                .iter()
-                .map(|e| e[0].abs().max(e[1].abs()))
-                .fold(0.0, f64::max);
+            let (expected, scale) = direct_sum(&table, &pts, &q);
             assert!(scale > 0.0);
             for (a, (got, e)) in u.iter().zip(&expected).enumerate() {
                 for c in 0..2 {
