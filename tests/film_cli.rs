@@ -8,6 +8,10 @@ use asperity::calibrate::table::{CalibrationRow, CalibrationTable};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "support/lw_scale.rs"]
+mod lw_scale;
+use lw_scale::lw_green;
+
 const LW_TABLE: &str = ";Pressure,R,G,B\n0.00,255.0,255.0,255.0\n2.00,0.0,255.0,0.0\n2.50,255.0,227.0,227.0\n3.44,255.0,198.0,198.0\n4.38,255.0,170.0,170.0\n5.31,255.0,142.0,142.0\n6.25,255.0,113.0,113.0\n7.19,255.0,85.0,85.0\n8.13,255.0,57.0,57.0\n9.06,255.0,28.0,28.0\n10.00,255.0,255.0,0.0\n";
 
 const PIXEL_MM: f64 = 0.1;
@@ -22,26 +26,13 @@ fn sigma_pa(x_mm: f64, y_mm: f64) -> f64 {
     6e6 - 3e6 * r2
 }
 
-fn lw_grey(p: f64) -> f64 {
-    let rows = [
-        (2.50e6, 227.0),
-        (3.44e6, 198.0),
-        (4.38e6, 170.0),
-        (5.31e6, 142.0),
-        (6.25e6, 113.0),
-    ];
-    let k = rows.windows(2).position(|w| p <= w[1].0).unwrap();
-    let (a, b) = (rows[k], rows[k + 1]);
-    a.1 + (p - a.0) / (b.0 - a.0) * (b.1 - a.1)
-}
-
 /// 8-bit film: the patch, a green pen stroke and a blue ink blot on white.
 fn render(path: &Path) {
     let mut img = image::RgbImage::from_pixel(N, N, image::Rgb([255, 255, 255]));
     for (c, r, px) in img.enumerate_pixels_mut() {
         let (x, y) = (c as f64 * PIXEL_MM, (N - 1 - r) as f64 * PIXEL_MM);
         if (x - CX).hypot(y - CY) <= R {
-            let g = lw_grey(sigma_pa(x, y)).round() as u8;
+            let g = lw_green(sigma_pa(x, y)).round() as u8;
             *px = image::Rgb([255, g, g]);
         } else if (2.0..18.0).contains(&x) && (16.0..18.0).contains(&y) {
             *px = image::Rgb([0, 255, 0]);
@@ -950,19 +941,7 @@ fn a_byte_order_mark_is_ignored() {
 
 /// LW colour of a pressure inside the range 2.5–9.06 MPa (linear along the pink scale).
 fn lw_colour(p: f64) -> [u8; 3] {
-    let rows = [
-        (2.50e6, 227.0),
-        (3.44e6, 198.0),
-        (4.38e6, 170.0),
-        (5.31e6, 142.0),
-        (6.25e6, 113.0),
-        (7.19e6, 85.0),
-        (8.13e6, 57.0),
-        (9.06e6, 28.0),
-    ];
-    let k = rows.windows(2).position(|w| p <= w[1].0).unwrap();
-    let (a, b) = (rows[k], rows[k + 1]);
-    let g = (a.1 + (p - a.0) / (b.0 - a.0) * (b.1 - a.1)).round() as u8;
+    let g = lw_green(p).round() as u8;
     [255, g, g]
 }
 

@@ -5,6 +5,10 @@
 use std::path::Path;
 use std::process::Command;
 
+#[path = "support/lw_scale.rs"]
+mod lw_scale;
+use lw_scale::lw_green;
+
 /// The Prescale LW vendor table as the app exports it (MPa, R, G, B; `;` comments).
 const LW_TABLE: &str = ";,,,\n;LW,,,\n;Pressure,R,G,B\n0.00,255.0,255.0,255.0\n2.00,0.0,255.0,0.0\n2.50,255.0,227.0,227.0\n3.44,255.0,198.0,198.0\n4.38,255.0,170.0,170.0\n5.31,255.0,142.0,142.0\n6.25,255.0,113.0,113.0\n7.19,255.0,85.0,85.0\n8.13,255.0,57.0,57.0\n9.06,255.0,28.0,28.0\n10.00,255.0,255.0,0.0\n";
 
@@ -33,20 +37,7 @@ fn sigma(u: f64, v: f64) -> f64 {
 
 /// LW colour of a pressure (linear along the graded rows 2.5–9.06 MPa).
 fn lw_colour(p: f64) -> [f64; 3] {
-    let rows = [
-        (2.50e6, 227.0),
-        (3.44e6, 198.0),
-        (4.38e6, 170.0),
-        (5.31e6, 142.0),
-        (6.25e6, 113.0),
-        (7.19e6, 85.0),
-        (8.13e6, 57.0),
-        (9.06e6, 28.0),
-    ];
-    assert!((2.5e6..=9.06e6).contains(&p), "{p}");
-    let k = rows.windows(2).position(|w| p <= w[1].0).unwrap();
-    let (a, b) = (rows[k], rows[k + 1]);
-    let g = a.1 + (p - a.0) / (b.0 - a.0) * (b.1 - a.1);
+    let g = lw_green(p);
     [255.0, g, g]
 }
 
