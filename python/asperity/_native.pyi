@@ -413,7 +413,8 @@ def join_elements(
 def read_preloads(path: Path) -> Columns:
     """Preload CSV → columns id, x_m, y_m, area_m2, pressure_Pa, N0_N."""
 
-def write_preloads(path: Path, preloads: Columns, comment: str = "") -> None: ...
+def write_preloads(path: Path, preloads: Columns, comment: str = "") -> None:
+    """Preload CSV as ``asperity film`` writes it (with ``pixel_class`` when the columns have it)."""
 
 # ---------------------------------------------------------------- film
 
@@ -497,7 +498,10 @@ def film_preloads(
     scale: float = 1.0,
     total_load_n: Optional[float] = None,
 ) -> Tuple[Columns, Dict[str, Any]]:
-    """N0 = σ_fit(x, y)·A (N) per node placed on the film; optional rescale to a total load."""
+    """N0 = σ_fit(x, y)·A (N) per node placed on the film; optional rescale to a total load.
+
+    The columns include ``pixel_class`` (list of str: in_range, above_range, below_range, hole),
+    what the film says under each node, as ``preload.csv`` of ``asperity film``."""
 
 def reduce_preloads(preloads: Columns, mesh_size_m: float) -> Columns:
     """Keep one node per triangle of an h-mesh (m) with summed area and load."""

@@ -6,6 +6,7 @@ use crate::errors::{to_python, IntoPy};
 use asperity::calibrate::table::{self, RangeFlag};
 use asperity::elements::{self, ElementRow};
 use asperity::film::nodes::Preload;
+use asperity::film::NodePixel;
 use ndarray::Ix1;
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -276,7 +277,29 @@ pub fn read_preloads(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict
 #[pyo3(signature = (path, preloads, comment=""))]
 pub fn write_preloads(path: PathBuf, preloads: &Bound<'_, PyDict>, comment: &str) -> PyResult<()> {
     let rows = preloads_from_columns(preloads)?;
-    asperity::film::nodes::write_preloads_csv(&path, &rows, comment).py()
+    // A `pixel_class` column (from `film_preloads`) is written as the CLI writes it.
+    match preloads.get_item("pixel_class")? {
+        Some(obj) => {
+            let names: Vec<String> = obj.extract()?;
+            let classes = names
+                .iter()
+                .map(|n| {
+                    NodePixel::from_name(n).ok_or_else(|| {
+                        crate::errors::parameter(
+                            preloads.py(),
+                            "pixel_class",
+                            format!(
+                                "unknown class `{n}` (in_range, above_range, below_range or hole)"
+                            ),
+                        )
+                    })
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            asperity::film::nodes::write_preloads_csv_with_classes(&path, &rows, &classes, comment)
+                .py()
+        }
+        None => asperity::film::nodes::write_preloads_csv(&path, &rows, comment).py(),
+    }
 }
 
 /// The calibration chain of `asperity calibrate` (surfaces → normal sweep → tangential loops at

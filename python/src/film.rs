@@ -403,7 +403,8 @@ fn nodes_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Node>> {
 /// pressure is the region's fit. With `total_load_n` (N) every preload is rescaled to that
 /// total. Nodes outside the map or the region raise `asperity.DataError`.
 /// Returns `(preloads, summary)`, the preloads as columns `id, x_m, y_m, area_m2, pressure_Pa,
-/// N0_N` (film frame).
+/// N0_N` (film frame) and `pixel_class` (what the film says under each node: `in_range`,
+/// `above_range`, `below_range`, `hole`; as `preload.csv` of `asperity film`).
 #[pyfunction]
 #[pyo3(signature = (film_map, region, fit, nodes, *, offset_m=(0.0, 0.0), rotation_rad=0.0, scale=1.0, total_load_n=None))]
 #[allow(clippy::too_many_arguments)]
@@ -428,7 +429,15 @@ pub fn film_preloads<'py>(
     let field = asperity::film::FittedRegion::new(&film_map.inner, &region.inner, &fit.inner);
     let pressure_at = |x: f64, y: f64| field.pressure_at(x, y);
     let (pre, summary) = nodes::preloads(&nodes, &placement, pressure_at, total_load_n).py()?;
-    Ok((preload_columns(py, &pre)?, to_python(py, &summary)?))
+    // What the film says under each node, as `asperity film` writes it (`pixel_class`).
+    let classes: Vec<&str> = pre
+        .iter()
+        .map(|p| field.pixel_at(p.x_m, p.y_m).map(|c| c.name()))
+        .collect::<asperity::Result<_>>()
+        .py()?;
+    let columns = preload_columns(py, &pre)?;
+    columns.set_item("pixel_class", classes)?;
+    Ok((columns, to_python(py, &summary)?))
 }
 
 /// Reduce preloaded nodes on a triangular mesh of side `mesh_size_m` (m): in each triangle the

@@ -34,6 +34,19 @@ pub enum NodePixel {
 }
 
 impl NodePixel {
+    /// Every class, in the order of their names.
+    pub const ALL: [NodePixel; 4] = [
+        NodePixel::InRange,
+        NodePixel::AboveRange,
+        NodePixel::BelowRange,
+        NodePixel::Hole,
+    ];
+
+    /// The class of a `pixel_class` name ([`NodePixel::name`]), `None` for any other text.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+
     /// Name used in output files (`pixel_class` of `preload.csv`).
     pub fn name(self) -> &'static str {
         match self {
