@@ -242,19 +242,11 @@ fn missing_duplicated_or_foreign_shards_are_refused() {
     // Results swapped between two shard files, their labels kept (shard 1 holds seed 2,
     // shard 2 seeds 3 and 4, all on the same grid): refused naming the file, the unit and
     // both surfaces.
+    let (swapped, labels) = swap_first_results(&paths[0], &paths[1], tmp.path(), "swapped");
+    assert_eq!(labels, ["seed-2", "seed-3"]);
     let read = |p: &Path| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
     };
-    let (mut a, mut b) = (read(&paths[0]), read(&paths[1]));
-    assert_eq!(a["units"][0]["label"], "seed-2");
-    assert_eq!(b["units"][0]["label"], "seed-3");
-    std::mem::swap(&mut a["units"][0]["result"], &mut b["units"][0]["result"]);
-    let swapped = [
-        tmp.path().join("swapped-1.json"),
-        tmp.path().join("swapped-2.json"),
-    ];
-    std::fs::write(&swapped[0], a.to_string()).unwrap();
-    std::fs::write(&swapped[1], b.to_string()).unwrap();
     assert_fails_without_output(
         merge(
             &[swapped[0].clone(), swapped[1].clone(), paths[2].clone()],
@@ -558,17 +550,10 @@ fn missing_duplicated_or_foreign_calibration_shards_are_refused() {
     );
     // Two realisations' results swapped between shard files, their labels kept: refused
     // naming the file, the unit and the seeds (realisation 0 is seed 1, realisation 1 seed 2).
+    let (swapped, _) = swap_first_results(&paths[0], &paths[1], tmp.path(), "swapped-calibrate");
     let read = |p: &Path| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
     };
-    let (mut a, mut b) = (read(&paths[0]), read(&paths[1]));
-    std::mem::swap(&mut a["units"][0]["result"], &mut b["units"][0]["result"]);
-    let swapped = [
-        tmp.path().join("swapped-calibrate-1.json"),
-        tmp.path().join("swapped-calibrate-2.json"),
-    ];
-    std::fs::write(&swapped[0], a.to_string()).unwrap();
-    std::fs::write(&swapped[1], b.to_string()).unwrap();
     assert_fails_without_output(
         merge(
             &[swapped[0].clone(), swapped[1].clone(), paths[2].clone()],
@@ -852,4 +837,22 @@ fn shard_files_record_the_build() {
         Some(!status.is_empty()),
         "{status}"
     );
+}
+
+/// Two shard files with the `result` blocks of their first units swapped (labels kept), written
+/// as `<prefix>-1.json` and `<prefix>-2.json` in `dir`; also returns the two units' labels.
+fn swap_first_results(a: &Path, b: &Path, dir: &Path, prefix: &str) -> ([PathBuf; 2], [String; 2]) {
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (mut a, mut b) = (read(a), read(b));
+    std::mem::swap(&mut a["units"][0]["result"], &mut b["units"][0]["result"]);
+    let label = |v: &serde_json::Value| v["units"][0]["label"].as_str().unwrap().to_string();
+    let paths = [
+        dir.join(format!("{prefix}-1.json")),
+        dir.join(format!("{prefix}-2.json")),
+    ];
+    std::fs::write(&paths[0], a.to_string()).unwrap();
+    std::fs::write(&paths[1], b.to_string()).unwrap();
+    (paths, [label(&a), label(&b)])
 }
