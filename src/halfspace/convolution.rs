@@ -549,6 +549,34 @@ pub struct PairWorkspace {
     tasks: Vec<PairScratch>,
 }
 
+/// `f(i, row i of x, row i of y, task scratch)` for the `nx` data rows (stride `sh`) of the two
+/// row-transform arrays of [`PairWorkspace`], in parallel: contiguous ranges of rows, one per
+/// task, each with its own scratch.
+fn for_each_row_pair(
+    rows_x: &mut [Complex64],
+    rows_y: &mut [Complex64],
+    nx: usize,
+    sh: usize,
+    tasks: &mut [PairScratch],
+    f: impl Fn(usize, &mut [Complex64], &mut [Complex64], &mut PairScratch) + Sync,
+) {
+    let per_task = nx.div_ceil(tasks.len()).max(1);
+    rows_x[..nx * sh]
+        .par_chunks_mut(per_task * sh)
+        .zip(rows_y[..nx * sh].par_chunks_mut(per_task * sh))
+        .zip(tasks.par_iter_mut())
+        .enumerate()
+        .for_each(|(b, ((chunk_x, chunk_y), task))| {
+            for (di, (row_x, row_y)) in chunk_x
+                .chunks_mut(sh)
+                .zip(chunk_y.chunks_mut(sh))
+                .enumerate()
+            {
+                f(b * per_task + di, row_x, row_y, task);
+            }
+        });
+}
+
 /// One task's scratch of [`FftPlan::convolve_pair`].
 #[derive(Debug, Clone)]
 struct PairScratch {
@@ -625,31 +653,18 @@ impl FftPlan<f64> {
         } = ws;
         assert_eq!(rows_x.len(), nfx * sh, "convolve_pair: workspace shape");
         assert_eq!(rows_y.len(), nfx * sh, "convolve_pair: workspace shape");
-        // Contiguous ranges of grid rows, one per task.
-        let per_task = nx.div_ceil(tasks.len()).max(1);
         // 1. Load and real-transform the nx data rows.
-        rows_x[..nx * sh]
-            .par_chunks_mut(per_task * sh)
-            .zip(rows_y[..nx * sh].par_chunks_mut(per_task * sh))
-            .zip(tasks.par_iter_mut())
-            .enumerate()
-            .for_each(|(b, ((chunk_x, chunk_y), task))| {
-                let [fx, fy] = &mut task.real;
-                for (di, (out_x, out_y)) in chunk_x
-                    .chunks_mut(sh)
-                    .zip(chunk_y.chunks_mut(sh))
-                    .enumerate()
-                {
-                    fx.fill(0.0);
-                    fy.fill(0.0);
-                    load(b * per_task + di, &mut fx[..ny], &mut fy[..ny]);
-                    for (f, out) in [(&mut *fx, out_x), (&mut *fy, out_y)] {
-                        self.r2c
-                            .process_with_scratch(f, &mut out[..nh], &mut task.r2c)
-                            .expect("r2c sizes match the plan");
-                    }
-                }
-            });
+        for_each_row_pair(rows_x, rows_y, nx, sh, tasks, |i, out_x, out_y, task| {
+            let [fx, fy] = &mut task.real;
+            fx.fill(0.0);
+            fy.fill(0.0);
+            load(i, &mut fx[..ny], &mut fy[..ny]);
+            for (f, out) in [(&mut *fx, out_x), (&mut *fy, out_y)] {
+                self.r2c
+                    .process_with_scratch(f, &mut out[..nh], &mut task.r2c)
+                    .expect("r2c sizes match the plan");
+            }
+        });
         // 2. Per block of COLUMNS y-frequencies: gather the columns, x-transform, kernel
         // product, inverse x-transform, scatter the kept rows back.
         let [kxx, kxy, kyy] = kernels.map(|k| k.values.as_slice().expect("standard layout"));
@@ -705,36 +720,25 @@ impl FftPlan<f64> {
         });
         // 3. Inverse real transforms of the nx rows that are kept, scale, store.
         let scale = 1.0 / (nfx * nfy) as f64;
-        rows_x[..nx * sh]
-            .par_chunks_mut(per_task * sh)
-            .zip(rows_y[..nx * sh].par_chunks_mut(per_task * sh))
-            .zip(tasks.par_iter_mut())
-            .enumerate()
-            .for_each(|(b, ((chunk_x, chunk_y), task))| {
-                let [ux, uy] = &mut task.real;
-                for (di, (in_x, in_y)) in chunk_x
-                    .chunks_mut(sh)
-                    .zip(chunk_y.chunks_mut(sh))
-                    .enumerate()
-                {
-                    for (row, u) in [(in_x, &mut *ux), (in_y, &mut *uy)] {
-                        let row = &mut row[..nh];
-                        // Imaginary parts of the DC (and Nyquist) terms of a real signal are
-                        // round-off; realfft insists they are zero.
-                        row[0].im = 0.0;
-                        if nfy.is_multiple_of(2) {
-                            row[nfy / 2].im = 0.0;
-                        }
-                        self.c2r
-                            .process_with_scratch(row, u, &mut task.c2r)
-                            .expect("c2r sizes match the plan");
-                        for v in &mut u[..ny] {
-                            *v *= scale;
-                        }
-                    }
-                    store(b * per_task + di, &ux[..ny], &uy[..ny]);
+        for_each_row_pair(rows_x, rows_y, nx, sh, tasks, |i, in_x, in_y, task| {
+            let [ux, uy] = &mut task.real;
+            for (row, u) in [(in_x, &mut *ux), (in_y, &mut *uy)] {
+                let row = &mut row[..nh];
+                // Imaginary parts of the DC (and Nyquist) terms of a real signal are
+                // round-off; realfft insists they are zero.
+                row[0].im = 0.0;
+                if nfy.is_multiple_of(2) {
+                    row[nfy / 2].im = 0.0;
                 }
-            });
+                self.c2r
+                    .process_with_scratch(row, u, &mut task.c2r)
+                    .expect("c2r sizes match the plan");
+                for v in &mut u[..ny] {
+                    *v *= scale;
+                }
+            }
+            store(i, &ux[..ny], &uy[..ny]);
+        });
     }
 }
 
