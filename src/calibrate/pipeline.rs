@@ -551,14 +551,6 @@ pub fn calibrate_surface(
     Ok((out, times))
 }
 
-/// One chain to run: a generated surface (spec with its seed) or the given one.
-#[derive(Debug, Clone, Copy)]
-enum Job {
-    Main(usize),
-    Grid(usize),
-    Patch(usize),
-}
-
 /// How the chains share the cores.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Parallelism {
@@ -698,23 +690,19 @@ pub fn run_realisations(
         ));
     }
     let (grid_spec, patch_spec, _) = checks_of(config, source);
-    let mut jobs: Vec<Job> = realisations.clone().map(Job::Main).collect();
+    // One job per chain to run: (chain, realisation), the main chains first.
+    let mut jobs: Vec<(Chain, usize)> = realisations.clone().map(|r| (Chain::Main, r)).collect();
     if grid_spec.is_some() {
-        jobs.extend(realisations.clone().map(Job::Grid));
+        jobs.extend(realisations.clone().map(|r| (Chain::GridCheck, r)));
     }
     if patch_spec.is_some() {
-        jobs.extend(realisations.clone().map(Job::Patch));
+        jobs.extend(realisations.clone().map(|r| (Chain::PatchCheck, r)));
     }
-    let spec_of = |job: Job| -> GaussianSurfaceSpec {
-        let (chain, r) = match job {
-            Job::Main(r) => (Chain::Main, r),
-            Job::Grid(r) => (Chain::GridCheck, r),
-            Job::Patch(r) => (Chain::PatchCheck, r),
-        };
+    let spec_of = |(chain, r): (Chain, usize)| -> GaussianSurfaceSpec {
         chain_spec_of(config, grid_spec, patch_spec, chain, r)
             .expect("a job for every chain that runs")
     };
-    let run_job = |job: Job| -> Result<Realisation> {
+    let run_job = |job: (Chain, usize)| -> Result<Realisation> {
         let t = Lap::start();
         let (surface, seed) = match source {
             SurfaceSource::Given { surface, .. } => (surface.clone(), None),
@@ -746,13 +734,13 @@ pub fn run_realisations(
     for (job, r) in jobs.iter().zip(results) {
         let r = r?;
         match *job {
-            Job::Main(_) => units.push(RealisationChains {
+            (Chain::Main, _) => units.push(RealisationChains {
                 main: r,
                 grid_check: None,
                 patch_check: None,
             }),
-            Job::Grid(i) => units[i - realisations.start].grid_check = Some(r),
-            Job::Patch(i) => units[i - realisations.start].patch_check = Some(r),
+            (Chain::GridCheck, i) => units[i - realisations.start].grid_check = Some(r),
+            (Chain::PatchCheck, i) => units[i - realisations.start].patch_check = Some(r),
         }
     }
     Ok(units)
