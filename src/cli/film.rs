@@ -290,12 +290,7 @@ fn node_pixel_report(
             })
     };
     let mut json = serde_json::Map::new();
-    for c in [
-        NodePixel::InRange,
-        NodePixel::AboveRange,
-        NodePixel::BelowRange,
-        NodePixel::Hole,
-    ] {
+    for c in NodePixel::ALL {
         let v = fitted(c);
         let (a, b) = span(&v);
         json.insert(
