@@ -939,7 +939,7 @@ fn convergence_at(
             .filter(|r| r.pressures[i].sweep.under_resolved())
             .count(),
         min_points_across: narrowest.points_across(),
-        narrowest_is_contact: narrowest.points_across_contact() <= narrowest.points_across_free(),
+        narrowest_is_contact: narrowest.contact_is_narrower(),
         pressure_pa: config.loading.pressures_pa[i],
         contact_spots: summarise(&values(main, i, |pc| pc.sweep.contact_spots as f64)),
         median_spot_points: median,

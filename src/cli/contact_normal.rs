@@ -590,14 +590,14 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
                 if r.reaches_window_edge() {
                     // Free islands that look narrow are the window's cut, not the grid's; narrow
                     // contact spots are still the grid's.
-                    if p.under_resolved() && r.points_across_contact() <= r.points_across_free() {
+                    if p.under_resolved() && r.contact_is_narrower() {
                         "  (contact reaches the window's edge: enlarge the window; contact spots under-resolved: refine the grid)"
                     } else {
                         "  (contact reaches the window's edge: enlarge the window)"
                     }
                 } else if !p.under_resolved() {
                     ""
-                } else if r.points_across_contact() <= r.points_across_free() {
+                } else if r.contact_is_narrower() {
                     "  (contact spots under-resolved: refine the grid)"
                 } else {
                     "  (free islands under-resolved: refine the grid)"

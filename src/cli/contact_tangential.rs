@@ -249,7 +249,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             format!(
                 "{p:e} Pa ({:.1} points across the {}, {} contact points)",
                 n.resolution.points_across(),
-                if n.resolution.points_across_contact() <= n.resolution.points_across_free() {
+                if n.resolution.contact_is_narrower() {
                     "contact spots"
                 } else {
                     "free islands"

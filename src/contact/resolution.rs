@@ -162,6 +162,12 @@ impl ContactResolution {
         self.points_across_contact().min(self.points_across_free())
     }
 
+    /// True when the contact spots are the narrower phase (or as narrow as the free regions):
+    /// [`Self::points_across`] is theirs.
+    pub fn contact_is_narrower(&self) -> bool {
+        self.points_across_contact() <= self.points_across_free()
+    }
+
     /// True when the narrower phase spans at least [`RESOLVED_POINTS_ACROSS`] points.
     pub fn resolved(&self) -> bool {
         self.points_across() >= RESOLVED_POINTS_ACROSS
