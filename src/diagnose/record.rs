@@ -334,9 +334,7 @@ fn check_uniform_sampling(path: &Path, column: &str, t: &[f64], lines: &[usize])
         return Ok(());
     }
     let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    let mut sorted = steps.clone();
-    sorted.sort_by(|a, b| a.total_cmp(b));
-    let median = sorted[sorted.len() / 2];
+    let median = super::noise::median(&steps);
     let (i, &largest) = steps
         .iter()
         .enumerate()
