@@ -1,4 +1,4 @@
-//! Build identity of the crate (`asperity::build_info::BuildId`), recorded in every shard file
+//! Build identity of the crate (`asperity::core::build_info::BuildId`), recorded in every shard file
 //! of a sharded sweep so that `asperity merge` refuses shards computed by different builds: a
 //! unit's results are bit-identical only for the same code, and the crate version alone does
 //! not say which code that was.

@@ -25,7 +25,7 @@ fn thread_cpu_s() -> f64 {
 }
 
 fn main() {
-    let dir = asperity::testdata::data_dir().join("frf");
+    let dir = asperity::core::testdata::data_dir().join("frf");
     let read = |i: usize| {
         Sweep::read_csv(&dir.join(format!("brb-force-control-level{i}.csv"))).unwrap_or_else(|e| {
             eprintln!("{e} (set ASPERITY_DATA_DIR)");

@@ -37,9 +37,9 @@ use asperity::contact::normal::{
 };
 use asperity::contact::resolution::ContactResolution;
 use asperity::contact::sweep::{self, stiffness_central_difference};
+use asperity::core::fft::{Boundary, FftPlan};
+use asperity::core::material::{composite_modulus, Material};
 use asperity::halfspace::influence::boussinesq_spectrum;
-use asperity::halfspace::{Boundary, FftPlan};
-use asperity::surface::combine::{composite_modulus, Material};
 use asperity::surface::generate::{generate, GaussianSurfaceSpec};
 use asperity::surface::self_affine::{generate_self_affine, SelfAffineSpec};
 use asperity::Grid2;

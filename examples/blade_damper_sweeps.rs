@@ -17,11 +17,11 @@
 #[path = "../tests/support/synthetic_sweep.rs"]
 mod synthetic_sweep;
 
+use asperity::core::output::OutputSet;
 use asperity::identify::fit::Parametrised;
 use asperity::identify::measured::Quantity;
 use asperity::identify::model::Drive;
 use asperity::identify::reduced::ReducedSpec;
-use asperity::output::OutputSet;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 
@@ -71,7 +71,7 @@ fn write_csv(path: &Path, rows: &[asperity::identify::measured::Row]) -> asperit
             r.frequency_hz, r.force_n, r.response, r.phase_rad
         );
     }
-    asperity::output::write_string_atomic(path, &t)
+    asperity::core::output::write_string_atomic(path, &t)
 }
 
 fn main() -> asperity::Result<()> {

@@ -29,9 +29,9 @@
 
 use crate::calibrate::convergence::Verdict;
 use crate::calibrate::table::{CalibrationTable, RangeFlag};
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
+use crate::core::hash::sha256_file;
 use crate::film::nodes::Preload;
-use sha2::{Digest, Sha256};
 use std::path::Path;
 
 /// One contact element.
@@ -190,7 +190,7 @@ pub const COLUMNS: &str =
 
 /// Write the element table (CSV with a `#` units header), atomically.
 pub fn write_csv(path: &Path, rows: &[ElementRow]) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         writeln!(
             w,
@@ -227,13 +227,6 @@ pub fn write_csv(path: &Path, rows: &[ElementRow]) -> Result<()> {
         }
         Ok(())
     })
-}
-
-/// Hex SHA-256 of a file's bytes.
-pub fn sha256_file(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let digest = Sha256::digest(&bytes);
-    Ok(digest.iter().map(|b| format!("{b:02x}")).collect())
 }
 
 /// One input file in a provenance record.
@@ -380,16 +373,5 @@ mod tests {
         assert_eq!(rows[2].out_of_range, 1);
         assert_eq!((s.n_below_range, s.n_above_range), (1, 1));
         assert_eq!(s.below_range_ids, vec![2]);
-    }
-
-    #[test]
-    fn sha256_of_known_bytes() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("abc");
-        std::fs::write(&p, b"abc").unwrap();
-        assert_eq!(
-            sha256_file(&p).unwrap(),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
     }
 }

@@ -2,39 +2,37 @@
 //!
 //! Contact parameters for microslip elements, computed from the rough surface.
 //!
-//! The data flows one way and the modules follow it:
+//! The data flows one way and the modules follow it; each stage uses only the stages above it
+//! and [`core`] (checked by `tests/module_layers.rs`):
 //!
 //! ```text
-//! surface  ──►  halfspace (Boussinesq, Cerruti, FFT convolution)
-//!          ──►  contact::normal (projected CG) ──► contact::tangential (partial slip loops)
-//!          ──►  element (Valanis, Jenkins) + calibrate (kn, E0, k vs pressure)
-//!          ──►  film (preload map) ──► elements (one row per contact element)
-//!          ◄──  diagnose (measured loops: residual, missing effect, error before/after)
+//! core        FFT plans, materials, grids, statistics, hashing, inputs, limits, output sets
+//! surface     generate · stats · io · combine                 rough patches, measured files
+//! halfspace   influence (Boussinesq, Cerruti)                 elastic half-space kernels
+//! contact     normal (projected CG) · tangential (partial slip) · sweeps
+//! element     one file per law: Valanis, Jenkins, Iwan, …     force update with exact partials
+//! calibrate   loops → Valanis fits → kn, E0, k versus pressure (calib/*.csv)
+//! film        pressure film → preload map → N0 per node
+//! elements    preloads + table → one row per contact element
+//! dynamics    harmonic balance (AFT, continuation) of structures with those elements
+//! identify    measured frequency responses → joint model → levels not used
+//! diagnose    measured loops → residual → missing effect → error before/after
 //! ```
 //!
 //! Units: SI throughout (m, Pa, N). File headers, CSV columns and CLI flags name their units.
-//! Grids follow the [`grid::Grid2`] convention: shape `(nx, ny)`, `[[i, j]]` at `(i·dx, j·dy)`.
+//! Grids follow the [`Grid2`] convention: shape `(nx, ny)`, `[[i, j]]` at `(i·dx, j·dy)`.
 
-pub mod build_info;
 pub mod calibrate;
 pub mod contact;
+pub mod core;
 pub mod diagnose;
 pub mod dynamics;
 pub mod element;
 pub mod elements;
-pub mod error;
 pub mod film;
-pub mod grid;
 pub mod halfspace;
 pub mod identify;
-pub mod input;
-pub mod limits;
-pub mod output;
-pub mod plot;
-pub mod sanity;
-pub mod shard;
 pub mod surface;
-pub mod testdata;
 
-pub use error::{Error, Result};
-pub use grid::Grid2;
+pub use crate::core::error::{Error, Result};
+pub use crate::core::grid::Grid2;

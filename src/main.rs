@@ -61,8 +61,8 @@ fn keep_freed_memory() {
 fn main() {
     keep_freed_memory();
     let cli = Cli::parse();
-    // An interrupt removes staged and temporary files and exits 130 (asperity::output).
-    asperity::output::install_interrupt_handler();
+    // An interrupt removes staged and temporary files and exits 130 (asperity::core::output).
+    asperity::core::output::install_interrupt_handler();
     let result = match cli.command {
         Command::Surface(c) => cli::surface::run(c),
         Command::Contact(c) => cli::contact::run(c),

@@ -8,7 +8,7 @@
 
 use asperity::calibrate::config::CalibrationConfig;
 use asperity::calibrate::pipeline::{self, CalibrationRun, SurfaceSource};
-use asperity::calibrate::statistics::student_t_975;
+use asperity::core::stats::student_t_975;
 
 fn cheap(count: usize) -> CalibrationConfig {
     let mut c = CalibrationConfig::reference();

@@ -19,7 +19,7 @@ fn run(args: &[&str]) -> Output {
 /// clearance, ringing, cycle-to-cycle variation), so the verdict is "model inadequate", with
 /// what characterises the residual, never "no effect needed".
 fn measured(name: &str) {
-    let Some(path) = asperity::testdata::reference_file(&format!("loops/{name}")) else {
+    let Some(path) = asperity::core::testdata::reference_file(&format!("loops/{name}")) else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();

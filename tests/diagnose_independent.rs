@@ -28,6 +28,8 @@ use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
 use asperity::contact::tangential::{
     oscillate, Control, Oscillation, TangentialOptions, TangentialProblem, TangentialSolver,
 };
+use asperity::core::fft::Boundary;
+use asperity::core::material::{composite_modulus, Material};
 use asperity::diagnose::{
     diagnose, Baseline, BaselineSource, Diagnosis, Effect, Options, Record, Verdict,
 };
@@ -36,8 +38,6 @@ use asperity::element::iwan::{IwanElement, IwanParams};
 use asperity::element::valanis::{
     integrate_reference, reference_step, ValanisParams, ValanisState,
 };
-use asperity::halfspace::Boundary;
-use asperity::surface::combine::{composite_modulus, Material};
 use asperity::surface::{generate, GaussianSurfaceSpec};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};

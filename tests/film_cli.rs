@@ -322,7 +322,7 @@ fn film_to_preloads_to_reduced_nodes_to_elements() {
             .unwrap();
     assert_eq!(sidecar["summary"]["n_above_range"], above);
     assert_eq!(sidecar["crate_version"], env!("CARGO_PKG_VERSION"));
-    let table_hash = asperity::elements::sha256_file(&table_csv).unwrap();
+    let table_hash = asperity::core::hash::sha256_file(&table_csv).unwrap();
     assert!(sidecar["inputs"]
         .as_array()
         .unwrap()

@@ -1,10 +1,10 @@
 //! The Prescale LW reference film (kura-okubo/4mNonSelfSim_Paper): six 8 mm gouge patches pressed
 //! at a nominal 2.0 MPa, rendered by the vendor app, with the app's colour table.
 
+use asperity::core::testdata::reference_file;
 use asperity::film::colour::{ColourTable, ColourToPressure, DEFAULT_MAX_COLOUR_DISTANCE};
 use asperity::film::polyfit;
 use asperity::film::regions::{detect_patches, summarise, FilmMap, DEFAULT_RIM_PIXELS};
-use asperity::testdata::reference_file;
 
 const PIXEL_SIZE_M: f64 = 0.2343e-3;
 

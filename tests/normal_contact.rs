@@ -243,7 +243,7 @@ fn westergaard_partial_contact_half_width() {
 #[test]
 fn reference_statistics_kn_monotone() {
     use asperity::contact::sweep;
-    use asperity::surface::combine::{composite_modulus, Material};
+    use asperity::core::material::{composite_modulus, Material};
     use asperity::surface::generate::{generate, GaussianSurfaceSpec};
     let spec = GaussianSurfaceSpec {
         nx: 256,

@@ -27,7 +27,7 @@ fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
 
 #[test]
 fn dektak_profile_matches_surface_topography() {
-    let Some(f) = asperity::testdata::reference_file("topography/dektak-1.csv") else {
+    let Some(f) = asperity::core::testdata::reference_file("topography/dektak-1.csv") else {
         return;
     };
     let v = stats_json(&f);
@@ -52,7 +52,7 @@ fn dektak_profile_matches_surface_topography() {
 
 #[test]
 fn x3p_area_matches_surface_topography() {
-    let Some(f) = asperity::testdata::reference_file("topography/x3p-2.x3p") else {
+    let Some(f) = asperity::core::testdata::reference_file("topography/x3p-2.x3p") else {
         return;
     };
     let v = stats_json(&f);
@@ -87,7 +87,7 @@ fn x3p_area_matches_surface_topography() {
 
 #[test]
 fn x3p_converted_to_every_format_keeps_its_statistics() {
-    let Some(f) = asperity::testdata::reference_file("topography/x3p-2.x3p") else {
+    let Some(f) = asperity::core::testdata::reference_file("topography/x3p-2.x3p") else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();

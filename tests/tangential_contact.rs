@@ -12,8 +12,8 @@ use asperity::contact::tangential::{
     oscillate, Control, Operator, Oscillation, TangentialOptions, TangentialProblem,
     TangentialSolver,
 };
-use asperity::halfspace::Boundary;
-use asperity::surface::combine::{composite_modulus, Material};
+use asperity::core::fft::Boundary;
+use asperity::core::material::{composite_modulus, Material};
 use asperity::{Error, Grid2};
 use ndarray::Array2;
 use std::process::Command;

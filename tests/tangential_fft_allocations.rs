@@ -9,8 +9,8 @@
 use asperity::contact::tangential::{
     Control, Operator, TangentialOptions, TangentialProblem, TangentialSolver,
 };
-use asperity::halfspace::Boundary;
-use asperity::surface::combine::Material;
+use asperity::core::fft::Boundary;
+use asperity::core::material::Material;
 use ndarray::Array2;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};

@@ -11,8 +11,8 @@ use asperity::contact::sweep::{self, SweepOptions};
 use asperity::contact::tangential::{
     self, Control, Operator, Oscillation, TangentialOptions, TangentialProblem,
 };
-use asperity::halfspace::Boundary;
-use asperity::surface::combine::Material;
+use asperity::core::fft::Boundary;
+use asperity::core::material::Material;
 use ndarray::{Array2, Ix2};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;

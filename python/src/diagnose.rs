@@ -85,7 +85,7 @@ pub fn diagnose<'py>(
         (Some(p), Some(n)) => (
             BaselineSource::Given(Baseline {
                 valanis: p.inner,
-                normal_n: asperity::error::require_positive("normal_n", n).py()?,
+                normal_n: asperity::core::error::require_positive("normal_n", n).py()?,
             }),
             "given".to_string(),
         ),

@@ -363,5 +363,5 @@ pub fn fit_valanis_loops(
 /// calibration table's confidence intervals, `t·s/√N` with `dof = N − 1`).
 #[pyfunction]
 pub fn student_t_975(dof: f64) -> f64 {
-    asperity::calibrate::statistics::student_t_975(dof)
+    asperity::core::stats::student_t_975(dof)
 }

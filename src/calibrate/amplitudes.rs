@@ -40,8 +40,8 @@
 //! cycle, doubled (the dissipation of the incremental Coulomb problem, without quadrature error).
 
 use crate::contact::tangential::{Control, TangentialSolver};
+use crate::core::error::{Error, Result};
 use crate::element::dissipated_energy;
-use crate::error::{Error, Result};
 use ndarray::Array2;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -298,8 +298,8 @@ mod tests {
     use crate::contact::tangential::{
         oscillate, Oscillation, TangentialOptions, TangentialProblem,
     };
-    use crate::halfspace::Boundary;
-    use crate::surface::combine::{composite_modulus, Material};
+    use crate::core::fft::Boundary;
+    use crate::core::material::{composite_modulus, Material};
     use crate::surface::generate::{generate, GaussianSurfaceSpec};
 
     fn rough_solver(pressure_pa: f64) -> TangentialSolver {

@@ -42,7 +42,7 @@
 //! k_tolerance = 0.05        # k: change allowed (absolute)
 //! ```
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use crate::surface::generate::GaussianSurfaceSpec;
 use std::path::Path;
 
@@ -159,7 +159,7 @@ impl CalibrationConfig {
         }
     }
 
-    /// Parse TOML text and validate (texts above [`crate::limits::MAX_TEXT_FILE_BYTES`] are
+    /// Parse TOML text and validate (texts above [`crate::core::limits::MAX_TEXT_FILE_BYTES`] are
     /// refused by [`Self::read`] before they are read). Errors carry the dotted key and, via [`Self::read`], the
     /// file and line.
     pub fn from_toml_str(text: &str) -> Result<Self> {
@@ -168,14 +168,14 @@ impl CalibrationConfig {
 
     /// Read and validate a TOML configuration file.
     pub fn read(path: &Path) -> Result<Self> {
-        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
+        crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Self::parse(&text, path)
     }
 
     fn parse(text: &str, path: &Path) -> Result<Self> {
         let cfg: Self =
-            toml::from_str(text).map_err(|e| crate::input::toml_error(path, text, e))?;
+            toml::from_str(text).map_err(|e| crate::core::input::toml_error(path, text, e))?;
         cfg.validate().map_err(|e| match e {
             Error::InvalidParameter { name, message } => {
                 let line = key_line(text, &name);
@@ -207,22 +207,22 @@ impl CalibrationConfig {
             }
         };
         self.surface.validate().map_err(prefixed("surface"))?;
-        crate::surface::combine::Material {
+        crate::core::material::Material {
             youngs_modulus_pa: self.material.youngs_modulus_pa,
             poisson_ratio: self.material.poisson_ratio,
         }
         .validated("material")?;
         let c = &self.contact;
-        crate::sanity::friction_coefficient("contact.mu", c.mu)?;
-        crate::sanity::tolerance("contact.normal_tolerance", c.normal_tolerance)?;
-        crate::sanity::tolerance("contact.tangential_tolerance", c.tangential_tolerance)?;
+        crate::core::sanity::friction_coefficient("contact.mu", c.mu)?;
+        crate::core::sanity::tolerance("contact.normal_tolerance", c.normal_tolerance)?;
+        crate::core::sanity::tolerance("contact.tangential_tolerance", c.tangential_tolerance)?;
         // Resource limits (before anything is allocated) and pressures the model resolves.
         let s = &self.surface;
-        crate::limits::check_grid(
+        crate::core::limits::check_grid(
             "surface.nx",
             s.nx,
             s.ny,
-            crate::limits::CONTACT_BYTES_PER_POINT,
+            crate::core::limits::CONTACT_BYTES_PER_POINT,
         )?;
         let l = &self.loading;
         if l.pressures_pa.is_empty() {
@@ -245,27 +245,27 @@ impl CalibrationConfig {
                 ));
             }
         }
-        crate::limits::check_count(
+        crate::core::limits::check_count(
             "loading.pressures_pa",
             l.pressures_pa.len(),
-            crate::limits::MAX_PRESSURES,
+            crate::core::limits::MAX_PRESSURES,
         )?;
-        let material = crate::surface::combine::Material {
+        let material = crate::core::material::Material {
             youngs_modulus_pa: self.material.youngs_modulus_pa,
             poisson_ratio: self.material.poisson_ratio,
         };
-        let e_star = crate::surface::combine::composite_modulus(material, material)?;
-        crate::sanity::contact_pressures_for(
+        let e_star = crate::core::material::composite_modulus(material, material)?;
+        crate::core::sanity::contact_pressures_for(
             "loading.pressures_pa",
             &l.pressures_pa,
             e_star,
             s.lx_m.max(s.ly_m),
             8.0 * s.rq_m,
         )?;
-        crate::limits::check_count(
+        crate::core::limits::check_count(
             "loading.steps_per_cycle",
             l.steps_per_cycle,
-            crate::limits::MAX_STEPS_PER_CYCLE,
+            crate::core::limits::MAX_STEPS_PER_CYCLE,
         )?;
         crate::calibrate::amplitudes::check_factors(&l.amplitude_factors).map_err(|e| match e {
             Error::InvalidParameter { message, .. } => {
@@ -277,9 +277,12 @@ impl CalibrationConfig {
             return Err(Error::param("realisations.count", "must be at least 1"));
         }
         let c = &self.convergence;
-        crate::error::require_positive("convergence.relative_tolerance", c.relative_tolerance)?;
-        crate::error::require_positive("convergence.k_tolerance", c.k_tolerance)?;
-        crate::limits::check_count("realisations.count", self.realisations.count, 1000)?;
+        crate::core::error::require_positive(
+            "convergence.relative_tolerance",
+            c.relative_tolerance,
+        )?;
+        crate::core::error::require_positive("convergence.k_tolerance", c.k_tolerance)?;
+        crate::core::limits::check_count("realisations.count", self.realisations.count, 1000)?;
         if l.steps_per_cycle < 8 || !l.steps_per_cycle.is_multiple_of(4) {
             return Err(Error::param(
                 "loading.steps_per_cycle",
@@ -306,8 +309,12 @@ impl CalibrationConfig {
         if f.max_iterations == 0 {
             return Err(Error::param("fit.max_iterations", "must be at least 1"));
         }
-        crate::limits::check_count("fit.k_starts", f.k_starts.len(), 100)?;
-        crate::limits::check_count("fit.max_iterations", f.max_iterations as usize, 1_000_000)?;
+        crate::core::limits::check_count("fit.k_starts", f.k_starts.len(), 100)?;
+        crate::core::limits::check_count(
+            "fit.max_iterations",
+            f.max_iterations as usize,
+            1_000_000,
+        )?;
         Ok(())
     }
 }

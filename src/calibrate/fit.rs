@@ -32,9 +32,9 @@
 //! R² on the steady cycle, normalised RMS error (RMS residual over the peak-to-peak force of the
 //! cycle) and the relative error of the energy dissipated per cycle `∮F dq`.
 
+use crate::core::error::{Error, Result};
 use crate::element::dissipated_energy;
 use crate::element::valanis::{integrate_reference, ValanisParams};
-use crate::error::{Error, Result};
 use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
 use argmin::solver::neldermead::NelderMead;
 use std::ops::Range;
@@ -262,7 +262,7 @@ pub fn fit_valanis_loops(loops: &[LoopData], opts: &FitOptions) -> Result<FitRes
     if loops.is_empty() {
         return Err(Error::param("loops", "give at least one loop to fit"));
     }
-    crate::error::require_positive("mu", opts.mu)?;
+    crate::core::error::require_positive("mu", opts.mu)?;
     let mut ss_tot = Vec::with_capacity(loops.len());
     let mut slope: f64 = 0.0;
     for data in loops {

@@ -18,12 +18,13 @@
 //! | `calibration.json` | configuration, crate version, input hashes, verdicts, warnings |
 
 use crate::calibrate::config::CalibrationConfig;
-use crate::calibrate::pipeline::{sha256_hex, CalibrationRun, KBound, Realisation};
+use crate::calibrate::pipeline::{CalibrationRun, KBound, Realisation};
 use crate::calibrate::statistics::summarise;
 use crate::calibrate::table::CalibrationRow;
-use crate::error::{Error, Result};
-use crate::output::write_string_atomic;
-use crate::plot::{line_plot, LinePlot, Scale, Series};
+use crate::core::error::{Error, Result};
+use crate::core::hash::sha256_hex;
+use crate::core::output::write_string_atomic;
+use crate::core::plot::{line_plot, LinePlot, Scale, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -40,14 +40,13 @@ use crate::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
 use crate::contact::resolution::RESOLVED_POINTS_ACROSS;
 use crate::contact::sweep::{self, SweepOptions, SweepPoint};
 use crate::contact::tangential::{TangentialOptions, TangentialProblem, TangentialSolver};
-use crate::error::{Error, Result};
-use crate::grid::Grid2;
-use crate::halfspace::Boundary;
-use crate::surface::combine::{composite_modulus, Material};
+use crate::core::error::{Error, Result};
+use crate::core::fft::Boundary;
+use crate::core::grid::Grid2;
+use crate::core::hash::sha256_hex;
+use crate::core::material::{composite_modulus, Material};
 use crate::surface::generate::{generate, GaussianSurfaceSpec};
 use indicatif::ProgressBar;
-use sha2::{Digest, Sha256};
-use std::fmt::Write as _;
 use std::time::Instant;
 
 /// A fitted `k` below this is reported as at the lower bound 0, above `1 − K_BOUND_FLAG` as at
@@ -272,15 +271,6 @@ pub struct CalibrationRun {
     pub warnings: Vec<String>,
     /// Stage times summed over all chains (main and checks), and the run's wall time.
     pub times: StageTimes,
-}
-
-pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .fold(String::with_capacity(64), |mut s, b| {
-            let _ = write!(s, "{b:02x}");
-            s
-        })
 }
 
 fn surface_sha256(surface: &Grid2) -> String {

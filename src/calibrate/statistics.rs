@@ -17,7 +17,7 @@
 //!   `x̄ − ȳ ± t₀.₉₇₅,ν · √(s_x²/N_x + s_y²/N_y)` with the Welch–Satterthwaite degrees of freedom
 //!   `ν = (s_x²/N_x + s_y²/N_y)² / ((s_x²/N_x)²/(N_x − 1) + (s_y²/N_y)²/(N_y − 1))`.
 
-use statrs::distribution::{ContinuousCDF, StudentsT};
+use crate::core::stats::student_t_975;
 
 /// Mean of a set of realisation values with its 95 % interval.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -30,18 +30,6 @@ pub struct Summary {
     pub sd: f64,
     /// Half-width of the 95 % confidence interval of the mean; NaN for one value.
     pub ci95: f64,
-}
-
-/// Two-sided 95 % quantile `t₀.₉₇₅,ν` of Student's t with `ν > 0` degrees of freedom (NaN
-/// otherwise).
-pub fn student_t_975(dof: f64) -> f64 {
-    if !(dof > 0.0 && dof.is_finite()) {
-        return f64::NAN;
-    }
-    match StudentsT::new(0.0, 1.0, dof) {
-        Ok(t) => t.inverse_cdf(0.975),
-        Err(_) => f64::NAN,
-    }
 }
 
 /// Mean, standard deviation and 95 % interval of `values` (see the module documentation).

@@ -1,5 +1,5 @@
 //! The calibration as a sharded sweep (`asperity calibrate --shard i/n`, see
-//! [`crate::shard`]): the unit is one **realisation** — its main chain over all pressures and
+//! [`crate::core::shard`]): the unit is one **realisation** — its main chain over all pressures and
 //! amplitudes (one Masing amplitude history per pressure) and its grid- and patch-check chains
 //! ([`RealisationChains`]) — so realisation `r` computes the same numbers, bit for bit, in a
 //! single run and in any shard. The merge assembles the table, convergence verdicts and
@@ -13,9 +13,9 @@ use crate::calibrate::output::ConfigSource;
 use crate::calibrate::pipeline::{
     self, CalibrationRun, Chain, Realisation, RealisationChains, SurfaceSource,
 };
+use crate::core::error::{num, Result};
+use crate::core::shard::{ShardedSweep, UnitRecord};
 use crate::element::valanis::ValanisParams;
-use crate::error::{num, Result};
-use crate::shard::{ShardedSweep, UnitRecord};
 use crate::surface::generate::GaussianSurfaceSpec;
 use serde::{Deserialize, Serialize};
 

@@ -55,8 +55,8 @@
 //! (Until 2026-11-28 the end row's values were used unchanged outside the range.)
 
 use crate::calibrate::convergence::Verdict;
-use crate::error::{Error, Result};
-use crate::output::write_atomic;
+use crate::core::error::{Error, Result};
+use crate::core::output::write_atomic;
 use std::path::Path;
 
 /// The CSV header, exactly.
@@ -369,7 +369,7 @@ impl CalibrationTable {
     /// and the 1-based line: wrong header, wrong field count, unparsable number, unphysical
     /// value, pressures not strictly increasing, no rows.
     pub fn read_csv(path: &Path) -> Result<Self> {
-        let mut rdr = crate::input::csv_reader_any_length(path)?;
+        let mut rdr = crate::core::input::csv_reader_any_length(path)?;
         let headers = rdr
             .headers()
             .map_err(|e| Error::parse(path, 1, format!("cannot read header: {e}")))?
@@ -396,7 +396,7 @@ impl CalibrationTable {
         let mut rows: Vec<CalibrationRow> = Vec::new();
         let mut intervals: Vec<RowInterval> = Vec::new();
         for rec in rdr.records() {
-            let (rec, line) = crate::input::csv_record(path, rec)?;
+            let (rec, line) = crate::core::input::csv_record(path, rec)?;
             if rec.len() == 1 && rec.get(0) == Some("") {
                 continue; // blank line
             }
@@ -404,7 +404,7 @@ impl CalibrationTable {
                 return Err(Error::parse(
                     path,
                     line,
-                    crate::input::field_count_message(width, rec.len()),
+                    crate::core::input::field_count_message(width, rec.len()),
                 ));
             }
             if with_convergence {

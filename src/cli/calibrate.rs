@@ -10,8 +10,8 @@ use asperity::calibrate::convergence::Verdict;
 use asperity::calibrate::output::{self, describe_shape, ConfigSource};
 use asperity::calibrate::pipeline::{self, CalibrationRun, RealisationChains, SurfaceSource};
 use asperity::calibrate::sweep::CalibrationSweep;
-use asperity::output::OutputSet;
-use asperity::shard::{self, Shard, ShardedSweep, UnitRecord};
+use asperity::core::output::OutputSet;
+use asperity::core::shard::{self, Shard, ShardedSweep, UnitRecord};
 use asperity::{Error, Result};
 use std::path::PathBuf;
 
@@ -108,7 +108,7 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
                 .map_err(|e| super::rename_param(e, "--surface"))?;
         // A flat (or identical-bodies) surface has no rough contact: say so now, not as a
         // failed loop fit after the sweep.
-        asperity::sanity::contact_surface(&surface, &description)?;
+        asperity::core::sanity::contact_surface(&surface, &description)?;
         config.realisations.count = 1;
         SurfaceSource::Given {
             surface,

@@ -7,13 +7,13 @@
 //!
 //! With `--shard i/n` only the surfaces of shard i are solved and their results go to
 //! `<out-dir>/contact-normal.shard-i-of-n.json`; `asperity merge` turns the n files into the
-//! same outputs a single run writes (see [`asperity::shard`]).
+//! same outputs a single run writes (see [`asperity::core::shard`]).
 
 use asperity::contact::normal::{NormalMethod, NormalOptions, NormalSolution};
 use asperity::contact::surface_sweep::{self, SurfaceResult, SurfaceSource, SurfaceSweep};
 use asperity::contact::sweep::{self, REFERENCE_PRESSURES_PA};
-use asperity::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
-use asperity::shard::{self, Shard, ShardedSweep, UnitRecord};
+use asperity::core::plot::{heatmap, line_plot, HeatMap, LinePlot, Scale, Series};
+use asperity::core::shard::{self, Shard, ShardedSweep, UnitRecord};
 use asperity::surface::generate::GaussianSurfaceSpec;
 use asperity::{Error, Result};
 use std::fmt::Write as _;
@@ -121,11 +121,11 @@ fn surfaces(args: &NormalArgs) -> Result<Vec<SurfaceSource>> {
         spec.validate()
             .map_err(|e| super::rename_param(e, "--grid"))?;
     }
-    asperity::limits::check_grid(
+    asperity::core::limits::check_grid(
         "--grid",
         spec.nx,
         spec.ny,
-        asperity::limits::CONTACT_BYTES_PER_POINT,
+        asperity::core::limits::CONTACT_BYTES_PER_POINT,
     )?;
     Ok(seeds
         .into_iter()
@@ -146,9 +146,13 @@ pub fn realisations_note(n: usize) -> String {
 
 /// The sweep from the flags, every input checked, errors naming the flag.
 fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
-    asperity::sanity::tolerance("--tolerance", args.tolerance)?;
+    asperity::core::sanity::tolerance("--tolerance", args.tolerance)?;
     if let Some(p) = &args.pressures_pa {
-        asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
+        asperity::core::limits::check_count(
+            "--pressures-pa",
+            p.len(),
+            asperity::core::limits::MAX_PRESSURES,
+        )?;
     }
     let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
     let pressures_pa = sweep::checked_pressures(
@@ -231,7 +235,7 @@ fn write_pressure_maps(
 
 pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output; the files are staged and appear together
-    // at the end (asperity::output::OutputSet).
+    // at the end (asperity::core::output::OutputSet).
     if args.shard.is_some() && args.pressure_maps {
         // `merge` rebuilds the sweep's tables and plots from the shard files, which hold no
         // pressure fields: a merged run would lack the maps a single run writes.
@@ -242,7 +246,7 @@ pub fn run(args: NormalArgs) -> Result<()> {
              the pressures wanted",
         ));
     }
-    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let mut out = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     if args.shard.is_none() {
         // An earlier run's maps at pressures this run does not have are removed.
         out.owns("pressure_map_", "Pa.png");
@@ -453,8 +457,11 @@ pub fn write_outputs(
     ) + &csv_records(&timings)?;
     let results: Vec<&SurfaceResult> = units.iter().map(|u| &u.result).collect();
     let stats = surface_sweep::statistics(&results)?;
-    asperity::output::write_string_atomic(&out_dir.join("normal_sweep.csv"), &table)?;
-    asperity::output::write_string_atomic(&out_dir.join("normal_sweep_timings.csv"), &timings)?;
+    asperity::core::output::write_string_atomic(&out_dir.join("normal_sweep.csv"), &table)?;
+    asperity::core::output::write_string_atomic(
+        &out_dir.join("normal_sweep_timings.csv"),
+        &timings,
+    )?;
     if units.len() > 1 {
         let mut csv = format!(
             "# asperity contact normal: mean and sample standard deviation over {} surfaces at each pressure\n\
@@ -477,7 +484,10 @@ pub fn write_outputs(
                 s.approach_m.std
             );
         }
-        asperity::output::write_string_atomic(&out_dir.join("normal_sweep_statistics.csv"), &csv)?;
+        asperity::core::output::write_string_atomic(
+            &out_dir.join("normal_sweep_statistics.csv"),
+            &csv,
+        )?;
     }
 
     type Quantity = (

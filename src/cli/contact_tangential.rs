@@ -13,9 +13,9 @@ use asperity::contact::tangential::{
     oscillate, Control, Operator, Oscillation, OscillationResult, TangentialOptions,
     TangentialProblem, TangentialSolver,
 };
-use asperity::halfspace::Boundary;
-use asperity::plot::{line_plot, LinePlot, Scale, Series};
-use asperity::surface::combine::composite_modulus;
+use asperity::core::fft::Boundary;
+use asperity::core::material::composite_modulus;
+use asperity::core::plot::{line_plot, LinePlot, Scale, Series};
 use asperity::surface::generate::{generate, GaussianSurfaceSpec};
 use asperity::{Error, Result};
 use std::fmt::Write as _;
@@ -81,18 +81,22 @@ pub struct TangentialArgs {
 
 pub fn run(args: TangentialArgs) -> Result<()> {
     // Every input is checked before any work or output; the files are staged and appear
-    // together at the end (asperity::output::OutputSet).
-    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    asperity::limits::check_steps(
+    // together at the end (asperity::core::output::OutputSet).
+    let mut out = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    asperity::core::limits::check_steps(
         "--cycles",
         args.cycles,
         "--steps-per-cycle",
         args.steps_per_cycle,
     )?;
     if let Some(p) = &args.pressures_pa {
-        asperity::limits::check_count("--pressures-pa", p.len(), asperity::limits::MAX_PRESSURES)?;
+        asperity::core::limits::check_count(
+            "--pressures-pa",
+            p.len(),
+            asperity::core::limits::MAX_PRESSURES,
+        )?;
     }
-    let mu = asperity::sanity::friction_coefficient(
+    let mu = asperity::core::sanity::friction_coefficient(
         "--friction-coefficient",
         args.friction_coefficient,
     )?;
@@ -156,11 +160,11 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         }
         spec.validate()
             .map_err(|e| super::rename_param(e, "--grid"))?;
-        asperity::limits::check_grid(
+        asperity::core::limits::check_grid(
             "--grid",
             spec.nx,
             spec.ny,
-            asperity::limits::CONTACT_BYTES_PER_POINT,
+            asperity::core::limits::CONTACT_BYTES_PER_POINT,
         )?;
         (
             generate(&spec)?,
@@ -179,14 +183,14 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         asperity::surface::io::read_equivalent_surface(&args.surface, args.fill)
             .map_err(|e| super::rename_param(e, "--surface"))?
     };
-    asperity::limits::check_grid(
+    asperity::core::limits::check_grid(
         &source,
         surface.nx(),
         surface.ny(),
-        asperity::limits::CONTACT_BYTES_PER_POINT,
+        asperity::core::limits::CONTACT_BYTES_PER_POINT,
     )?;
-    asperity::sanity::contact_surface(&surface, &source)?;
-    asperity::sanity::contact_pressures("--pressures-pa", &pressures, e_star, &surface)?;
+    asperity::core::sanity::contact_surface(&surface, &source)?;
+    asperity::core::sanity::contact_pressures("--pressures-pa", &pressures, e_star, &surface)?;
     if let Some(a) = args.amplitude_m {
         // Gross slip sets in at displacements of the order of μ·p/E*·(patch size); an amplitude
         // beyond the patch itself is a unit error (µm written as m).
@@ -321,11 +325,11 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             |i, _| bar.set_position(done + i as u64),
         )?;
         for c in &r.cycles {
-            asperity::sanity::finite_result(
+            asperity::core::sanity::finite_result(
                 &format!(
                     "the energy of cycle {} at {} Pa",
                     c.cycle,
-                    asperity::error::num(p)
+                    asperity::core::error::num(p)
                 ),
                 c.dissipated_j_per_m2,
             )?;
@@ -417,9 +421,9 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             );
         }
     }
-    asperity::output::write_string_atomic(&out.path("tangential_loops.csv")?, &loops)?;
-    asperity::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
-    asperity::output::write_string_atomic(&out.path("tangential_timings.csv")?, &timings)?;
+    asperity::core::output::write_string_atomic(&out.path("tangential_loops.csv")?, &loops)?;
+    asperity::core::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
+    asperity::core::output::write_string_atomic(&out.path("tangential_timings.csv")?, &timings)?;
 
     let series = |norm: bool| -> Vec<Series> {
         pressures

@@ -1,9 +1,9 @@
 //! Closing the loop: compare a model with measured hysteresis, find and add the missing effect.
 use asperity::calibrate::table::CalibrationTable;
+use asperity::core::error::require_positive;
 use asperity::diagnose::report::{self, InputInfo, Outputs, Report};
 use asperity::diagnose::{diagnose, Baseline, BaselineSource, Columns, Options, Record};
 use asperity::element::valanis::ValanisParams;
-use asperity::error::require_positive;
 use asperity::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -56,7 +56,7 @@ pub struct Flags {
 fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String)> {
     require_positive("--pressure-pa", p)?;
     require_positive("--area-m2", a)?;
-    asperity::limits::check_file_size(path, asperity::limits::MAX_TEXT_FILE_BYTES)?;
+    asperity::core::limits::check_file_size(path, asperity::core::limits::MAX_TEXT_FILE_BYTES)?;
     let table = CalibrationTable::read_csv(path)?;
     let row = table.interpolate(p);
     let valanis = ValanisParams::new(row.e0_n_per_m3 * a, row.k, row.et_n_per_m3 * a, row.mu)?;
@@ -103,9 +103,9 @@ fn check_slip_force(baseline: &BaselineSource, record: &Record) -> Result<()> {
             format!(
                 "the table baseline's slip force μ·p·A = {} N is {} times the measured force \
                  amplitude {} N: check the pressure and the area (m²)",
-                asperity::error::num(slip),
-                asperity::error::num(ratio),
-                asperity::error::num(amplitude)
+                asperity::core::error::num(slip),
+                asperity::core::error::num(ratio),
+                asperity::core::error::num(amplitude)
             ),
         ));
     }
@@ -115,8 +115,8 @@ fn check_slip_force(baseline: &BaselineSource, record: &Record) -> Result<()> {
 pub fn run(args: DiagnoseArgs) -> Result<()> {
     let args = *args.args;
     // Refused now, before the analysis: an --out-dir that is a file or not writable.
-    let mut out_set = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    asperity::limits::check_count("--max-effects", args.max_effects, 8)?;
+    let mut out_set = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    asperity::core::limits::check_count("--max-effects", args.max_effects, 8)?;
     let columns = Columns {
         time: args.time_column.clone(),
         displacement: args.displacement_column.clone(),
@@ -168,7 +168,7 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
             ("peak force error", e.peak_force_error),
             ("energy-per-cycle error", e.energy_error),
         ] {
-            asperity::sanity::finite_result(
+            asperity::core::sanity::finite_result(
                 &format!("{}: the {name} {what}", args.record.display()),
                 v,
             )?;

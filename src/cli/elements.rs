@@ -1,9 +1,9 @@
 //! `asperity elements`: preload map ⋈ calibration table → one row per contact element.
 
 use asperity::calibrate::table::CalibrationTable;
+use asperity::core::output::write_string_atomic;
 use asperity::elements::{join, provenance_json, write_csv, InputFile};
 use asperity::film::nodes::read_preloads_csv;
-use asperity::output::write_string_atomic;
 use asperity::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -68,7 +68,7 @@ pub fn run(args: ElementsArgs) -> Result<()> {
             &[(&args.preload, "--preload"), (&args.table, "--table")],
         )?;
     }
-    let mut out = asperity::output::OutputSet::new();
+    let mut out = asperity::core::output::OutputSet::new();
     let table_staged = out.file(&args.out, "--out")?;
     let sidecar_staged = out.file(&sidecar, "the JSON sidecar of --out")?;
     let pre = read_preloads_csv(&args.preload)?;

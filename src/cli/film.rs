@@ -1,5 +1,7 @@
 //! `asperity film`: film image → pressure map, regions, polynomial fit, node preloads.
 
+use asperity::core::output::write_string_atomic;
+use asperity::core::plot::{heatmap, HeatMap};
 use asperity::elements::{provenance_json, InputFile};
 use asperity::film::colour::{
     ColourTable, ColourToPressure, DensityCalibration, DEFAULT_MAX_COLOUR_DISTANCE,
@@ -17,8 +19,6 @@ use asperity::film::regions::{
 };
 use asperity::film::scan::{self, Channel};
 use asperity::film::{FittedRegion, NodePixel};
-use asperity::output::write_string_atomic;
-use asperity::plot::{heatmap, HeatMap};
 use asperity::{Error, Result};
 use ndarray::Array2;
 use std::path::{Path, PathBuf};
@@ -237,17 +237,17 @@ fn check_flags(a: &FilmOptions) -> Result<()> {
             "--max-colour-distance",
             format!(
                 "must be > 0 and at most 255·√3 ≈ 441.7 RGB units (black to white), got {}",
-                asperity::error::num(d)
+                asperity::core::error::num(d)
             ),
         ));
     }
     // A preload rescaled to a non-positive total would pull the joint apart.
     if let Some(f) = a.total_load_n {
-        asperity::error::require_positive("--total-load-n", f)?;
+        asperity::core::error::require_positive("--total-load-n", f)?;
     }
     // Mesh lengths map onto film lengths: a zero or negative scale mirrors or collapses the mesh.
-    asperity::error::require_positive("--node-scale", a.node_scale)?;
-    asperity::error::require_finite("--node-rotation-deg", a.node_rotation_deg)?;
+    asperity::core::error::require_positive("--node-scale", a.node_scale)?;
+    asperity::core::error::require_finite("--node-rotation-deg", a.node_rotation_deg)?;
     if let Some(off) = &a.node_offset_mm {
         if off.len() != 2 {
             return Err(Error::param(
@@ -256,7 +256,7 @@ fn check_flags(a: &FilmOptions) -> Result<()> {
             ));
         }
         for v in off {
-            asperity::error::require_finite("--node-offset-mm", *v)?;
+            asperity::core::error::require_finite("--node-offset-mm", *v)?;
         }
     }
     Ok(())
@@ -379,7 +379,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
     let args = *args.opts;
     check_flags(&args)?;
     // Refused now, before any work: an --out-dir that is a file or not writable.
-    let mut out = asperity::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let mut out = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     // Every file film writes is its own: one of an earlier run into the same --out-dir that this
     // run does not write (a `preload_reduced.csv` of a run with --reduce-mesh-size-mm, the
     // plots of a region that no longer exists) is removed after the commit, so that no reader
@@ -409,7 +409,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
     let mut img = scan::read_rgb(&args.image)?;
     let (pixel_size_m, pixel_source) = match args.pixel_size_mm {
         Some(v) => (
-            asperity::error::require_positive("--pixel-size-mm", v)? * 1e-3,
+            asperity::core::error::require_positive("--pixel-size-mm", v)? * 1e-3,
             "--pixel-size-mm".to_string(),
         ),
         None => match scan::resolution(&args.image)? {
@@ -417,7 +417,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
                 r.pixel_size_m,
                 format!(
                     "{} dpi declared by the image ({})",
-                    asperity::error::num((r.dpi * 1e6).round() / 1e6),
+                    asperity::core::error::num((r.dpi * 1e6).round() / 1e6),
                     r.source
                 ),
             ),
@@ -434,7 +434,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
     };
     let pixel_size_mm = pixel_size_m * 1e3;
     if let Some(s) = args.smooth_mm {
-        asperity::error::require_positive("--smooth-mm", s)?;
+        asperity::core::error::require_positive("--smooth-mm", s)?;
         scan::smooth(&mut img, s / pixel_size_mm)
             .map_err(|e| super::rename_param(e, "--smooth-mm"))?;
     }
@@ -461,15 +461,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
         let first = d.points[0].0;
         let level = match args.unstained_density {
             Some(u) => {
-                asperity::error::require_finite("--unstained-density", u)?;
+                asperity::core::error::require_finite("--unstained-density", u)?;
                 if u > first {
                     return Err(Error::param(
                         "--unstained-density",
                         format!(
                             "{} exceeds the first calibration density {}: calibrated stain \
                              would read as paper",
-                            asperity::error::num(u),
-                            asperity::error::num(first)
+                            asperity::core::error::num(u),
+                            asperity::core::error::num(first)
                         ),
                     ));
                 }
@@ -507,7 +507,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
     eprintln!(
         "{}: {nx} × {ny} px at {} mm ({pixel_source}); range {:.3}–{:.3} MPa; pixels in range {}, unstained {}, below range {}, above range {}, off-curve (rejected) {}",
         args.image.display(),
-        asperity::error::num(pixel_size_mm),
+        asperity::core::error::num(pixel_size_mm),
         lo / 1e6,
         hi / 1e6,
         all.in_range,
@@ -812,7 +812,7 @@ pub fn run(args: FilmArgs) -> Result<()> {
         if let Some(h) = args.reduce_mesh_size_mm {
             let r = reduce(
                 &pre,
-                asperity::error::require_positive("--reduce-mesh-size-mm", h)? * 1e-3,
+                asperity::core::error::require_positive("--reduce-mesh-size-mm", h)? * 1e-3,
             )?;
             let red_comment = format!(
                 "asperity {} reduced node preloads: {} of {} nodes kept on a {} mm triangular mesh; area and load are sums over each triangle",

@@ -1,10 +1,10 @@
 //! `asperity identify` and `asperity predict`: measured frequency responses → identified
 //! single-nonlinear-mode model → errors on the levels and tests not used.
+use asperity::core::output::OutputSet;
 use asperity::identify::effects::Effect;
 use asperity::identify::model::Family;
 use asperity::identify::pipeline::FitRows;
 use asperity::identify::{identify, predict, read_sweeps, Control, Options};
-use asperity::output::OutputSet;
 use asperity::{Error, Result};
 use std::path::PathBuf;
 
@@ -140,7 +140,7 @@ fn chain_steps(args: &IdentifyArgs) -> Result<Option<usize>> {
 
 /// The search settings within the resource limits (before anything is read or fitted).
 fn check_limits(args: &IdentifyArgs) -> Result<()> {
-    use asperity::limits::*;
+    use asperity::core::limits::*;
     check_count("--starts", args.starts, MAX_FIT_STARTS)?;
     check_count("--particles", args.particles, MAX_PARTICLES)?;
     check_count(

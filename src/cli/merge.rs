@@ -1,13 +1,13 @@
 //! `asperity merge`: the shard files of a sharded sweep (`--shard i/n`) → the outputs a single
 //! run writes, byte for byte. Every shard must be present once and all must come from the same
-//! configuration and every result read must be physical (see [`asperity::shard::merge`] and
+//! configuration and every result read must be physical (see [`asperity::core::shard::merge`] and
 //! each sweep's `check_unit`); the outputs appear together or not at all.
 
-use asperity::build_info::BuildId;
 use asperity::calibrate::sweep::CalibrationSweep;
 use asperity::contact::surface_sweep::SurfaceSweep;
-use asperity::output::OutputSet;
-use asperity::shard::{self, ShardedSweep};
+use asperity::core::build_info::BuildId;
+use asperity::core::output::OutputSet;
+use asperity::core::shard::{self, ShardedSweep};
 use asperity::{Error, Result};
 use std::path::PathBuf;
 

@@ -14,7 +14,7 @@ pub mod progress;
 pub mod response;
 pub mod surface;
 
-use asperity::surface::combine::Material;
+use asperity::core::material::Material;
 use asperity::{Error, Grid2, Result};
 
 /// `"nx × ny points, spacing dx × dy m, periodic"` (or `non-periodic (zero-padded kernels)`).

@@ -1,12 +1,12 @@
 //! `asperity response`: nonlinear forced response of a model file (HBM + AFT + continuation).
 
+use asperity::core::output::{write_string_atomic, OutputSet};
 use asperity::dynamics::aft::Harmonics;
 use asperity::dynamics::continuation::{sweep, ContinuationSettings};
 use asperity::dynamics::hbm::{Excitation, HbmSystem};
 use asperity::dynamics::model_file;
 use asperity::dynamics::report::{self, LevelResult};
 use asperity::elements::{provenance_json, InputFile};
-use asperity::output::{write_string_atomic, OutputSet};
 use asperity::{Error, Result};
 use rayon::prelude::*;
 use std::path::PathBuf;

@@ -1,7 +1,7 @@
 //! `asperity surface …`: generate, analyse, convert and combine rough surfaces.
 
-use asperity::output::OutputSet;
-use asperity::plot::{line_plot, LinePlot, Scale, Series};
+use asperity::core::output::OutputSet;
+use asperity::core::plot::{line_plot, LinePlot, Scale, Series};
 use asperity::surface::missing::{fill_topography, Fill, FillReport};
 use asperity::surface::stats::Psd;
 use asperity::surface::{self, Detrend, GaussianSurfaceSpec, SurfaceStats, Topography};
@@ -216,11 +216,11 @@ impl GenerateArgs {
         } else {
             "--n".to_string()
         };
-        asperity::limits::check_grid(
+        asperity::core::limits::check_grid(
             &grid_flag,
             s.nx,
             s.ny,
-            asperity::limits::GENERATE_BYTES_PER_POINT,
+            asperity::core::limits::GENERATE_BYTES_PER_POINT,
         )?;
         Ok(s)
     }
@@ -253,7 +253,7 @@ impl GenerateArgs {
 
 /// Read a surface spec from TOML (all fields required).
 fn read_spec(path: &Path) -> Result<GaussianSurfaceSpec> {
-    asperity::limits::check_file_size(path, asperity::limits::MAX_TEXT_FILE_BYTES)?;
+    asperity::core::limits::check_file_size(path, asperity::core::limits::MAX_TEXT_FILE_BYTES)?;
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     toml::from_str(&text).map_err(|e| {
         let line = e
@@ -614,7 +614,7 @@ fn write_psd(csv: &Path, png: &Path, source: &Path, psd: &Psd, detrend: Detrend)
     for ((q, c), n) in psd.q.iter().zip(&psd.c).zip(&psd.count) {
         let _ = writeln!(text, "{q:e},{c:e},{n}");
     }
-    asperity::output::write_string_atomic(csv, &text)?;
+    asperity::core::output::write_string_atomic(csv, &text)?;
     // The plot shows 12 decades below the peak; lower values are FFT round-off.
     let c_max = psd.c.iter().cloned().fold(0.0, f64::max);
     let points: Vec<(f64, f64)> = psd
@@ -647,9 +647,8 @@ fn write_psd(csv: &Path, png: &Path, source: &Path, psd: &Psd, detrend: Detrend)
 }
 
 fn combine(a: CombineArgs) -> Result<()> {
-    use asperity::surface::combine::{
-        composite_modulus, equivalent_rms_slope, equivalent_rq, equivalent_surface, Material,
-    };
+    use asperity::core::material::{composite_modulus, Material};
+    use asperity::surface::combine::{equivalent_rms_slope, equivalent_rq, equivalent_surface};
     if a.surface1.is_none() && a.rq1_m.is_none() && a.slope1.is_none() && a.e1_pa.is_none() {
         return Err(Error::param(
             "combine",

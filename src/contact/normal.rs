@@ -72,9 +72,9 @@
 //! pressure is not set by the zero-mean periodic kernel) and zero-padded (finite) contacts.
 
 use crate::contact::resolution::ContactResolution;
-use crate::error::{require_positive, Error, Result};
-use crate::grid::Grid2;
-use crate::halfspace::convolution::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum};
+use crate::core::error::{require_positive, Error, Result};
+use crate::core::fft::{Boundary, ConvolutionWorkspace, FftPlan, KernelSpectrum};
+use crate::core::grid::Grid2;
 use crate::halfspace::influence::boussinesq_spectrum;
 use ndarray::Array2;
 use std::time::Instant;
@@ -107,7 +107,7 @@ pub struct NormalProblem<'a> {
     /// Heights of the equivalent rough surface (m), peaks positive. `surface.periodic` selects
     /// the periodic (representative patch) or zero-padded (finite contact) convolution.
     pub surface: &'a Grid2,
-    /// Composite modulus E* (Pa), see [`crate::surface::combine::composite_modulus`].
+    /// Composite modulus E* (Pa), see [`crate::core::material::composite_modulus`].
     pub e_star_pa: f64,
 }
 
@@ -185,7 +185,7 @@ impl NormalOptions {
 
     /// Check the settings: tolerances finite and > 0, at least one iteration.
     pub fn validate(&self) -> Result<()> {
-        crate::sanity::tolerance("tolerance", self.tolerance)?;
+        crate::core::sanity::tolerance("tolerance", self.tolerance)?;
         require_positive("approach_tolerance", self.approach_tolerance)?;
         if self.max_iterations == 0 {
             return Err(Error::param("max_iterations", "must be at least 1"));

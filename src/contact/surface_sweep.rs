@@ -2,7 +2,7 @@
 //! seed) or measured files, each with its whole warm-started pressure sweep
 //! ([`super::sweep::run`]).
 //!
-//! One surface is one unit of a [sharded sweep](crate::shard): the load steps of a surface are
+//! One surface is one unit of a [sharded sweep](crate::core::shard): the load steps of a surface are
 //! warm-started one from the next, so they stay together, while surfaces are independent and can
 //! run in any job of a cluster array. Units: pressures in Pa, lengths in m, kn in N/m³.
 //!
@@ -12,10 +12,10 @@
 
 use super::normal::{NormalOptions, NormalProblem, NormalSolution, NormalSolver};
 use super::sweep::{self, checked_pressures, SweepOptions, SweepPoint};
-use crate::error::{num, Error, Result};
-use crate::grid::Grid2;
-use crate::shard::{ShardedSweep, UnitRecord};
-use crate::surface::combine::{composite_modulus, Material};
+use crate::core::error::{num, Error, Result};
+use crate::core::grid::Grid2;
+use crate::core::material::{composite_modulus, Material};
+use crate::core::shard::{ShardedSweep, UnitRecord};
 use crate::surface::generate::{generate, GaussianSurfaceSpec};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -47,7 +47,7 @@ impl SurfaceSource {
     pub fn file_filled(path: &Path, fill: Option<crate::surface::missing::Fill>) -> Result<Self> {
         Ok(SurfaceSource::File {
             path: path.display().to_string(),
-            sha256: crate::elements::sha256_file(path)?,
+            sha256: crate::core::hash::sha256_file(path)?,
             fill,
         })
     }
@@ -80,15 +80,15 @@ impl SurfaceSource {
             SurfaceSource::Generated { spec } => generate(spec),
             SurfaceSource::File { path, sha256, fill } => {
                 let p = Path::new(path);
-                let now = crate::elements::sha256_file(p)?;
+                let now = crate::core::hash::sha256_file(p)?;
                 if &now != sha256 {
                     return Err(Error::Data(format!(
                         "{path}: content changed during the sweep (sha256 {now}, expected {sha256})"
                     )));
                 }
                 let (grid, report) = crate::surface::missing::load_area(p, *fill)?;
-                crate::sanity::contact_file_grid(path, grid.nx(), grid.ny())?;
-                if let Some(w) = crate::sanity::contact_surface_tilt(path, &grid) {
+                crate::core::sanity::contact_file_grid(path, grid.nx(), grid.ny())?;
+                if let Some(w) = crate::surface::stats::contact_surface_tilt(path, &grid) {
                     eprintln!("warning: {w}");
                 }
                 if let Some(r) = report {
@@ -229,7 +229,7 @@ impl SurfaceSweep {
                 spec.validate()?;
             }
         }
-        crate::shard::check_labels(&self.unit_labels())
+        crate::core::shard::check_labels(&self.unit_labels())
     }
 
     /// Composite modulus E* of the two bodies (Pa).
@@ -258,14 +258,14 @@ impl SurfaceSweep {
         // Limits and physical sanity (asperity::limits, asperity::sanity) before the solver
         // allocates, and finite, positive results after it.
         let label = source.label();
-        crate::limits::check_grid(
+        crate::core::limits::check_grid(
             &label,
             surface.nx(),
             surface.ny(),
-            crate::limits::CONTACT_BYTES_PER_POINT,
+            crate::core::limits::CONTACT_BYTES_PER_POINT,
         )?;
-        crate::sanity::contact_surface(&surface, &label)?;
-        crate::sanity::contact_pressures(
+        crate::core::sanity::contact_surface(&surface, &label)?;
+        crate::core::sanity::contact_pressures(
             "--pressures-pa",
             &self.pressures_pa,
             self.e_star_pa()?,
@@ -289,21 +289,29 @@ impl SurfaceSweep {
             other => other,
         })?;
         for p in &sw.points {
-            let at = |q: &str| format!("{label}: {q} at {} Pa", crate::error::num(p.pressure_pa));
+            let at = |q: &str| {
+                format!(
+                    "{label}: {q} at {} Pa",
+                    crate::core::error::num(p.pressure_pa)
+                )
+            };
             if p.contact_area_ratio >= 1.0 {
                 // Full contact: the gap is closed everywhere and more load no longer moves the
                 // bodies together in the half-space model, so kn is infinite — a limit of the
                 // model, not a failed solve; say so rather than "kn is inf".
                 return Err(Error::Data(format!(
                     "{label}: full contact at {} Pa (every point in contact, mean gap {:.3e} m): the half-space model's normal stiffness is infinite there; lower the pressure below the one that closes the last gap",
-                    crate::error::num(p.pressure_pa),
+                    crate::core::error::num(p.pressure_pa),
                     p.mean_gap_m
                 )));
             }
-            crate::sanity::positive_result(&at("kn"), p.kn_n_per_m3)?;
-            crate::sanity::finite_result(&at("the mean gap"), p.mean_gap_m)?;
-            crate::sanity::finite_result(&at("the approach"), p.approach_m)?;
-            crate::sanity::positive_result(&at("the contact area ratio"), p.contact_area_ratio)?;
+            crate::core::sanity::positive_result(&at("kn"), p.kn_n_per_m3)?;
+            crate::core::sanity::finite_result(&at("the mean gap"), p.mean_gap_m)?;
+            crate::core::sanity::finite_result(&at("the approach"), p.approach_m)?;
+            crate::core::sanity::positive_result(
+                &at("the contact area ratio"),
+                p.contact_area_ratio,
+            )?;
         }
         Ok((
             SurfaceResult {
@@ -394,7 +402,7 @@ pub fn statistics(results: &[&SurfaceResult]) -> Result<Vec<PressureStatistics>>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shard::{merge, run_units, write_shard, Shard};
+    use crate::core::shard::{merge, run_units, write_shard, Shard};
 
     fn small_sweep(seeds: &[u64]) -> SurfaceSweep {
         SurfaceSweep {

@@ -26,7 +26,7 @@
 
 use super::normal::{NormalMethod, NormalSolution, NormalSolver};
 use super::resolution::ContactResolution;
-use crate::error::{num, require_positive, Error, Result};
+use crate::core::error::{num, require_positive, Error, Result};
 
 /// The reference sweep of nominal pressures (Pa): 0.1, 0.2, 1, 2, 5, 10 MPa.
 pub const REFERENCE_PRESSURES_PA: [f64; 6] = [0.1e6, 0.2e6, 1e6, 2e6, 5e6, 10e6];

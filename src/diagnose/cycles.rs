@@ -12,7 +12,8 @@
 //! then by the tangent stiffness `k_t = dF/dx` relative to the half-cycle's initial stiffness:
 //! `Stick` above 0.8, `Macroslip` below 0.1, `Microslip` between.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
+use crate::core::stats::percentile_nearest;
 use serde::Serialize;
 
 /// Reversal threshold as a fraction of the robust displacement range.
@@ -58,13 +59,6 @@ fn moving_average(x: &[f64], h: usize) -> Vec<f64> {
         .collect()
 }
 
-fn percentile(x: &[f64], q: f64) -> f64 {
-    let mut v = x.to_vec();
-    v.sort_by(|a, b| a.total_cmp(b));
-    let k = ((v.len() - 1) as f64 * q).round() as usize;
-    v[k]
-}
-
 /// Detect displacement reversals and segment the record into complete cycles.
 ///
 /// Errors: constant displacement (no drive), oscillation only at the noise scale, or fewer than
@@ -72,7 +66,7 @@ fn percentile(x: &[f64], q: f64) -> f64 {
 pub fn segment(time_s: &[f64], displacement_m: &[f64]) -> Result<Cycles> {
     let x = displacement_m;
     let n = x.len();
-    let (lo, hi) = (percentile(x, 0.01), percentile(x, 0.99));
+    let (lo, hi) = (percentile_nearest(x, 0.01), percentile_nearest(x, 0.99));
     let range = hi - lo;
     let scale = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     if range <= 1e-9 * scale || range == 0.0 || range.is_nan() {

@@ -43,6 +43,7 @@
 //! tolerance), not by the data (noise-free synthetic records).
 
 use super::cycles::{Cycles, HalfCycle};
+use crate::core::stats::median;
 use serde::Serialize;
 
 /// Smallest noise floor, as a fraction of the force amplitude.
@@ -118,19 +119,6 @@ pub fn robust_sigma(v: &[f64]) -> f64 {
     let med = median(v);
     let dev: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
     MAD_TO_SIGMA * median(&dev)
-}
-
-/// Median of a non-empty `v` (the mean of the two middle values for an even count; sorted by
-/// `total_cmp`, so a NaN-free input is assumed).
-pub(crate) fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(|a, b| a.total_cmp(b));
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
 }
 
 /// Linear interpolation of the force of half-cycle samples `a..=b` (displacement monotone in

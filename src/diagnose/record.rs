@@ -5,7 +5,7 @@
 //! velocity_m_per_s`; those names are the defaults. Every value must be finite, time strictly
 //! increasing, and every row complete: a malformed file is reported with its path and line.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::path::Path;
 
 /// Largest |displacement| a record may hold (10 m: no friction rig moves further).
@@ -142,8 +142,8 @@ impl Record {
     /// normal force ≤ 0, and magnitudes no instrument records (|x| > [`MAX_DISPLACEMENT_M`],
     /// |F| > [`MAX_FORCE_N`]: a unit or format error).
     pub fn read_csv(path: &Path, columns: &Columns) -> Result<Self> {
-        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
-        let mut rdr = crate::input::csv_reader_any_length(path)?;
+        crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
+        let mut rdr = crate::core::input::csv_reader_any_length(path)?;
         let headers = rdr
             .headers()
             .map_err(|e| Error::parse(path, 1, e.to_string()))?
@@ -190,7 +190,7 @@ impl Record {
         let mut nf = inf.map(|_| Vec::new());
         let mut lines: Vec<usize> = Vec::new();
         for rec in rdr.records() {
-            let (rec, line) = crate::input::csv_record(path, rec)?;
+            let (rec, line) = crate::core::input::csv_record(path, rec)?;
             if rec.len() != headers.len() {
                 return Err(Error::parse(
                     path,
@@ -230,8 +230,8 @@ impl Record {
                         format!(
                             "column `{name}`: {} exceeds {} {unit} in magnitude (a unit or \
                              format error)",
-                            crate::error::num(v),
-                            crate::error::num(max)
+                            crate::core::error::num(v),
+                            crate::core::error::num(max)
                         ),
                     ));
                 }
@@ -246,8 +246,8 @@ impl Record {
                         format!(
                             "column `{}`: time {} does not increase (previous row: {})",
                             columns.time,
-                            crate::error::num(time),
-                            crate::error::num(prev)
+                            crate::core::error::num(time),
+                            crate::core::error::num(prev)
                         ),
                     ));
                 }
@@ -264,7 +264,7 @@ impl Record {
                         line,
                         format!(
                             "column `{name}`: a normal force must be > 0, got {}",
-                            crate::error::num(n)
+                            crate::core::error::num(n)
                         ),
                     ));
                 }
@@ -334,7 +334,7 @@ fn check_uniform_sampling(path: &Path, column: &str, t: &[f64], lines: &[usize])
         return Ok(());
     }
     let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    let median = super::noise::median(&steps);
+    let median = crate::core::stats::median(&steps);
     let (i, &largest) = steps
         .iter()
         .enumerate()
@@ -348,8 +348,8 @@ fn check_uniform_sampling(path: &Path, column: &str, t: &[f64], lines: &[usize])
                 "column `{column}`: time jumps from {} s to {} s, a step {:.1}× the median step \
                  {median:.4e} s (more than {MAX_TIME_STEP_OVER_MEDIAN}×): samples are missing, \
                  and the analysis needs uniform sampling",
-                crate::error::num(t[i]),
-                crate::error::num(t[i + 1]),
+                crate::core::error::num(t[i]),
+                crate::core::error::num(t[i + 1]),
                 largest / median,
             ),
         ));

@@ -14,9 +14,9 @@ use super::select::{
 };
 use super::stationarity::{Stationarity, Trend, MIN_DEGREES_OF_FREEDOM};
 use super::{Bound, Effect};
-use crate::error::{Error, Result};
-use crate::output::{write_atomic, write_string_atomic};
-use crate::plot::{length_unit, line_plot, LinePlot, Scale, Series};
+use crate::core::error::{Error, Result};
+use crate::core::output::{write_atomic, write_string_atomic};
+use crate::core::plot::{length_unit, line_plot, LinePlot, Scale, Series};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

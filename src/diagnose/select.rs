@@ -58,8 +58,9 @@ use super::noise::{self, NoiseFloor};
 use super::record::Record;
 use super::residual::{self, ClearanceRegion, PhaseStats, Ringing};
 use super::stationarity::Stationarity;
+use crate::core::error::{Error, Result};
+use crate::core::stats::percentile_nearest;
 use crate::element::valanis::ValanisParams;
-use crate::error::{Error, Result};
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
@@ -127,12 +128,6 @@ pub struct Prepared {
     pub noise: NoiseFloor,
     /// Measured force smoothed like the drive (Savitzky–Golay over 1/64 of a cycle) (N).
     pub smooth_force_n: Vec<f64>,
-}
-
-fn percentile(x: &[f64], q: f64) -> f64 {
-    let mut v = x.to_vec();
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
 fn block_average(x: &[f64], m: usize) -> Vec<f64> {
@@ -231,8 +226,8 @@ pub fn prepare(record: &Record) -> Result<Prepared> {
         let mean = nf.iter().sum::<f64>() / nf.len() as f64;
         nf.iter().map(|v| v / mean).collect()
     });
-    let force_scale =
-        0.5 * (percentile(&record.force_n, 0.995) - percentile(&record.force_n, 0.005));
+    let force_scale = 0.5
+        * (percentile_nearest(&record.force_n, 0.995) - percentile_nearest(&record.force_n, 0.005));
     if force_scale <= 0.0 || force_scale.is_nan() {
         return Err(Error::Data(
             "the measured force is constant: nothing to fit".into(),
@@ -242,7 +237,7 @@ pub fn prepare(record: &Record) -> Result<Prepared> {
     let drive = Drive {
         time_s: t.clone(),
         q_m: xs.iter().map(|v| v - centre).collect(),
-        velocity_scale: percentile(&abs_v, 0.99).max(1e-300),
+        velocity_scale: percentile_nearest(&abs_v, 0.99).max(1e-300),
         velocity_m_per_s: velocity,
         normal_ratio,
         phase_rad: t

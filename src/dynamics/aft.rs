@@ -38,8 +38,8 @@
 //! states; otherwise by the general chain rule. Both give the same sensitivities (test
 //! `recorded_sensitivities_equal_the_general_chain_rule`).
 
+use crate::core::error::{Error, Result};
 use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
-use crate::error::{Error, Result};
 use bumpalo::Bump;
 use nalgebra::DMatrix;
 use realfft::RealFftPlanner;
@@ -84,9 +84,9 @@ impl Harmonics {
         } else {
             (0..=h_max).collect()
         };
-        crate::limits::check_count("harmonics", h_max, crate::limits::MAX_HARMONICS)?;
+        crate::core::limits::check_count("harmonics", h_max, crate::core::limits::MAX_HARMONICS)?;
         let n = n_time.unwrap_or_else(|| (16 * h_max).max(64).next_power_of_two());
-        crate::limits::check_count("time_samples", n, crate::limits::MAX_TIME_SAMPLES)?;
+        crate::core::limits::check_count("time_samples", n, crate::core::limits::MAX_TIME_SAMPLES)?;
         if n <= 2 * h_max {
             return Err(Error::param(
                 "time_samples",
@@ -1073,7 +1073,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("time_samples") && e.contains("limit"), "{e}");
-        assert!(Harmonics::new(crate::limits::MAX_HARMONICS, true, None).is_ok());
+        assert!(Harmonics::new(crate::core::limits::MAX_HARMONICS, true, None).is_ok());
     }
 
     use super::*;

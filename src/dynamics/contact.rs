@@ -8,9 +8,9 @@
 //! pointing from `a` towards `b` (so `u_n > 0` closes the contact), `t1` the given tangent made
 //! orthogonal to `n`, `t2 = n × t1`.
 
+use crate::core::error::{Error, Result};
 use crate::dynamics::nonlinear::{ContactLaw, HystereticElement, JenkinsContact, MicroslipContact};
 use crate::element::ValanisParams;
-use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -35,10 +35,10 @@ pub struct TableElement {
 /// Every value is checked: `N0, kn, E0, μ > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, ids unique;
 /// errors name the file, the line and the column.
 pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
-    let mut rdr = crate::input::csv_reader(path)?;
+    let mut rdr = crate::core::input::csv_reader(path)?;
     let headers = rdr
         .headers()
-        .map_err(|e| crate::input::csv_error(path, e))?
+        .map_err(|e| crate::core::input::csv_error(path, e))?
         .clone();
     let col = |name: &str| -> Result<usize> {
         headers.iter().position(|h| h == name).ok_or_else(|| {
@@ -62,7 +62,7 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
     let mut out: Vec<TableElement> = Vec::new();
     let mut seen: HashMap<u64, usize> = HashMap::new();
     for rec in rdr.records() {
-        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let field = |i: usize, name: &str| -> Result<f64> {
             let s = rec
                 .get(i)
@@ -134,10 +134,10 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
 
 /// Node pairs of the elements: `element_id,node_a,node_b` (`node_b` may be `ground`).
 pub fn read_pairs(path: &Path) -> Result<HashMap<u64, (String, String, usize)>> {
-    let mut rdr = crate::input::csv_reader(path)?;
+    let mut rdr = crate::core::input::csv_reader(path)?;
     let headers = rdr
         .headers()
-        .map_err(|e| crate::input::csv_error(path, e))?
+        .map_err(|e| crate::core::input::csv_error(path, e))?
         .clone();
     let expect = ["element_id", "node_a", "node_b"];
     if headers.len() < 3 || headers.iter().take(3).ne(expect.iter().copied()) {
@@ -149,7 +149,7 @@ pub fn read_pairs(path: &Path) -> Result<HashMap<u64, (String, String, usize)>> 
     }
     let mut out = HashMap::new();
     for rec in rdr.records() {
-        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let id_s = rec.get(0).unwrap_or("");
         let id: u64 = id_s.parse().map_err(|_| {
             Error::parse(

@@ -21,8 +21,8 @@
 //! the step falls below its minimum the sweep stops with an error that names the frequency, the
 //! residual, and what was tried.
 
+use crate::core::error::{Error, Result};
 use crate::dynamics::hbm::{HbmPoint, HbmSystem};
-use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use std::rc::Rc;
 use std::time::Instant;
@@ -71,8 +71,8 @@ impl ContinuationSettings {
     }
 
     fn validate(&self) -> Result<()> {
-        crate::error::require_positive("frequency_start_Hz", self.frequency_start_hz)?;
-        crate::error::require_positive("frequency_end_Hz", self.frequency_end_hz)?;
+        crate::core::error::require_positive("frequency_start_Hz", self.frequency_start_hz)?;
+        crate::core::error::require_positive("frequency_end_Hz", self.frequency_end_hz)?;
         if self.frequency_start_hz == self.frequency_end_hz {
             return Err(Error::param(
                 "frequency_end_Hz",

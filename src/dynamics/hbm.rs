@@ -26,10 +26,10 @@
 //! convergence when `‖R‖ ≤ tolerance·(‖level·F̂‖ + ‖f̂_nl‖)` (coordinates) or
 //! `‖R‖ ≤ tolerance·(‖U_lin‖ + ‖G·f̂‖)` (receptance).
 
+use crate::core::error::{Error, Result};
 use crate::dynamics::aft::{self, AftSettings, ElementCycle, Harmonics};
 use crate::dynamics::condensation::Receptance;
 use crate::dynamics::model::Structure;
-use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -220,7 +220,7 @@ impl<'a> HbmSystem<'a> {
         let unknowns = system.unknowns();
         let jacobian_bytes = (unknowns as u64).pow(2).saturating_mul(8 * 3);
         if jacobian_bytes > JACOBIAN_BYTES_ALWAYS_AVAILABLE {
-            crate::limits::check_memory(
+            crate::core::limits::check_memory(
                 "sweep.harmonics",
                 jacobian_bytes,
                 &format!("a harmonic-balance Jacobian of {unknowns} unknowns"),
@@ -650,7 +650,7 @@ impl<'a> HbmSystem<'a> {
                 "response control is implemented for the coordinates formulation",
             ));
         }
-        crate::error::require_positive("target amplitude", target)?;
+        crate::core::error::require_positive("target amplitude", target)?;
         if observation.len() != self.structure.n() {
             return Err(Error::param(
                 "observation",

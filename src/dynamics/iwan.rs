@@ -8,9 +8,9 @@
 //! `k_j` to `∂F/∂u1` and `−k_j` to `∂F/∂x_j0`; a slipping one has `∂x_j/∂u1 = 1` and no force
 //! derivative (its force is `±k_j·φ̄_j`).
 
+use crate::core::error::Result;
 use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
 use crate::element::iwan::{IwanElement, IwanParams};
-use crate::error::Result;
 
 /// An Iwan joint on one displacement component.
 #[derive(Debug, Clone, PartialEq)]

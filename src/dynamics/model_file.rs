@@ -38,11 +38,11 @@
 //!
 //! Paths are relative to the model file. Every error names the file, line and key or column.
 
+use crate::core::error::{Error, Result};
 use crate::dynamics::contact::{self, contact_frame, TableElement};
 use crate::dynamics::hbm::FormulationChoice;
 use crate::dynamics::model::Structure;
 use crate::dynamics::nonlinear::ContactLaw;
-use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -161,7 +161,8 @@ fn key_line(text: &str, key: &str) -> usize {
 impl ModelFile {
     /// Parse and validate TOML text (`path` names it in errors).
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let f: Self = toml::from_str(text).map_err(|e| crate::input::toml_error(path, text, e))?;
+        let f: Self =
+            toml::from_str(text).map_err(|e| crate::core::input::toml_error(path, text, e))?;
         f.validate().map_err(|e| match e {
             Error::InvalidParameter { name, message } => {
                 let key = name.rsplit('.').next().unwrap_or(&name).to_string();
@@ -217,7 +218,7 @@ impl ModelFile {
                 format!("levels must be finite and > 0, got {v}"),
             ));
         }
-        let max = crate::sanity::MAX_FORCE_AMPLITUDE_N;
+        let max = crate::core::sanity::MAX_FORCE_AMPLITUDE_N;
         if let Some(v) = e.levels_n.iter().find(|v| **v > max) {
             return Err(Error::param(
                 "excitation.levels_n",
@@ -257,7 +258,7 @@ impl ModelFile {
             ("sweep.frequency_start_hz", s.frequency_start_hz),
             ("sweep.frequency_end_hz", s.frequency_end_hz),
         ] {
-            crate::error::require_positive(k, v)?;
+            crate::core::error::require_positive(k, v)?;
         }
         if s.frequency_start_hz == s.frequency_end_hz {
             return Err(Error::param(
@@ -268,25 +269,25 @@ impl ModelFile {
         if s.harmonics == 0 {
             return Err(Error::param("sweep.harmonics", "must be ≥ 1"));
         }
-        if s.harmonics > crate::limits::MAX_HARMONICS {
+        if s.harmonics > crate::core::limits::MAX_HARMONICS {
             return Err(Error::param(
                 "sweep.harmonics",
                 format!(
                     "{} is more than the limit of {}",
                     s.harmonics,
-                    crate::limits::MAX_HARMONICS
+                    crate::core::limits::MAX_HARMONICS
                 ),
             ));
         }
         if let Some(n) = s
             .time_samples
-            .filter(|&n| n > crate::limits::MAX_TIME_SAMPLES)
+            .filter(|&n| n > crate::core::limits::MAX_TIME_SAMPLES)
         {
             return Err(Error::param(
                 "sweep.time_samples",
                 format!(
                     "{n} is more than the limit of {}",
-                    crate::limits::MAX_TIME_SAMPLES
+                    crate::core::limits::MAX_TIME_SAMPLES
                 ),
             ));
         }
@@ -417,10 +418,10 @@ pub fn read_matrix(path: &Path, unit: &[&str]) -> Result<(Vec<String>, DMatrix<f
 type Shapes = HashMap<(String, usize), Vec<f64>>;
 
 fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
-    let mut rdr = crate::input::csv_reader(path)?;
+    let mut rdr = crate::core::input::csv_reader(path)?;
     let h = rdr
         .headers()
-        .map_err(|e| crate::input::csv_error(path, e))?
+        .map_err(|e| crate::core::input::csv_error(path, e))?
         .clone();
     if h.iter().ne(["mode", "frequency_Hz", "damping_ratio"]) {
         return Err(Error::parse(
@@ -431,7 +432,7 @@ fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
     }
     let (mut f, mut z) = (Vec::new(), Vec::new());
     for rec in rdr.records() {
-        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let num = |i: usize, name: &str| -> Result<f64> {
             rec.get(i)
                 .and_then(|s| s.parse::<f64>().ok())
@@ -471,10 +472,10 @@ fn read_modes(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
 }
 
 fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
-    let mut rdr = crate::input::csv_reader(path)?;
+    let mut rdr = crate::core::input::csv_reader(path)?;
     let h = rdr
         .headers()
-        .map_err(|e| crate::input::csv_error(path, e))?
+        .map_err(|e| crate::core::input::csv_error(path, e))?
         .clone();
     let ok = h.len() == n_modes + 2
         && h.get(0) == Some("node")
@@ -490,7 +491,7 @@ fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
     }
     let mut out = Shapes::new();
     for rec in rdr.records() {
-        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let node = rec.get(0).unwrap_or("").to_string();
         let axis = match rec.get(1).unwrap_or("") {
             "x" => 0,

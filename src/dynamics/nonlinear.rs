@@ -25,10 +25,10 @@
 use crate::element::jenkins::{self, JenkinsParams};
 use crate::element::valanis::{self, ValanisParams, ValanisState};
 // Index of the inputs in `valanis::StepPartials`.
+use crate::core::error::{Error, Result};
 use crate::element::valanis::{
     F0 as VF0, FZ0 as VFZ0, FZ1 as VFZ1, Q0 as VQ0, Q1 as VQ1, QR0 as VQR0,
 };
-use crate::error::{Error, Result};
 
 /// Contact state of an element at one time sample (for stick / slip / separation fractions).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -246,7 +246,7 @@ impl Jenkins {
     /// Jenkins element with stiffness `kt` (N/m) and slip force `slip_force` (N) (`μ = 1`,
     /// `N = slip force`).
     pub fn new(kt: f64, slip_force: f64) -> Result<Self> {
-        crate::error::require_positive("slip_force", slip_force)?;
+        crate::core::error::require_positive("slip_force", slip_force)?;
         Ok(Self {
             params: JenkinsParams::new(kt, 1.0)?,
             normal_load: slip_force,
@@ -426,8 +426,8 @@ impl MicroslipContact {
     /// Build and validate (`kn > 0`, `N0 > 0`, Valanis parameters as in [`ValanisParams`]).
     pub fn new(valanis: ValanisParams, kn: f64, n0: f64) -> Result<Self> {
         valanis.validate()?;
-        crate::error::require_positive("kn", kn)?;
-        crate::error::require_positive("N0", n0)?;
+        crate::core::error::require_positive("kn", kn)?;
+        crate::core::error::require_positive("N0", n0)?;
         Ok(Self { valanis, kn, n0 })
     }
 }
@@ -544,8 +544,8 @@ impl JenkinsContact {
     /// Build and validate (`kt, μ, kn, N0 > 0`).
     pub fn new(kt: f64, mu: f64, kn: f64, n0: f64) -> Result<Self> {
         let params = JenkinsParams::new(kt, mu)?;
-        crate::error::require_positive("kn", kn)?;
-        crate::error::require_positive("N0", n0)?;
+        crate::core::error::require_positive("kn", kn)?;
+        crate::core::error::require_positive("N0", n0)?;
         Ok(Self { params, kn, n0 })
     }
 }

@@ -1,12 +1,12 @@
 //! Output files of a frequency-response run: one CSV per excitation level, the element energies
 //! and contact states at each level's peak, and the PNG of the FRF family. Every file is written
-//! atomically ([`crate::output`]).
+//! atomically ([`crate::core::output`]).
 
+use crate::core::error::{Error, Result};
+use crate::core::plot::{line_plot, LinePlot, Scale, Series};
 use crate::dynamics::aft::ElementCycle;
 use crate::dynamics::continuation::Branch;
 use crate::dynamics::hbm::HbmSystem;
-use crate::error::{Error, Result};
-use crate::plot::{line_plot, LinePlot, Scale, Series};
 use nalgebra::DVector;
 use std::path::Path;
 
@@ -165,7 +165,7 @@ pub fn write_level_csv(
     header: &str,
 ) -> Result<()> {
     let cols = level_columns(system, responses, result);
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         for l in header.lines() {
             writeln!(w, "# {l}").map_err(io)?;
@@ -208,7 +208,7 @@ pub fn write_level_csv(
 /// CSV of the elements at a level's peak.
 pub fn write_elements_csv(path: &Path, system: &HbmSystem<'_>, result: &LevelResult) -> Result<()> {
     let peak = &result.branch.points[result.peak];
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         writeln!(
             w,

@@ -13,10 +13,10 @@
 //! convention), and stops when the harmonics of two successive periods agree within the
 //! tolerance (relative to the largest coefficient).
 
+use crate::core::error::{Error, Result};
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::model::Structure;
 use crate::dynamics::nonlinear::StepPartials;
-use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
 
@@ -77,7 +77,7 @@ pub fn steady_state(
             "initial conditions or force of the wrong length",
         ));
     }
-    crate::error::require_positive("omega", omega)?;
+    crate::core::error::require_positive("omega", omega)?;
     if settings.steps_per_period < 8 {
         return Err(Error::param("steps_per_period", "at least 8"));
     }

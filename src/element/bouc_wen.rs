@@ -24,7 +24,7 @@
 //! exact solution never leaves. Units: `u`, `z` in m, `k` in N/m, `F` in N, `A` and `α`
 //! dimensionless, `β`, `γ` in 1/m^n.
 
-use crate::error::{require_positive, Error, Result};
+use crate::core::error::{require_positive, Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Largest Runge–Kutta sub-step as a fraction of the elastic range `z_u/A`.

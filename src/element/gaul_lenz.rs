@@ -7,8 +7,8 @@
 //! maps onto that implementation (one code path for the physics). Units: `σ0` in Pa (per area) or
 //! N (per element), `E0`, `Et` in N/m³ or N/m.
 
+use crate::core::error::Result;
 use crate::element::valanis::{self, Integrator, ValanisParams};
-use crate::error::Result;
 
 /// Gaul–Lenz (constant stick limit) Valanis parameters.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -26,7 +26,7 @@ pub struct GaulLenzParams {
 impl GaulLenzParams {
     /// The equivalent Valanis parameters with `μ = 1`, to be driven with `Fz ≡ σ0`.
     pub fn as_valanis(&self) -> Result<ValanisParams> {
-        crate::error::require_positive("sigma0", self.sigma0)?;
+        crate::core::error::require_positive("sigma0", self.sigma0)?;
         ValanisParams::new(self.e0, self.k, self.et, 1.0)
     }
 }

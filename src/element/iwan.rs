@@ -47,7 +47,7 @@
 //!
 //! Units: displacement m, force N, stiffness N/m (per element); `χ`, `β` dimensionless.
 
-use crate::error::{require_positive, Error, Result};
+use crate::core::error::{require_positive, Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Segalman's four parameters.

@@ -6,7 +6,7 @@
 //! limit (same policy as [`crate::element::valanis`]). Units as in [`crate::element`]: `kt` in
 //! N/m³ with forces in Pa, or N/m with forces in N.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 
 /// Jenkins element parameters.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -20,8 +20,8 @@ pub struct JenkinsParams {
 impl JenkinsParams {
     /// Build and validate (`kt > 0`, `μ > 0`).
     pub fn new(kt: f64, mu: f64) -> Result<Self> {
-        crate::error::require_positive("kt", kt)?;
-        crate::error::require_positive("mu", mu)?;
+        crate::core::error::require_positive("kt", kt)?;
+        crate::core::error::require_positive("mu", mu)?;
         Ok(Self { kt, mu })
     }
 }

@@ -56,7 +56,7 @@
 //!
 //! Two in-plane directions are two uncoupled elements ([`integrate_in_plane`]).
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 
 /// Parameters of a Valanis element (see the module documentation for units).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -81,8 +81,8 @@ impl ValanisParams {
 
     /// Check `E0 > 0`, `0 ≤ k < 1`, `0 ≤ Et < E0`, `μ > 0`, all finite.
     pub fn validate(&self) -> Result<()> {
-        crate::error::require_positive("e0", self.e0)?;
-        crate::error::require_positive("mu", self.mu)?;
+        crate::core::error::require_positive("e0", self.e0)?;
+        crate::core::error::require_positive("mu", self.mu)?;
         if !(self.k.is_finite() && (0.0..1.0).contains(&self.k)) {
             return Err(Error::param(
                 "k",

@@ -31,7 +31,7 @@
 //! at pressure 0 is the colour of unstained film; a table must have one (as its first row):
 //! without it unstained paper could not be told from stain below the range.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::path::Path;
 
 /// A colour step longer than this multiple of the table's median step separates a marker row
@@ -76,8 +76,8 @@ fn check_plausible_pressures(
                 "every pressure is below 1 kPa (largest {} {unit_name} = {} Pa), but pressure \
                  films measure about 0.005–300 MPa: are the values in MPa under a {unit_name} \
                  header? Name the column pressure_MPa",
-                crate::error::num(max_pa / unit),
-                crate::error::num(max_pa)
+                crate::core::error::num(max_pa / unit),
+                crate::core::error::num(max_pa)
             ),
         ));
     }
@@ -94,8 +94,8 @@ fn check_plausible_pressures(
                 "pressure {} read as {unit_name} is {} Pa, above 1 GPa, but pressure films \
                  measure about 0.005–300 MPa: are the values in Pa under {header}? Name the \
                  column pressure_Pa",
-                crate::error::num(max_pa / unit),
-                crate::error::num(max_pa)
+                crate::core::error::num(max_pa / unit),
+                crate::core::error::num(max_pa)
             ),
         ));
     }
@@ -187,7 +187,7 @@ impl ColourTable {
     /// Build a table from rows (pressures strictly increasing), finding the graded curve and the
     /// marker rows (see the module documentation). `source` names the table in error messages.
     pub fn from_rows(rows: Vec<ColourRow>, max_distance: f64, source: &str) -> Result<Self> {
-        crate::error::require_positive("max_colour_distance", max_distance)?;
+        crate::core::error::require_positive("max_colour_distance", max_distance)?;
         if rows.len() < 2 {
             return Err(Error::Data(format!(
                 "{source}: a colour table needs at least 2 rows, got {}",
@@ -244,7 +244,7 @@ impl ColourTable {
 
     /// Read a colour table file (format in the module documentation).
     pub fn read_csv(path: &Path, max_distance: f64) -> Result<Self> {
-        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
+        crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         // A byte-order mark (spreadsheets write one in front of UTF-8 CSV) is no part of the
         // first field: without this, a header read "unknown pressure column `\u{feff};`".
@@ -562,7 +562,7 @@ impl DensityCalibration {
 
     /// Read a density calibration CSV (format above).
     pub fn read_csv(path: &Path) -> Result<Self> {
-        crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
+        crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         // A byte-order mark (spreadsheets write one in front of UTF-8 CSV) is no part of the
         // first field.
@@ -622,7 +622,7 @@ impl DensityCalibration {
                     format!(
                         "density {} is negative: an optical density (log10 of paper over stain \
                          brightness) is ≥ 0",
-                        crate::error::num(d)
+                        crate::core::error::num(d)
                     ),
                 ));
             }

@@ -15,7 +15,7 @@ pub mod reduce;
 pub mod regions;
 pub mod scan;
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 
 /// What the film says under a contact node: the class of the pixel it lies on. Only these
 /// pixels of a region are read by the nodes (see [`FittedRegion`]).

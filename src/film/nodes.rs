@@ -9,7 +9,7 @@
 //! total normal load `F` is given, every preload (and pressure) is scaled by `F / Σ N0`, so the
 //! preloads sum to `F`.
 
-use crate::error::{num, Error, Result};
+use crate::core::error::{num, Error, Result};
 use std::path::Path;
 
 /// A contact node in the mesh frame.
@@ -69,18 +69,18 @@ impl Placement {
 
     /// Check the parameters.
     pub fn validate(&self) -> Result<()> {
-        crate::error::require_finite("node offset x", self.offset_x_m)?;
-        crate::error::require_finite("node offset y", self.offset_y_m)?;
-        crate::error::require_finite("node rotation", self.rotation_rad)?;
-        crate::error::require_positive("node scale", self.scale)?;
+        crate::core::error::require_finite("node offset x", self.offset_x_m)?;
+        crate::core::error::require_finite("node offset y", self.offset_y_m)?;
+        crate::core::error::require_finite("node rotation", self.rotation_rad)?;
+        crate::core::error::require_positive("node scale", self.scale)?;
         Ok(())
     }
 }
 
 /// Read a nodes CSV (see the module documentation).
 pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
-    crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
-    let mut rdr = crate::input::csv_reader(path)?;
+    crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
+    let mut rdr = crate::core::input::csv_reader(path)?;
     let headers = rdr
         .headers()
         .map_err(|e| Error::parse(path, 1, e.to_string()))?
@@ -103,7 +103,7 @@ pub fn read_nodes_csv(path: &Path) -> Result<Vec<Node>> {
     let mut nodes: Vec<Node> = Vec::new();
     let mut seen = std::collections::HashSet::new();
     for rec in rdr.records() {
-        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let field = |c: usize, name: &str| -> Result<f64> {
             let s = rec.get(c).unwrap_or("");
             let v: f64 = s
@@ -330,7 +330,7 @@ pub fn preloads(
 ) -> Result<(Vec<Preload>, PreloadSummary)> {
     placement.validate()?;
     if let Some(f) = total_load_n {
-        crate::error::require_positive("total_load_n", f)?;
+        crate::core::error::require_positive("total_load_n", f)?;
     }
     let film: Vec<(f64, f64)> = nodes
         .iter()
@@ -429,7 +429,7 @@ fn write_preloads(
     classes: Option<&[crate::film::NodePixel]>,
     comment: &str,
 ) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         for line in comment.lines() {
             writeln!(w, "# {line}").map_err(io)?;
@@ -484,16 +484,16 @@ pub const PRELOAD_CONSISTENCY_TOLERANCE: f64 = 1e-6;
 /// equal to `pressure_Pa × area_m2` (within [`PRELOAD_CONSISTENCY_TOLERANCE`]), a duplicate
 /// node id.
 pub fn read_preloads_csv(path: &Path) -> Result<Vec<Preload>> {
-    crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
-    let mut rdr = crate::input::csv_reader(path)?;
+    crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
+    let mut rdr = crate::core::input::csv_reader(path)?;
     let headers = rdr
         .headers()
-        .map_err(|e| crate::input::csv_error(path, e))?
+        .map_err(|e| crate::core::input::csv_error(path, e))?
         .clone();
     let mut out: Vec<Preload> = Vec::new();
     let mut seen = std::collections::HashMap::new();
     for rec in rdr.records() {
-        let (rec, line) = crate::input::csv_record(path, rec)?;
+        let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let p: Preload = rec.deserialize(Some(&headers)).map_err(|e| {
             Error::parse(
                 path,

@@ -11,7 +11,7 @@
 //! Goodness of fit: `R² = 1 − SS_res / SS_tot` (coefficient of determination) over the fitted
 //! points; the reference study reports R² = 0.935 for its order-4 fit.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 
 /// The affine map from film coordinates (m) to the scaled fit coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -235,7 +235,7 @@ fn householder_least_squares(a: &mut [f64], n: usize, m: usize, y: &mut [f64]) -
 /// Write fitted coefficients of several regions as CSV
 /// (`region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa`).
 pub fn write_coefficients_csv(path: &std::path::Path, fits: &[(usize, &PolyFit2)]) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         writeln!(w, "# sigma(x, y) = sum coefficient_Pa * u^a * v^b, u = (x - x_centre_m)/x_half_width_m, v = (y - y_centre_m)/y_half_width_m (film frame, m)").map_err(io)?;
         writeln!(w, "region_id,order,x_centre_m,y_centre_m,x_half_width_m,y_half_width_m,a,b,coefficient_Pa").map_err(io)?;

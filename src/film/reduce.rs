@@ -20,7 +20,7 @@
 //! from lower-left to upper-right.
 
 use super::nodes::Preload;
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::collections::BTreeMap;
 
 /// Result of a reduction.
@@ -36,7 +36,7 @@ pub struct Reduction {
 
 /// Reduce `fine` nodes on a coarse triangular mesh of side `mesh_size_m`.
 pub fn reduce(fine: &[Preload], mesh_size_m: f64) -> Result<Reduction> {
-    crate::error::require_positive("mesh_size_m", mesh_size_m)?;
+    crate::core::error::require_positive("mesh_size_m", mesh_size_m)?;
     if fine.is_empty() {
         return Err(Error::Data("node reduction of an empty node set".into()));
     }

@@ -4,7 +4,7 @@
 //! The film frame is right-handed with x to the right and y **upwards**, in metres, origin at the
 //! centre of the image's bottom-left pixel: pixel (column `c`, row `r` counted from the top of an
 //! image `H` pixels high) is sample `[[i, j]] = [[c, H − 1 − r]]` at `(i·s, j·s)` with `s` the
-//! pixel size, the [`crate::grid::Grid2`] convention. Image tools (and the authors of the
+//! pixel size, the [`crate::core::grid::Grid2`] convention. Image tools (and the authors of the
 //! reference data) count y downwards from the top: `y_down = (H − 1)·s − y`.
 //!
 //! ## Regions
@@ -26,7 +26,7 @@
 
 use super::colour::{ColourToPressure, PixelClass};
 use super::scan::RgbImage;
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use ndarray::Array2;
 use std::path::Path;
 
@@ -96,7 +96,7 @@ impl FilmMap {
         reader: &ColourToPressure,
         pixel_size_m: f64,
     ) -> Result<Self> {
-        crate::error::require_positive("pixel_size_m", pixel_size_m)?;
+        crate::core::error::require_positive("pixel_size_m", pixel_size_m)?;
         let (width, height) = img.dim();
         if width == 0 || height == 0 {
             return Err(Error::Data("film image has no pixels".into()));
@@ -218,7 +218,7 @@ pub fn roi_region(map: &FilmMap, roi: &Roi, id: usize) -> Result<Region> {
     let inside: Box<dyn Fn(f64, f64) -> bool> = match roi {
         Roi::Rectangle { x0, y0, x1, y1 } => {
             for (n, v) in [("x0", x0), ("y0", y0), ("x1", x1), ("y1", y1)] {
-                crate::error::require_finite(&format!("roi rectangle {n}"), *v)?;
+                crate::core::error::require_finite(&format!("roi rectangle {n}"), *v)?;
             }
             if x1 <= x0 || y1 <= y0 {
                 return Err(Error::param(
@@ -443,14 +443,14 @@ fn detect_components(
     seed: impl Fn(PixelClass) -> bool,
 ) -> Result<PatchDetection> {
     let (min_diameter_m, rim_pixels) = (opts.min_diameter_m, opts.rim_pixels);
-    crate::error::require_positive("min_patch_diameter_m", min_diameter_m)?;
-    crate::error::require_positive("max_elongation", opts.max_elongation)?;
+    crate::core::error::require_positive("min_patch_diameter_m", min_diameter_m)?;
+    crate::core::error::require_positive("max_elongation", opts.max_elongation)?;
     if !(opts.min_solidity.is_finite() && (0.0..=1.0).contains(&opts.min_solidity)) {
         return Err(Error::param(
             "min_solidity",
             format!(
                 "must lie in [0, 1], got {}",
-                crate::error::num(opts.min_solidity)
+                crate::core::error::num(opts.min_solidity)
             ),
         ));
     }
@@ -696,7 +696,7 @@ pub fn summarise(map: &FilmMap, region: &Region) -> Result<RegionSummary> {
 /// Write the per-pixel readings of `regions` as CSV (`region_id,x_m,y_m,pressure_Pa,class`),
 /// pressure empty unless in range.
 pub fn write_region_pixels_csv(path: &Path, map: &FilmMap, regions: &[Region]) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         writeln!(w, "# film pressure map, pixels of the regions of interest; x_m, y_m in m (film frame, y up), pressure_Pa in Pa").map_err(io)?;
         writeln!(w, "# class: in_range (pressure given), unstained, below_range, above_range, off_curve (rejected colour); pixel size {} m", map.pixel_size_m).map_err(io)?;
@@ -731,7 +731,7 @@ pub fn write_summary_csv(
     path: &Path,
     summaries: &[(RegionSummary, Option<&super::polyfit::PolyFit2>)],
 ) -> Result<()> {
-    crate::output::write_atomic(path, |w| {
+    crate::core::output::write_atomic(path, |w| {
         let io = |e: std::io::Error| Error::io(path, e);
         writeln!(w, "# film regions: centre in m (film frame, y up), area in m², pressures in Pa, load in N; mean/max over in-range pixels; counts in pixels; saturated_fraction = n_above_range / (n_in_range + n_above_range), the share the fit (from in-range pixels) does not know").map_err(io)?;
         writeln!(w, "{SUMMARY_COLUMNS}").map_err(io)?;

@@ -6,7 +6,7 @@
 //! module offers (used by `asperity film` in density mode):
 //!
 //! - [`read_rgb`]: the image in the film frame (x right, y up), 0–255 per channel (16-bit images
-//!   keep their precision); its size is checked against [`crate::limits::MAX_IMAGE_PIXELS`] and
+//!   keep their precision); its size is checked against [`crate::core::limits::MAX_IMAGE_PIXELS`] and
 //!   the available memory **before** it is decoded. An EXIF/TIFF `Orientation` is applied: the
 //!   film frame is the image as a viewer displays it.
 //! - [`resolution`]: the pixel size the image declares: PNG `pHYs` (pixels per metre), TIFF
@@ -25,7 +25,7 @@
 //!   Densities above `mode + max(5σ, 0.01)` are stained; stained pixels below the first
 //!   calibration point are *below range* (not unstained), and counted.
 
-use crate::error::{num, Error, Result};
+use crate::core::error::{num, Error, Result};
 use ndarray::Array2;
 use std::path::Path;
 
@@ -88,17 +88,17 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
         .map_err(|e| Error::parse(path, 0, format!("cannot read image: {e}")))?;
     let pixels = w as u64 * h as u64;
     let name = path.display().to_string();
-    if pixels > crate::limits::MAX_IMAGE_PIXELS {
+    if pixels > crate::core::limits::MAX_IMAGE_PIXELS {
         return Err(Error::limit(
             name,
             format!(
                 "a {w} × {h} image has more than {} pixels",
-                crate::limits::MAX_IMAGE_PIXELS
+                crate::core::limits::MAX_IMAGE_PIXELS
             ),
         ));
     }
-    let budget = pixels.saturating_mul(crate::limits::FILM_BYTES_PER_PIXEL);
-    crate::limits::check_memory(&name, budget, &format!("a {w} × {h} film image"))?;
+    let budget = pixels.saturating_mul(crate::core::limits::FILM_BYTES_PER_PIXEL);
+    crate::core::limits::check_memory(&name, budget, &format!("a {w} × {h} film image"))?;
     let mut r = reader()?;
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(budget.max(1 << 20));

@@ -5,7 +5,7 @@
 //! `1/E* = (1-ν1²)/E1 + (1-ν2²)/E2` (see [`crate::surface::combine`]), and element half-sizes
 //! `a = dx/2`, `b = dy/2`. Lengths in m, moduli in Pa, displacement per unit traction in m/Pa.
 
-use super::convolution::{Boundary, FftPlan, KernelSpectrum};
+use crate::core::fft::{Boundary, FftPlan, KernelSpectrum};
 use rustfft::num_complex::Complex64;
 
 /// Antiderivative of `1/r` over a rectangle corner:
@@ -159,10 +159,10 @@ impl CerrutiConstants {
         }
     }
 
-    /// Constants of a pair of [`Material`](crate::surface::combine::Material)s.
+    /// Constants of a pair of [`Material`](crate::core::material::Material)s.
     pub fn of_materials(
-        body1: crate::surface::combine::Material,
-        body2: crate::surface::combine::Material,
+        body1: crate::core::material::Material,
+        body2: crate::core::material::Material,
     ) -> Self {
         Self::two_bodies(
             body1.shear_modulus_pa(),

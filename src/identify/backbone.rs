@@ -36,7 +36,7 @@
 //! [`MIN_REFERENCE_PAIRS`] pairs or a shift beyond [`MAX_REFERENCE_SHIFT`].
 
 use super::measured::{Quantity, Sweep};
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use nalgebra::{Matrix3, Vector3};
 use realfft::num_complex::Complex64;
 use serde::Serialize;

@@ -31,7 +31,7 @@
 
 use super::measured::{PhaseConvention, Quantity, Sweep};
 use super::model::{Drive, Model, ModelSpec, ParamSpec};
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
 use argmin::solver::neldermead::NelderMead;
 use argmin::solver::particleswarm::ParticleSwarm;

@@ -34,12 +34,12 @@
 //! values are degrees (a value beyond ±4π, or a span beyond 3π: radians unwrapped beyond ±2π are
 //! accepted, see [`MAX_RADIAN_PHASE_SPAN`]) are errors naming the file and the line.
 
-use crate::error::{Error, Result};
-use crate::input::{csv_reader, csv_record};
-use crate::sanity::{MAX_FORCE_AMPLITUDE_N, MAX_VIBRATION_AMPLITUDE_M};
+use crate::core::error::{Error, Result};
+use crate::core::hash::sha256_hex;
+use crate::core::input::{csv_reader, csv_record};
+use crate::core::sanity::{MAX_FORCE_AMPLITUDE_N, MAX_VIBRATION_AMPLITUDE_M};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::{Path, PathBuf};
 
@@ -139,14 +139,6 @@ pub struct Sweep {
     pub header_line: usize,
 }
 
-/// Hex SHA-256 of some bytes.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
 fn find_column(
     path: &Path,
     header: &csv::StringRecord,
@@ -208,7 +200,7 @@ impl Sweep {
         let mut rdr = csv_reader(path)?;
         let header = rdr
             .headers()
-            .map_err(|e| crate::input::csv_error(path, e))?
+            .map_err(|e| crate::core::input::csv_error(path, e))?
             .clone();
         let header_line = header.position().map(|p| p.line() as usize).unwrap_or(1);
         let need = |names: &[&str], what: &str| -> Result<(usize, usize)> {

@@ -37,6 +37,7 @@
 //! force; a row that still fails is an error naming the frequency.
 
 use super::effects::Effect;
+use crate::core::error::{Error, Result};
 use crate::dynamics::aft::{self, AftSettings, Harmonics};
 use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmPoint, HbmSystem};
 use crate::dynamics::model::Structure;
@@ -44,7 +45,6 @@ use crate::dynamics::nonlinear::{
     ContactStatus, CubicSpring, GaulLenz, HystereticElement, Jenkins, QuadraticSpring, StepPartials,
 };
 use crate::element::GaulLenzParams;
-use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};

@@ -31,7 +31,7 @@ use super::fit::LevelData;
 use super::measured::Sweep;
 use super::report::{level_role, LevelErrors};
 use super::stationarity;
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::brent::{BrentOpt, BrentRoot};
 use nalgebra::{DMatrix, DVector};

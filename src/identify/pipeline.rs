@@ -17,8 +17,8 @@ use super::report::{
 use super::select::{self, refit_all_rows, Round, SelectOptions, Selection, Verdict};
 use super::stationarity::{self, SideComparison};
 use super::uncertainty::{self, Ensemble, Uncertainty};
-use crate::error::{Error, Result};
-use crate::output::{write_atomic, write_string_atomic};
+use crate::core::error::{Error, Result};
+use crate::core::output::{write_atomic, write_string_atomic};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
@@ -730,7 +730,7 @@ pub fn identify(
     let response_controlled = amplitudes
         .iter()
         .map(|&a| {
-            crate::error::require_positive("--response-amplitude", a)?;
+            crate::core::error::require_positive("--response-amplitude", a)?;
             response_controlled(&after.model, quantity, a, (flo, fhi), scales.force_n)
         })
         .collect::<Result<Vec<_>>>()?;

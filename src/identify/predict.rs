@@ -28,8 +28,8 @@ use super::report::{
 };
 use super::stationarity::{self, SideComparison};
 use super::uncertainty::{bands_table, prediction_bands, Ensemble, PredictionBand};
-use crate::error::{Error, Result};
-use crate::output::write_string_atomic;
+use crate::core::error::{Error, Result};
+use crate::core::output::write_string_atomic;
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -447,7 +447,7 @@ impl Prediction {
             &serde_json::json!({
                 "tool": "asperity predict",
                 "crate_version": env!("CARGO_PKG_VERSION"),
-                "model_file_sha256": super::measured::sha256_hex(
+                "model_file_sha256": crate::core::hash::sha256_hex(
                     &std::fs::read(&self.model_file).map_err(|e| Error::io(&self.model_file, e))?),
                 "prediction": self,
                 "stationarity_criterion": super::stationarity::criterion_json(),

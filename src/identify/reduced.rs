@@ -69,7 +69,7 @@
 use super::backbone::{self, BackbonePoint, LevelBackbone};
 use super::effects::Effect;
 use super::fit::{fit_global, fit_local, FitOptions, FitResult, LevelData, Parametrised};
-use super::measured::{sha256_hex, PhaseConvention, Sweep};
+use super::measured::{PhaseConvention, Sweep};
 use super::model::check_values;
 use super::model::{
     cubic_stiffness_law, effect_params, preload_factor_law, quadratic_stiffness_law, Scales,
@@ -88,14 +88,15 @@ use super::report::{
 use super::select::{Extensible, SelectOptions, Selection};
 use super::stationarity::{self, SideComparison};
 use super::uncertainty::{self, Ensemble, Uncertainty};
+use crate::core::error::{Error, Result};
+use crate::core::hash::sha256_hex;
+use crate::core::output::write_string_atomic;
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::contact::element_for;
 use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use crate::dynamics::model::Structure;
 use crate::dynamics::model_file::{self, LoadedModel};
 use crate::dynamics::nonlinear::{CubicSpring, QuadraticSpring};
-use crate::error::{Error, Result};
-use crate::output::write_string_atomic;
 use nalgebra::{DMatrix, DVector};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -971,7 +972,7 @@ pub fn identify_reduced(
     let reference_force = fit_data.iter().map(|l| l.mean_force_n).fold(0.0, f64::max);
     let (mut response_controlled, mut response_control_failures) = (Vec::new(), Vec::new());
     for a in amplitudes {
-        crate::error::require_positive("--response-amplitude", a)?;
+        crate::core::error::require_positive("--response-amplitude", a)?;
         match response_controlled_with(quantity, a, band, |om, targets| {
             fit.model.response_controlled(om, targets, reference_force)
         }) {

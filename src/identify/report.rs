@@ -1,6 +1,6 @@
 //! Error measures of a model against a measured level, and the files of an identification or
 //! a prediction: text, JSON (inputs with SHA-256), CSV, the saved model, PNG figures. Every file
-//! is written atomically ([`crate::output`]).
+//! is written atomically ([`crate::core::output`]).
 //!
 //! # Error measures (per level)
 //!
@@ -25,9 +25,9 @@ use super::backbone::{half_power_rows, phase_resonance, resonance, BackbonePoint
 use super::fit::LevelData;
 use super::measured::PhaseConvention;
 use super::model::{Drive, Model};
-use crate::error::{Error, Result};
-use crate::output::{write_atomic, write_string_atomic};
-use crate::plot::{stacked_line_plots, LinePlot, Scale, Series};
+use crate::core::error::{Error, Result};
+use crate::core::output::{write_atomic, write_string_atomic};
+use crate::core::plot::{stacked_line_plots, LinePlot, Scale, Series};
 use realfft::num_complex::Complex64;
 use serde::Serialize;
 use std::f64::consts::TAU;

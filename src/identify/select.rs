@@ -53,7 +53,7 @@ use super::fit::{
     fit_global, fit_local, FitOptions, FitResult, LevelData, Objective, Parametrised,
 };
 use super::model::{Model, ModelSpec, NUMERICAL_COST_FLOOR};
-use crate::error::Result;
+use crate::core::error::Result;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
 

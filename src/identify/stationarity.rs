@@ -196,7 +196,7 @@ impl SideComparison {
         let (f0, f1) = self.frequency_difference_hz;
         let (n0, n1) = self.noise_sd;
         let (i0, i1) = self.damping_form_interval;
-        let (scale, unit) = crate::plot::length_unit(a1);
+        let (scale, unit) = crate::core::plot::length_unit(a1);
         let (s0, s1) = self.frequency_shift;
         let (m0, m1) = self.frequency_noise_sd;
         let mean = |n: usize, m: String| {
@@ -433,7 +433,7 @@ impl SidePairs {
     /// Median of the pairs' natural-frequency shifts.
     fn median_shift(&self) -> f64 {
         let v: Vec<f64> = self.pairs.iter().map(|p| p.shift).collect();
-        crate::diagnose::noise::median(&v)
+        crate::core::stats::median(&v)
     }
 }
 

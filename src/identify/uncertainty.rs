@@ -39,7 +39,8 @@ use super::fit::{LevelData, Parametrised};
 use super::model::{check_values, ParamSpec, NUMERICAL_COST_FLOOR};
 use super::report::LevelErrors;
 use super::select::{cost_all_rows, lag1_autocorrelation};
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
+use crate::core::stats::quantile_hazen;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -478,21 +479,6 @@ pub struct PredictionBand {
     pub r_hat: f64,
 }
 
-/// Quantile `q` of sorted values, the k-th of n at `(k + ½)/n` and linear between (Hazen;
-/// type 5 of Hyndman & Fan 1996).
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let n = sorted.len();
-    let x = q * n as f64 - 0.5;
-    if x <= 0.0 {
-        return sorted[0];
-    }
-    let (i, t) = (x.floor() as usize, x.fract());
-    if i + 1 >= n {
-        return sorted[n - 1];
-    }
-    sorted[i] * (1.0 - t) + sorted[i + 1] * t
-}
-
 /// The 95 % band of values (non-finite ones left out) about `value`.
 fn band(value: f64, xs: Vec<f64>) -> Band {
     let mut xs: Vec<f64> = xs.into_iter().filter(|x| x.is_finite()).collect();
@@ -506,8 +492,8 @@ fn band(value: f64, xs: Vec<f64>) -> Band {
     }
     Band {
         value,
-        lo_95: quantile(&xs, 0.025),
-        hi_95: quantile(&xs, 0.975),
+        lo_95: quantile_hazen(&xs, 0.025),
+        hi_95: quantile_hazen(&xs, 0.975),
     }
 }
 
@@ -795,11 +781,11 @@ mod tests {
     #[test]
     fn hazen_quantiles() {
         let xs: Vec<f64> = (0..=100).map(f64::from).collect();
-        assert!((quantile(&xs, 0.025) - 2.025).abs() < 1e-12);
-        assert!((quantile(&xs, 0.975) - 97.975).abs() < 1e-12);
-        assert!((quantile(&[0.0, 1.0], 0.5) - 0.5).abs() < 1e-12);
-        assert_eq!(quantile(&[0.0, 1.0], 0.1), 0.0);
-        assert_eq!(quantile(&[0.0, 1.0], 0.9), 1.0);
-        assert_eq!(quantile(&[3.0], 0.5), 3.0);
+        assert!((quantile_hazen(&xs, 0.025) - 2.025).abs() < 1e-12);
+        assert!((quantile_hazen(&xs, 0.975) - 97.975).abs() < 1e-12);
+        assert!((quantile_hazen(&[0.0, 1.0], 0.5) - 0.5).abs() < 1e-12);
+        assert_eq!(quantile_hazen(&[0.0, 1.0], 0.1), 0.0);
+        assert_eq!(quantile_hazen(&[0.0, 1.0], 0.9), 1.0);
+        assert_eq!(quantile_hazen(&[3.0], 0.5), 3.0);
     }
 }

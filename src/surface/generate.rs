@@ -42,10 +42,10 @@
 //! Reproducibility: every coefficient comes from its own stream, so the surface is the same bit
 //! for bit whatever the number of threads; the same seed gives the same surface.
 
-use crate::error::{num, require_positive, Error, Result};
-use crate::grid::Grid2;
-use crate::halfspace::convolution::{Boundary, FftPlan};
-use crate::sanity;
+use crate::core::error::{num, require_positive, Error, Result};
+use crate::core::fft::{Boundary, FftPlan};
+use crate::core::grid::Grid2;
+use crate::core::sanity;
 use ndarray::{Array2, Axis};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -30,8 +30,8 @@
 //! [`load_area`]`(path, fill)` reads the file and returns the map with the fill report, or an
 //! error naming the file, the number of missing points and the `--fill` flag.
 
-use crate::error::{num, Error, Result};
-use crate::grid::Grid2;
+use crate::core::error::{num, Error, Result};
+use crate::core::grid::Grid2;
 use crate::surface::topography::Topography;
 use ndarray::Array2;
 use std::path::Path;
@@ -53,8 +53,8 @@ impl MaskedGrid {
     /// Build a masked grid: spacings finite and > 0, every height finite or NaN (infinities are
     /// errors, naming the point), at least one measured point.
     pub fn new(heights: Array2<f64>, dx: f64, dy: f64, periodic: bool) -> Result<Self> {
-        crate::error::require_positive("dx", dx)?;
-        crate::error::require_positive("dy", dy)?;
+        crate::core::error::require_positive("dx", dx)?;
+        crate::core::error::require_positive("dy", dy)?;
         if heights.is_empty() {
             return Err(Error::param("heights", "grid has no points"));
         }

@@ -25,9 +25,9 @@
 //! row-major order; the transforms are row-parallel and exact. The same seed gives the same
 //! surface bit for bit, whatever the number of threads.
 
-use crate::error::{require_positive, Error, Result};
-use crate::grid::Grid2;
-use crate::halfspace::convolution::{Boundary, FftPlan};
+use crate::core::error::{require_positive, Error, Result};
+use crate::core::fft::{Boundary, FftPlan};
+use crate::core::grid::Grid2;
 use crate::surface::stats::rms_slopes_area;
 use ndarray::Array2;
 use rand::{Rng, SeedableRng};

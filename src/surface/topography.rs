@@ -1,8 +1,8 @@
 //! What the readers return and the statistics work on: a 1-D profile or a 2-D height map,
 //! complete or with missing points (see [`crate::surface::missing`]).
 
-use crate::error::{require_positive, Error, Result};
-use crate::grid::Grid2;
+use crate::core::error::{require_positive, Error, Result};
+use crate::core::grid::Grid2;
 use crate::surface::missing::MaskedGrid;
 
 /// A line scan: heights (m) at `x = i·dx` (uniform) or at measured positions (nonuniform, e.g.

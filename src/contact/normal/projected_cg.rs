@@ -42,8 +42,8 @@
 //! All sums are added in row order, so results do not depend on the number of threads.
 
 use super::{NormalMethod, NormalSolver, REFRESH_INTERVAL};
-use crate::error::{Error, Result};
-use crate::halfspace::convolution::{FftPlan, FftReal, KernelSpectrum, SharedMut};
+use crate::core::error::{Error, Result};
+use crate::core::fft::{FftPlan, FftReal, KernelSpectrum, SharedMut};
 use ndarray::Array2;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;

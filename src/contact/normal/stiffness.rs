@@ -29,8 +29,8 @@
 
 use super::projected_cg::{row, rows_sum, Ptr};
 use super::{NormalSolution, NormalSolver};
-use crate::error::{Error, Result};
-use crate::halfspace::convolution::Boundary;
+use crate::core::error::{Error, Result};
+use crate::core::fft::Boundary;
 use std::time::Instant;
 
 /// Tolerance of the tangent solve on the rms gap residual over the contact set, relative to the

@@ -25,7 +25,7 @@
 //! Both give the same product to round-off (tested).
 
 use super::Operator;
-use crate::halfspace::convolution::{Boundary, FftPlan, PairWorkspace, SharedMut};
+use crate::core::fft::{Boundary, FftPlan, PairWorkspace, SharedMut};
 use crate::halfspace::influence::{
     cerruti_spectra, cerruti_uxx, cerruti_uxy, cerruti_uyy, CerrutiConstants, CerrutiSpectra,
 };
@@ -726,7 +726,7 @@ mod tests {
     /// The product as it was computed before the workspace (whole-grid transforms, allocated
     /// at every call): the allocation-free one must give the same bits.
     fn allocating_product(f: &FftCompliance, q: &[[f64; 2]]) -> Vec<[f64; 2]> {
-        use crate::halfspace::convolution::multiply_in_place;
+        use crate::core::fft::multiply_in_place;
         let (plan, spectra) = (&f.plan, &f.spectra);
         let mut fx = Array2::<f64>::zeros(plan.grid_shape());
         let mut fy = Array2::<f64>::zeros(plan.grid_shape());

@@ -62,10 +62,10 @@
 
 mod compliance;
 
-use crate::error::{require_positive, Error, Result};
-use crate::halfspace::convolution::Boundary;
+use crate::core::error::{require_positive, Error, Result};
+use crate::core::fft::Boundary;
+use crate::core::material::Material;
 use crate::halfspace::influence::CerrutiConstants;
-use crate::surface::combine::Material;
 use compliance::{largest_eigenvalue, Compliance};
 use nalgebra::{DMatrix, DVector};
 use ndarray::Array2;
@@ -137,7 +137,7 @@ impl Default for TangentialOptions {
 impl TangentialOptions {
     /// The options, checked: a relative tolerance in (0, 1) and at least one iteration.
     pub fn validated(self) -> Result<Self> {
-        crate::sanity::tolerance("tolerance", self.tolerance)?;
+        crate::core::sanity::tolerance("tolerance", self.tolerance)?;
         if self.max_iterations == 0 {
             return Err(Error::param("max_iterations", "must be at least 1"));
         }
@@ -262,7 +262,7 @@ impl TangentialSolver {
     /// ([`Error::Data`]).
     pub fn new(problem: &TangentialProblem<'_>, options: TangentialOptions) -> Result<Self> {
         let start = Instant::now();
-        let mu = crate::sanity::friction_coefficient(
+        let mu = crate::core::sanity::friction_coefficient(
             "friction_coefficient",
             problem.friction_coefficient,
         )?;

@@ -11,7 +11,7 @@
 //! that end more than two samples (`Resolution`) short of it are a truncated export, reported
 //! as such rather than read as a shorter profile.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use crate::surface::io::profile_text::{profile_from_columns, read_columns};
 use crate::surface::io::text::numbered_lines;
 use crate::surface::io::units::unit_in_header;
@@ -96,9 +96,9 @@ pub fn read(path: &Path, text: &str) -> Result<Profile> {
                 format!(
                     "truncated export: the scan data end at {} µm after {} samples, but the \
                      header's Length (line {ln}) is {} µm{expected}",
-                    crate::error::num(span * 1e6),
+                    crate::core::error::num(span * 1e6),
                     x.len(),
-                    crate::error::num(length * 1e6)
+                    crate::core::error::num(length * 1e6)
                 ),
             ));
         }

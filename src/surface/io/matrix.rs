@@ -16,9 +16,9 @@
 //! prints every value with Rust's shortest round-trip representation, so a written matrix reads
 //! back bit for bit.
 
-use crate::error::{Error, Result};
-use crate::grid::Grid2;
-use crate::output::write_atomic;
+use crate::core::error::{Error, Result};
+use crate::core::grid::Grid2;
+use crate::core::output::write_atomic;
 use crate::surface::io::text::{
     comment_pairs, fields, height_or_missing, number, numbered_lines, periodic_flag,
 };

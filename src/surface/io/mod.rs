@@ -13,7 +13,7 @@
 //! Missing points (NaN heights, the x3p validity mask, `nan` in text) are kept: such a map is
 //! read as [`Topography::MaskedArea`] (a profile keeps NaN samples) and written back with its
 //! missing points by [`write_topography`] (see [`crate::surface::missing`]). Text files larger
-//! than [`crate::limits::MAX_TEXT_FILE_BYTES`] are refused before they are read.
+//! than [`crate::core::limits::MAX_TEXT_FILE_BYTES`] are refused before they are read.
 
 pub mod dektak;
 pub mod matrix;
@@ -24,8 +24,8 @@ pub mod text;
 pub mod units;
 pub mod x3p;
 
-use crate::error::{Error, Result};
-use crate::grid::Grid2;
+use crate::core::error::{Error, Result};
+use crate::core::grid::Grid2;
 use crate::surface::topography::Topography;
 use std::path::Path;
 
@@ -105,12 +105,12 @@ pub fn write_topography(path: &Path, topo: &Topography) -> Result<()> {
             match extension(path).as_str() {
                 "npy" => npy::write_field(path, &m.heights, m.dx, m.dy, m.periodic, "m", None),
                 "x3p" => x3p::write_masked(path, m),
-                "png" => crate::plot::heatmap(
+                "png" => crate::core::plot::heatmap(
                     path,
                     &m.heights,
                     m.dx,
                     m.dy,
-                    &crate::plot::HeatMap {
+                    &crate::core::plot::HeatMap {
                         title: "height map (blank: missing points)",
                         value_label: "height (µm)",
                         value_scale: 1e6,
@@ -143,7 +143,7 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
 }
 
 /// The equivalent rough surface for the contact solvers from one or two topography files
-/// (areas of at least [`crate::sanity::MIN_CONTACT_FILE_POINTS`] points per side; a profile is
+/// (areas of at least [`crate::core::sanity::MIN_CONTACT_FILE_POINTS`] points per side; a profile is
 /// refused): one file is the equivalent surface itself; two files are
 /// body 1 and body 2 on the same grid, body 2's heights in the common frame (`z` from body 1
 /// towards body 2, as `asperity surface combine` takes them), reduced to `h1 − h2` by
@@ -157,7 +157,7 @@ pub fn read_equivalent_surface(
     let area = |p: &Path| -> Result<(Grid2, String)> {
         let name = p.display().to_string();
         let (g, report) = crate::surface::missing::complete_area(read(p)?, &name, fill)?;
-        crate::sanity::contact_file_grid(&name, g.nx(), g.ny())?;
+        crate::core::sanity::contact_file_grid(&name, g.nx(), g.ny())?;
         Ok(match report {
             Some(r) => (
                 g,
@@ -174,7 +174,7 @@ pub fn read_equivalent_surface(
     match paths {
         [one] => {
             let (g, name) = area(one)?;
-            if let Some(w) = crate::sanity::contact_surface_tilt(&name, &g) {
+            if let Some(w) = crate::surface::stats::contact_surface_tilt(&name, &g) {
                 eprintln!("warning: {w}");
             }
             Ok((g, format!("measured surface {name}")))
@@ -185,7 +185,7 @@ pub fn read_equivalent_surface(
                 .map_err(|e| Error::Data(format!("{} and {}: {e}", a.display(), b.display())))?;
             // The bodies' tilts count through their difference only.
             let pair = format!("{} − {}", a.display(), b.display());
-            if let Some(w) = crate::sanity::contact_surface_tilt(&pair, &h) {
+            if let Some(w) = crate::surface::stats::contact_surface_tilt(&pair, &h) {
                 eprintln!("warning: {w}");
             }
             Ok((

@@ -8,13 +8,13 @@
 //! with `"unit": "Pa"`, read back by [`read_field`]). Both files are written atomically.
 //!
 //! Before the data are read, the header is checked against the file: the shape must be 2-D,
-//! within [`crate::limits::MAX_GRID_POINTS`], and the file must hold exactly the bytes the shape
+//! within [`crate::core::limits::MAX_GRID_POINTS`], and the file must hold exactly the bytes the shape
 //! promises (a header claiming 10⁶ × 10⁶ values over 32 kB of data is reported as truncated,
 //! not allocated).
 
-use crate::error::{Error, Result};
-use crate::grid::Grid2;
-use crate::output::write_atomic;
+use crate::core::error::{Error, Result};
+use crate::core::grid::Grid2;
+use crate::core::output::write_atomic;
 use crate::surface::topography::Topography;
 use ndarray::Array2;
 use ndarray_npy::{ReadNpyExt, WriteNpyExt};
@@ -83,7 +83,7 @@ pub fn write_field(
             .write_npy(w)
             .map_err(|e| Error::parse(path, 0, format!("writing .npy: {e}")))
     })?;
-    crate::output::write_string_atomic(&sidecar_path(path), &text)
+    crate::core::output::write_string_atomic(&sidecar_path(path), &text)
 }
 
 /// Header of a `.npy` file: element type, memory order, shape and where the data start.
@@ -196,11 +196,11 @@ fn check_header(path: &Path) -> Result<(usize, usize)> {
             want.map_or("more than 2^64".to_string(), |w| w.to_string())
         )));
     }
-    crate::limits::check_grid(
+    crate::core::limits::check_grid(
         &path.display().to_string(),
         nx,
         ny,
-        crate::limits::STATS_BYTES_PER_POINT,
+        crate::core::limits::STATS_BYTES_PER_POINT,
     )?;
     Ok((nx, ny))
 }
@@ -232,7 +232,10 @@ pub fn read_field(path: &Path) -> Result<(Array2<f64>, NpySidecar)> {
             return Err(Error::parse(
                 &side,
                 0,
-                format!("`{k}` must be finite and > 0, got {}", crate::error::num(v)),
+                format!(
+                    "`{k}` must be finite and > 0, got {}",
+                    crate::core::error::num(v)
+                ),
             ));
         }
     }

@@ -1,8 +1,8 @@
 //! PNG height image with a colour bar (write only), heights shown in µm over x, y in µm.
 
-use crate::error::Result;
-use crate::grid::Grid2;
-use crate::plot::{heatmap, HeatMap};
+use crate::core::error::Result;
+use crate::core::grid::Grid2;
+use crate::core::plot::{heatmap, HeatMap};
 use std::path::Path;
 
 /// Draw `grid` as a height map with a colour bar into `path` (atomically).

@@ -16,7 +16,7 @@
 //! height is written `nan`; only a uniform profile can have missing points. Errors name the
 //! file line.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use crate::surface::io::text::{
     comment_pairs, fields, height_or_missing, is_numeric_line, number, numbered_lines,
     periodic_flag,
@@ -53,8 +53,8 @@ pub fn profile_from_columns(
             line(k),
             format!(
                 "positions must increase strictly: {} m follows {} m (line {})",
-                crate::error::num(x[k]),
-                crate::error::num(x[k - 1]),
+                crate::core::error::num(x[k]),
+                crate::core::error::num(x[k - 1]),
                 line(k - 1)
             ),
         ));

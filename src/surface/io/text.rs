@@ -1,13 +1,13 @@
 //! Shared helpers of the text readers: decoding, line numbering, number parsing with errors
 //! that name the file, the line and the column.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::path::Path;
 
 /// Read a text file as UTF-8, falling back to Latin-1 (instrument exports often use it for `µ`).
-/// Files above [`crate::limits::MAX_TEXT_FILE_BYTES`] are refused before they are read.
+/// Files above [`crate::core::limits::MAX_TEXT_FILE_BYTES`] are refused before they are read.
 pub fn read_text(path: &Path) -> Result<String> {
-    crate::limits::check_file_size(path, crate::limits::MAX_TEXT_FILE_BYTES)?;
+    crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     Ok(match String::from_utf8(bytes) {
         Ok(s) => s,

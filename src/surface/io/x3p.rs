@@ -19,7 +19,7 @@
 //!   against `MD5ChecksumValidPoints` when given). Such a map is read as a
 //!   [`MaskedGrid`](crate::surface::missing::MaskedGrid); the writer writes NaN heights and the
 //!   validity mask for it.
-//! - Limits: `SizeX·SizeY` is checked against [`crate::limits::MAX_GRID_POINTS`] and the memory
+//! - Limits: `SizeX·SizeY` is checked against [`crate::core::limits::MAX_GRID_POINTS`] and the memory
 //!   available, and every entry is read with at most the bytes `main.xml` promises, before
 //!   anything is allocated for it.
 //!
@@ -27,9 +27,9 @@
 //! periodic patch as the comment `asperity:periodic` in `Record2/Comment`, which the reader
 //! honours.
 
-use crate::error::{Error, Result};
-use crate::grid::Grid2;
-use crate::output::write_atomic_via_path;
+use crate::core::error::{Error, Result};
+use crate::core::grid::Grid2;
+use crate::core::output::write_atomic_via_path;
 use crate::surface::missing::MaskedGrid;
 use crate::surface::topography::Topography;
 use md5::{Digest, Md5};
@@ -296,16 +296,16 @@ pub fn read_topography(path: &Path) -> Result<Topography> {
         "main.xml",
         "description",
         None,
-        crate::limits::MAX_XML_BYTES,
+        crate::core::limits::MAX_XML_BYTES,
     )?;
     let xml = String::from_utf8(xml)
         .map_err(|e| Error::parse(path, 0, format!("main.xml is not UTF-8: {e}")))?;
     let d = describe(path, &xml_texts(path, &xml)?)?;
-    crate::limits::check_grid(
+    crate::core::limits::check_grid(
         &path.display().to_string(),
         d.nx,
         d.ny,
-        crate::limits::STATS_BYTES_PER_POINT,
+        crate::core::limits::STATS_BYTES_PER_POINT,
     )?;
     let n = d.nx * d.ny;
     let w = bytes_per_value(d.data_type);

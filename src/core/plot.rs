@@ -1,7 +1,7 @@
 //! PNG figures (plotters). Every figure is written atomically beside the CSV it illustrates.
 
-use crate::error::{Error, Result};
-use crate::output::write_atomic_via_path;
+use crate::core::error::{Error, Result};
+use crate::core::output::write_atomic_via_path;
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -5,7 +5,7 @@
 //! whether the patch is one period of an infinite surface (generated surfaces are) or a finite
 //! window (measured files, a sphere): it selects the periodic or zero-padded FFT convolution.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use ndarray::Array2;
 
 /// A field sampled on a regular grid (heights in m, or pressures in Pa, ...).
@@ -24,8 +24,8 @@ pub struct Grid2 {
 impl Grid2 {
     /// Build a grid, checking spacings and that every value is finite.
     pub fn new(heights: Array2<f64>, dx: f64, dy: f64, periodic: bool) -> Result<Self> {
-        crate::error::require_positive("dx", dx)?;
-        crate::error::require_positive("dy", dy)?;
+        crate::core::error::require_positive("dx", dx)?;
+        crate::core::error::require_positive("dy", dy)?;
         if heights.is_empty() {
             return Err(Error::param("heights", "grid has no points"));
         }

@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | [`tolerance`] | `0 < tol < 1` | a relative residual of 1 or more is met by the initial guess |
 //! | [`contact_surface`] | spacing in [[`MIN_SPACING_M`], [`MAX_SPACING_M`]], `max |h|` ≤ [`MAX_HEIGHT_M`], not flat | outside these the heights are in the wrong unit or the products overflow; a flat surface is in full contact at any load |
-//! | [`contact_surface_tilt`] (warning) | plane's rise across a non-periodic window ≤ the Rq left without it | the solvers take heights as given: a tilt loads one side of the window |
+//! | [`crate::surface::stats::contact_surface_tilt`] (warning) | plane's rise across a non-periodic window ≤ the Rq left without it | the solvers take heights as given: a tilt loads one side of the window |
 //! | [`contact_file_grid`] | ≥ [`MIN_CONTACT_FILE_POINTS`] points per side | a profile or a stub read from a file is not an area whose contact the solvers resolve |
 //! | [`contact_pressures`] | `p ≤ MAX_STRAIN · E*` and `p·L/E* ≥ RESOLVABLE_FRACTION · (h_max − h_min)` | small-strain linear elasticity; an elastic displacement below the round-off of the heights cannot be resolved |
 //! | [`finite_result`] / [`positive_result`] | finite (and > 0) | a non-finite or non-positive stiffness, gap or error is never reported as a result |
@@ -19,8 +19,8 @@
 //! `sanity::contact_surface(&grid, &source)?`, `sanity::contact_pressures("--pressures-pa",
 //! &p, e_star, &grid)?`) and one per reported number (`sanity::finite_result(what, v)?`).
 
-use crate::error::{num, Error, Result};
-use crate::grid::Grid2;
+use crate::core::error::{num, Error, Result};
+use crate::core::grid::Grid2;
 
 /// Smallest grid spacing of a contact surface (1 pm: below atomic distances).
 pub const MIN_SPACING_M: f64 = 1e-12;
@@ -58,38 +58,6 @@ pub fn contact_file_grid(source: &str, nx: usize, ny: usize) -> Result<()> {
         )));
     }
     Ok(())
-}
-
-/// A non-periodic contact surface tilted by more than its roughness: the least-squares plane's
-/// height change across the window, `|b|·Lx + |c|·Ly`, above the rms height left once the plane
-/// is removed. The solvers take the heights as given, so a tilt loads one side of the window:
-/// a slope of 1e-3 added to the measured `x3p-2.x3p` (0.2 µm across 205 µm, Rq 0.077 µm) moved
-/// kn at 10 MPa by −11 % and the mean gap by +22 % (review of 2026-11-28). Returns the warning
-/// naming `source`, or `None` (periodic patches carry no tilt).
-pub fn contact_surface_tilt(source: &str, grid: &crate::grid::Grid2) -> Option<String> {
-    let (tilt, rq) = plane_tilt(grid);
-    (!grid.periodic && tilt > rq).then(|| {
-        format!(
-            "{source}: the least-squares plane of the heights rises {tilt:.3e} m across the window, more than the roughness left without it (Rq {rq:.3e} m); the contact solvers use the heights as given, so the tilt loads one side: if the tilt is not part of the contact, level the surface first (`asperity surface convert <file> --detrend plane -o <levelled file>`, for two bodies each of them)"
-        )
-    })
-}
-
-/// `(rise of the least-squares plane between the window's outermost samples, Rq of h − plane)`,
-/// the plane from the surface statistics' detrending ([`crate::surface::stats::Detrend::Plane`]).
-pub fn plane_tilt(grid: &crate::grid::Grid2) -> (f64, f64) {
-    use crate::surface::stats::{detrend_area, Detrend};
-    let level = detrend_area(&grid.heights, Detrend::Plane);
-    // The plane alone: mean-removed heights minus plane-removed ones; its range is its rise
-    // between the window's corners.
-    let plane = detrend_area(&grid.heights, Detrend::Mean) - &level;
-    let (lo, hi) = plane
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    let rq = (level.iter().map(|v| v * v).sum::<f64>() / level.len() as f64).sqrt();
-    (hi - lo, rq)
 }
 
 /// Largest Coulomb friction coefficient accepted. Dry metal pairs measure 0.1–1.5 in air and
@@ -314,41 +282,6 @@ mod tests {
     fn rough(scale: f64, dx: f64) -> Grid2 {
         let h = Array2::from_shape_fn((8, 8), |(i, j)| scale * ((i * 7 + j * 3) % 5) as f64);
         Grid2::new(h, dx, dx, true).unwrap()
-    }
-
-    /// A plane added to a rough (here: sinusoidal) window is measured exactly and flagged once
-    /// it exceeds the roughness; the same window level, or periodic, is not flagged.
-    #[test]
-    fn a_tilted_window_is_flagged_with_its_tilt() {
-        let (n, d) = (64, 1e-6);
-        let rough = |i: usize, j: usize| 0.1e-6 * (0.7 * i as f64).sin() * (1.3 * j as f64).cos();
-        let grid = |slope: f64, periodic: bool| crate::grid::Grid2 {
-            heights: ndarray::Array2::from_shape_fn((n, n), |(i, j)| {
-                rough(i, j) + slope * i as f64 * d
-            }),
-            dx: d,
-            dy: d,
-            periodic,
-        };
-        let (tilt, rq) = plane_tilt(&grid(1e-2, false));
-        let (level_tilt, level_rq) = plane_tilt(&grid(0.0, false));
-        // The plane's rise across the window is the slope times the window (within what the
-        // rough part projects onto a plane), and removing it leaves the rough part's Rq.
-        assert!(
-            (tilt - 1e-2 * n as f64 * d).abs() < 0.02 * 1e-2 * n as f64 * d,
-            "{tilt}"
-        );
-        assert!((rq / level_rq - 1.0).abs() < 1e-9, "{rq} vs {level_rq}");
-        assert!(level_tilt < 0.1 * level_rq);
-        let w = contact_surface_tilt("x.csv", &grid(1e-2, false)).unwrap();
-        assert!(
-            w.starts_with("x.csv:")
-                && w.contains("level the surface")
-                && w.contains("--detrend plane"),
-            "{w}"
-        );
-        assert!(contact_surface_tilt("x.csv", &grid(0.0, false)).is_none());
-        assert!(contact_surface_tilt("x.csv", &grid(1e-2, true)).is_none());
     }
 
     #[test]

@@ -38,7 +38,7 @@
 //! files. (A SIGKILL or power loss during the few renames of a commit can still leave a mix;
 //! staging directories left by a killed process are hidden and named `.asperity-staging-*`.)
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;

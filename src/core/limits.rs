@@ -28,7 +28,7 @@
 //! every grid they are about to build, `check_steps(flag, cycles, steps_per_cycle)` for every
 //! loading history, `check_count(flag, n, MAX_PRESSURES)` for lists.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::path::Path;
 
 /// Largest number of points of one grid (2²⁶ ≈ 67 million, e.g. 8192 × 8192): one field of

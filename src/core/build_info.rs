@@ -3,7 +3,7 @@
 //! of the build inputs (`src/`, `build.rs`, `Cargo.toml`, `Cargo.lock`), compiler, target and
 //! profile.
 //!
-//! Every shard file of a sharded sweep records it and [`crate::shard::merge`] refuses shards of
+//! Every shard file of a sharded sweep records it and [`crate::core::shard::merge`] refuses shards of
 //! different builds: a unit's result is the same bit for bit only when computed by the same
 //! code, and the crate version has stayed the same across many commits. Without git (a build
 //! from a tarball) the commit is absent and the source hash still tells two builds apart; two

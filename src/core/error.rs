@@ -2,7 +2,7 @@
 //!
 //! Every variant names what the user has to fix: the file and line, the parameter, or the solver
 //! that failed to converge (with its iteration count and residual). The CLI prints the message and
-//! exits non-zero; no stage writes partial output when it returns an error (see [`crate::output`]).
+//! exits non-zero; no stage writes partial output when it returns an error (see [`crate::core::output`]).
 
 use std::path::PathBuf;
 
@@ -38,7 +38,7 @@ pub enum Error {
     #[error("{0}")]
     Data(String),
     /// A request that would exceed a documented resource limit (grid size, memory, file size,
-    /// number of steps), refused before any allocation (see [`crate::limits`]).
+    /// number of steps), refused before any allocation (see [`crate::core::limits`]).
     #[error("resource limit `{name}`: {message}")]
     Limit { name: String, message: String },
 }

@@ -5,7 +5,7 @@
 //! `(record, line)` through [`csv_record`], so malformed input is always reported the same way:
 //! `file:line: message`.
 
-use crate::error::{Error, Result};
+use crate::core::error::{Error, Result};
 use std::path::Path;
 
 /// Open a CSV file with a header row: fields trimmed, lines starting with `#` skipped, every

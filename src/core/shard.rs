@@ -46,8 +46,8 @@
 //! [`run_units`] with [`Shard::WHOLE`] and its output writer), and add the kind to `asperity
 //! merge`, which calls [`merge`] and the same output writer.
 
-use crate::build_info::BuildId;
-use crate::error::{Error, Result};
+use crate::core::build_info::BuildId;
+use crate::core::error::{Error, Result};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -255,7 +255,7 @@ pub fn write_shard<S: ShardedSweep>(
             path.display()
         ))
     })? + "\n";
-    crate::output::write_string_atomic(&path, &text)?;
+    crate::core::output::write_string_atomic(&path, &text)?;
     Ok(path)
 }
 
