@@ -92,13 +92,13 @@ mod tests {
     }
 
     /// Student's t quantiles against the printed table (Abramowitz & Stegun, Table 26.10):
-    /// t₀.₉₇₅ = 12.706 (ν 1), 2.571 (ν 5), 2.228 (ν 10), 1.960 (ν → ∞).
+    /// t₀.₉₇₅ = 12.706 (ν 1), 2.571 (ν 5), 2.228 (ν 10), 1.960 (ν → ∞, here 10⁶).
     #[test]
     fn student_t_matches_the_table() {
         assert!((student_t_975(1.0) - 12.706).abs() < 1e-3);
         assert!((student_t_975(5.0) - 2.571).abs() < 1e-3);
         assert!((student_t_975(10.0) - 2.228).abs() < 1e-3);
-        assert!((student_t_975(1e9) - 1.960).abs() < 1e-3);
+        assert!((student_t_975(1e6) - 1.960).abs() < 1e-3);
         assert!(student_t_975(0.0).is_nan());
         assert!(student_t_quantile(1.0, 3.0).is_nan());
     }
