@@ -1,4 +1,4 @@
-//! The synthetic measured sweeps of the full-size reduced-model update in README
+//! The synthetic measured sweeps of the full-size reduced-model update in docs/identify.md
 //! ("Multi-DOF reduced models", `calib/identify-reduced/`): the blade–damper example of
 //! `asperity response` (`calib/response/model.toml`, two tables of 110 Valanis elements) with
 //! known updating factors, swept at three force levels and written as a displacement sensor at

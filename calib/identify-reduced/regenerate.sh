@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates calib/identify-reduced/ (README, "Multi-DOF reduced models", full-size update):
+# Regenerates calib/identify-reduced/ (docs/identify.md, "Multi-DOF reduced models", at full size):
 # the synthetic sweeps of the blade–damper example with known factors (seeded noise, so the
 # same files every time) and the reduced-model update fitted on the 3 N and 30 N levels,
 # predicting 10 N. About 20–30 min on 2 cores (one evaluation of two 36-row sweeps takes
