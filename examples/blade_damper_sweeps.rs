@@ -1,10 +1,10 @@
-//! The synthetic measured sweeps of the full-size reduced-model update in README
-//! ("Multi-DOF reduced models", `docs/identify-reduced/`): the blade–damper example of
+//! The synthetic measured sweeps of the full-size reduced-model update in docs/identify.md
+//! ("Multi-DOF reduced models", `calib/identify-reduced/`): the blade–damper example of
 //! `asperity response` (`calib/response/model.toml`, two tables of 110 Valanis elements) with
 //! known updating factors, swept at three force levels and written as a displacement sensor at
 //! the response DOF would record it (the mode is damped by 3–12 %: an accelerance's maximum would
 //! sit well above the resonance) — seeded noise, so the report can be regenerated exactly
-//! (`docs/identify-reduced/regenerate.sh`).
+//! (`calib/identify-reduced/regenerate.sh`).
 //!
 //!     cargo run --release --example blade_damper_sweeps -- <out dir>
 //!

@@ -5,7 +5,7 @@
 # This notebook-style script (cells marked `# %%`, runnable as a script or in Jupyter/VS Code)
 # rebuilds, with the `asperity` Python package, the calibration table that
 # `cargo run --release -- calibrate` writes to `calib/calibration_table.csv` and that the
-# README shows: per realisation (reference statistics, seeds 1, 2, ...) the surface →
+# docs/calibrate.md shows: per realisation (reference statistics, seeds 1, 2, ...) the surface →
 # warm-started normal sweep (kn = dp̄/dδ, tangent problem) → per pressure one history of increasing tangential
 # amplitudes (0.2 … 1.5 × the gross-slip displacement, 40 steps per cycle, μ = 0.6; the steady
 # loop of each amplitude from one half cycle and its point reflection) → one Valanis element
@@ -13,7 +13,7 @@
 # realisations and the half-width of its 95 % Student-t interval.
 #
 #     python examples/reference_calibration.py              # the reference case: 1024², 8 realisations (many minutes)
-#     python examples/reference_calibration.py --grid 256   # a quick look (seconds), NOT the README's numbers
+#     python examples/reference_calibration.py --grid 256   # a quick look (seconds), NOT the reference numbers of docs/calibrate.md
 #
 # The same library code runs, composed here in Python: python/tests/test_example.py checks that
 # the table equals `asperity calibrate --grid 128` value for value. The CLI also runs the grid
@@ -120,11 +120,11 @@ def calibrate(grid=1024, realisations=REALISATIONS, log=print):
 def main():
     parser = argparse.ArgumentParser(description="The reference calibration table from Python.")
     parser.add_argument("--grid", type=int, default=1024,
-                        help="points per side (1024: the reference case of the README; 256: a quick look)")
+                        help="points per side (1024: the reference case of docs/calibrate.md; 256: a quick look)")
     parser.add_argument("--realisations", type=int, default=REALISATIONS,
                         help="number of surfaces (seeds 1, 2, ...)")
     parser.add_argument("--compare", type=Path, default=REPO / "calib" / "calibration_table.csv",
-                        help="table to compare with at 1024² (the README's reference numbers)")
+                        help="table to compare with at 1024² (the reference numbers of docs/calibrate.md)")
     args = parser.parse_args()
     t0 = time.perf_counter()
     table = calibrate(args.grid, args.realisations)
@@ -138,7 +138,7 @@ def main():
 
     # %% The table in use: element parameters at an arbitrary pressure (monotone cubic in ln p).
     if args.grid != 1024 or args.realisations != REALISATIONS:
-        print("\n(coarse grid: a quick look, not the README's reference numbers)")
+        print("\n(coarse grid: a quick look, not the reference numbers of docs/calibrate.md)")
         return 0
     reference = ap.CalibrationTable.read_csv(args.compare)
     ref = reference.columns()

@@ -6,8 +6,8 @@
 //! are scaled by the element's area: `kn = kn″(p)·A`, `E0 = E0″(p)·A`, `Et = Et″(p)·A` (N/m from
 //! N/m³ × m²); the shape parameter `k` and friction coefficient `mu` are taken as they are.
 //! Elements whose pressure lies outside the table's range get the end pair's power law
-//! (`kn ∝ p^m`, see [`crate::calibrate::table`]; until 2026-11-28 the end row's values, which left
-//! a node at a tenth of the first row's pressure about four times too stiff), are flagged in the
+//! (`kn ∝ p^m`, see [`crate::calibrate::table`]; the end row's values would leave a node at a
+//! tenth of the first row's pressure about four times too stiff), are flagged in the
 //! `out_of_range` column (−1 below, +1 above, 0 within) and counted in the summary.
 //!
 //! A table written by `asperity calibrate` carries each row's convergence verdict; the elements

@@ -1,4 +1,4 @@
-//! The bad-input catalogue: every case of issue 15 and more, for every reader, configuration
+//! The bad-input catalogue: every case reported by users and more, for every reader, configuration
 //! key and flag, run through the binary. Each case must end with a non-zero exit that is an
 //! error, not a crash (exit 1, or 2 for clap's own argument errors; never 0, 101 = panic or
 //! 134 = abort), an error message naming the file, line or flag (the expected fragments), and
@@ -199,7 +199,7 @@ fn catalogue() -> Vec<Case> {
         truncated_dektak += &format!("{:.1},{:.5},,\n", k as f64 * 0.15625, 0.01 * k as f64);
     }
     vec![
-        // --- Out-of-memory aborts of the issue: resource limits, named.
+        // --- Out-of-memory aborts: resource limits, named.
         case("npy header claims 1e6 x 1e6", "surface stats {d}/big.npy", &["big.npy", "truncated or corrupt"])
             .file("big.npy", npy("(1000000, 1000000)", "<f8", &[0u8; 32768]))
             .file("big.npy.json", sidecar(1e-6)),
@@ -214,7 +214,7 @@ fn catalogue() -> Vec<Case> {
             .file("big.png", png_header(100_000, 100_000))
             .file("d.csv", "density,pressure_MPa\n0.3,2.5\n1,10\n"),
         case("too many pressures", &format!("contact normal --grid 128 --pressures-pa {} --out-dir {{d}}/out", (1..=1001).map(|k| format!("{k}e3")).collect::<Vec<_>>().join(",")), &["--pressures-pa", "resource limit"]),
-        // --- Exit 0 with nonsense in the issue: physical sanity.
+        // --- Exit 0 with nonsense: physical sanity.
         case("flat surface kn -inf", "contact normal --surface {d}/flat.npy --out-dir {d}/out", &["flat.npy", "flat"])
             .file("flat.npy", npy("(16, 16)", "<f8", &f64s(std::iter::repeat_n(3e-6, 256))))
             .file("flat.npy.json", sidecar(1e-6)),
@@ -269,7 +269,7 @@ fn catalogue() -> Vec<Case> {
             .file("r.csv", record(100.0))
             .file("f", "x"),
         case("--out-dir below a file (contact)", "contact normal --grid 128 --out-dir {d}/f/sub", &["--out-dir", "not a directory"]).file("f", "x"),
-        // --- Unclear errors of the issue.
+        // --- Unclear errors.
         case("area of 1 x 5 points names the file", "surface stats {d}/m.csv", &["m.csv", "2 × 2"])
             .file("m.csv", "# unit: m, dx_m: 1e-6, dy_m: 1e-6\n1e-7,2e-7,3e-7,1e-7,5e-8\n"),
         case("time not increasing: file line", "diagnose {d}/r.csv --out-dir {d}/out", &["r.csv:4", "does not increase"])

@@ -190,7 +190,7 @@ fn reference_chain_on_a_coarse_grid_writes_table_plots_and_sidecar() {
     }
 }
 
-/// Issue 14: a coarse grid (contact spots 1–3 points across) is flagged, with the pressure.
+/// A coarse grid (contact spots 1–3 points across) is flagged, with the pressure.
 #[test]
 fn coarse_grid_warns_about_under_resolved_spots() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,4 +1,4 @@
-//! Issue 14 validation of the realisation statistics on a cheap configuration (reference
+//! Validation of the realisation statistics on a cheap configuration (reference
 //! statistics on a 128² grid over a 125 µm patch, two pressures, two amplitudes): every
 //! realisation is the same whatever the number of realisations run with it, and the 95 %
 //! interval of the mean narrows as t₀.₉₇₅,N−1·s/√N (the expected half-width is checked exactly

@@ -20,7 +20,7 @@
 //! least the best Valanis element's local misfit of the clean loop, see [`BEM_MIN_FORCE_NOISE`])
 //! and on the displacement (0.02 %); only (time, displacement, force) reach
 //! `diagnose`. The confusion matrix of expected against found verdicts is printed and recorded
-//! in the README; every verdict must be right, and no verdict may say "no effect needed" while
+//! in docs/diagnose.md; every verdict must be right, and no verdict may say "no effect needed" while
 //! the held-out residual is above twice the noise floor.
 
 use asperity::calibrate::fit::{fit_valanis, FitOptions, LoopData};

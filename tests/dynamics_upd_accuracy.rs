@@ -8,7 +8,7 @@
 //! the previous point's Jacobian, 30 points over the band). Tight: corrector tolerance 1e-11,
 //! 4× the points, a 5° turning-angle limit. Both peaks refined by a parabola through the largest
 //! sample and its neighbours. Tolerance: peak amplitude within 0.02 %, peak frequency within
-//! 0.005 % (the peer comparison with pyHarm agrees to 0.01 %; the issue asks 0.5 %; found
+//! 0.005 % (the peer comparison with pyHarm agrees to 0.01 %; the goal is 0.5 %; found
 //! when written: +0.003 % and −0.0004 %). Units: SI.
 
 #[path = "support/upd_model.rs"]

@@ -632,7 +632,7 @@ fn a_file_in_another_phase_convention_is_refused_naming_it() {
         "{err}"
     );
     assert!(!out.exists(), "output written on error");
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/identify/model.json");
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("calib/identify/model.json");
     let o = run(
         "predict",
         &[

@@ -262,7 +262,7 @@ fn the_stiffness_law_put_in_is_chosen() {
     // in ω² at 200 µm, k2 = 3π·ε1·k_s/(8·A)) in the even realisations, as its square (cubic
     // spring, hardening +0.5 % at 200 µm) in the odd ones; both offered each time, with the
     // quadratic damper as a third competitor for the misfit. Fit on levels 1 and 3 (the
-    // issue's protocol): the two laws differ in how the resonance moves between and within the
+    // validation protocol): the two laws differ in how the resonance moves between and within the
     // levels, not only in its size at one amplitude.
     let truths = [
         (Effect::QuadraticStiffness, -0.005),

@@ -1,4 +1,4 @@
-//! `asperity response` end to end on a small lumped model, and every bad input the issue lists:
+//! `asperity response` end to end on a small lumped model, and every bad input of the catalogue:
 //! a clear error naming the file, line or parameter, a non-zero exit, and no output written.
 
 use std::path::{Path, PathBuf};

@@ -368,7 +368,7 @@ fn mindlin_deresiewicz_energy_at_displacement(cm: &CattaneoMindlin, da: f64) -> 
     }
 }
 
-/// Issue 14 validation: energy per cycle versus displacement amplitude of one Hertzian asperity
+/// Validation: energy per cycle versus displacement amplitude of one Hertzian asperity
 /// through the calibration's amplitude history (one history of increasing amplitudes, half
 /// cycles and their point reflections, `calibrate::amplitudes`), against Mindlin–Deresiewicz
 /// from microslip (0.2 δ_gs, stick radius 0.89 a) to gross slip (1.5 δ_gs): within 1 % in both

@@ -1,6 +1,6 @@
 """The notebook-style example (examples/reference_calibration.py) composes the calibration
 chain from the Python package; on a coarse grid it must write the same table as
-`asperity calibrate --grid N`, value for value (at 1024² it reproduces calib/, see README)."""
+`asperity calibrate --grid N`, value for value (at 1024² it reproduces calib/, see docs/calibrate.md)."""
 
 import runpy
 

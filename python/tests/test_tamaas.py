@@ -3,7 +3,7 @@ Python: contact area ratio and mean gap within 1e-6 relative. Conventions as in
 benches/peers/tamaas_compare.py: tamaas model E = E*, ν = 0 (its hertz modulus equals E*),
 periodic kernel 2/(E*|q|) in both; tamaas' mean gap is mean(u − h).
 
-Prints the numbers (pytest -s) that README/BENCHMARKS record.
+Prints the numbers (pytest -s) that docs/python.md and BENCHMARKS.md record.
 """
 
 import numpy as np

@@ -38,7 +38,7 @@ impl Verdict {
     /// The verdict of a change `d` against `tolerance` (see the module documentation). A
     /// difference without an interval (one realisation) is undetermined: its value alone mixes
     /// the effect with the surface's sampling noise — one realisation at 256² called the same
-    /// 5 MPa grid check converged or not converged depending on the seed (2026-11-28; with two
+    /// 5 MPa grid check converged or not converged depending on the seed (with two
     /// realisations it read undetermined).
     pub fn of(d: Difference, tolerance: f64) -> Self {
         if !d.mean.is_finite() {

@@ -52,7 +52,6 @@
 //! contact — gives zero stiffness. The result is flagged ([`RangeFlag::Below`] /
 //! [`RangeFlag::Above`], `in_range = false`) so that the caller can count and report the nodes
 //! concerned: no BEM loop was computed there. A negative pressure reads as zero, NaN gives NaN.
-//! (Until 2026-11-28 the end row's values were used unchanged outside the range.)
 
 use crate::calibrate::convergence::Verdict;
 use crate::core::error::{Error, Result};

@@ -92,7 +92,7 @@ pub const REFRESH_INTERVAL: usize = 25;
 /// surface and the self-affine benchmark surface (1024², five loads at 0.01–39 % contact,
 /// 1 thread; `cargo bench --bench normal -- --warm-start`): a warm start 2 % away takes
 /// 0.70–0.92 of the nested start's time, 10 % away 0.96–1.19, a factor 2 away 1.16–1.35
-/// (BENCHMARKS.md, issue 16, section D).
+/// (BENCHMARKS.md, normal contact, section D).
 pub const WARM_START_LOAD_RATIO: f64 = 1.05;
 
 /// Nested iteration stops coarsening below this many points a side.
@@ -317,7 +317,7 @@ pub struct NormalSolver {
 /// steps and the convergence test are computed in double precision on the operator `K⊛`. Its
 /// rounding (relative 1e-7, as if `M` were perturbed by that much) cost no iteration on any
 /// benchmark case (self-affine and Gaussian, 512²–2048²), and it halves the preconditioner's
-/// memory traffic (BENCHMARKS.md, issue 16).
+/// memory traffic (BENCHMARKS.md, normal contact).
 struct Preconditioner {
     plan: FftPlan<f32>,
     spectrum: KernelSpectrum<f32>,

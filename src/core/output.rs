@@ -86,7 +86,9 @@ pub fn remove_partial_outputs() {
 }
 
 /// Handle SIGINT, SIGTERM and SIGHUP: remove partial outputs (see the module documentation),
-/// print a line and exit with status 130. Call once, at the start of `main`.
+/// print a line and exit with status 130. Call once, at the start of `main`. Part of the `cli`
+/// feature (a host process such as Python owns its signals).
+#[cfg(feature = "cli")]
 pub fn install_interrupt_handler() {
     let r = ctrlc::set_handler(|| {
         remove_partial_outputs();

@@ -54,8 +54,8 @@ use sha2::{Digest, Sha256};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// Format tag written into every shard file. v2 (2026-11-28) records the build
-/// ([`ShardFile::build`]) where v1 recorded only the crate version.
+/// Format tag written into every shard file. v2 records the build ([`ShardFile::build`]);
+/// v1 files recorded only the crate version.
 pub const FORMAT: &str = "asperity-shard-v2";
 
 /// The previous format, refused with its own message (it cannot say which build wrote it).

@@ -59,7 +59,7 @@
 //! `μN/E0`) lags the exact loop by O(Δx). That lag is systematic, odd in the direction of motion
 //! and concentrated after reversals, and a selection then "explains" it with viscous damping or
 //! a static friction peak: with an exactly calibrated baseline and no effect in the data it gave
-//! false positives (ΔBIC −11 to −18 at 400 and 1024 samples per cycle; −82 in the run).
+//! false positives (ΔBIC −11 to −18 at 400 and 1024 samples per cycle; −82 on an earlier record).
 //! With the exact step the calibrated baseline's residual is at the noise (tested in
 //! `tests/diagnose_independent.rs`).
 

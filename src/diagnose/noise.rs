@@ -384,7 +384,7 @@ mod tests {
     /// estimate over 200 noise realisations of a Jenkins loop (6 cycles, 936 differences;
     /// and 3 cycles, 234): within −15 %…+35 % of the measured spread for white noise and
     /// AR(1) noise with ρ = 0.6 and 0.9, using the ρ each record's own estimate gives
-    /// (measured 2026-11-28: predictions 0.88–1.18× the spread; counting `n(1−ρ)/(1+ρ)`
+    /// (measured: predictions 0.88–1.18× the spread; counting `n(1−ρ)/(1+ρ)`
     /// independent differences instead overstated it up to 1.8×, counting `n` understated it
     /// up to 3×).
     #[test]

@@ -367,7 +367,7 @@ impl Report {
     /// `d·F_slip`, which is what a load-cell zero offset `F₀ = d·F_slip` does in macroslip; the
     /// two differ only in stick and microslip (the offset shifts them too, the asymmetry does
     /// not). An offset is not a candidate (it would be chosen about as often: with it, the
-    /// measured 1.5 in record took an offset of 1076 N before the asymmetry, 2026-11-28), so
+    /// measured 1.5 in record took an offset of 1076 N before the asymmetry), so
     /// the report names the alias wherever the asymmetry is accepted.
     fn offset_alias(&self) -> Option<String> {
         let c = self

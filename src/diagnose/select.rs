@@ -23,7 +23,7 @@
 //!      ([`super::residual::clearance_regions`], model-free). Without this check a gap of
 //!      2 µm in a 1 mm stroke was "found" in an Iwan loop, where it only bent the reversals.
 //!
-//!    Why not the previous `ΔBIC` with `n_eff` from the residual's lag-1 autocorrelation: a
+//!    Why not a `ΔBIC` with `n_eff` from the residual's lag-1 autocorrelation: a
 //!    systematic misfit is smooth, so its residual has ρ → 1 and `n_eff = n(1−ρ)/(1+ρ)` falls
 //!    to a few dozen: a model missing half of the physics made every candidate look
 //!    insignificant and the answer read "no effect needed". That autocorrelation is the

@@ -1027,8 +1027,8 @@ mod tests {
 
     /// A Gaul–Lenz element (k = 0.5, Et = 0) driven at one and three slip displacements: its
     /// fundamental force coefficients at 64 samples per period (the default for H = 3) agree
-    /// with 4096 samples to 1e-5 (measured 1.2e-6; 3e-4 at 16 samples). With the backward-Euler
-    /// update used before 2026-11-27 they were off by −1.8 % and −2.2 % (in phase, quadrature)
+    /// with 4096 samples to 1e-5 (measured 1.2e-6; 3e-4 at 16 samples). With a backward-Euler
+    /// update they are off by −1.8 % and −2.2 % (in phase, quadrature)
     /// at one slip displacement and +0.9 % and −2.9 % at three, halving with each doubling.
     #[test]
     fn a_nan_periodicity_error_is_the_worst() {

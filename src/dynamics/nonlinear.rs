@@ -313,8 +313,8 @@ impl HystereticElement for Jenkins {
 /// Gaul–Lenz element: the Valanis element with a constant stick limit `σ0` (N) on one
 /// displacement component ([`crate::element::gaul_lenz`]). State: force and `q_ref`. Each
 /// sample increment is integrated exactly for the piecewise-linear displacement between the
-/// samples ([`valanis::frozen_load_step`], exact at a constant normal load); until 2026-11-27
-/// it was a backward-Euler step, whose first-order lag biased the harmonic forces by up to
+/// samples ([`valanis::frozen_load_step`], exact at a constant normal load); a
+/// backward-Euler step's first-order lag would bias the harmonic forces by up to
 /// 2–3 % at 64 samples per period (test `valanis_aft_forces_converge_with_the_sampling`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GaulLenz {

@@ -64,10 +64,10 @@ impl NodePixel {
 /// round patch's box the film is white, the nearest fitted data lie up to `(√2 − 1)·r` away,
 /// and an order-4 fit there reads anything. On the reference LW film, nodes 4 mm from patch
 /// 1's centre in x and in y (white film inside its box) read 2.39 and 0.99 MPa, and two
-/// negative values set to 0, before this check. A region of interest (`--roi-rect-mm`,
+/// negative values set to 0, without this check. A region of interest (`--roi-rect-mm`,
 /// `--roi-polygon-mm`) holds white film too: its unstained pixels that are not enclosed by
 /// stain (4-connected to a pixel outside the region) are refused like white film outside an
-/// automatic patch (before 2026-11-28 every pixel of an ROI was accepted). For an automatic
+/// automatic patch, so an ROI is no way round the check. For an automatic
 /// patch (stained core and rim, holes filled) the rule accepts exactly its pixels.
 pub struct FittedRegion<'a> {
     map: &'a regions::FilmMap,

@@ -13,7 +13,7 @@
 //! in the reference study, where the parallel fine elements would give `Σ kn″(p_i)·A_i`. The two
 //! differ by the table's curvature in the pressure over a triangle. With the committed
 //! `calib/calibration_table.csv`, a triangle holding equal areas at 1 and 9 MPa gets kn +3.1 %
-//! above the sum (one at 0 and 4 MPa: +2.5 %); on the README's film example (725 nodes reduced to 110 on a 1 mm mesh, 1.6–2.8 MPa) Σkn and ΣE0 within 5e-5 of the fine nodes'.
+//! above the sum (one at 0 and 4 MPa: +2.5 %); on the film example of docs/film.md (725 nodes reduced to 110 on a 1 mm mesh, 1.6–2.8 MPa) Σkn and ΣE0 within 5e-5 of the fine nodes'.
 //!
 //! The coarse mesh is structured: squares of side `h` aligned with the film axes, starting at the
 //! fine nodes' lower-left bounding corner, each split into two right triangles by its diagonal

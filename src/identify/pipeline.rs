@@ -1289,13 +1289,13 @@ mod tests {
     fn saved_model_files_are_read_strictly() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         for f in [
-            "docs/identify/model.json",
-            "docs/identify-settled/model.json",
+            "calib/identify/model.json",
+            "calib/identify-settled/model.json",
         ] {
             SavedModel::read(&root.join(f)).unwrap();
         }
         let good: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(root.join("docs/identify/model.json")).unwrap(),
+            &std::fs::read_to_string(root.join("calib/identify/model.json")).unwrap(),
         )
         .unwrap();
         let d = tempfile::tempdir().unwrap();

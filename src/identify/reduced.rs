@@ -863,7 +863,7 @@ pub fn identify_reduced(
     // One Nelder–Mead start from the model as given (the prediction being updated is the
     // natural first guess) and the swarm's starts, if any; the best is kept. Without swarm
     // starts the update is local: the choice for large models, whose every evaluation costs
-    // seconds (README).
+    // seconds (docs/identify.md).
     let local = fit_local(spec, &fit_data, &masks, &[vec![1.0; 4]], opts, progress)?;
     let factors_fit = if opts.starts == 0 {
         local

@@ -1007,7 +1007,7 @@ mod tests {
     /// flagged. The rate-independent one's viscous-equivalent damping ratios differ between the
     /// sides by up to the drive frequencies' ratio (here beyond −20 %, twice the tolerance) —
     /// what the check counted as a change of the structure before it allowed for the
-    /// damping's form (on the synthetic blade–damper sweeps of docs/identify-reduced, all
+    /// damping's form (on the synthetic blade–damper sweeps of calib/identify-reduced, all
     /// three levels) — and lie inside the damping-form interval.
     #[test]
     fn heavy_damping_of_either_form_is_stationary() {

@@ -1193,7 +1193,7 @@ fn masked_area_stats(m: &MaskedGrid, detrend: Detrend) -> Result<SurfaceStats> {
 /// height change across the window, `|b|·Lx + |c|·Ly`, above the rms height left once the plane
 /// is removed. The solvers take the heights as given, so a tilt loads one side of the window:
 /// a slope of 1e-3 added to the measured `x3p-2.x3p` (0.2 µm across 205 µm, Rq 0.077 µm) moved
-/// kn at 10 MPa by −11 % and the mean gap by +22 % (review of 2026-11-28). Returns the warning
+/// kn at 10 MPa by −11 % and the mean gap by +22 %. Returns the warning
 /// naming `source`, or `None` (periodic patches carry no tilt).
 pub fn contact_surface_tilt(source: &str, grid: &Grid2) -> Option<String> {
     let (tilt, rq) = plane_tilt(grid);

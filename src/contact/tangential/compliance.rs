@@ -585,7 +585,7 @@ impl KernelTable {
 /// Estimated cost of one product with each operator `(dense, fft)`, in ns (2 threads).
 ///
 /// Measured on the reference statistics' periodic patch (`cargo bench --bench tangential`,
-/// 2 threads, idle machine, 2026-11-28, after the FFT product stopped allocating; BENCHMARKS.md,
+/// 2 threads, idle machine, allocation-free FFT product; BENCHMARKS.md,
 /// "Tangential contact"): the direct summation costs 0.12–0.25 ns per pair of contact points
 /// (`n²` pairs; less per pair as `n` grows: 0.18 at n = 3391 on 512², 0.12 at 13 222 on
 /// 1024²), the FFT product (two forward and two inverse real transforms, six spectral
