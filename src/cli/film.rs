@@ -385,10 +385,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
     // plots of a region that no longer exists) is removed after the commit, so that no reader
     // (`asperity elements`) picks up a stale file.
     for name in FIXED_OUTPUTS {
-        out.owns(name, "");
+        out.owns(name, "")?;
     }
-    out.owns("region_", "_fitted.png");
-    out.owns("region_", "_residual.png");
+    out.owns("region_", "_fitted.png")?;
+    out.owns("region_", "_residual.png")?;
+    // No output may be (or remove) one of the inputs.
+    out.input(&args.image, "--image")?;
+    out.inputs(&args.colour_table, "--colour-table")?;
+    out.inputs(&args.density_calibration, "--density-calibration")?;
+    out.inputs(&args.nodes, "--nodes")?;
     let (mut reader, table_path) = match (&args.colour_table, &args.density_calibration) {
         (Some(t), None) => (
             ColourToPressure::Table(ColourTable::read_csv(t, args.max_colour_distance)?),

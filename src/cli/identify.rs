@@ -211,8 +211,7 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     opts.response_amplitudes = args.response_amplitude.clone();
     opts.rows = fit_rows(args.rows);
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
-    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("identify-level", ".png");
+    let out = identify_outputs(&args)?;
     let sweeps = read_sweeps(&args.files)?;
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
@@ -221,6 +220,25 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     let id = result?;
     report(&id.text(), &write_all(out, |d| id.write(d))?);
     Ok(())
+}
+
+/// The output set of `identify` with its inputs declared: the measured files (and the model
+/// file of `--structure` with the files it names, added by the caller) are never written over.
+fn identify_outputs(args: &IdentifyArgs) -> Result<OutputSet> {
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.owns("identify-level", ".png")?;
+    out.writes(&[
+        "identify.txt",
+        "identify.json",
+        "model.json",
+        "identify-rows.csv",
+        "identify-backbone.csv",
+        "identify-backbone.png",
+        "identify-response-controlled.csv",
+    ])?;
+    out.inputs(&args.files, "measured file")?;
+    out.inputs(&args.structure, "--structure")?;
+    Ok(out)
 }
 
 /// The effects of `--candidates` (`none`: no search), each one of `allowed`.
@@ -258,8 +276,10 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     if args.starts > 0 {
         check_search(args)?;
     }
-    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("identify-level", ".png");
+    let mut out = identify_outputs(args)?;
+    for (role, p) in asperity::dynamics::model_file::referenced_files(structure)? {
+        out.input(&p, &format!("--structure {role}"))?;
+    }
     let spec = ReducedSpec::load(structure)?;
     let sweeps = read_sweeps(&args.files)?;
     let fit_levels =
@@ -330,7 +350,12 @@ pub fn run_predict(args: PredictArgs) -> Result<()> {
         ControlArg::Response => Control::Response,
     };
     let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("predict-", ".png");
+    out.owns("predict-", ".png")?;
+    out.writes(&["predict.txt", "predict.json", "predict-rows.csv"])?;
+    out.inputs(&args.files, "measured file")?;
+    for (role, p) in asperity::identify::predict::model_inputs(&args.model)? {
+        out.input(&p, &role)?;
+    }
     let sweeps = read_sweeps(&args.files)?;
     let p = predict(&args.model, sweeps, control)?;
     let written = write_all(out, |d| p.write(d))?;

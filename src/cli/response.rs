@@ -32,7 +32,13 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         ("elements_level_", ".csv"),
         ("frf_", ".png"),
     ] {
-        out.owns(prefix, suffix);
+        out.owns(prefix, suffix)?;
+    }
+    out.writes(&["response.json"])?;
+    // The model file and every file it names are inputs: none may be written over or removed
+    // (checked before the model is built and swept).
+    for (role, p) in model_file::referenced_files(&args.model)? {
+        out.input(&p, &format!("{role} of {}", args.model.display()))?;
     }
     let model = model_file::load(&args.model)?;
     let f = &model.file;

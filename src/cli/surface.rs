@@ -351,6 +351,7 @@ fn generate(a: GenerateArgs) -> Result<()> {
         surface::io::check_writable_format(p).map_err(|e| super::rename_param(e, "--out"))?;
     }
     let mut out = OutputSet::for_files(&a.out, "--out")?;
+    out.inputs(&a.config, "--config")?;
     let pb = spinner(&format!("generating {}×{} patch", spec.nx, spec.ny));
     let t0 = Instant::now();
     let grid = surface::generate(&spec)?;
@@ -446,10 +447,11 @@ fn stats(a: StatsArgs) -> Result<()> {
         None => None,
     };
     let mut out = match &psd_paths {
-        Some((csv, png)) => Some(OutputSet::for_files(
-            &[csv.clone(), png.clone()],
-            "--psd-out",
-        )?),
+        Some((csv, png)) => {
+            let mut set = OutputSet::for_files(&[csv.clone(), png.clone()], "--psd-out")?;
+            super::surface_inputs(&mut set, std::slice::from_ref(&a.file), "the topography")?;
+            Some(set)
+        }
         None => None,
     };
     let pb = spinner(&format!("reading {}", a.file.display()));
@@ -686,7 +688,10 @@ fn combine(a: CombineArgs) -> Result<()> {
                 surface::io::check_writable_format(p)
                     .map_err(|e| super::rename_param(e, "--out"))?;
             }
-            out = Some(OutputSet::for_files(&a.out, "--out")?);
+            let mut set = OutputSet::for_files(&a.out, "--out")?;
+            super::surface_inputs(&mut set, std::slice::from_ref(p1), "SURFACE1")?;
+            super::surface_inputs(&mut set, std::slice::from_ref(p2), "SURFACE2")?;
+            out = Some(set);
             let load = |p: &Path| -> Result<_> {
                 let (g, r) = surface::missing::load_area(p, a.fill)?;
                 if let Some(r) = r {
@@ -740,6 +745,7 @@ fn convert(a: ConvertArgs) -> Result<()> {
         .transpose()
         .map_err(|e| super::rename_param(e, "--detrend"))?;
     let mut out = OutputSet::for_files(&a.out, "--out")?;
+    super::surface_inputs(&mut out, std::slice::from_ref(&a.input), "the input")?;
     let (topo, fill) = read_filled(&a.input, a.fill)?;
     if let Topography::Profile(_) = topo {
         return Err(Error::Data(format!(

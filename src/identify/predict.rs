@@ -151,6 +151,26 @@ pub struct Prediction {
     pub stationarity: std::result::Result<Vec<Option<SideComparison>>, String>,
 }
 
+/// `(role, path)` of a saved model file and, for a reduced model, of the response-model file
+/// it updates and every file that one names: the inputs of `predict` besides the measured
+/// files. A file that cannot be read as a model gives the model file alone (its reader reports
+/// the error).
+pub fn model_inputs(model_file: &Path) -> Result<Vec<(String, std::path::PathBuf)>> {
+    let mut files = vec![("--model".to_string(), model_file.to_path_buf())];
+    let reduced = std::fs::read_to_string(model_file)
+        .ok()
+        .and_then(|t| serde_json::from_str::<SavedReducedModel>(&t).ok());
+    if let Some(r) = reduced {
+        if let Ok(refs) = crate::dynamics::model_file::referenced_files(&r.model_file) {
+            files.extend(
+                refs.into_iter()
+                    .map(|(role, p)| (format!("{role} of the --model's structure"), p)),
+            );
+        }
+    }
+    Ok(files)
+}
+
 /// Predict measured files with a saved model.
 pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Result<Prediction> {
     let (model, saved_convention) = if SavedReducedModel::is_reduced(model_file)? {
