@@ -296,11 +296,13 @@ fn inode_of(_: &std::fs::Metadata) -> Option<(u64, u64)> {
     None
 }
 
-/// What would happen to an input: it would be written over, or removed as a stale output.
+/// What would happen to an input: it would be written over, removed as a stale output, or
+/// either (an owned name of the output directory, before the run knows which it writes).
 #[derive(Clone, Copy)]
 enum Clash {
     Overwritten,
     Removed,
+    Owned,
 }
 
 /// The refusal of an output `target` (named by `flag`) that is the input `input`.
@@ -323,6 +325,10 @@ fn clash_error(target: &Path, flag: &str, input: &Input, target_id: &FileIdentit
     let what = match how {
         Clash::Overwritten => "it would be overwritten",
         Clash::Removed => "it would be removed as a file of an earlier run",
+        Clash::Owned => {
+            "its name is one this command writes into the output directory: it would be \
+             overwritten, or removed as a file of an earlier run"
+        }
     };
     Error::param(
         flag,
@@ -500,7 +506,7 @@ impl OutputSet {
             }
             for t in self.owned_files() {
                 if let Some((i, id)) = self.input_at(&t) {
-                    return Err(clash_error(&t, flag, i, &id, Clash::Removed));
+                    return Err(clash_error(&t, flag, i, &id, Clash::Owned));
                 }
             }
         }
