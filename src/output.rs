@@ -42,21 +42,50 @@
 //! own report. No other file of the directory is touched.
 //!
 //! **Interrupts.** [`install_interrupt_handler`] (called once by the CLI) handles SIGINT,
-//! SIGTERM and SIGHUP: it waits for a commit in progress to finish, removes every staging
-//! directory and temporary file of the process, and exits with status 130. So an interrupt
-//! leaves either the complete previous outputs or the complete new ones, and no temporary
-//! files. (A SIGKILL or power loss during the few renames of a commit can still leave a mix;
-//! staging directories left by a killed process are hidden and named `.asperity-staging-*`.)
+//! SIGTERM and SIGHUP: it waits for a commit in progress to finish (and lets no other start),
+//! removes every staging directory and temporary file of the process, and reports what
+//! happened:
+//!
+//! | when | message | exit status |
+//! |---|---|---|
+//! | before the output set was moved into place (or its commit failed and was undone) | `interrupted before writing: previous files untouched` | 130 ([`EXIT_INTERRUPTED_BEFORE_WRITING`]) |
+//! | after the output set was complete | `interrupted after the new set was complete: new files in place` | 3 ([`EXIT_INTERRUPTED_AFTER_WRITING`]) |
+//!
+//! So an interrupt leaves either the complete previous outputs or the complete new ones, and
+//! no temporary files, and says which. An error the interrupted work runs into while its
+//! staged files are removed (a writer finding its directory gone) is not reported: the CLI
+//! checks [`interrupted`] before printing an error. (A SIGKILL or power loss during the few
+//! renames of a commit can still leave a mix; staging directories left by a killed process are
+//! hidden and named `.asperity-staging-*`.)
 
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// Paths (staging directories and temporary files) to remove if the process is interrupted.
 static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 /// Held while an [`OutputSet`] moves its files into place; the interrupt handler waits for it.
 static COMMIT: Mutex<()> = Mutex::new(());
+/// Set when an [`OutputSet`] of this process has been moved into place.
+static COMMITTED: AtomicBool = AtomicBool::new(false);
+/// Set as soon as an interrupt arrives.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Exit status of an interrupt that arrived before the outputs were moved into place: the
+/// previous files are untouched (128 + SIGINT, as a shell reports it).
+pub const EXIT_INTERRUPTED_BEFORE_WRITING: i32 = 130;
+
+/// Exit status of an interrupt that arrived after the command's new output set was complete:
+/// the new files are in place (the rest of the command, e.g. its summary, did not run).
+pub const EXIT_INTERRUPTED_AFTER_WRITING: i32 = 3;
+
+/// Whether an interrupt has arrived: an error then is a consequence of the interrupt's cleanup,
+/// not something to report (the handler reports what happened and exits).
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
@@ -85,23 +114,49 @@ fn remove_path(p: &Path) {
     }
 }
 
-/// Remove every staging directory and temporary file of this process (what the interrupt
-/// handler does before exiting). Waits for a commit in progress.
-pub fn remove_partial_outputs() {
-    let _commit = lock(&COMMIT);
+/// Remove every staging directory and temporary file registered so far.
+fn remove_registered() {
     let paths: Vec<PathBuf> = std::mem::take(&mut *lock(&CLEANUP));
     for p in paths.iter().rev() {
         remove_path(p);
     }
 }
 
-/// Handle SIGINT, SIGTERM and SIGHUP: remove partial outputs (see the module documentation),
-/// print a line and exit with status 130. Call once, at the start of `main`.
+/// Remove every staging directory and temporary file of this process. Waits for a commit in
+/// progress.
+pub fn remove_partial_outputs() {
+    let _commit = lock(&COMMIT);
+    remove_registered();
+}
+
+/// What an interrupt found: the report and the exit status (module documentation).
+pub fn interrupt_report(new_set_in_place: bool) -> (&'static str, i32) {
+    if new_set_in_place {
+        (
+            "interrupted after the new set was complete: new files in place",
+            EXIT_INTERRUPTED_AFTER_WRITING,
+        )
+    } else {
+        (
+            "interrupted before writing: previous files untouched",
+            EXIT_INTERRUPTED_BEFORE_WRITING,
+        )
+    }
+}
+
+/// Handle SIGINT, SIGTERM and SIGHUP: wait for a commit in progress, remove partial outputs,
+/// report which set is in place and exit (see the module documentation). Call once, at the
+/// start of `main`.
 pub fn install_interrupt_handler() {
     let r = ctrlc::set_handler(|| {
-        remove_partial_outputs();
-        eprintln!("interrupted: stopped before writing; no partial output is left");
-        std::process::exit(130);
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        // Held until the exit: no commit starts after this point.
+        let commit = lock(&COMMIT);
+        remove_registered();
+        let (message, code) = interrupt_report(COMMITTED.load(Ordering::SeqCst));
+        eprintln!("{message}");
+        std::mem::forget(commit);
+        std::process::exit(code);
     });
     if let Err(e) = r {
         eprintln!("warning: cannot install the interrupt handler: {e}");
@@ -734,6 +789,7 @@ impl OutputSet {
             return Err(e);
         }
         self.committed = true;
+        COMMITTED.store(true, Ordering::SeqCst);
         for (_, staging) in &self.stagings {
             remove_path(staging);
             deregister(staging);
