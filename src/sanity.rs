@@ -14,6 +14,8 @@
 //! | [`contact_pressures`] | `p ≤ MAX_STRAIN · E*` (10 %, also in `NormalSolver::solve_load`) and `p·L/E* ≥ RESOLVABLE_FRACTION · (h_max − h_min)` | small-strain linear elasticity; an elastic displacement below the round-off of the heights cannot be resolved |
 //! | [`finite_result`] / [`positive_result`] | finite (and > 0) | a non-finite or non-positive stiffness, gap or error is never reported as a result |
 //! | [`magnitudes`] | `|v| ≤ max` | measured values beyond any instrument's range are a unit or format error |
+//! | [`grid_spacing`] (every topography read, `surface::io::read`) | [[`MIN_SPACING_M`], [`MAX_SPACING_M`]] | the same spacings for statistics, conversion and contact: outside them the unit is wrong and slopes or lengths overflow |
+//! | [`film_pixel_size`] | [[`MIN_FILM_PIXEL_M`], [`MAX_FILM_PIXEL_M`]] | a pixel outside any scan's range gives infinite areas or no patch at all |
 //!
 //! New commands adopt them with one call per input (`sanity::tolerance("--tolerance", t)?`,
 //! `sanity::contact_surface(&grid, &source)?`, `sanity::contact_pressures("--pressures-pa",
@@ -42,6 +44,30 @@ pub const MAX_STRAIN: f64 = 0.1;
 /// Smallest elastic displacement scale `p·L/E*` relative to the height range that double
 /// precision resolves in the gap `h0 − δ + u` (10⁻¹² ≫ the 2.2 × 10⁻¹⁶ round-off).
 pub const RESOLVABLE_FRACTION: f64 = 1e-12;
+
+/// Smallest pixel of a pressure-film scan (0.1 µm, about 250 000 dpi): finer than any scanner
+/// or microscope image of a film whose microcapsules are several µm across.
+pub const MIN_FILM_PIXEL_M: f64 = 1e-7;
+/// Largest pixel of a pressure-film scan (10 mm, 2.5 dpi): a coarser image does not resolve a
+/// contact patch.
+pub const MAX_FILM_PIXEL_M: f64 = 1e-2;
+
+/// A film pixel size (m) within [[`MIN_FILM_PIXEL_M`], [`MAX_FILM_PIXEL_M`]]; the message
+/// otherwise (areas and pressures derived from a pixel outside it overflow, or no patch is
+/// large enough to be found).
+pub fn film_pixel_size(pixel_m: f64) -> std::result::Result<(), String> {
+    if (MIN_FILM_PIXEL_M..=MAX_FILM_PIXEL_M).contains(&pixel_m) {
+        Ok(())
+    } else {
+        Err(format!(
+            "a pixel of {} mm lies outside the {}–{} mm a film scan can have (wrong unit? \
+             300 dpi is 0.0847 mm)",
+            num(pixel_m * 1e3),
+            num(MIN_FILM_PIXEL_M * 1e3),
+            num(MAX_FILM_PIXEL_M * 1e3)
+        ))
+    }
+}
 
 /// Largest displacement amplitude a measured vibration row may imply (m): no vibration test of
 /// a structure reaches a metre at its resonance; more is a unit error.
@@ -194,8 +220,8 @@ pub fn grid_spacing(d: f64) -> std::result::Result<(), String> {
         Ok(())
     } else {
         Err(format!(
-            "grid spacing {} m lies outside [{}, {}] m that a rough contact patch can have \
-             (wrong unit?)",
+            "grid spacing {} m lies outside [{}, {}] m that a measured or generated rough \
+             surface can have (wrong unit?)",
             num(d),
             num(MIN_SPACING_M),
             num(MAX_SPACING_M)

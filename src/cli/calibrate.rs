@@ -149,6 +149,9 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
 fn run_shard(sweep: CalibrationSweep, shard: Shard, mut out: OutputSet) -> Result<()> {
     let labels = sweep.unit_labels();
     shard::check_labels(&labels)?;
+    shard
+        .check_units(labels.len(), "realisations")
+        .map_err(|e| super::rename_param(e, "--shard"))?;
     let block = shard.units(labels.len());
     eprintln!(
         "calibrate: shard {shard}: realisations {}..{} ({} of {})",

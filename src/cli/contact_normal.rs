@@ -271,6 +271,9 @@ pub fn run(args: NormalArgs) -> Result<()> {
     };
     let e_star = sweep.e_star_pa()?;
     let labels = sweep.unit_labels();
+    shard
+        .check_units(labels.len(), "surfaces")
+        .map_err(|e| super::rename_param(e, "--shard"))?;
     let block = shard.units(labels.len());
     eprintln!(
         "{} surface(s), E* = {e_star:.4e} Pa, {} pressures{}",

@@ -437,6 +437,16 @@ pub fn run(args: FilmArgs) -> Result<()> {
             }
         },
     };
+    asperity::sanity::film_pixel_size(pixel_size_m).map_err(|m| {
+        if args.pixel_size_mm.is_some() {
+            Error::param("--pixel-size-mm", m)
+        } else {
+            Error::param(
+                "--pixel-size-mm",
+                format!("not given, and the resolution {} declares ({pixel_source}) gives {m}: give the pixel size", args.image.display()),
+            )
+        }
+    })?;
     let pixel_size_mm = pixel_size_m * 1e3;
     if let Some(s) = args.smooth_mm {
         asperity::error::require_positive("--smooth-mm", s)?;
