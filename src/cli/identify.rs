@@ -327,9 +327,11 @@ pub struct PredictArgs {
     /// Measured files to predict.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// How the measured test was controlled.
-    #[arg(long, value_enum, default_value = "force")]
-    pub control: ControlArg,
+    /// How the measured test was controlled. Default: what the files' headers state (a comment
+    /// line saying "Force control" or "Response control"), force control where they state
+    /// nothing; a flag that contradicts a file's header is refused.
+    #[arg(long, value_enum)]
+    pub control: Option<ControlArg>,
     /// Output directory: predict.{txt,json}, predict-rows.csv, predict-<N>.png.
     #[arg(long, default_value = "predict-out")]
     pub out_dir: PathBuf,
@@ -345,10 +347,10 @@ pub enum ControlArg {
 }
 
 pub fn run_predict(args: PredictArgs) -> Result<()> {
-    let control = match args.control {
+    let flag = args.control.map(|c| match c {
         ControlArg::Force => Control::Force,
         ControlArg::Response => Control::Response,
-    };
+    });
     let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     out.owns("predict-", ".png")?;
     out.writes(&["predict.txt", "predict.json", "predict-rows.csv"])?;
@@ -357,6 +359,7 @@ pub fn run_predict(args: PredictArgs) -> Result<()> {
         out.input(&p, &role)?;
     }
     let sweeps = read_sweeps(&args.files)?;
+    let control = asperity::identify::predict::choose_control(&sweeps, flag)?;
     let p = predict(&args.model, sweeps, control)?;
     let written = write_all(out, |d| p.write(d))?;
     print!("{}", p.text());
