@@ -202,3 +202,64 @@ fn the_control_mode_comes_from_the_file_header() {
         "{stdout}"
     );
 }
+
+/// A file whose response channel is inverted (phases moved by π): with a majority of files in
+/// one convention the odd file is named; with two files, one of each, neither is blamed — the
+/// files alone cannot tell which is inverted (before, the lower level's convention won the tie
+/// and the good file was named as the odd one).
+#[test]
+fn an_inverted_file_is_blamed_only_where_the_others_outvote_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let invert = |src: &Path, name: &str| {
+        let text = std::fs::read_to_string(src).unwrap();
+        let flipped: Vec<String> = text
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                match f.get(3).map(|v| v.parse::<f64>()) {
+                    Some(Ok(p)) => {
+                        let q = if p > 0.0 { p - std::f64::consts::PI } else { p + std::f64::consts::PI };
+                        format!("{},{},{},{q}", f[0], f[1], f[2])
+                    }
+                    _ => l.to_string(),
+                }
+            })
+            .collect();
+        let p = d.join(name);
+        std::fs::write(&p, flipped.join("\n") + "\n").unwrap();
+        p
+    };
+    let low = model_sweep(d, "low.csv", 0.02, "# synthetic\n");
+    let mid = model_sweep(d, "mid.csv", 0.15, "# synthetic\n");
+    let high = model_sweep(d, "high.csv", 0.6, "# synthetic\n");
+    let low_inverted = invert(&low, "low-inverted.csv");
+    let out = d.join("out");
+    let identify = |files: &[&Path]| {
+        let mut args = vec!["identify"];
+        args.extend(files.iter().map(|p| s(p)));
+        args.extend(["--max-effects", "0", "--starts", "1", "--particles", "4"]);
+        args.extend(["--out-dir", s(&out)]);
+        run(&args)
+    };
+    // Two files, one of each convention: no file is named the odd one.
+    let o = identify(&[&low_inverted, &mid]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("none is shared by most")
+            && err.contains("low-inverted.csv")
+            && err.contains("mid.csv")
+            && !err.contains("is not in the phase convention"),
+        "{err}"
+    );
+    // Three files, the inverted one outvoted: it, and only it, is named.
+    let o = identify(&[&low_inverted, &mid, &high]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("low-inverted.csv is not in the phase convention"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

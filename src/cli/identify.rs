@@ -69,7 +69,7 @@ pub struct IdentifyArgs {
     /// parameter count beyond (each fit runs Nelder–Mead and restarts it from its optimum, up to
     /// three times, until a restart stops on its tolerance; one that never does has not
     /// converged, which is an error for the final models).
-    #[arg(long, default_value_t = 600)]
+    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u64).range(1..))]
     pub local_iterations: u64,
     /// Seed of the first start (start k uses seed + k).
     #[arg(long, default_value_t = 1)]
@@ -213,6 +213,9 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
     let out = identify_outputs(&args)?;
     let sweeps = read_sweeps(&args.files)?;
+    if let Some(note) = work_note(opts.estimated_evaluations(), &sweeps) {
+        eprintln!("{note}");
+    }
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
     let result = identify(sweeps, &opts, Some(&bar));
@@ -239,6 +242,35 @@ fn identify_outputs(args: &IdentifyArgs) -> Result<OutputSet> {
     out.inputs(&args.files, "measured file")?;
     out.inputs(&args.structure, "--structure")?;
     Ok(out)
+}
+
+/// Seconds per model evaluation per measured row of the single-mode identification: measured
+/// as the wall time of `identify` with its defaults (`--max-effects 0 --chain-steps 0`) on the
+/// four Brake–Reuss files of `../shared/data/frf` (164 rows), 23 s on the 2-core machine shared
+/// with other builds, over its estimated evaluations × rows; rounded up.
+const SECONDS_PER_ROW_EVALUATION: f64 = 2e-5;
+
+/// Above this estimate (s) a command says up front how long it will take and what bounds it.
+const LONG_WORK_S: f64 = 600.0;
+
+/// A note before a search estimated at more than [`LONG_WORK_S`]: its size, and the flags and
+/// files that bound it.
+fn work_note(evaluations: u64, sweeps: &[asperity::identify::measured::Sweep]) -> Option<String> {
+    let rows: usize = sweeps.iter().map(|s| s.rows.len()).sum();
+    let seconds = evaluations as f64 * rows as f64 * SECONDS_PER_ROW_EVALUATION;
+    if seconds <= LONG_WORK_S {
+        return None;
+    }
+    let largest = sweeps.iter().max_by_key(|s| s.rows.len())?;
+    Some(format!(
+        "note: about {evaluations} model evaluations over {rows} measured rows: roughly {:.0} \
+         min; bounded by --starts, --particles, --swarm-iterations, --local-iterations, \
+         --max-effects and --candidates, and by the rows of the files (largest: {}, {} rows; \
+         thin it to shorten every evaluation)",
+        seconds / 60.0,
+        largest.path.display(),
+        largest.rows.len()
+    ))
 }
 
 /// The effects of `--candidates` (`none`: no search), each one of `allowed`.
@@ -360,7 +392,14 @@ pub fn run_predict(args: PredictArgs) -> Result<()> {
     }
     let sweeps = read_sweeps(&args.files)?;
     let control = asperity::identify::predict::choose_control(&sweeps, flag)?;
-    let p = predict(&args.model, sweeps, control)?;
+    let rows: usize = sweeps.iter().map(|s| s.rows.len()).sum();
+    let bar = super::spinner(&format!(
+        "predicting {rows} rows of {} file(s)",
+        sweeps.len()
+    ));
+    let p = predict(&args.model, sweeps, control);
+    bar.finish_and_clear();
+    let p = p?;
     let written = write_all(out, |d| p.write(d))?;
     print!("{}", p.text());
     println!("\nwrote:");

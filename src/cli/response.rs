@@ -97,7 +97,12 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             ))
         })
         .collect::<Result<Vec<_>>>()
-        .inspect_err(|_| bar.abandon())?;
+        .inspect_err(|_| bar.abandon())
+        // A sweep's error names the model file its settings come from.
+        .map_err(|e| match e {
+            Error::Data(m) => Error::Data(format!("{}: {m}", args.model.display())),
+            e => e,
+        })?;
     bar.finish_and_clear();
     // Everything computed: write the files.
     let header = format!(

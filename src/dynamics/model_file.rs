@@ -293,6 +293,18 @@ impl ModelFile {
         if s.points < 2 {
             return Err(Error::param("sweep.points", "must be ≥ 2"));
         }
+        if s.points > crate::limits::MAX_SWEEP_POINTS {
+            return Err(Error::param(
+                "sweep.points",
+                format!(
+                    "{} is more than the limit of {} (resource limit: each point is a Newton \
+                     solve of every level's harmonic balance; a resonance gets more points than \
+                     this by itself)",
+                    s.points,
+                    crate::limits::MAX_SWEEP_POINTS
+                ),
+            ));
+        }
         if e.harmonic > s.harmonics || (s.odd_only && e.harmonic.is_multiple_of(2)) {
             return Err(Error::param(
                 "excitation.harmonic",
