@@ -61,7 +61,8 @@ fn keep_freed_memory() {
 fn main() {
     keep_freed_memory();
     let cli = Cli::parse();
-    // An interrupt removes staged and temporary files and exits 130 (asperity::core::output).
+    // An interrupt removes staged and temporary files and reports whether the previous or the
+    // new outputs are in place (asperity::core::output: exit 130 or 3).
     asperity::core::output::install_interrupt_handler();
     let result = match cli.command {
         Command::Surface(c) => cli::surface::run(c),
@@ -76,7 +77,21 @@ fn main() {
         Command::Predict(a) => cli::identify::run_predict(a),
     };
     if let Err(e) = result {
+        if asperity::core::output::interrupted() {
+            // The error comes from the interrupt's cleanup (a writer whose staging directory was
+            // removed): the handler reports what happened and exits.
+            loop {
+                std::thread::park();
+            }
+        }
         eprintln!("error: {e}");
         std::process::exit(1);
+    }
+    // Tests of the interrupt after a complete output set hold the process here.
+    if let Some(ms) = std::env::var("ASPERITY_TEST_PAUSE_BEFORE_EXIT_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
     }
 }

@@ -474,3 +474,58 @@ fn a_tilted_window_is_flagged_and_levelled_by_convert() {
     assert!(!ok && err.contains("--detrend"), "{err}");
     assert!(!tmp.path().join("bad.npy").exists());
 }
+
+/// One small-strain limit through every door: the benchmark's self-affine surface (rms gradient
+/// 0.1) at p̄ = 0.053·E* (BENCHMARKS.md, p̄/E*h' = 0.53) runs through the CLI, and 0.11·E* is
+/// refused by the CLI and by the library's solver alike, each naming its own parameter.
+#[test]
+fn one_pressure_limit_through_every_door() {
+    use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
+    let tmp = tempfile::tempdir().unwrap();
+    let sa = tmp.path().join("sa.npy");
+    let (ok, _, err) = asperity(&["surface", "self-affine", "--n", "128", "-o", sa.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let e_star = 210e9 / (2.0 * (1.0 - 0.3 * 0.3));
+    let out = tmp.path().join("out");
+    let (ok, stdout, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        sa.to_str().unwrap(),
+        "--pressures-pa",
+        &format!("{:e}", 0.053 * e_star),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "0.053·E* refused: {err}");
+    assert!(stdout.contains("wrote"), "{stdout}");
+    let out2 = tmp.path().join("out2");
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        sa.to_str().unwrap(),
+        "--pressures-pa",
+        &format!("{:e}", 0.11 * e_star),
+        "--out-dir",
+        out2.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("--pressures-pa") && err.contains("0.1 × E*"), "{err}");
+    assert_no_output(&out2);
+    let grid = asperity::surface::io::read(&sa).unwrap();
+    let asperity::surface::Topography::Area(grid) = grid else {
+        panic!("an area")
+    };
+    let mut solver = NormalSolver::new(
+        &NormalProblem {
+            surface: &grid,
+            e_star_pa: e_star,
+        },
+        NormalOptions::default(),
+    )
+    .unwrap();
+    let e = solver.solve_load(0.11 * e_star, None).unwrap_err().to_string();
+    assert!(e.contains("mean_pressure_pa") && e.contains("0.1 × E*"), "{e}");
+    let sol = solver.solve_load(0.053 * e_star, None).unwrap();
+    assert!((0.5..0.95).contains(&sol.contact_area_ratio), "{}", sol.contact_area_ratio);
+}

@@ -727,7 +727,7 @@ fn shard_files_record_the_build() {
             "contact",
             "normal",
             "--seeds",
-            "1",
+            "1,2",
             "--grid",
             "128",
             "--pressures-pa=1e6",

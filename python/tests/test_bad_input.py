@@ -109,3 +109,11 @@ def test_views_are_read_only_and_keep_their_owner_alive():
     with pytest.raises(ValueError):
         p[0, 0] = 0.0
     assert np.shares_memory(p, sol.pressure)
+
+
+def test_one_small_strain_limit_as_the_cli():
+    """The library's solver refuses a nominal pressure above 0.1·E* as `contact normal` does."""
+    s = ap.Surface.generate(nx=64, lx_m=100e-6, clx_m=5e-6)
+    with pytest.raises(ap.ParameterError, match=r"0\.1 × E\*") as e:
+        ap.NormalSolver(s, e_star_pa=E_STAR).solve_load(0.11 * E_STAR)
+    assert e.value.name == "mean_pressure_pa"

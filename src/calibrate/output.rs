@@ -65,6 +65,24 @@ pub mod files {
     pub const K_AMPLITUDE_PLOT: &str = "k_vs_amplitude.png";
     pub const LOOPS_PLOT: &str = "loops_normalised.png";
 
+    /// Every fixed name above.
+    pub const ALL: [&str; 14] = [
+        TABLE,
+        REALISATIONS,
+        FITS,
+        ENERGY,
+        CONVERGENCE,
+        LOOPS,
+        TIMINGS,
+        SIDECAR,
+        KN_PLOT,
+        E0_PLOT,
+        K_PLOT,
+        ENERGY_PLOT,
+        K_AMPLITUDE_PLOT,
+        LOOPS_PLOT,
+    ];
+
     /// Per-pressure loops-with-fit figure, e.g. `loop_fit_100000Pa.png`.
     pub fn loop_plot(pressure_pa: f64) -> String {
         format!("loop_fit_{pressure_pa}Pa.png")

@@ -52,7 +52,11 @@ pub struct CalibrateArgs {
 
 pub fn run(args: CalibrateArgs) -> Result<()> {
     // Refused now, before the computation: an --out-dir that is a file or not writable.
-    let out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.writes(&output::files::ALL)?;
+    out.owns("loop_fit_", "Pa.png")?;
+    out.inputs(&args.config, "the configuration")?;
+    super::surface_inputs(&mut out, &args.surface, "--surface")?;
     let (mut config, source) = match &args.config {
         Some(path) => {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -145,6 +149,9 @@ pub fn run(args: CalibrateArgs) -> Result<()> {
 fn run_shard(sweep: CalibrationSweep, shard: Shard, mut out: OutputSet) -> Result<()> {
     let labels = sweep.unit_labels();
     shard::check_labels(&labels)?;
+    shard
+        .check_units(labels.len(), "realisations")
+        .map_err(|e| super::rename_param(e, "--shard"))?;
     let block = shard.units(labels.len());
     eprintln!(
         "calibrate: shard {shard}: realisations {}..{} ({} of {})",
@@ -200,7 +207,7 @@ pub fn write_and_report(
 ) -> Result<()> {
     // Every file is staged and appears at once (or not at all, on an error or an interrupt);
     // an earlier run's loop plots at pressures this run does not have are removed.
-    out.owns("loop_fit_", "Pa.png");
+    out.owns("loop_fit_", "Pa.png")?;
     let (_, output_s) = output::write_outputs(result, source, &out.staging_dir()?)?;
     let written = out.commit()?;
 

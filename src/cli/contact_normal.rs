@@ -233,6 +233,16 @@ fn write_pressure_maps(
     Ok(())
 }
 
+/// The fixed file names a run without `--shard` may write (besides the pressure maps).
+const OUTPUT_FILES: [&str; 6] = [
+    "normal_sweep.csv",
+    "normal_sweep_timings.csv",
+    "normal_sweep_statistics.csv",
+    "area_ratio.png",
+    "mean_gap.png",
+    "kn.png",
+];
+
 pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output; the files are staged and appear together
     // at the end (asperity::core::output::OutputSet).
@@ -249,8 +259,12 @@ pub fn run(args: NormalArgs) -> Result<()> {
     let mut out = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
     if args.shard.is_none() {
         // An earlier run's maps at pressures this run does not have are removed.
-        out.owns("pressure_map_", "Pa.png");
+        out.owns("pressure_map_", "Pa.png")?;
     }
+    if args.shard.is_none() {
+        out.writes(&OUTPUT_FILES)?;
+    }
+    super::surface_inputs(&mut out, &args.surface, "--surface")?;
     let sweep = sweep_from_args(&args)?;
     let staged = out.staging_dir()?;
     let shard = match &args.shard {
@@ -261,6 +275,9 @@ pub fn run(args: NormalArgs) -> Result<()> {
     };
     let e_star = sweep.e_star_pa()?;
     let labels = sweep.unit_labels();
+    shard
+        .check_units(labels.len(), "surfaces")
+        .map_err(|e| super::rename_param(e, "--shard"))?;
     let block = shard.units(labels.len());
     eprintln!(
         "{} surface(s), E* = {e_star:.4e} Pa, {} pressures{}",

@@ -83,6 +83,14 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     // Every input is checked before any work or output; the files are staged and appear
     // together at the end (asperity::core::output::OutputSet).
     let mut out = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.writes(&[
+        "tangential_loops.csv",
+        "tangential_energy.csv",
+        "tangential_timings.csv",
+        "tangential_loops.png",
+        "tangential_loops_normalised.png",
+    ])?;
+    super::surface_inputs(&mut out, &args.surface, "--surface")?;
     asperity::core::limits::check_steps(
         "--cycles",
         args.cycles,

@@ -116,6 +116,9 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
     let args = *args.args;
     // Refused now, before the analysis: an --out-dir that is a file or not writable.
     let mut out_set = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out_set.writes(&Outputs::file_names())?;
+    out_set.input(&args.record, "the measured record")?;
+    out_set.inputs(&args.table, "--table")?;
     asperity::core::limits::check_count("--max-effects", args.max_effects, 8)?;
     let columns = Columns {
         time: args.time_column.clone(),

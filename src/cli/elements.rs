@@ -5,7 +5,7 @@ use asperity::core::output::write_string_atomic;
 use asperity::elements::{join, provenance_json, write_csv, InputFile};
 use asperity::film::nodes::read_preloads_csv;
 use asperity::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Join node preloads (from `asperity film --nodes`) with a calibration table: kn, E0, Et scaled
 /// by each element's area, k and mu at its local pressure; out-of-range elements flagged.
@@ -22,30 +22,6 @@ pub struct ElementsArgs {
     out: PathBuf,
 }
 
-/// Refuse an output `target` (named `role`) that is one of the `inputs` (file, flag): writing it
-/// would replace the input with a table derived from it, and the provenance record would hash
-/// a file that no longer exists. Paths are compared after resolving links and `..` (only an
-/// existing output can be an input).
-fn refuse_input_as_output(target: &Path, role: &str, inputs: &[(&PathBuf, &str)]) -> Result<()> {
-    let Ok(t) = std::fs::canonicalize(target) else {
-        return Ok(());
-    };
-    for (input, flag) in inputs {
-        if std::fs::canonicalize(input).is_ok_and(|i| i == t) {
-            return Err(Error::param(
-                "--out",
-                format!(
-                    "{role} `{}` is the {flag} input `{}`: it would be overwritten; give the \
-                     element table another name",
-                    target.display(),
-                    input.display()
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
 pub fn run(args: ElementsArgs) -> Result<()> {
     let sidecar = args.out.with_extension("json");
     if sidecar == args.out {
@@ -58,17 +34,11 @@ pub fn run(args: ElementsArgs) -> Result<()> {
             ),
         ));
     }
-    for (target, role) in [
-        (&args.out, "--out"),
-        (&sidecar, "the JSON sidecar of --out"),
-    ] {
-        refuse_input_as_output(
-            target,
-            role,
-            &[(&args.preload, "--preload"), (&args.table, "--table")],
-        )?;
-    }
+    // Neither the table nor its sidecar may be an input (the provenance record would hash a
+    // file that no longer exists).
     let mut out = asperity::core::output::OutputSet::new();
+    out.input(&args.preload, "--preload")?;
+    out.input(&args.table, "--table")?;
     let table_staged = out.file(&args.out, "--out")?;
     let sidecar_staged = out.file(&sidecar, "the JSON sidecar of --out")?;
     let pre = read_preloads_csv(&args.preload)?;

@@ -385,10 +385,15 @@ pub fn run(args: FilmArgs) -> Result<()> {
     // plots of a region that no longer exists) is removed after the commit, so that no reader
     // (`asperity elements`) picks up a stale file.
     for name in FIXED_OUTPUTS {
-        out.owns(name, "");
+        out.owns(name, "")?;
     }
-    out.owns("region_", "_fitted.png");
-    out.owns("region_", "_residual.png");
+    out.owns("region_", "_fitted.png")?;
+    out.owns("region_", "_residual.png")?;
+    // No output may be (or remove) one of the inputs.
+    out.input(&args.image, "--image")?;
+    out.inputs(&args.colour_table, "--colour-table")?;
+    out.inputs(&args.density_calibration, "--density-calibration")?;
+    out.inputs(&args.nodes, "--nodes")?;
     let (mut reader, table_path) = match (&args.colour_table, &args.density_calibration) {
         (Some(t), None) => (
             ColourToPressure::Table(ColourTable::read_csv(t, args.max_colour_distance)?),
@@ -432,6 +437,16 @@ pub fn run(args: FilmArgs) -> Result<()> {
             }
         },
     };
+    asperity::core::sanity::film_pixel_size(pixel_size_m).map_err(|m| {
+        if args.pixel_size_mm.is_some() {
+            Error::param("--pixel-size-mm", m)
+        } else {
+            Error::param(
+                "--pixel-size-mm",
+                format!("not given, and the resolution {} declares ({pixel_source}) gives {m}: give the pixel size", args.image.display()),
+            )
+        }
+    })?;
     let pixel_size_mm = pixel_size_m * 1e3;
     if let Some(s) = args.smooth_mm {
         asperity::core::error::require_positive("--smooth-mm", s)?;

@@ -69,7 +69,7 @@ pub struct IdentifyArgs {
     /// parameter count beyond (each fit runs Nelder–Mead and restarts it from its optimum, up to
     /// three times, until a restart stops on its tolerance; one that never does has not
     /// converged, which is an error for the final models).
-    #[arg(long, default_value_t = 600)]
+    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u64).range(1..))]
     pub local_iterations: u64,
     /// Seed of the first start (start k uses seed + k).
     #[arg(long, default_value_t = 1)]
@@ -211,9 +211,11 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     opts.response_amplitudes = args.response_amplitude.clone();
     opts.rows = fit_rows(args.rows);
     opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
-    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("identify-level", ".png");
+    let out = identify_outputs(&args)?;
     let sweeps = read_sweeps(&args.files)?;
+    if let Some(note) = work_note(opts.estimated_evaluations(), &sweeps) {
+        eprintln!("{note}");
+    }
     let bar = super::progress_bar("identify", opts.estimated_evaluations());
     bar.set_message("model evaluations");
     let result = identify(sweeps, &opts, Some(&bar));
@@ -221,6 +223,54 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
     let id = result?;
     report(&id.text(), &write_all(out, |d| id.write(d))?);
     Ok(())
+}
+
+/// The output set of `identify` with its inputs declared: the measured files (and the model
+/// file of `--structure` with the files it names, added by the caller) are never written over.
+fn identify_outputs(args: &IdentifyArgs) -> Result<OutputSet> {
+    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.owns("identify-level", ".png")?;
+    out.writes(&[
+        "identify.txt",
+        "identify.json",
+        "model.json",
+        "identify-rows.csv",
+        "identify-backbone.csv",
+        "identify-backbone.png",
+        "identify-response-controlled.csv",
+    ])?;
+    out.inputs(&args.files, "measured file")?;
+    out.inputs(&args.structure, "--structure")?;
+    Ok(out)
+}
+
+/// Seconds per model evaluation per measured row of the single-mode identification: measured
+/// as the wall time of `identify` with its defaults (`--max-effects 0 --chain-steps 0`) on the
+/// four Brake–Reuss files of `../shared/data/frf` (164 rows), 23 s on the 2-core machine shared
+/// with other builds, over its estimated evaluations × rows; rounded up.
+const SECONDS_PER_ROW_EVALUATION: f64 = 2e-5;
+
+/// Above this estimate (s) a command says up front how long it will take and what bounds it.
+const LONG_WORK_S: f64 = 600.0;
+
+/// A note before a search estimated at more than [`LONG_WORK_S`]: its size, and the flags and
+/// files that bound it.
+fn work_note(evaluations: u64, sweeps: &[asperity::identify::measured::Sweep]) -> Option<String> {
+    let rows: usize = sweeps.iter().map(|s| s.rows.len()).sum();
+    let seconds = evaluations as f64 * rows as f64 * SECONDS_PER_ROW_EVALUATION;
+    if seconds <= LONG_WORK_S {
+        return None;
+    }
+    let largest = sweeps.iter().max_by_key(|s| s.rows.len())?;
+    Some(format!(
+        "note: about {evaluations} model evaluations over {rows} measured rows: roughly {:.0} \
+         min; bounded by --starts, --particles, --swarm-iterations, --local-iterations, \
+         --max-effects and --candidates, and by the rows of the files (largest: {}, {} rows; \
+         thin it to shorten every evaluation)",
+        seconds / 60.0,
+        largest.path.display(),
+        largest.rows.len()
+    ))
 }
 
 /// The effects of `--candidates` (`none`: no search), each one of `allowed`.
@@ -258,8 +308,10 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     if args.starts > 0 {
         check_search(args)?;
     }
-    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("identify-level", ".png");
+    let mut out = identify_outputs(args)?;
+    for (role, p) in asperity::dynamics::model_file::referenced_files(structure)? {
+        out.input(&p, &format!("--structure {role}"))?;
+    }
     let spec = ReducedSpec::load(structure)?;
     let sweeps = read_sweeps(&args.files)?;
     let fit_levels =
@@ -307,9 +359,11 @@ pub struct PredictArgs {
     /// Measured files to predict.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// How the measured test was controlled.
-    #[arg(long, value_enum, default_value = "force")]
-    pub control: ControlArg,
+    /// How the measured test was controlled. Default: what the files' headers state (a comment
+    /// line saying "Force control" or "Response control"), force control where they state
+    /// nothing; a flag that contradicts a file's header is refused.
+    #[arg(long, value_enum)]
+    pub control: Option<ControlArg>,
     /// Output directory: predict.{txt,json}, predict-rows.csv, predict-<N>.png.
     #[arg(long, default_value = "predict-out")]
     pub out_dir: PathBuf,
@@ -325,14 +379,27 @@ pub enum ControlArg {
 }
 
 pub fn run_predict(args: PredictArgs) -> Result<()> {
-    let control = match args.control {
+    let flag = args.control.map(|c| match c {
         ControlArg::Force => Control::Force,
         ControlArg::Response => Control::Response,
-    };
+    });
     let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("predict-", ".png");
+    out.owns("predict-", ".png")?;
+    out.writes(&["predict.txt", "predict.json", "predict-rows.csv"])?;
+    out.inputs(&args.files, "measured file")?;
+    for (role, p) in asperity::identify::predict::model_inputs(&args.model)? {
+        out.input(&p, &role)?;
+    }
     let sweeps = read_sweeps(&args.files)?;
-    let p = predict(&args.model, sweeps, control)?;
+    let control = asperity::identify::predict::choose_control(&sweeps, flag)?;
+    let rows: usize = sweeps.iter().map(|s| s.rows.len()).sum();
+    let bar = super::spinner(&format!(
+        "predicting {rows} rows of {} file(s)",
+        sweeps.len()
+    ));
+    let p = predict(&args.model, sweeps, control);
+    bar.finish_and_clear();
+    let p = p?;
     let written = write_all(out, |d| p.write(d))?;
     print!("{}", p.text());
     println!("\nwrote:");

@@ -38,6 +38,7 @@ fn warn_other_build(shards: &BuildId) {
 pub fn run(args: MergeArgs) -> Result<()> {
     // Refused now, before any shard is read: an --out-dir that is a file or not writable.
     let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
+    out.inputs(&args.shards, "shard file")?;
     let kind = shard::read_kind(&args.shards[0])?;
     match kind.as_str() {
         SurfaceSweep::KIND => {

@@ -45,6 +45,25 @@ pub fn grid_header(surface: &Grid2) -> String {
     )
 }
 
+/// Declare topography files read by a command as inputs of its output set, each with its
+/// `.npy.json` sidecar where it has one: no output may be either.
+pub fn surface_inputs(
+    out: &mut asperity::core::output::OutputSet,
+    files: &[std::path::PathBuf],
+    role: &str,
+) -> Result<()> {
+    for f in files {
+        out.input(f, role)?;
+        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy")) {
+            out.input(
+                &asperity::surface::io::npy::sidecar_path(f),
+                &format!("the sidecar of {role} {}", f.display()),
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// Name the CLI flag in a parameter error raised by the library.
 pub fn rename_param(e: Error, flag: &str) -> Error {
     match e {

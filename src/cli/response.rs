@@ -32,7 +32,13 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         ("elements_level_", ".csv"),
         ("frf_", ".png"),
     ] {
-        out.owns(prefix, suffix);
+        out.owns(prefix, suffix)?;
+    }
+    out.writes(&["response.json"])?;
+    // The model file and every file it names are inputs: none may be written over or removed
+    // (checked before the model is built and swept).
+    for (role, p) in model_file::referenced_files(&args.model)? {
+        out.input(&p, &format!("{role} of {}", args.model.display()))?;
     }
     let model = model_file::load(&args.model)?;
     let f = &model.file;
@@ -91,7 +97,12 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             ))
         })
         .collect::<Result<Vec<_>>>()
-        .inspect_err(|_| bar.abandon())?;
+        .inspect_err(|_| bar.abandon())
+        // A sweep's error names the model file its settings come from.
+        .map_err(|e| match e {
+            Error::Data(m) => Error::Data(format!("{}: {m}", args.model.display())),
+            e => e,
+        })?;
     bar.finish_and_clear();
     // Everything computed: write the files.
     let header = format!(

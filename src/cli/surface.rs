@@ -45,7 +45,8 @@ pub struct SelfAffineArgs {
     /// Roll-off wavelength (m); default a quarter of the patch.
     #[arg(long)]
     rolloff_wavelength_m: Option<f64>,
-    /// Short-wavelength cut-off (m); default 16 grid spacings.
+    /// Short-wavelength cut-off (m); default 16 grid spacings, or half the roll-off where that
+    /// is not shorter than the roll-off (coarse grids: n ≤ 64 at the default roll-off).
     #[arg(long)]
     cutoff_wavelength_m: Option<f64>,
     /// Random seed (same seed ⇒ same surface, bit for bit).
@@ -278,15 +279,21 @@ pub fn run(cmd: SurfaceCommand) -> Result<()> {
 
 fn self_affine(a: SelfAffineArgs) -> Result<()> {
     let benchmark = surface::SelfAffineSpec::benchmark(a.n.max(1), a.size_m, a.seed);
+    let rolloff = a
+        .rolloff_wavelength_m
+        .unwrap_or(benchmark.rolloff_wavelength_m);
+    // The benchmark's cut-off (16 spacings) where it lies below the roll-off; on coarser grids
+    // half the roll-off, so that the defaults give a spectrum on every grid that can hold one.
+    let default_cutoff = if benchmark.cutoff_wavelength_m < rolloff {
+        benchmark.cutoff_wavelength_m
+    } else {
+        0.5 * rolloff
+    };
     let spec = surface::SelfAffineSpec {
         hurst: a.hurst,
         rms_gradient: a.rms_gradient,
-        rolloff_wavelength_m: a
-            .rolloff_wavelength_m
-            .unwrap_or(benchmark.rolloff_wavelength_m),
-        cutoff_wavelength_m: a
-            .cutoff_wavelength_m
-            .unwrap_or(benchmark.cutoff_wavelength_m),
+        rolloff_wavelength_m: rolloff,
+        cutoff_wavelength_m: a.cutoff_wavelength_m.unwrap_or(default_cutoff),
         ..benchmark
     };
     let spec = surface::SelfAffineSpec {
@@ -296,7 +303,31 @@ fn self_affine(a: SelfAffineArgs) -> Result<()> {
     };
     spec.validate().map_err(|e| {
         let flag = flag_of(&e);
-        super::rename_param(e, &flag)
+        // A wavelength the user did not give is a default that the grid cannot hold: the
+        // grid (--n, --size-m) is what to change, or the wavelength to give.
+        let given = match flag.as_str() {
+            "--rolloff-wavelength-m" => a.rolloff_wavelength_m.is_some(),
+            "--cutoff-wavelength-m" => a.cutoff_wavelength_m.is_some(),
+            _ => true,
+        };
+        match e {
+            Error::InvalidParameter { message, .. } if !given => Error::param(
+                "--n",
+                format!(
+                    "{} points over {:e} m are too few for the default spectrum (roll-off a \
+                     quarter of the patch, cut-off 16 spacings or half the roll-off): the \
+                     default {} {message}; give more points, or {flag}",
+                    a.n,
+                    a.size_m,
+                    if flag.starts_with("--rolloff") {
+                        "roll-off wavelength"
+                    } else {
+                        "cut-off wavelength"
+                    }
+                ),
+            ),
+            e => super::rename_param(e, &flag),
+        }
     })?;
     for p in &a.out {
         surface::io::check_writable_format(p)?;
@@ -351,6 +382,7 @@ fn generate(a: GenerateArgs) -> Result<()> {
         surface::io::check_writable_format(p).map_err(|e| super::rename_param(e, "--out"))?;
     }
     let mut out = OutputSet::for_files(&a.out, "--out")?;
+    out.inputs(&a.config, "--config")?;
     let pb = spinner(&format!("generating {}×{} patch", spec.nx, spec.ny));
     let t0 = Instant::now();
     let grid = surface::generate(&spec)?;
@@ -446,10 +478,11 @@ fn stats(a: StatsArgs) -> Result<()> {
         None => None,
     };
     let mut out = match &psd_paths {
-        Some((csv, png)) => Some(OutputSet::for_files(
-            &[csv.clone(), png.clone()],
-            "--psd-out",
-        )?),
+        Some((csv, png)) => {
+            let mut set = OutputSet::for_files(&[csv.clone(), png.clone()], "--psd-out")?;
+            super::surface_inputs(&mut set, std::slice::from_ref(&a.file), "the topography")?;
+            Some(set)
+        }
         None => None,
     };
     let pb = spinner(&format!("reading {}", a.file.display()));
@@ -685,7 +718,10 @@ fn combine(a: CombineArgs) -> Result<()> {
                 surface::io::check_writable_format(p)
                     .map_err(|e| super::rename_param(e, "--out"))?;
             }
-            out = Some(OutputSet::for_files(&a.out, "--out")?);
+            let mut set = OutputSet::for_files(&a.out, "--out")?;
+            super::surface_inputs(&mut set, std::slice::from_ref(p1), "SURFACE1")?;
+            super::surface_inputs(&mut set, std::slice::from_ref(p2), "SURFACE2")?;
+            out = Some(set);
             let load = |p: &Path| -> Result<_> {
                 let (g, r) = surface::missing::load_area(p, a.fill)?;
                 if let Some(r) = r {
@@ -695,7 +731,10 @@ fn combine(a: CombineArgs) -> Result<()> {
             };
             let g1 = load(p1)?;
             let g2 = load(p2)?;
-            Some(equivalent_surface(&g1, &g2)?)
+            Some(equivalent_surface(&g1, &g2).map_err(|e| match e {
+                Error::Data(m) => Error::Data(format!("{} and {}: {m}", p1.display(), p2.display())),
+                e => e,
+            })?)
         }
         _ => None,
     };
@@ -739,6 +778,7 @@ fn convert(a: ConvertArgs) -> Result<()> {
         .transpose()
         .map_err(|e| super::rename_param(e, "--detrend"))?;
     let mut out = OutputSet::for_files(&a.out, "--out")?;
+    super::surface_inputs(&mut out, std::slice::from_ref(&a.input), "the input")?;
     let (topo, fill) = read_filled(&a.input, a.fill)?;
     if let Topography::Profile(_) = topo {
         return Err(Error::Data(format!(

@@ -496,6 +496,9 @@ impl NormalSolver {
     ) -> Result<NormalSolution> {
         let start = Instant::now();
         let p_mean = require_positive("mean_pressure_pa", mean_pressure_pa)?;
+        // The same small-strain limit as every command and configuration (crate::core::sanity).
+        crate::core::sanity::nominal_strain(p_mean, self.e_star)
+            .map_err(|m| Error::param("mean_pressure_pa", m))?;
         let n = (self.nx * self.ny) as f64;
         let mut coarse_iterations = 0;
         let warm = match warm_start {
@@ -927,10 +930,13 @@ mod tests {
         assert!(mk(0.0).is_err());
         assert!(mk(f64::NAN).is_err());
         let mut solver = mk(1e11).unwrap();
-        for p in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        for p in [0.0, -1.0, f64::NAN, f64::INFINITY, 0.11e11] {
             let e = solver.solve_load(p, None).unwrap_err().to_string();
             assert!(e.contains("mean_pressure_pa"), "{e}");
         }
+        // The small-strain limit is the one every command applies (crate::core::sanity).
+        let e = solver.solve_load(0.11e11, None).unwrap_err().to_string();
+        assert!(e.contains("0.1 × E*"), "{e}");
         let mut bad = s.clone();
         bad.heights[[3, 4]] = f64::NAN;
         let e = NormalSolver::new(

@@ -14,6 +14,8 @@
 //! | harmonics and time samples of a harmonic-balance model | [`MAX_HARMONICS`] = 256, [`MAX_TIME_SAMPLES`] = 65 536 | `dynamics::aft::Harmonics::new`, model-file validation |
 //! | unknowns of a harmonic-balance Jacobian | its dense matrices within the available memory | `dynamics::hbm::HbmSystem::new` ([`check_memory`]) |
 //! | identification search: starts, particles, swarm iterations, local iterations, chain steps | [`MAX_FIT_STARTS`], [`MAX_PARTICLES`], [`MAX_SWARM_ITERATIONS`], [`MAX_LOCAL_ITERATIONS`], [`MAX_CHAIN_STEPS`] | `asperity identify` ([`check_count`]) |
+//! | rows of a measured frequency-response file | [`MAX_SWEEP_ROWS`] = 20 000 | `identify::measured::Sweep::read_csv` |
+//! | points of a response sweep (`sweep.points`) | [`MAX_SWEEP_POINTS`] = 5000; accepted points at most 4 × that | response-model validation |
 //!
 //! Binary files are checked against their own headers first: a `.npy` whose header promises
 //! more values than the file holds, or an x3p whose `main.xml` declares more points than its
@@ -77,6 +79,14 @@ pub const MAX_LOCAL_ITERATIONS: u64 = 10_000_000;
 /// Most steps of one Metropolis chain of the prediction bands (each step's model is kept in
 /// memory for the chain's diagnostics).
 pub const MAX_CHAIN_STEPS: usize = 1_000_000;
+
+/// Most data rows of one measured frequency-response file (`identify`, `predict`): every model
+/// evaluation of an identification visits each row, so the work grows with the rows.
+pub const MAX_SWEEP_ROWS: usize = 20_000;
+
+/// Most points of `sweep.points` of a response model (the span's smooth part; peaks get more,
+/// up to four times as many accepted points, [`crate::dynamics::continuation`]).
+pub const MAX_SWEEP_POINTS: usize = 5_000;
 
 /// Largest `main.xml` of an x3p archive (16 MiB; real ones are a few kB).
 pub const MAX_XML_BYTES: u64 = 16 << 20;

@@ -25,6 +25,16 @@
 //! `?`) removes everything staged. The same target twice (e.g. a sidecar that would overwrite
 //! its data file) is refused when it is staged.
 //!
+//! **Inputs are never outputs.** A command declares every file it reads with
+//! [`OutputSet::input`] (a model file and every file it names, each topography with its
+//! sidecar); no file of the set may be one of them, nor may the cleanup below remove one. Files
+//! are compared by identity — canonical path (links and `..` resolved) and, on Unix, device and
+//! inode, so a hard link is caught too; a file not yet existing by its nearest existing
+//! directory — when an input or an output becomes known (an input among the
+//! [`OutputSet::writes`] names or the owned files of the directory is refused before any
+//! computation), when a file is staged, and for every file again at the commit, before the
+//! first rename. The error names both paths and the input's role; nothing is written.
+//!
 //! **Files of earlier runs.** A command whose file names depend on its input (one plot per
 //! level or per pressure) declares them with [`OutputSet::owns`]: after a commit, the files of
 //! the output directory that match such a name and that this run did not write are removed —
@@ -32,21 +42,50 @@
 //! own report. No other file of the directory is touched.
 //!
 //! **Interrupts.** [`install_interrupt_handler`] (called once by the CLI) handles SIGINT,
-//! SIGTERM and SIGHUP: it waits for a commit in progress to finish, removes every staging
-//! directory and temporary file of the process, and exits with status 130. So an interrupt
-//! leaves either the complete previous outputs or the complete new ones, and no temporary
-//! files. (A SIGKILL or power loss during the few renames of a commit can still leave a mix;
-//! staging directories left by a killed process are hidden and named `.asperity-staging-*`.)
+//! SIGTERM and SIGHUP: it waits for a commit in progress to finish (and lets no other start),
+//! removes every staging directory and temporary file of the process, and reports what
+//! happened:
+//!
+//! | when | message | exit status |
+//! |---|---|---|
+//! | before the output set was moved into place (or its commit failed and was undone) | `interrupted before writing: previous files untouched` | 130 ([`EXIT_INTERRUPTED_BEFORE_WRITING`]) |
+//! | after the output set was complete | `interrupted after the new set was complete: new files in place` | 3 ([`EXIT_INTERRUPTED_AFTER_WRITING`]) |
+//!
+//! So an interrupt leaves either the complete previous outputs or the complete new ones, and
+//! no temporary files, and says which. An error the interrupted work runs into while its
+//! staged files are removed (a writer finding its directory gone) is not reported: the CLI
+//! checks [`interrupted`] before printing an error. (A SIGKILL or power loss during the few
+//! renames of a commit can still leave a mix; staging directories left by a killed process are
+//! hidden and named `.asperity-staging-*`.)
 
 use crate::core::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// Paths (staging directories and temporary files) to remove if the process is interrupted.
 static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 /// Held while an [`OutputSet`] moves its files into place; the interrupt handler waits for it.
 static COMMIT: Mutex<()> = Mutex::new(());
+/// Set when an [`OutputSet`] of this process has been moved into place.
+static COMMITTED: AtomicBool = AtomicBool::new(false);
+/// Set as soon as an interrupt arrives.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Exit status of an interrupt that arrived before the outputs were moved into place: the
+/// previous files are untouched (128 + SIGINT, as a shell reports it).
+pub const EXIT_INTERRUPTED_BEFORE_WRITING: i32 = 130;
+
+/// Exit status of an interrupt that arrived after the command's new output set was complete:
+/// the new files are in place (the rest of the command, e.g. its summary, did not run).
+pub const EXIT_INTERRUPTED_AFTER_WRITING: i32 = 3;
+
+/// Whether an interrupt has arrived: an error then is a consequence of the interrupt's cleanup,
+/// not something to report (the handler reports what happened and exits).
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
@@ -75,25 +114,51 @@ fn remove_path(p: &Path) {
     }
 }
 
-/// Remove every staging directory and temporary file of this process (what the interrupt
-/// handler does before exiting). Waits for a commit in progress.
-pub fn remove_partial_outputs() {
-    let _commit = lock(&COMMIT);
+/// Remove every staging directory and temporary file registered so far.
+fn remove_registered() {
     let paths: Vec<PathBuf> = std::mem::take(&mut *lock(&CLEANUP));
     for p in paths.iter().rev() {
         remove_path(p);
     }
 }
 
-/// Handle SIGINT, SIGTERM and SIGHUP: remove partial outputs (see the module documentation),
-/// print a line and exit with status 130. Call once, at the start of `main`. Part of the `cli`
-/// feature (a host process such as Python owns its signals).
+/// Remove every staging directory and temporary file of this process. Waits for a commit in
+/// progress.
+pub fn remove_partial_outputs() {
+    let _commit = lock(&COMMIT);
+    remove_registered();
+}
+
+/// What an interrupt found: the report and the exit status (module documentation).
+pub fn interrupt_report(new_set_in_place: bool) -> (&'static str, i32) {
+    if new_set_in_place {
+        (
+            "interrupted after the new set was complete: new files in place",
+            EXIT_INTERRUPTED_AFTER_WRITING,
+        )
+    } else {
+        (
+            "interrupted before writing: previous files untouched",
+            EXIT_INTERRUPTED_BEFORE_WRITING,
+        )
+    }
+}
+
+/// Handle SIGINT, SIGTERM and SIGHUP: wait for a commit in progress, remove partial outputs,
+/// report which set is in place and exit (see the module documentation). Call once, at the
+/// start of `main`.
+/// Part of the `cli` feature (a host process such as Python owns its signals).
 #[cfg(feature = "cli")]
 pub fn install_interrupt_handler() {
     let r = ctrlc::set_handler(|| {
-        remove_partial_outputs();
-        eprintln!("interrupted: stopped before writing; no partial output is left");
-        std::process::exit(130);
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        // Held until the exit: no commit starts after this point.
+        let commit = lock(&COMMIT);
+        remove_registered();
+        let (message, code) = interrupt_report(COMMITTED.load(Ordering::SeqCst));
+        eprintln!("{message}");
+        std::mem::forget(commit);
+        std::process::exit(code);
     });
     if let Err(e) = r {
         eprintln!("warning: cannot install the interrupt handler: {e}");
@@ -214,7 +279,124 @@ pub struct OutputSet {
     /// File-name patterns `(prefix, suffix)` of the output directory that belong to this
     /// command ([`OutputSet::owns`]).
     owned: Vec<(String, String)>,
+    /// Fixed file names of the output directory this command writes ([`OutputSet::writes`]).
+    names: Vec<String>,
+    /// Files announced by [`OutputSet::for_files`] (staged later), with their flag.
+    planned: Vec<(PathBuf, String)>,
+    /// The command's input files ([`OutputSet::input`]): none may be written or removed.
+    inputs: Vec<Input>,
     committed: bool,
+}
+
+/// An input file of a command: the path as given, the flag or role naming it, its identity.
+#[derive(Debug, Clone)]
+struct Input {
+    path: PathBuf,
+    role: String,
+    id: FileIdentity,
+}
+
+/// Which file a path names: its canonical path (links and `..` resolved) and, on Unix, its
+/// device and inode, so that a hard link (another name of the same file) is recognised too.
+/// A path that does not exist yet is named by its nearest existing ancestor, canonical, and the
+/// rest of the path (`..` taken lexically: the directories to be created are no links).
+#[derive(Debug, Clone, PartialEq)]
+struct FileIdentity {
+    path: PathBuf,
+    inode: Option<(u64, u64)>,
+}
+
+impl FileIdentity {
+    /// The identity of `p`, or `None` when no ancestor of it can be resolved.
+    fn of(p: &Path) -> Option<Self> {
+        if let Ok(path) = std::fs::canonicalize(p) {
+            let inode = std::fs::metadata(&path).ok().and_then(|m| inode_of(&m));
+            return Some(Self { path, inode });
+        }
+        for a in p.ancestors().skip(1) {
+            let base = if a.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                a
+            };
+            let Ok(mut path) = std::fs::canonicalize(base) else {
+                continue;
+            };
+            for c in p.strip_prefix(a).ok()?.components() {
+                match c {
+                    std::path::Component::Normal(n) => path.push(n),
+                    std::path::Component::ParentDir => {
+                        path.pop();
+                    }
+                    _ => {}
+                }
+            }
+            return Some(Self { path, inode: None });
+        }
+        None
+    }
+
+    /// The same file: the same canonical path, or the same device and inode.
+    fn same(&self, other: &Self) -> bool {
+        self.path == other.path || (self.inode.is_some() && self.inode == other.inode)
+    }
+}
+
+#[cfg(unix)]
+fn inode_of(m: &std::fs::Metadata) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    Some((m.dev(), m.ino()))
+}
+
+#[cfg(not(unix))]
+fn inode_of(_: &std::fs::Metadata) -> Option<(u64, u64)> {
+    None
+}
+
+/// What would happen to an input: it would be written over, removed as a stale output, or
+/// either (an owned name of the output directory, before the run knows which it writes).
+#[derive(Clone, Copy)]
+enum Clash {
+    Overwritten,
+    Removed,
+    Owned,
+}
+
+/// The refusal of an output `target` (named by `flag`) that is the input `input`.
+fn clash_error(target: &Path, flag: &str, input: &Input, target_id: &FileIdentity, how: Clash) -> Error {
+    // The target's own name (its directory resolved, not the file): another name than the
+    // input's means a symbolic or a hard link.
+    let own_name = target
+        .parent()
+        .map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d })
+        .and_then(|d| std::fs::canonicalize(d).ok())
+        .zip(target.file_name())
+        .map(|(d, n)| d.join(n));
+    let link = if target_id.path != input.id.path
+        || own_name.is_some_and(|n| n != input.id.path)
+    {
+        " (the same file under another name: a link)"
+    } else {
+        ""
+    };
+    let what = match how {
+        Clash::Overwritten => "it would be overwritten",
+        Clash::Removed => "it would be removed as a file of an earlier run",
+        Clash::Owned => {
+            "its name is one this command writes into the output directory: it would be \
+             overwritten, or removed as a file of an earlier run"
+        }
+    };
+    Error::param(
+        flag,
+        format!(
+            "the output `{}` is the input `{}` ({}){link}: {what}; nothing was written, give the \
+             output another path",
+            target.display(),
+            input.path.display(),
+            input.role
+        ),
+    )
 }
 
 /// A relative `path` with an explicit leading `./` (so that it lies below the anchor `.`).
@@ -277,18 +459,126 @@ impl OutputSet {
     /// Declare the files of the output directory named `prefix…suffix` as this command's (one
     /// per level, pressure, …): those of an earlier run that this commit does not write are
     /// removed after it (module documentation). Only for a set made by [`OutputSet::in_dir`].
-    pub fn owns(&mut self, prefix: &str, suffix: &str) {
+    /// An owned file that is one of the command's inputs is refused (now, and again at the
+    /// commit): it would be overwritten or removed.
+    pub fn owns(&mut self, prefix: &str, suffix: &str) -> Result<()> {
         debug_assert!(self.dir.is_some(), "owns() needs an output directory");
         self.owned.push((prefix.to_string(), suffix.to_string()));
+        self.check_inputs()
     }
 
-    /// Remove the owned files of the output directory that are not among `written`.
-    fn remove_stale(&self, written: &[PathBuf]) {
-        let Some((dir, _)) = &self.dir else { return };
-        if self.owned.is_empty() {
-            return;
+    /// Declare fixed file names this command writes into the output directory of
+    /// [`OutputSet::in_dir`], so that an input among them is refused now, before the
+    /// computation, rather than when the file is staged.
+    pub fn writes(&mut self, names: &[&str]) -> Result<()> {
+        debug_assert!(self.dir.is_some(), "writes() needs an output directory");
+        self.names.extend(names.iter().map(|n| n.to_string()));
+        self.check_inputs()
+    }
+
+    /// Declare an input file of the command (named by `role`, a flag or a description, in
+    /// errors). No output of this set may be that file — compared by identity: canonical path,
+    /// and device and inode, so a link is caught too — and no stale-file cleanup may remove it.
+    /// Checked now against what is already known (staged files, [`OutputSet::writes`] names,
+    /// owned files of the directory), and again for every file at staging and at the commit.
+    /// An input that does not exist is ignored here (its reader reports it).
+    pub fn input(&mut self, path: &Path, role: &str) -> Result<()> {
+        if let Some(id) = std::fs::metadata(path).ok().and(FileIdentity::of(path)) {
+            self.inputs.push(Input {
+                path: path.to_path_buf(),
+                role: role.to_string(),
+                id,
+            });
         }
-        let Ok(dir) = dir.canonicalize() else { return };
+        self.check_inputs()
+    }
+
+    /// [`OutputSet::input`] for several files of one role.
+    pub fn inputs<P: AsRef<Path>>(
+        &mut self,
+        paths: impl IntoIterator<Item = P>,
+        role: &str,
+    ) -> Result<()> {
+        for p in paths {
+            self.input(p.as_ref(), role)?;
+        }
+        Ok(())
+    }
+
+    /// The input that `target` is, if any.
+    fn input_at(&self, target: &Path) -> Option<(&Input, FileIdentity)> {
+        if self.inputs.is_empty() {
+            return None;
+        }
+        let id = FileIdentity::of(target)?;
+        self.inputs
+            .iter()
+            .find(|i| i.id.same(&id))
+            .map(|i| (i, id))
+    }
+
+    /// Files of the output directory matching an owned pattern (candidates for removal).
+    fn owned_files(&self) -> Vec<PathBuf> {
+        let Some((dir, _)) = &self.dir else {
+            return Vec::new();
+        };
+        if self.owned.is_empty() {
+            return Vec::new();
+        }
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return Vec::new();
+        };
+        entries
+            .flatten()
+            .filter(|e| {
+                e.file_name().to_str().is_some_and(|text| {
+                    self.owned.iter().any(|(pre, suf)| {
+                        text.len() >= pre.len() + suf.len()
+                            && text.starts_with(pre.as_str())
+                            && text.ends_with(suf.as_str())
+                    })
+                })
+            })
+            .map(|e| e.path())
+            .collect()
+    }
+
+    /// Refuse any known output (staged target, declared name, owned file of the directory)
+    /// that is an input.
+    fn check_inputs(&self) -> Result<()> {
+        if self.inputs.is_empty() {
+            return Ok(());
+        }
+        for (t, flag) in self.targets.iter().chain(&self.planned) {
+            if let Some((i, id)) = self.input_at(t) {
+                return Err(clash_error(t, flag, i, &id, Clash::Overwritten));
+            }
+        }
+        if let Some((dir, flag)) = &self.dir {
+            for name in &self.names {
+                let t = dir.join(name);
+                if let Some((i, id)) = self.input_at(&t) {
+                    return Err(clash_error(&t, flag, i, &id, Clash::Overwritten));
+                }
+            }
+            for t in self.owned_files() {
+                if let Some((i, id)) = self.input_at(&t) {
+                    return Err(clash_error(&t, flag, i, &id, Clash::Owned));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The owned files of the output directory that are not among `written` (removed after
+    /// the commit).
+    fn stale_files(&self, written: &[PathBuf]) -> Vec<PathBuf> {
+        let Some((dir, _)) = &self.dir else {
+            return Vec::new();
+        };
+        let Ok(dir) = dir.canonicalize() else {
+            return Vec::new();
+        };
         let fresh: std::collections::HashSet<std::ffi::OsString> = written
             .iter()
             .filter(|w| {
@@ -298,19 +588,10 @@ impl OutputSet {
             })
             .filter_map(|w| w.file_name().map(|n| n.to_os_string()))
             .collect();
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            return;
-        };
-        for e in entries.flatten() {
-            let name = e.file_name();
-            let Some(text) = name.to_str() else { continue };
-            let owned = self.owned.iter().any(|(pre, suf)| {
-                text.len() >= pre.len() + suf.len() && text.starts_with(pre) && text.ends_with(suf)
-            });
-            if owned && !fresh.contains(&name) && e.path().is_file() {
-                let _ = std::fs::remove_file(e.path());
-            }
-        }
+        self.owned_files()
+            .into_iter()
+            .filter(|p| p.file_name().is_some_and(|n| !fresh.contains(n)) && p.is_file())
+            .collect()
     }
 
     /// A set of explicitly named files (named by `flag` in errors), all checked now: none is an
@@ -320,7 +601,7 @@ impl OutputSet {
         for p in paths {
             set.stage(p, flag)?;
         }
-        set.targets.clear();
+        set.planned = std::mem::take(&mut set.targets);
         Ok(set)
     }
 
@@ -367,6 +648,9 @@ impl OutputSet {
                     target.display()
                 ),
             ));
+        }
+        if let Some((i, id)) = self.input_at(target) {
+            return Err(clash_error(target, flag, i, &id, Clash::Overwritten));
         }
         let (anchor, staging) = self.staging_for(&t, flag)?;
         let rel = t
@@ -431,6 +715,27 @@ impl OutputSet {
             }
         }
         moves.sort_by(|a, b| a.1.cmp(&b.1));
+        // No input is written over or removed, whichever way the file came to be staged (a
+        // library writer may have added a sidecar): checked before the first rename.
+        let written: Vec<PathBuf> = moves.iter().map(|m| m.1.clone()).collect();
+        let stale = self.stale_files(&written);
+        let flag = |t: &Path| {
+            self.targets
+                .iter()
+                .find(|(p, _)| with_dir(p) == with_dir(t))
+                .map(|(_, f)| f.clone())
+                .or_else(|| self.dir.as_ref().map(|(_, f)| f.clone()))
+                .unwrap_or_else(|| "output".to_string())
+        };
+        for (t, how) in written
+            .iter()
+            .map(|t| (t, Clash::Overwritten))
+            .chain(stale.iter().map(|t| (t, Clash::Removed)))
+        {
+            if let Some((i, id)) = self.input_at(t) {
+                return Err(clash_error(t, &flag(t), i, &id, how));
+            }
+        }
         // (staged, target, backup of the previous target, directories created)
         let mut done: Vec<(PathBuf, PathBuf, Option<PathBuf>)> = Vec::new();
         let mut created: Vec<PathBuf> = Vec::new();
@@ -486,12 +791,14 @@ impl OutputSet {
             return Err(e);
         }
         self.committed = true;
+        COMMITTED.store(true, Ordering::SeqCst);
         for (_, staging) in &self.stagings {
             remove_path(staging);
             deregister(staging);
         }
-        let written: Vec<PathBuf> = moves.into_iter().map(|m| m.1).collect();
-        self.remove_stale(&written);
+        for p in stale {
+            let _ = std::fs::remove_file(p);
+        }
         Ok(written)
     }
 }
@@ -631,6 +938,76 @@ mod tests {
             set.owns("level-", ".png");
         }
         assert!(out.join("level-2.png").exists());
+    }
+
+    /// An output that is an input — by the same path, by another spelling of it, through a
+    /// symbolic or a hard link, or as an owned file of an earlier run that the commit would
+    /// remove — is refused naming both, and the input is left as it was.
+    #[test]
+    fn an_input_is_never_written_over_or_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let input = d.join("p.csv");
+        std::fs::write(&input, "measured").unwrap();
+        let intact = || assert_eq!(std::fs::read_to_string(&input).unwrap(), "measured");
+        // The same path, and another spelling of it, at staging or when declared after it.
+        let mut set = OutputSet::new();
+        set.input(&input, "the profile").unwrap();
+        let e = set.file(&input, "--psd-out").unwrap_err().to_string();
+        assert!(
+            e.contains("--psd-out") && e.contains("p.csv") && e.contains("the profile"),
+            "{e}"
+        );
+        let mut set = OutputSet::for_files(&[d.join("sub/../p.csv")], "--out").unwrap();
+        let e = set.input(&input, "SURFACE1").unwrap_err().to_string();
+        assert!(e.contains("SURFACE1") && e.contains("overwritten"), "{e}");
+        // Links: another name of the same file.
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(&input, d.join("sym.csv")).unwrap();
+            std::fs::hard_link(&input, d.join("hard.csv")).unwrap();
+            for link in ["sym.csv", "hard.csv"] {
+                let mut set = OutputSet::new();
+                set.input(&input, "the profile").unwrap();
+                let e = set.file(&d.join(link), "--out").unwrap_err().to_string();
+                assert!(e.contains(link) && e.contains("a link"), "{link}: {e}");
+            }
+        }
+        // An owned file of the directory: refused when declared, whatever the order.
+        let out = d.join("out");
+        std::fs::create_dir(&out).unwrap();
+        let table = out.join("elements_level_3.csv");
+        std::fs::write(&table, "table").unwrap();
+        let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+        set.owns("elements_level_", ".csv").unwrap();
+        let e = set.input(&table, "contact 1 elements").unwrap_err().to_string();
+        assert!(e.contains("removed") && e.contains("elements_level_3.csv"), "{e}");
+        drop(set);
+        let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+        set.input(&table, "contact 1 elements").unwrap();
+        assert!(set.owns("elements_level_", ".csv").is_err());
+        drop(set);
+        // A fixed name declared with writes().
+        let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+        set.input(&table, "contact 1 elements").unwrap();
+        assert!(set.writes(&["elements_level_3.csv"]).is_err());
+        drop(set);
+        // A file a library writer puts into the staging directory (not declared): refused at
+        // the commit, before anything is moved.
+        let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
+        set.input(&table, "contact 1 elements").unwrap();
+        let staged = set.staging_dir().unwrap();
+        std::fs::write(staged.join("new.csv"), "new").unwrap();
+        std::fs::write(staged.join("elements_level_3.csv"), "peaks").unwrap();
+        assert!(set.commit().is_err());
+        assert_eq!(std::fs::read_to_string(&table).unwrap(), "table");
+        assert!(!out.join("new.csv").exists());
+        intact();
+        let left: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left.len(), 1, "{left:?}");
     }
 
     #[test]

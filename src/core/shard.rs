@@ -107,6 +107,23 @@ impl Shard {
         (self.index - 1) * total / self.count..self.index * total / self.count
     }
 
+    /// Refuse more shards than `total` units: a shard would hold no unit (its file would be
+    /// empty, and the run would do nothing). `what` names the units (e.g. `realisations`).
+    /// With `count ≤ total` every shard holds at least one unit.
+    pub fn check_units(&self, total: usize, what: &str) -> Result<()> {
+        if self.count > total {
+            return Err(Error::param(
+                "shard",
+                format!(
+                    "{self}: {total} {what} cannot be split into {} shards (every shard needs \
+                     one at least): at most {total}/{total}",
+                    self.count
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// File name of this shard's results for sweeps of `kind`: `<kind>.shard-<i>-of-<n>.json`.
     pub fn file_name(&self, kind: &str) -> String {
         format!("{kind}.shard-{}-of-{}.json", self.index, self.count)

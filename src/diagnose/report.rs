@@ -635,14 +635,26 @@ pub struct Outputs {
 }
 
 impl Outputs {
+    /// The names of the files, without a directory.
+    pub fn file_names() -> [&'static str; 5] {
+        [
+            "diagnose.txt",
+            "diagnose.json",
+            "diagnose.csv",
+            "diagnose-loops.png",
+            "diagnose-residual.png",
+        ]
+    }
+
     /// Files `diagnose.{txt,json,csv}`, `diagnose-loops.png`, `diagnose-residual.png` in `dir`.
     pub fn in_dir(dir: &Path) -> Self {
+        let [text, json, csv, loops_png, residual_png] = Self::file_names().map(|n| dir.join(n));
         Self {
-            text: dir.join("diagnose.txt"),
-            json: dir.join("diagnose.json"),
-            csv: dir.join("diagnose.csv"),
-            loops_png: dir.join("diagnose-loops.png"),
-            residual_png: dir.join("diagnose-residual.png"),
+            text,
+            json,
+            csv,
+            loops_png,
+            residual_png,
         }
     }
 }

@@ -66,7 +66,7 @@ impl ContinuationSettings {
             target_iterations: 4,
             max_corrector_iterations: 12,
             max_angle_deg: 20.0,
-            max_points: 20_000,
+            max_points: 4 * crate::core::limits::MAX_SWEEP_POINTS,
         }
     }
 
@@ -376,9 +376,13 @@ pub fn sweep(
         progress(((corr.omega - w0) / (w1 - w0)).clamp(0.0, 1.0));
         if points.len() >= settings.max_points {
             return Err(Error::Data(format!(
-                "continuation at level {level:.4e} reached max_points = {} at {:.6} Hz",
+                "continuation at level {level:.4e} reached its cap of {} accepted points (4 × \
+                 the largest `sweep.points`) at {:.6} Hz, with `sweep.points` = {}: the branch \
+                 folds or refines more than a response sweep should; fewer `sweep.points` or a \
+                 narrower frequency span",
                 settings.max_points,
-                corr.omega / TWO_PI
+                corr.omega / TWO_PI,
+                settings.points
             )));
         }
     }

@@ -294,6 +294,18 @@ impl ModelFile {
         if s.points < 2 {
             return Err(Error::param("sweep.points", "must be ≥ 2"));
         }
+        if s.points > crate::core::limits::MAX_SWEEP_POINTS {
+            return Err(Error::param(
+                "sweep.points",
+                format!(
+                    "{} is more than the limit of {} (resource limit: each point is a Newton \
+                     solve of every level's harmonic balance; a resonance gets more points than \
+                     this by itself)",
+                    s.points,
+                    crate::core::limits::MAX_SWEEP_POINTS
+                ),
+            ));
+        }
         if e.harmonic > s.harmonics || (s.odd_only && e.harmonic.is_multiple_of(2)) {
             return Err(Error::param(
                 "excitation.harmonic",
@@ -569,6 +581,36 @@ impl Kinematics {
         }
         Ok(p)
     }
+}
+
+/// `(role, path)` of the model file and of every file it names (matrices or modes and shapes,
+/// element tables, node pairs), paths resolved against the model file's directory, without
+/// reading those files: the inputs a command declares before it writes anything.
+pub fn referenced_files(path: &Path) -> Result<Vec<(String, PathBuf)>> {
+    crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let file = ModelFile::parse(&text, path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut files = vec![("model".to_string(), path.to_path_buf())];
+    let l = &file.linear;
+    for (role, p) in [
+        ("mass", &l.mass),
+        ("damping", &l.damping),
+        ("stiffness", &l.stiffness),
+        ("modes", &l.modes),
+        ("shapes", &l.shapes),
+    ] {
+        if let Some(p) = p {
+            files.push((format!("{role} matrix"), base.join(p)));
+        }
+    }
+    for (ci, c) in file.contact.iter().enumerate() {
+        files.push((format!("contact {} elements", ci + 1), base.join(&c.elements)));
+        if let Some(p) = &c.pairs {
+            files.push((format!("contact {} pairs", ci + 1), base.join(p)));
+        }
+    }
+    Ok(files)
 }
 
 /// Read the model file and everything it names; build the structure with its elements.

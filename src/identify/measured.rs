@@ -195,6 +195,7 @@ pub const MIN_ROWS: usize = 5;
 impl Sweep {
     /// Read and validate a measured sweep (see the module documentation).
     pub fn read_csv(path: &Path) -> Result<Self> {
+        crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
         let sha256 = sha256_hex(&bytes);
         let mut rdr = csv_reader(path)?;
@@ -226,6 +227,17 @@ impl Sweep {
         let mut rows: Vec<Row> = Vec::new();
         for rec in rdr.records() {
             let (rec, line) = csv_record(path, rec)?;
+            if rows.len() == crate::core::limits::MAX_SWEEP_ROWS {
+                return Err(Error::limit(
+                    path.display().to_string(),
+                    format!(
+                        "more than {} data rows (line {line}); a stepped-sine sweep has tens to a \
+                         few thousand, and every model evaluation of the identification visits \
+                         each row: thin the file (every k-th row) or split the band",
+                        crate::core::limits::MAX_SWEEP_ROWS
+                    ),
+                ));
+            }
             let frequency_hz = field(path, &rec, line, c_f, "frequency_Hz")?;
             let force_n = field(path, &rec, line, c_force, "force_amplitude_N")?;
             let response = field(path, &rec, line, c_resp, quantity.column())?;
@@ -511,6 +523,10 @@ pub fn check_agree(
     if odd.is_empty() {
         return Ok(());
     }
+    let agreeing = own
+        .iter()
+        .filter(|c| matches!(c, FileConvention::Detected(c) if *c == common))
+        .count();
     let list = sweeps
         .iter()
         .zip(own)
@@ -526,6 +542,17 @@ pub fn check_agree(
         })
         .collect::<Vec<_>>()
         .join("; ");
+    if common_source.is_none() && odd.len() >= agreeing {
+        // No convention is shared by most files (two files, one inverted): the files alone
+        // cannot tell which is odd, so none is singled out (before, the lowest level's
+        // convention won the tie and the other file, maybe the good one, was blamed).
+        return Err(Error::Data(format!(
+            "the files are in different phase conventions and none is shared by most of them: \
+             {list}. Measurements of one structure with one acquisition set-up share one \
+             convention: correct the phases (or the response column) of the file whose channel \
+             is inverted or conjugated — the files alone cannot tell which one it is"
+        )));
+    }
     let against = format!(
         "{} ({})",
         common_source.unwrap_or("of the other files"),

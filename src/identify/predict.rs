@@ -44,6 +44,85 @@ pub enum Control {
     Response,
 }
 
+impl Control {
+    fn name(self) -> &'static str {
+        match self {
+            Control::Force => "force",
+            Control::Response => "response",
+        }
+    }
+}
+
+/// The test control a measured file's header comments state — a comment line before the
+/// header row saying "force control" or "response control" (any case, also "force-controlled",
+/// "response-controlled") — with its 1-based line; `None` where they say neither (or both).
+pub fn stated_control(path: &Path) -> Result<Option<(Control, usize)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    for (k, line) in text.lines().enumerate() {
+        let Some(comment) = line.trim_start().strip_prefix('#') else {
+            break;
+        };
+        let c = comment.to_lowercase().replace('-', " ");
+        let says = |mode: &str| c.contains(&format!("{mode} control"));
+        match (says("force"), says("response")) {
+            (true, false) => return Ok(Some((Control::Force, k + 1))),
+            (false, true) => return Ok(Some((Control::Response, k + 1))),
+            _ => {}
+        }
+    }
+    Ok(None)
+}
+
+/// The control under which the files are predicted, and where it comes from: the files'
+/// headers where they state it ([`stated_control`]), the `flag` (`--control`) otherwise (force
+/// control by default). Files that state different controls, or a flag that contradicts a
+/// file's statement, are refused naming the file and line: a response-controlled test predicted
+/// under force control gives other numbers without a word.
+pub fn choose_control(sweeps: &[Sweep], flag: Option<Control>) -> Result<(Control, String)> {
+    let mut stated: Option<(Control, &Sweep, usize)> = None;
+    for s in sweeps {
+        let Some((c, line)) = stated_control(&s.path)? else {
+            continue;
+        };
+        if let Some(f) = flag.filter(|f| *f != c) {
+            return Err(Error::param(
+                "--control",
+                format!(
+                    "{} contradicts {}:{line}, whose header states {} control",
+                    f.name(),
+                    s.path.display(),
+                    c.name()
+                ),
+            ));
+        }
+        match stated {
+            Some((c0, s0, l0)) if c0 != c => {
+                return Err(Error::Data(format!(
+                    "{}:{l0} states {} control and {}:{line} {} control: predict files of one \
+                     control at a time",
+                    s0.path.display(),
+                    c0.name(),
+                    s.path.display(),
+                    c.name()
+                )))
+            }
+            None => stated = Some((c, s, line)),
+            _ => {}
+        }
+    }
+    Ok(match (stated, flag) {
+        (Some((c, s, line)), _) => (
+            c,
+            format!("stated in the header of {}:{line}", s.path.display()),
+        ),
+        (None, Some(f)) => (f, "--control".to_string()),
+        (None, None) => (
+            Control::Force,
+            "default (no file's header states its control; --control sets it)".to_string(),
+        ),
+    })
+}
+
 /// The model that predicts: the identified single nonlinear mode, or an updated reduced model.
 #[derive(Debug, Clone)]
 pub enum Predictor {
@@ -104,6 +183,11 @@ pub struct FilePrediction {
     /// Why the file lies outside the amplitudes the model was identified on (its peak more than
     /// [`EXTRAPOLATION_FACTOR`] beyond the fit levels' peaks), or `None`.
     pub extrapolation: Option<String>,
+    /// Why the measured file is not one lightly damped mode (its equivalent linear fit,
+    /// [`backbone::fit_linear_mode`], has no positive stiffness, damping and modal mass), or
+    /// `None`: a single-mode model's errors on such a file compare it with something it does not
+    /// describe, and are flagged so beside them.
+    pub not_one_mode: Option<String>,
 }
 
 /// How far beyond the fit levels' peak amplitudes (above the largest, below the smallest) a
@@ -132,6 +216,8 @@ pub fn extrapolation_note(peak: f64, (lo, hi): (f64, f64)) -> Option<String> {
 pub struct Prediction {
     pub model_file: PathBuf,
     pub control: Control,
+    /// Where the control comes from ([`choose_control`]).
+    pub control_source: String,
     pub convention: PhaseConvention,
     pub convention_source: String,
     pub files: Vec<FilePrediction>,
@@ -151,8 +237,33 @@ pub struct Prediction {
     pub stationarity: std::result::Result<Vec<Option<SideComparison>>, String>,
 }
 
+/// `(role, path)` of a saved model file and, for a reduced model, of the response-model file
+/// it updates and every file that one names: the inputs of `predict` besides the measured
+/// files. A file that cannot be read as a model gives the model file alone (its reader reports
+/// the error).
+pub fn model_inputs(model_file: &Path) -> Result<Vec<(String, std::path::PathBuf)>> {
+    let mut files = vec![("--model".to_string(), model_file.to_path_buf())];
+    let reduced = std::fs::read_to_string(model_file)
+        .ok()
+        .and_then(|t| serde_json::from_str::<SavedReducedModel>(&t).ok());
+    if let Some(r) = reduced {
+        if let Ok(refs) = crate::dynamics::model_file::referenced_files(&r.model_file) {
+            files.extend(
+                refs.into_iter()
+                    .map(|(role, p)| (format!("{role} of the --model's structure"), p)),
+            );
+        }
+    }
+    Ok(files)
+}
+
 /// Predict measured files with a saved model.
-pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Result<Prediction> {
+/// `control` is the test control and where it comes from ([`choose_control`]).
+pub fn predict(
+    model_file: &Path,
+    sweeps: Vec<Sweep>,
+    (control, control_source): (Control, String),
+) -> Result<Prediction> {
     let (model, saved_convention) = if SavedReducedModel::is_reduced(model_file)? {
         let (m, c, e) = SavedReducedModel::read(model_file)?;
         (Predictor::Reduced(m, e), c)
@@ -237,7 +348,12 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
             ),
             Predictor::Reduced(..) => None,
         };
+        let not_one_mode = {
+            let x = backbone::receptance(s.quantity, &om, &level.measured);
+            backbone::fit_linear_mode(&om, &x).err().map(|e| e.to_string())
+        };
         files.push(FilePrediction {
+            not_one_mode,
             peak_amplitude_m,
             extrapolation,
             input: InputFile::of(s),
@@ -274,6 +390,7 @@ pub fn predict(model_file: &Path, sweeps: Vec<Sweep>, control: Control) -> Resul
         stationarity,
         model_file: model_file.to_path_buf(),
         control,
+        control_source,
         convention,
         convention_source: source,
         files,
@@ -328,7 +445,8 @@ impl Prediction {
     /// Human-readable report.
     pub fn text(&self) -> String {
         let mut s = format!(
-            "asperity predict — identified model {} on measured files ({} control)\n\
+            "asperity predict — identified model {} on measured files\n\
+             control: {} ({})\n\
              phase convention: {} ({})\n\n",
             self.model_file.display(),
             match self.control {
@@ -336,11 +454,33 @@ impl Prediction {
                 Control::Response =>
                     "response: the measured response of each row held, force solved for",
             },
+            self.control_source,
             self.convention.describe(),
             self.convention_source
         );
-        let rows: Vec<_> = self.files.iter().map(|f| (&f.errors, None)).collect();
+        // A file that is not one lightly damped mode is marked in the table, beside its errors.
+        let marked: Vec<LevelErrors> = self
+            .files
+            .iter()
+            .map(|f| {
+                let mut e = f.errors.clone();
+                if f.not_one_mode.is_some() {
+                    e.file += " [NOT ONE MODE]";
+                }
+                e
+            })
+            .collect();
+        let rows: Vec<_> = marked.iter().map(|e| (e, None)).collect();
         s += &errors_table("errors per file (model − measured):", &rows);
+        for f in &self.files {
+            if let Some(why) = &f.not_one_mode {
+                s += &format!(
+                    "  warning: {} [NOT ONE MODE]: {why}; its errors compare the single-mode model \
+                     with data it does not describe\n",
+                    f.errors.file
+                );
+            }
+        }
         match &self.bands {
             Ok(b) => {
                 s += "95 % bands over the ensemble saved with the model (models of its form that \

@@ -59,6 +59,33 @@ pub struct RegionErrors {
     pub mean_phase_error_rad: f64,
 }
 
+/// Why a phase-resonance frequency (`f_90`) is not available: the phase of the displacement
+/// does not pass quadrature with the force inside the band (e.g. a constant-amplitude file).
+pub const NO_PHASE_RESONANCE: &str = "the phase does not pass quadrature inside the band";
+
+/// A phase-resonance frequency (or its error) in JSON: the number, or, where it is not
+/// available (NaN), `{"not_available": NO_PHASE_RESONANCE}` — never `null` or `NaN`.
+pub fn phase_resonance_or_reason<S: serde::Serializer>(
+    value: &f64,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    let v: std::result::Result<f64, String> = if value.is_finite() {
+        Ok(*value)
+    } else {
+        Err(NO_PHASE_RESONANCE.to_string())
+    };
+    available_or_reason(&v, s)
+}
+
+/// A number of a text table, or `n/a` where it is not available (not finite).
+pub fn number_or_na(value: f64, format: impl Fn(f64) -> String) -> String {
+    if value.is_finite() {
+        format(value)
+    } else {
+        "n/a".to_string()
+    }
+}
+
 /// Why a level has no resonance-frequency error ([`LevelErrors::resonance_error`]).
 pub const NO_RESONANCE_IN_BAND: &str = "no resonance inside the band";
 
@@ -81,9 +108,13 @@ pub struct LevelErrors {
     #[serde(rename = "resonance_error_hz", serialize_with = "available_or_reason")]
     pub resonance_error: std::result::Result<f64, String>,
     /// Phase resonance (quadrature) of the measured and modelled responses (Hz; NaN where the
-    /// phase does not pass quadrature in the band) and their difference.
+    /// phase does not pass quadrature in the band, `n/a` in text and
+    /// `{"not_available": …}` in JSON) and their difference.
+    #[serde(serialize_with = "phase_resonance_or_reason")]
     pub phase_resonance_measured_hz: f64,
+    #[serde(serialize_with = "phase_resonance_or_reason")]
     pub phase_resonance_model_hz: f64,
+    #[serde(serialize_with = "phase_resonance_or_reason")]
     pub phase_resonance_error_hz: f64,
     pub peak_measured: f64,
     pub peak_model: f64,
@@ -550,6 +581,15 @@ impl InputFile {
 
 /// Text table of level errors (before/after).
 pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) -> String {
+    // Columns of two models read `before → after`; of one model, a single value each.
+    let compare = rows.iter().any(|(_, a)| a.is_some());
+    let head = |h: &str| {
+        if compare {
+            format!("{h} bef→aft")
+        } else {
+            h.to_string()
+        }
+    };
     let mut s = format!("{title}\n");
     s += &format!(
         "{:<34} {:>9} {:>8} {:>10} {:>21} {:>9} {:>21} {:>19} {:>17}\n",
@@ -557,40 +597,55 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
         "role",
         "F (N)",
         "f_res (Hz)",
-        "Δf_res (Hz) bef→aft",
+        head("Δf_res (Hz)"),
         "f_90 (Hz)",
-        "Δf_90 (Hz) bef→aft",
-        "peak err bef→aft",
-        "RMS cplx bef→aft"
+        head("Δf_90 (Hz)"),
+        head("peak err"),
+        head("RMS cplx")
     );
+    let mut missing_f90 = false;
     for (b, a) in rows {
         let resonance_pair = match (&b.resonance_error, a.map(|a| &a.resonance_error)) {
             (Err(_), _) | (_, Some(Err(_))) => "n/a (see below)".to_string(),
             (Ok(x), None) => format!("{x:+.3}"),
             (Ok(x), Some(Ok(y))) => format!("{x:+.3} → {y:+.3}"),
         };
-        let pair = |x: f64, y: Option<f64>, scale: f64, prec: usize| match y {
-            Some(y) => format!("{:+.p$} → {:+.p$}", x * scale, y * scale, p = prec),
-            None => format!("{:+.p$}", x * scale, p = prec),
+        let one = |x: f64, scale: f64, prec: usize, unit: &str| {
+            number_or_na(x, |x| format!("{:+.p$}{unit}", x * scale, p = prec))
         };
+        let pair = |x: f64, y: Option<f64>, scale: f64, prec: usize, unit: &str| match y {
+            Some(y) => format!(
+                "{} → {}",
+                one(x, scale, prec, unit),
+                one(y, scale, prec, unit)
+            ),
+            None => one(x, scale, prec, unit),
+        };
+        missing_f90 |= !b.phase_resonance_error_hz.is_finite()
+            || a.is_some_and(|a| !a.phase_resonance_error_hz.is_finite());
         s += &format!(
-            "{:<34} {:>9} {:>8.3} {:>10.3} {:>21} {:>9.3} {:>21} {:>18}% {:>17}\n",
+            "{:<34} {:>9} {:>8.3} {:>10.3} {:>21} {:>9} {:>21} {:>19} {:>17}\n",
             b.file,
             b.role,
             b.mean_force_n,
             b.resonance_measured_hz,
             resonance_pair,
-            b.phase_resonance_measured_hz,
+            number_or_na(b.phase_resonance_measured_hz, |v| format!("{v:.3}")),
             pair(
                 b.phase_resonance_error_hz,
                 a.map(|a| a.phase_resonance_error_hz),
                 1.0,
-                3
+                3,
+                ""
             ),
-            pair(b.peak_error, a.map(|a| a.peak_error), 100.0, 1),
+            pair(b.peak_error, a.map(|a| a.peak_error), 100.0, 1, "%"),
             match a {
-                Some(a) => format!("{:.3} → {:.3}", b.rms_complex, a.rms_complex),
-                None => format!("{:.3}", b.rms_complex),
+                Some(a) => format!(
+                    "{} → {}",
+                    number_or_na(b.rms_complex, |v| format!("{v:.3}")),
+                    number_or_na(a.rms_complex, |v| format!("{v:.3}"))
+                ),
+                None => number_or_na(b.rms_complex, |v| format!("{v:.3}")),
             }
         );
     }
@@ -598,6 +653,9 @@ pub fn errors_table(title: &str, rows: &[(&LevelErrors, Option<&LevelErrors>)]) 
         if let Err(why) = &b.resonance_error {
             s += &format!("  {}: Δf_res n/a, {why}\n", b.file);
         }
+    }
+    if missing_f90 {
+        s += &format!("  f_90 n/a: {NO_PHASE_RESONANCE}\n");
     }
     s
 }

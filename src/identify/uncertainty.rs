@@ -471,6 +471,7 @@ pub struct PredictionBand {
     pub resonance_measured_hz: f64,
     /// Phase resonance (Hz).
     pub phase_resonance_hz: Band,
+    #[serde(serialize_with = "super::report::phase_resonance_or_reason")]
     pub phase_resonance_measured_hz: f64,
     /// Ensemble models whose every row converged (the others are left out).
     pub models: usize,
@@ -710,6 +711,9 @@ pub fn bands_table(bands: &[PredictionBand]) -> String {
         "R̂"
     );
     let cell = |b: &Band, m: f64, d: usize| {
+        if !(m.is_finite() && b.value.is_finite()) {
+            return format!("{:>36}", "n/a");
+        }
         let inside = if b.contains(m) { " " } else { "*" };
         format!(
             "{:>8.d$} [{:>7.d$}, {:>7.d$}] {:>8.d$}{inside}",

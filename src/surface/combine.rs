@@ -37,6 +37,15 @@ pub fn equivalent_surface(body1: &Grid2, body2: &Grid2) -> Result<Grid2> {
             )));
         }
     }
+    if body1.heights == body2.heights {
+        // The same surface twice (often the same file): h1 − h2 is zero everywhere, a flat
+        // surface in full contact at any load — say what happened, not "flat".
+        return Err(Error::Data(
+            "identical bodies: the two surfaces have the same heights at every point, so h1 − h2 \
+             is zero everywhere (the same file twice?); give body 2's own measurement"
+                .into(),
+        ));
+    }
     Grid2::new(
         &body1.heights - &body2.heights,
         body1.dx,

@@ -778,10 +778,55 @@ fn area_stats(g: &Grid2, detrend: Detrend) -> Result<SurfaceStats> {
 
 /// Statistics of a topography after removing the mean (or the plane).
 pub fn stats(topo: &Topography, detrend: Detrend) -> Result<SurfaceStats> {
-    match topo {
+    let s = match topo {
         Topography::Profile(p) => profile_stats(p, detrend),
         Topography::Area(g) => area_stats(g, detrend),
         Topography::MaskedArea(m) => masked_area_stats(m, detrend),
+    }?;
+    s.check_finite()?;
+    Ok(s)
+}
+
+impl SurfaceStats {
+    /// Every statistic finite: one that overflowed (heights or spacings far outside any
+    /// roughness) is an error naming the statistic and the input it came from, never printed
+    /// as `inf` or `NaN`.
+    pub fn check_finite(&self) -> Result<()> {
+        let spacing = format!(
+            "spacing {}{} m",
+            crate::core::error::num(self.dx_m),
+            self.dy_m
+                .map_or(String::new(), |d| format!(" × {}", crate::core::error::num(d)))
+        );
+        let heights = "the heights".to_string();
+        let rq = format!("the heights (Rq {} m)", crate::core::error::num(self.rq_m));
+        let slope_cause = format!("the heights over the {spacing}");
+        let length_cause = format!("the {spacing}");
+        let values = [
+            ("Ra", Some(self.ra_m), &heights),
+            ("Rq", Some(self.rq_m), &heights),
+            ("Rsk", Some(self.rsk), &rq),
+            ("Rku", Some(self.rku), &rq),
+            ("rms slope", Some(self.rms_slope), &slope_cause),
+            ("rms slope (y)", self.rms_slope_y, &slope_cause),
+            ("rms gradient", self.rms_gradient, &slope_cause),
+            ("patch length", Some(self.lx_m), &length_cause),
+            ("patch width", self.ly_m, &length_cause),
+            ("correlation length", self.correlation_length_1_over_e_m, &length_cause),
+            ("correlation length (0.2)", self.correlation_length_0_2_m, &length_cause),
+            ("correlation length along x", self.correlation_length_x_1_over_e_m, &length_cause),
+            ("correlation length along y", self.correlation_length_y_1_over_e_m, &length_cause),
+        ];
+        for (name, v, cause) in values {
+            if let Some(v) = v.filter(|v| !v.is_finite()) {
+                return Err(Error::Data(format!(
+                    "the {name} is {} (not a finite number): it overflowed from {cause}; \
+                     check their units",
+                    crate::core::error::num(v)
+                )));
+            }
+        }
+        Ok(())
     }
 }
 

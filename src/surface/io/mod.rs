@@ -35,8 +35,24 @@ fn extension(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Read a topography, choosing the reader from the extension and, for text, the content.
+/// Read a topography, choosing the reader from the extension and, for text, the content. Its
+/// spacings are bounded as every command bounds them ([`crate::core::sanity::grid_spacing`]: 1 pm to
+/// 1 m), so that no statistic is computed from a spacing in the wrong unit.
 pub fn read(path: &Path) -> Result<Topography> {
+    let topo = read_any_spacing(path)?;
+    let spacings = match &topo {
+        Topography::Profile(p) => vec![("x", p.dx)],
+        Topography::Area(g) => vec![("x", g.dx), ("y", g.dy)],
+        Topography::MaskedArea(g) => vec![("x", g.dx), ("y", g.dy)],
+    };
+    for (axis, d) in spacings {
+        crate::core::sanity::grid_spacing(d)
+            .map_err(|m| Error::parse(path, 0, format!("along {axis}, {m}")))?;
+    }
+    Ok(topo)
+}
+
+fn read_any_spacing(path: &Path) -> Result<Topography> {
     match extension(path).as_str() {
         "npy" => npy::read_topography(path),
         "x3p" => x3p::read_topography(path),
