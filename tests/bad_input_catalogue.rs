@@ -410,7 +410,8 @@ fn catalogue() -> Vec<Case> {
 
 /// A stepped-sine sweep of `rows` rows around a resonance at 80 Hz (accelerance, e^{iωt}).
 fn long_sweep(rows: usize) -> String {
-    let mut s = String::from("frequency_Hz,force_amplitude_N,acceleration_amplitude_m_per_s2,phase_rad\n");
+    let mut s =
+        String::from("frequency_Hz,force_amplitude_N,acceleration_amplitude_m_per_s2,phase_rad\n");
     for k in 0..rows {
         let f = 79.0 + 2.0 * k as f64 / rows as f64;
         let r = (80.0_f64.powi(2) - f * f) / 80.0_f64.powi(2);
@@ -424,7 +425,14 @@ fn long_sweep(rows: usize) -> String {
 fn num_complex(re: f64, im: f64) -> (f64, f64) {
     let norm = re.hypot(im);
     let phase = std::f64::consts::PI - im.atan2(re);
-    (norm, if phase > std::f64::consts::PI { phase - 2.0 * std::f64::consts::PI } else { phase })
+    (
+        norm,
+        if phase > std::f64::consts::PI {
+            phase - 2.0 * std::f64::consts::PI
+        } else {
+            phase
+        },
+    )
 }
 
 /// A 60 × 60 PNG with a pink disc (0.1 mm pixels: a 3 mm disc) on white, no dpi.
@@ -570,7 +578,11 @@ fn defaults_that_no_longer_surprise() {
     // failed, naming --rolloff-wavelength-m, a flag not given).
     for n in ["16", "32", "64"] {
         let o = run(&["surface", "self-affine", "--n", n, "-o", "sa.npy"]);
-        assert!(o.status.success(), "--n {n}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.status.success(),
+            "--n {n}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
     }
     // contact normal takes --grid; with output redirected, progress prints log lines.
     let o = run(&[

@@ -483,7 +483,14 @@ fn one_pressure_limit_through_every_door() {
     use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
     let tmp = tempfile::tempdir().unwrap();
     let sa = tmp.path().join("sa.npy");
-    let (ok, _, err) = asperity(&["surface", "self-affine", "--n", "128", "-o", sa.to_str().unwrap()]);
+    let (ok, _, err) = asperity(&[
+        "surface",
+        "self-affine",
+        "--n",
+        "128",
+        "-o",
+        sa.to_str().unwrap(),
+    ]);
     assert!(ok, "{err}");
     let e_star = 210e9 / (2.0 * (1.0 - 0.3 * 0.3));
     let out = tmp.path().join("out");
@@ -510,7 +517,10 @@ fn one_pressure_limit_through_every_door() {
         "--out-dir",
         out2.to_str().unwrap(),
     ]);
-    assert!(!ok && err.contains("--pressures-pa") && err.contains("0.1 × E*"), "{err}");
+    assert!(
+        !ok && err.contains("--pressures-pa") && err.contains("0.1 × E*"),
+        "{err}"
+    );
     assert_no_output(&out2);
     let grid = asperity::surface::io::read(&sa).unwrap();
     let asperity::surface::Topography::Area(grid) = grid else {
@@ -524,8 +534,18 @@ fn one_pressure_limit_through_every_door() {
         NormalOptions::default(),
     )
     .unwrap();
-    let e = solver.solve_load(0.11 * e_star, None).unwrap_err().to_string();
-    assert!(e.contains("mean_pressure_pa") && e.contains("0.1 × E*"), "{e}");
+    let e = solver
+        .solve_load(0.11 * e_star, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("mean_pressure_pa") && e.contains("0.1 × E*"),
+        "{e}"
+    );
     let sol = solver.solve_load(0.053 * e_star, None).unwrap();
-    assert!((0.5..0.95).contains(&sol.contact_area_ratio), "{}", sol.contact_area_ratio);
+    assert!(
+        (0.5..0.95).contains(&sol.contact_area_ratio),
+        "{}",
+        sol.contact_area_ratio
+    );
 }

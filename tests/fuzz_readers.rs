@@ -107,6 +107,73 @@ fn topography(path: &Path) {
     }
 }
 
+/// A stepped-sine sweep through a resonance at 80 Hz (accelerance, e^{iωt}), with a header
+/// comment stating the control when `stated`.
+fn frf_seed(stated: bool) -> Vec<u8> {
+    let mut s = String::new();
+    if stated {
+        s += "# Response control; level 1\n";
+    }
+    s += "frequency_Hz,force_amplitude_N,acceleration_amplitude_m_per_s2,phase_rad\n";
+    for k in 0..21 {
+        let f = 79.0 + 0.1 * k as f64;
+        let (re, im) = (1.0 - (f / 80.0).powi(2), 0.004 * f / 80.0);
+        let amp = 0.2 / re.hypot(im);
+        let phase = std::f64::consts::PI - im.atan2(re);
+        s += &format!("{f},0.2,{amp:e},{phase}\n");
+    }
+    s.into_bytes()
+}
+
+/// An identified single-mode model as `identify` saves it.
+fn model_json_seed() -> Vec<u8> {
+    use asperity::identify::model::{Family, Model, ModelSpec, Scales};
+    let scales = Scales {
+        frequency_hz: 80.0,
+        modal_mass_kg: 2.0,
+        amplitude_max_m: 2e-4,
+        amplitude_min_m: 2e-5,
+        force_n: 0.6,
+    };
+    let model = Model::new(
+        ModelSpec::baseline(Family::Jenkins, scales),
+        vec![80.0, 1e-3, 2.0, 0.02, 3e-5],
+    )
+    .unwrap();
+    let saved = asperity::identify::SavedModel {
+        format: asperity::identify::pipeline::MODEL_FORMAT.into(),
+        version: 1,
+        model,
+        phase_convention: asperity::identify::measured::PhaseConvention::MODEL,
+        parameters: Vec::new(),
+        identified_from: Vec::new(),
+        ensemble: None,
+    };
+    serde_json::to_vec_pretty(&saved).unwrap()
+}
+
+/// A two-mass response model (`asperity response`), the files it names in
+/// [`response_model_files`].
+const RESPONSE_MODEL: &str = "[linear]\nmass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"\n\n\
+[[contact]]\nelements = \"elements.csv\"\nlaw = \"valanis\"\npairs = \"pairs.csv\"\n\
+normal = [0.0, 0.0, 1.0]\ntangent = [1.0, 0.0, 0.0]\n\n\
+[excitation]\ndofs = [\"m1.x\"]\nlevels_n = [0.02, 0.5]\n\n\
+[response]\ndofs = [\"m1.x\", \"m2.x\"]\n\n\
+[sweep]\nfrequency_start_hz = 15.0\nfrequency_end_hz = 50.0\npoints = 15\nharmonics = 3\nodd_only = true\n";
+
+fn response_model_files() -> Vec<(&'static str, Vec<u8>)> {
+    vec![
+        ("mass.csv", b"# unit: kg\nm1.x,m2.x\n1.0,0\n0,0.5\n".to_vec()),
+        ("stiffness.csv", b"# unit: N/m\nm1.x,m2.x\n6e4,-2e4\n-2e4,2e4\n".to_vec()),
+        ("damping.csv", b"# unit: N*s/m\nm1.x,m2.x\n2,0\n0,1\n".to_vec()),
+        (
+            "elements.csv",
+            b"id,x_m,y_m,area_m2,pressure_Pa,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m,out_of_range\n7,0,0,1e-6,2e6,2.0,1e6,2.0e4,0.3,0.5,0,0\n".to_vec(),
+        ),
+        ("pairs.csv", b"element_id,node_a,node_b\n7,m2,ground\n".to_vec()),
+    ]
+}
+
 fn targets() -> Vec<Target> {
     let table = b"pressure_Pa,contact_area_ratio,kn_N_per_m3,E0_N_per_m3,k,mu,Et_N_per_m3,fit_R2,energy_per_cycle_J_per_m2\n1e6,0.001,1e13,6e12,0.5,0.6,0,0.99,0.01\n2e6,0.002,2e13,1e13,0.3,0.6,0,0.99,0.02\n".to_vec();
     let mut png = Vec::new();
@@ -257,6 +324,57 @@ fn targets() -> Vec<Target> {
             },
         },
         Target {
+            name: "frequency response (identify, predict)",
+            file_name: "frf.csv",
+            seeds: vec![frf_seed(false), frf_seed(true)],
+            extra: vec![],
+            read: |p| {
+                let _ = asperity::identify::predict::stated_control(p);
+                if let Ok(s) = asperity::identify::measured::Sweep::read_csv(p) {
+                    let _ = asperity::identify::measured::PhaseConvention::detect_file(&s);
+                    let sweeps = vec![s];
+                    let _ = asperity::identify::measured::PhaseConvention::detect_common(&sweeps);
+                    let _ = asperity::identify::predict::choose_control(&sweeps, None);
+                }
+            },
+        },
+        Target {
+            name: "identified model (model.json)",
+            file_name: "model.json",
+            seeds: vec![model_json_seed()],
+            extra: vec![],
+            read: |p| {
+                let _ = asperity::identify::predict::model_inputs(p);
+                let _ = asperity::identify::reduced::SavedReducedModel::is_reduced(p);
+                let _ = asperity::identify::SavedModel::read(p);
+                let _ = asperity::identify::reduced::SavedReducedModel::read(p);
+            },
+        },
+        Target {
+            name: "response model (TOML)",
+            file_name: "model.toml",
+            seeds: vec![RESPONSE_MODEL.as_bytes().to_vec()],
+            extra: response_model_files(),
+            read: |p| {
+                let _ = asperity::dynamics::model_file::referenced_files(p);
+                let _ = asperity::dynamics::model_file::load(p);
+            },
+        },
+        Target {
+            name: "response matrix",
+            file_name: "stiffness.csv",
+            seeds: vec![b"# unit: N/m\nm1.x,m2.x\n6e4,-2e4\n-2e4,2e4\n".to_vec()],
+            extra: {
+                let mut f = response_model_files();
+                f.retain(|(n, _)| *n != "stiffness.csv");
+                f.push(("model.toml", RESPONSE_MODEL.as_bytes().to_vec()));
+                f
+            },
+            read: |p| {
+                let _ = asperity::dynamics::model_file::load(&p.with_file_name("model.toml"));
+            },
+        },
+        Target {
             name: "film image",
             file_name: "i.png",
             seeds: vec![png],
@@ -332,4 +450,33 @@ fn readers_never_panic_on_mutated_or_random_input() {
         ));
     }
     eprintln!("fuzzed inputs per reader: {}", report.join(", "));
+}
+
+/// The seeds of the frequency-response, model.json and response-model targets are valid input
+/// (so the mutations start from files the readers accept and reach past their first check).
+#[test]
+fn the_seeds_of_the_newer_readers_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for stated in [false, true] {
+        let p = d.join("frf.csv");
+        std::fs::write(&p, frf_seed(stated)).unwrap();
+        let s = asperity::identify::measured::Sweep::read_csv(&p).unwrap();
+        asperity::identify::measured::PhaseConvention::detect_file(&s).unwrap();
+    }
+    let p = d.join("model.json");
+    std::fs::write(&p, model_json_seed()).unwrap();
+    asperity::identify::SavedModel::read(&p).unwrap();
+    for (name, bytes) in response_model_files() {
+        std::fs::write(d.join(name), bytes).unwrap();
+    }
+    let p = d.join("model.toml");
+    std::fs::write(&p, RESPONSE_MODEL).unwrap();
+    assert_eq!(
+        asperity::dynamics::model_file::referenced_files(&p)
+            .unwrap()
+            .len(),
+        6
+    );
+    asperity::dynamics::model_file::load(&p).unwrap();
 }

@@ -135,7 +135,9 @@ fn surface_commands_refuse_their_input_as_output() {
     );
     refused(
         d,
-        &["surface", "combine", "p.npy", "q.npy", "-o", "x.npy", "-o", "q.npy"],
+        &[
+            "surface", "combine", "p.npy", "q.npy", "-o", "x.npy", "-o", "q.npy",
+        ],
         "q.npy",
         "SURFACE2",
     );
@@ -154,7 +156,9 @@ fn surface_commands_refuse_their_input_as_output() {
     );
     refused(
         d,
-        &["surface", "generate", "--config", "spec.npy", "-o", "spec.npy"],
+        &[
+            "surface", "generate", "--config", "spec.npy", "-o", "spec.npy",
+        ],
         "spec.npy",
         "--config",
     );
@@ -179,7 +183,11 @@ fn a_link_to_an_input_is_the_input() {
         assert!(e.contains("link"), "{e}");
     }
     // A measured record reached through a linked name in the output directory.
-    write(d, "r.csv", "time_s,displacement_m,friction_force_N\n0,0,0\n");
+    write(
+        d,
+        "r.csv",
+        "time_s,displacement_m,friction_force_N\n0,0,0\n",
+    );
     std::fs::create_dir(d.join("out")).unwrap();
     std::fs::hard_link(d.join("r.csv"), d.join("out/diagnose.csv")).unwrap();
     refused(
@@ -282,11 +290,23 @@ fn film_and_elements_refuse_their_inputs_as_outputs() {
         "preload.csv",
         "--colour-table",
     );
-    write(d, "p.csv", "id,x_m,y_m,area_m2,pressure_Pa,N0_N\n1,0,0,1e-6,1.5e6,1.5\n");
+    write(
+        d,
+        "p.csv",
+        "id,x_m,y_m,area_m2,pressure_Pa,N0_N\n1,0,0,1e-6,1.5e6,1.5\n",
+    );
     write(d, "t.csv", "pressure_Pa\n1e6\n");
     refused(
         d,
-        &["elements", "--preload", "p.csv", "--table", "t.csv", "--out", "p.csv"],
+        &[
+            "elements",
+            "--preload",
+            "p.csv",
+            "--table",
+            "t.csv",
+            "--out",
+            "p.csv",
+        ],
         "p.csv",
         "--preload",
     );
@@ -294,7 +314,15 @@ fn film_and_elements_refuse_their_inputs_as_outputs() {
     write(d, "t.json", "{}");
     refused(
         d,
-        &["elements", "--preload", "p.csv", "--table", "t.json", "--out", "t.csv"],
+        &[
+            "elements",
+            "--preload",
+            "p.csv",
+            "--table",
+            "t.json",
+            "--out",
+            "t.csv",
+        ],
         "t.json",
         "--table",
     );
@@ -316,10 +344,15 @@ normal = [0.0, 0.0, 1.0]\ntangent = [1.0, 0.0, 0.0]\n\n\
 [sweep]\nfrequency_start_hz = 15.0\nfrequency_end_hz = 50.0\npoints = 15\nharmonics = 3\nodd_only = true\n"
         )
     };
-    let elements = "id,x_m,y_m,area_m2,pressure_Pa,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m,out_of_range\n\
+    let elements =
+        "id,x_m,y_m,area_m2,pressure_Pa,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m,out_of_range\n\
 7,0,0,1e-6,2e6,2.0,1e6,2.0e4,0.3,0.5,0,0\n";
     write(d, "m/mass.csv", "# unit: kg\nm1.x,m2.x\n1.0,0\n0,0.5\n");
-    write(d, "m/stiffness.csv", "# unit: N/m\nm1.x,m2.x\n6e4,-2e4\n-2e4,2e4\n");
+    write(
+        d,
+        "m/stiffness.csv",
+        "# unit: N/m\nm1.x,m2.x\n6e4,-2e4\n-2e4,2e4\n",
+    );
     write(d, "m/damping.csv", "# unit: N*s/m\nm1.x,m2.x\n2,0\n0,1\n");
     for table in ["elements_level_1.csv", "elements_level_3.csv"] {
         write(d, &format!("m/{table}"), elements);
@@ -360,7 +393,11 @@ fn diagnose_identify_predict_refuse_the_measured_file() {
         "measured record",
     );
     write(d, "out/diagnose.json", "pressure_Pa\n1\n");
-    write(d, "r.csv", "time_s,displacement_m,friction_force_N\n0,0,0\n1,1e-4,1\n");
+    write(
+        d,
+        "r.csv",
+        "time_s,displacement_m,friction_force_N\n0,0,0\n1,1e-4,1\n",
+    );
     refused(
         d,
         &[
@@ -397,7 +434,13 @@ fn diagnose_identify_predict_refuse_the_measured_file() {
     write(d, "id/identify-level9.png", sweep);
     refused(
         d,
-        &["identify", "id/identify-level9.png", "id/b.csv", "--out-dir", "id"],
+        &[
+            "identify",
+            "id/identify-level9.png",
+            "id/b.csv",
+            "--out-dir",
+            "id",
+        ],
         "identify-level9.png",
         "measured file",
     );

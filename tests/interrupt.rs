@@ -57,7 +57,12 @@ fn sigint_before_writing_leaves_previous_outputs_whole_and_says_so() {
         let status = child.wait().unwrap();
         assert!(t0.elapsed() < Duration::from_secs(10), "slow to stop");
         let mut err = String::new();
-        child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut err)
+            .unwrap();
         assert_eq!(status.code(), Some(130), "after {delay_ms} ms: {err}");
         assert!(
             err.contains("interrupted before writing: previous files untouched"),
@@ -113,13 +118,20 @@ fn sigint_after_the_new_set_is_complete_says_the_new_files_are_in_place() {
     let status = child.wait().unwrap();
     assert!(t0.elapsed() < Duration::from_secs(20), "slow to stop");
     let mut err = String::new();
-    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
     assert_eq!(status.code(), Some(3), "{err}");
     assert!(
         err.contains("interrupted after the new set was complete: new files in place"),
         "{err}"
     );
     no_staging_talk(&err);
-    assert!(std::fs::read(d.join("s.npy")).unwrap().starts_with(b"\x93NUMPY"));
+    assert!(std::fs::read(d.join("s.npy"))
+        .unwrap()
+        .starts_with(b"\x93NUMPY"));
     assert!(d.join("s.npy.json").exists());
 }

@@ -96,7 +96,14 @@ fn a_constant_amplitude_file_gets_n_a_and_is_flagged_beside_its_error() {
     let flat = d.join("flat.csv");
     std::fs::write(&flat, text).unwrap();
     let out = d.join("out");
-    let o = run(&["predict", "--model", s(&model), s(&flat), "--out-dir", s(&out)]);
+    let o = run(&[
+        "predict",
+        "--model",
+        s(&model),
+        s(&flat),
+        "--out-dir",
+        s(&out),
+    ]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
         o.status.success(),
@@ -113,16 +120,16 @@ fn a_constant_amplitude_file_gets_n_a_and_is_flagged_beside_its_error() {
             .lines()
             .find(|l| l.starts_with("flat.csv") || l.contains("flat.csv [NOT ONE MODE]"))
             .unwrap_or_else(|| panic!("no row of flat.csv: {t}"));
-        assert!(row.contains("[NOT ONE MODE]") && row.contains("n/a"), "{row}");
+        assert!(
+            row.contains("[NOT ONE MODE]") && row.contains("n/a"),
+            "{row}"
+        );
         assert!(t.contains("not a single lightly damped mode"), "{t}");
     }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("predict.json")).unwrap()).unwrap();
     let f = &json["prediction"]["files"][0];
-    for key in [
-        "phase_resonance_measured_hz",
-        "phase_resonance_error_hz",
-    ] {
+    for key in ["phase_resonance_measured_hz", "phase_resonance_error_hz"] {
         assert!(
             f["errors"][key]["not_available"].is_string(),
             "{key}: {}",
@@ -146,7 +153,14 @@ fn the_control_mode_comes_from_the_file_header() {
         "# Brake-Reuss beam, stepped sine\n# Response control; level 1\n",
     );
     let out = d.join("out");
-    let o = run(&["predict", "--model", s(&model), s(&rc), "--out-dir", s(&out)]);
+    let o = run(&[
+        "predict",
+        "--model",
+        s(&model),
+        s(&rc),
+        "--out-dir",
+        s(&out),
+    ]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
@@ -189,11 +203,21 @@ fn the_control_mode_comes_from_the_file_header() {
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("rc.csv:2") && err.contains("fc.csv:1"), "{err}");
+    assert!(
+        err.contains("rc.csv:2") && err.contains("fc.csv:1"),
+        "{err}"
+    );
     assert!(!out2.exists());
     // A file that states nothing: force control by default, and the report says why.
     let plain = model_sweep(d, "plain.csv", 0.2, "# synthetic\n");
-    let o = run(&["predict", "--model", s(&model), s(&plain), "--out-dir", s(&out2)]);
+    let o = run(&[
+        "predict",
+        "--model",
+        s(&model),
+        s(&plain),
+        "--out-dir",
+        s(&out2),
+    ]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
@@ -219,7 +243,11 @@ fn an_inverted_file_is_blamed_only_where_the_others_outvote_it() {
                 let f: Vec<&str> = l.split(',').collect();
                 match f.get(3).map(|v| v.parse::<f64>()) {
                     Some(Ok(p)) => {
-                        let q = if p > 0.0 { p - std::f64::consts::PI } else { p + std::f64::consts::PI };
+                        let q = if p > 0.0 {
+                            p - std::f64::consts::PI
+                        } else {
+                            p + std::f64::consts::PI
+                        };
                         format!("{},{},{},{q}", f[0], f[1], f[2])
                     }
                     _ => l.to_string(),

@@ -732,7 +732,9 @@ fn combine(a: CombineArgs) -> Result<()> {
             let g1 = load(p1)?;
             let g2 = load(p2)?;
             Some(equivalent_surface(&g1, &g2).map_err(|e| match e {
-                Error::Data(m) => Error::Data(format!("{} and {}: {m}", p1.display(), p2.display())),
+                Error::Data(m) => {
+                    Error::Data(format!("{} and {}: {m}", p1.display(), p2.display()))
+                }
                 e => e,
             })?)
         }

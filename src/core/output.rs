@@ -363,18 +363,28 @@ enum Clash {
 }
 
 /// The refusal of an output `target` (named by `flag`) that is the input `input`.
-fn clash_error(target: &Path, flag: &str, input: &Input, target_id: &FileIdentity, how: Clash) -> Error {
+fn clash_error(
+    target: &Path,
+    flag: &str,
+    input: &Input,
+    target_id: &FileIdentity,
+    how: Clash,
+) -> Error {
     // The target's own name (its directory resolved, not the file): another name than the
     // input's means a symbolic or a hard link.
     let own_name = target
         .parent()
-        .map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d })
+        .map(|d| {
+            if d.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                d
+            }
+        })
         .and_then(|d| std::fs::canonicalize(d).ok())
         .zip(target.file_name())
         .map(|(d, n)| d.join(n));
-    let link = if target_id.path != input.id.path
-        || own_name.is_some_and(|n| n != input.id.path)
-    {
+    let link = if target_id.path != input.id.path || own_name.is_some_and(|n| n != input.id.path) {
         " (the same file under another name: a link)"
     } else {
         ""
@@ -511,10 +521,7 @@ impl OutputSet {
             return None;
         }
         let id = FileIdentity::of(target)?;
-        self.inputs
-            .iter()
-            .find(|i| i.id.same(&id))
-            .map(|i| (i, id))
+        self.inputs.iter().find(|i| i.id.same(&id)).map(|i| (i, id))
     }
 
     /// Files of the output directory matching an owned pattern (candidates for removal).
@@ -906,7 +913,7 @@ mod tests {
         let out = dir.path().join("out");
         let run = |levels: usize| {
             let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
-            set.owns("level-", ".png");
+            set.owns("level-", ".png").unwrap();
             for i in 1..=levels {
                 write_string_atomic(&set.path(&format!("level-{i}.png")).unwrap(), "png").unwrap();
             }
@@ -935,7 +942,7 @@ mod tests {
         // An uncommitted set removes nothing.
         {
             let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
-            set.owns("level-", ".png");
+            set.owns("level-", ".png").unwrap();
         }
         assert!(out.join("level-2.png").exists());
     }
@@ -980,8 +987,14 @@ mod tests {
         std::fs::write(&table, "table").unwrap();
         let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
         set.owns("elements_level_", ".csv").unwrap();
-        let e = set.input(&table, "contact 1 elements").unwrap_err().to_string();
-        assert!(e.contains("removed") && e.contains("elements_level_3.csv"), "{e}");
+        let e = set
+            .input(&table, "contact 1 elements")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("removed") && e.contains("elements_level_3.csv"),
+            "{e}"
+        );
         drop(set);
         let mut set = OutputSet::in_dir(&out, "--out-dir").unwrap();
         set.input(&table, "contact 1 elements").unwrap();

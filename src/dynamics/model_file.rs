@@ -605,7 +605,10 @@ pub fn referenced_files(path: &Path) -> Result<Vec<(String, PathBuf)>> {
         }
     }
     for (ci, c) in file.contact.iter().enumerate() {
-        files.push((format!("contact {} elements", ci + 1), base.join(&c.elements)));
+        files.push((
+            format!("contact {} elements", ci + 1),
+            base.join(&c.elements),
+        ));
         if let Some(p) = &c.pairs {
             files.push((format!("contact {} pairs", ci + 1), base.join(p)));
         }

@@ -350,7 +350,9 @@ pub fn predict(
         };
         let not_one_mode = {
             let x = backbone::receptance(s.quantity, &om, &level.measured);
-            backbone::fit_linear_mode(&om, &x).err().map(|e| e.to_string())
+            backbone::fit_linear_mode(&om, &x)
+                .err()
+                .map(|e| e.to_string())
         };
         files.push(FilePrediction {
             not_one_mode,

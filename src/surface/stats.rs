@@ -812,10 +812,26 @@ impl SurfaceStats {
             ("rms gradient", self.rms_gradient, &slope_cause),
             ("patch length", Some(self.lx_m), &length_cause),
             ("patch width", self.ly_m, &length_cause),
-            ("correlation length", self.correlation_length_1_over_e_m, &length_cause),
-            ("correlation length (0.2)", self.correlation_length_0_2_m, &length_cause),
-            ("correlation length along x", self.correlation_length_x_1_over_e_m, &length_cause),
-            ("correlation length along y", self.correlation_length_y_1_over_e_m, &length_cause),
+            (
+                "correlation length",
+                self.correlation_length_1_over_e_m,
+                &length_cause,
+            ),
+            (
+                "correlation length (0.2)",
+                self.correlation_length_0_2_m,
+                &length_cause,
+            ),
+            (
+                "correlation length along x",
+                self.correlation_length_x_1_over_e_m,
+                &length_cause,
+            ),
+            (
+                "correlation length along y",
+                self.correlation_length_y_1_over_e_m,
+                &length_cause,
+            ),
         ];
         for (name, v, cause) in values {
             if let Some(v) = v.filter(|v| !v.is_finite()) {
