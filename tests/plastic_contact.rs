@@ -400,3 +400,138 @@ fn same_contact_and_plastic_sets_as_tamaas_kato_saturated() {
         assert!((theirs / p - 1.0).abs() < 1e-6);
     }
 }
+
+fn asperity(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .output()
+        .expect("run asperity");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A periodic 32² two-wave surface (amplitude 0.2 µm, wavelength 32 µm) as a height matrix.
+fn write_wavy_matrix(path: &Path) {
+    let n = 32;
+    let mut text = String::from(
+        "# asperity height matrix\n# unit: m, dx_m: 1e-6, dy_m: 1e-6, periodic: true\n",
+    );
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+                let h = 0.2e-6 * ((2.0 * PI * x).cos() + (2.0 * PI * y).cos())
+                    + 0.05e-6 * (6.0 * PI * x).sin();
+                format!("{h:e}")
+            })
+            .collect();
+        text.push_str(&row.join(", "));
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// `contact normal --hardness-pa`: the unloading and loading stiffness columns (loading ≤
+/// unloading), the plastic areas and volume, the residual surfaces (heights ≤ the surface's,
+/// lower by the plastic volume); a material name is taken; bad values name the flag and leave
+/// no output.
+#[test]
+fn cli_hardness_columns_and_residual_surfaces() {
+    let tmp = tempfile::tempdir().unwrap();
+    let surf = tmp.path().join("wavy.txt");
+    write_wavy_matrix(&surf);
+    let out = tmp.path().join("out");
+    let (ok, stdout, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        surf.to_str().unwrap(),
+        "--pressures-pa",
+        "5e6,5e7,2e8",
+        "--hardness-pa",
+        "1e9",
+        "--residual-surfaces",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("kn load"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("normal_sweep.csv")).unwrap();
+    assert!(csv.contains("# hardness_Pa = 1e9"), "{csv}");
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 3);
+    let v = |r: &Vec<String>, name: &str| -> f64 { r[col(name)].parse().unwrap() };
+    let s = asperity::surface::io::read_equivalent_surface(&[surf.clone()], None)
+        .unwrap()
+        .0;
+    for r in &rows {
+        let (ku, kl) = (v(r, "kn_unloading_N_per_m3"), v(r, "kn_loading_N_per_m3"));
+        assert!(kl > 0.0 && kl <= ku, "loading {kl:e} ≤ unloading {ku:e}");
+        let (area, el, pl) = (
+            v(r, "contact_area_ratio"),
+            v(r, "elastic_area_ratio"),
+            v(r, "plastic_area_ratio"),
+        );
+        assert!((el + pl - area).abs() < 1e-12);
+        let p = v(r, "pressure_Pa");
+        let residual: Array2<f64> =
+            ndarray_npy::read_npy(out.join(format!("residual_surface_{p:e}Pa.npy"))).unwrap();
+        let removed: f64 = (&s.heights - &residual).sum() * 1e-12;
+        assert!(
+            (&s.heights - &residual).iter().all(|d| *d >= 0.0),
+            "material is only removed"
+        );
+        let volume = v(r, "plastic_volume_m3");
+        assert!(
+            (removed - volume).abs() <= 1e-9 * volume.max(1e-30),
+            "{removed:e} {volume:e}"
+        );
+    }
+    assert!(v(&rows[2], "plastic_area_ratio") > 0.0, "2e8 Pa saturates");
+    assert!(v(&rows[2], "kn_loading_N_per_m3") < v(&rows[2], "kn_unloading_N_per_m3"));
+    // A documented material is accepted.
+    let (ok, _, err) = asperity(&[
+        "contact",
+        "normal",
+        "--surface",
+        surf.to_str().unwrap(),
+        "--pressures-pa",
+        "5e7",
+        "--hardness-pa",
+        "inconel-718",
+        "--out-dir",
+        tmp.path().join("out2").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    // Bad values.
+    let bad = tmp.path().join("bad");
+    for (value, pressures, needle) in [
+        ("0", "5e7", "--hardness-pa"),
+        ("brass", "5e7", "steel-42crmo4"),
+        ("1e7", "5e7", "--pressures-pa"),
+    ] {
+        let (ok, _, err) = asperity(&[
+            "contact",
+            "normal",
+            "--surface",
+            surf.to_str().unwrap(),
+            "--pressures-pa",
+            pressures,
+            "--hardness-pa",
+            value,
+            "--out-dir",
+            bad.to_str().unwrap(),
+        ]);
+        assert!(!ok, "{value} accepted");
+        assert!(err.contains(needle), "{value}: {err}");
+        assert!(!bad.exists() || std::fs::read_dir(&bad).unwrap().next().is_none());
+    }
+}
