@@ -123,7 +123,9 @@ fn sphere_saturates_at_the_hertz_load_and_spreads_beyond_it() {
 
 /// The fully plastic limit: with H far below the elastic contact pressures every contact point
 /// but a few saturates and the real area is `P/H` (closed form), between the plastic area and
-/// the whole contact area; load and displacement control agree.
+/// the whole contact area; load and displacement control agree. p̄/H = 0.25 and 0.5 are loads
+/// of a whole number of points at H (4096 and 8192 of 128²), where every contact point can be
+/// plastic and the free set no longer fixes the approach (the solver once stalled there).
 #[test]
 fn fully_plastic_limit_area_is_load_over_hardness() {
     let s = self_affine(128, 3);
@@ -131,7 +133,7 @@ fn fully_plastic_limit_area_is_load_over_hardness() {
     // rms gradient 0.1: elastic contact pressures ~ E*·h'rms/2 = 5 GPa; H = 50 MPa.
     let hardness = 5e7;
     let mut solver = solver(&s, e_star, Some(hardness));
-    for ratio in [0.01, 0.05, 0.2] {
+    for ratio in [0.01, 0.05, 0.2, 0.25, 0.5] {
         let p_mean = ratio * hardness;
         let sol = solver.solve_load(p_mean, None).unwrap();
         let n = sol.pressure.len() as f64;
@@ -161,6 +163,12 @@ fn fully_plastic_limit_area_is_load_over_hardness() {
         assert_eq!(dc.plastic_points, sol.plastic_points);
     }
     assert!(solver.solve_load(hardness, None).is_err(), "p̄ = H refused");
+    // Displacement control from a cold start at a deep approach: the bracketing stays below H.
+    let shallow = solver.solve_load(0.05 * hardness, None).unwrap();
+    let target = 20.0 * shallow.approach_m;
+    let deep = solver.solve_approach(target, None).unwrap();
+    assert!((deep.approach_m / target - 1.0).abs() < 1e-6);
+    assert!(deep.mean_pressure_pa > 0.05 * hardness && deep.mean_pressure_pa < hardness);
 }
 
 /// The unloading stiffness of a rigid circular flat punch, `2E*a` (Johnson 1985 §3.8; Sneddon

@@ -764,6 +764,12 @@ impl NormalSolver {
         if !(guess.is_finite() && guess > 0.0) {
             guess = self.e_star * 1e-6;
         }
+        // With hardness the load stays below H (p̄ → H as δ → ∞, every point plastic): a trial
+        // load at or above H is replaced by the point halfway from the current one to H.
+        let hardness = self.hardness;
+        if guess >= hardness {
+            guess = 0.5 * hardness;
+        }
         let mut total_iterations = 0;
         let solve =
             |this: &mut Self, p: f64, warm: Option<&NormalSolution>| this.solve_load(p, warm);
@@ -781,7 +787,11 @@ impl NormalSolver {
         let factor: f64 = if fc < 0.0 { 4.0 } else { 0.25 };
         let mut expansions = 0;
         loop {
-            let next = solve(self, cur.mean_pressure_pa * factor, Some(&cur))?;
+            let mut trial = cur.mean_pressure_pa * factor;
+            if trial >= hardness {
+                trial = 0.5 * (cur.mean_pressure_pa + hardness);
+            }
+            let next = solve(self, trial, Some(&cur))?;
             total_iterations += next.iterations;
             let fnext = f(&next);
             if fnext.abs() <= tol {

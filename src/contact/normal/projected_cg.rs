@@ -122,12 +122,10 @@ struct StateSums {
     entered: f64,
     /// Plastic points (`p = H`).
     n_pl: f64,
-    /// Σ_Pl g_s.
-    g_pl: f64,
 }
 
 impl StateSums {
-    const N: usize = 10;
+    const N: usize = 9;
     fn from(a: [f64; Self::N]) -> Self {
         Self {
             p: a[0],
@@ -139,7 +137,6 @@ impl StateSums {
             clipped: a[6],
             entered: a[7],
             n_pl: a[8],
-            g_pl: a[9],
         }
     }
 
@@ -157,7 +154,6 @@ impl StateSums {
                 s[5] += g * t;
             } else {
                 s[8] += 1.0;
-                s[9] += g;
             }
         }
     }
@@ -338,12 +334,13 @@ impl NormalSolver {
             }
             sum_p = state.p;
             check_load(sum_p, iterations)?;
-            // δ is the mean over the free set; with every contact point plastic (a transient
-            // state: the load restoration leaves a free point) the plastic set centres it.
+            // δ is the mean over the free set. With every contact point plastic (the load is a
+            // whole number of points at H) the free set does not fix it: see
+            // `degenerate_centre`.
             let c = if n_c > 0.0 {
                 state.g / n_c
             } else {
-                state.g_pl / state.n_pl
+                self.degenerate_centre()
             };
             approach += c;
             // Σ_F g² and Σ_F g·t_old of the centred gap g = g_s − c.
@@ -446,6 +443,61 @@ impl NormalSolver {
             exact = false;
             conjugate = true;
         }
+    }
+
+    /// The centring `c` of the stored gap when every contact point is plastic (no free point
+    /// fixes δ): the root of `φ(c) = Σ_{p=0, g_s<c} (g_s − c) + Σ_{p=H, g_s>c} (g_s − c)`,
+    /// decreasing in `c`, so that the direction of the entering points (penetrating, and
+    /// plastic points whose gap opened), `t = γ (g_s − c)`, has zero sum and exchanges load
+    /// between them. When the largest plastic gap is below the smallest open one, every `c`
+    /// between them is a root and the state is a solution (residual 0): the largest plastic gap
+    /// is returned. Otherwise bisection on `[min open gap, max plastic gap]`. Rare: only when
+    /// the load is a whole number of points at H.
+    fn degenerate_centre(&self) -> f64 {
+        let h = self.hardness;
+        let extremes = |i: usize| {
+            let mut e = [f64::INFINITY, f64::NEG_INFINITY];
+            for (&p, &g) in row(&self.p, i).iter().zip(row(&self.g, i)) {
+                if p >= h {
+                    e[1] = e[1].max(g);
+                } else if p <= 0.0 {
+                    e[0] = e[0].min(g);
+                }
+            }
+            e
+        };
+        let [min_open, max_plastic] = (0..self.nx).into_par_iter().map(extremes).reduce(
+            || [f64::INFINITY, f64::NEG_INFINITY],
+            |a, b| [a[0].min(b[0]), a[1].max(b[1])],
+        );
+        if max_plastic <= min_open {
+            return max_plastic;
+        }
+        let phi = |c: f64| {
+            let [v] = rows_sum(self.nx, |i| {
+                let mut s = 0.0;
+                for (&p, &g) in row(&self.p, i).iter().zip(row(&self.g, i)) {
+                    if (p <= 0.0 && g < c) || (p >= h && g > c) {
+                        s += g - c;
+                    }
+                }
+                [s]
+            });
+            v
+        };
+        let (mut lo, mut hi) = (min_open, max_plastic);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if phi(mid) > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
     }
 
     /// Build the preconditioner on first use.
