@@ -10,6 +10,7 @@
 //!     cargo bench --bench normal -- --resolution    # R: grid-refinement study of the resolution
 //!     cargo bench --bench normal -- --size 4096     # one 4096² solve (run under /usr/bin/time -v)
 //!     cargo bench --bench normal -- --reference     # reference sweep (1024²) and kn ∝ p^β
+//!     cargo bench --bench normal -- --plastic       # P: hardness-limited solve (1024²; or --sizes)
 //!
 //! A. Self-affine surfaces (H = 0.8, rms gradient 0.1, periodic, roll-off L/4, cut-off 16 grid
 //!    spacings; `SelfAffineSpec::benchmark`, seed 1) on 512², 1024², 2048² at p̄/(E*h'rms) =
@@ -20,6 +21,13 @@
 //! C. Warm-started sweeps and kn: the six reference pressures and the four self-affine loads on
 //!    1024², cold solves against a warm-started sweep; kn from the tangent problem against two
 //!    warm-started solves of a central difference.
+//!
+//! P. Hardness-limited (elastic–perfectly plastic) contact on the self-affine surface of A
+//!    (seed 1), H = 0.3·E*·h'rms = 3 GPa (the ratio H/E* of steel, 0.029, at h'rms = 0.1), at
+//!    p̄/H = 0.01, 0.1, 0.3, 0.45 (1–55 % contact): the plastic solve against the elastic solve
+//!    of the same surface and load (cold, 1 thread, CPU time), the unloading and loading
+//!    stiffnesses, and tamaas 2.9's `KatoSaturated` (`benches/peers/tamaas_saturated.py`, one
+//!    thread, tolerance 1e-10): contact and plastic sets point for point, load, CPU-time ratio.
 //!
 //! Every asperity solve of A and B is cold (uniform pressure, or the nested coarse-to-fine start
 //! of the preconditioned method) with the default method choice (`auto`), timed on rayon pools
@@ -155,6 +163,7 @@ fn solver(s: &Grid2, e_star: f64, method: NormalMethod) -> NormalSolver {
         &NormalProblem {
             surface: s,
             e_star_pa: e_star,
+            hardness_pa: None,
         },
         NormalOptions {
             tolerance: TOLERANCE,
@@ -455,6 +464,7 @@ fn warm_start_study(n: usize) {
                 &NormalProblem {
                     surface: s,
                     e_star_pa: *e_star,
+                    hardness_pa: None,
                 },
                 NormalOptions {
                     tolerance: TOLERANCE,
@@ -661,6 +671,142 @@ fn sizes_arg(args: &[String]) -> Option<Vec<usize>> {
     )
 }
 
+/// p̄/H of section P.
+const PLASTIC_LOADS: [f64; 4] = [0.01, 0.1, 0.3, 0.45];
+
+/// Section P: the hardness-limited solve against the elastic one and against tamaas'
+/// `KatoSaturated` (see the module documentation).
+fn plastic_section(n: usize, dir: &Path) {
+    let s = self_affine(n);
+    let e_star = SELF_AFFINE_E_STAR;
+    let hardness = 0.3 * e_star * 0.1;
+    let pressures: Vec<f64> = PLASTIC_LOADS.iter().map(|r| r * hardness).collect();
+    let reps = repeats(n);
+    let make = |h: Option<f64>| {
+        NormalSolver::new(
+            &NormalProblem {
+                surface: &s,
+                e_star_pa: e_star,
+                hardness_pa: h,
+            },
+            NormalOptions {
+                tolerance: TOLERANCE,
+                ..NormalOptions::default()
+            },
+        )
+        .unwrap()
+    };
+    // (solution, best CPU time) of cold solves on one thread.
+    let timed = |solver: &mut NormalSolver, p: f64| {
+        let mut best = f64::INFINITY;
+        let mut last = None;
+        for _ in 0..reps {
+            let c0 = thread_cpu_s();
+            let sol = solver.solve_load(p, None).unwrap();
+            best = best.min(thread_cpu_s() - c0);
+            last = Some(sol);
+        }
+        (last.unwrap(), best)
+    };
+    let load0 = load_average();
+    let (elastic, plastic): (Vec<_>, Vec<_>) = pool(1).install(|| {
+        let mut el = make(None);
+        let mut pl = make(Some(hardness));
+        pressures
+            .iter()
+            .map(|&p| {
+                let e = timed(&mut el, p);
+                let q = timed(&mut pl, p);
+                let c0 = thread_cpu_s();
+                let ku = pl.contact_stiffness(&q.0).unwrap();
+                let kl = pl.loading_stiffness(&q.0).unwrap();
+                let kcpu = thread_cpu_s() - c0;
+                (e, (q, ku, kl, kcpu))
+            })
+            .unzip()
+    });
+    let peer = venv_python().and_then(|py| {
+        let npy = dir.join(format!("plastic_surface_{n}.npy"));
+        ndarray_npy::write_npy(&npy, &s.heights).unwrap();
+        let case = serde_json::json!({
+            "surface_npy": npy,
+            "lx_m": s.lx(),
+            "ly_m": s.ly(),
+            "e_star_pa": e_star,
+            "hardness_pa": hardness,
+            "tolerance": TOLERANCE,
+            "pressures_pa": pressures,
+            "repeats": 1,
+            "write_fields": true,
+        });
+        let case_path = dir.join("plastic_case.json");
+        let out_path = dir.join("plastic_tamaas.json");
+        std::fs::write(&case_path, case.to_string()).unwrap();
+        let script =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peers/tamaas_saturated.py");
+        let status = std::process::Command::new(py)
+            .arg(script)
+            .arg(&case_path)
+            .arg(&out_path)
+            .env("OMP_NUM_THREADS", "1")
+            .status()
+            .ok()?;
+        if !status.success() {
+            eprintln!("tamaas run failed ({status})");
+            return None;
+        }
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&out_path).ok()?).ok()
+    });
+    println!(
+        "\n#### P. Hardness-limited contact, self-affine seed 1, {n}², H = {hardness:e} Pa (load average {load0} → {}){}\n",
+        load_average(),
+        peer.as_ref()
+            .map(|v| format!(", tamaas {} {}", v["tamaas_version"], v["solver"]))
+            .unwrap_or_else(|| ", no tamaas (run benches/peers/setup.sh)".into())
+    );
+    println!("| p̄/H | contact | plastic | iterations elastic / plastic (+coarse) | CPU elastic (s) | CPU plastic (s) | plastic / elastic | kn unloading (N/m³) | kn loading (N/m³) | kn CPU (s) | tamaas iterations | tamaas CPU (s) | tamaas / plastic | contact set diff | plastic set diff | load diff |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for (k, &ratio) in PLASTIC_LOADS.iter().enumerate() {
+        let (e, ecpu) = &elastic[k];
+        let ((q, pcpu), ku, kl, kcpu) = &plastic[k];
+        let peer_cells = match &peer {
+            Some(v) => {
+                let r = &v["results"][k];
+                let field: ndarray::Array2<f64> =
+                    ndarray_npy::read_npy(r["pressure_npy"].as_str().unwrap()).unwrap();
+                let diff = |f: &dyn Fn(f64) -> bool| {
+                    q.pressure
+                        .iter()
+                        .zip(field.iter())
+                        .filter(|(a, b)| f(**a) != f(**b))
+                        .count()
+                };
+                let tcpu = r["cpu_s"].as_f64().unwrap();
+                format!(
+                    "{} | {tcpu:.2} | **{:.1}×** | {} | {} | {:.1e}",
+                    r["iterations"],
+                    tcpu / pcpu,
+                    diff(&|p| p > 0.0),
+                    diff(&|p| p >= hardness),
+                    (q.pressure.mean().unwrap() - field.mean().unwrap()).abs() / pressures[k]
+                )
+            }
+            None => "– | – | – | – | – | –".into(),
+        };
+        println!(
+            "| {ratio} | {:.4} | {:.4} | {} / {} (+{}) | {ecpu:.3} | {pcpu:.3} | **{:.2}** | {:.4e} | {:.4e} | {kcpu:.3} | {peer_cells} |",
+            q.contact_area_ratio,
+            q.plastic_area_ratio,
+            e.iterations,
+            q.iterations,
+            q.coarse_iterations,
+            pcpu / ecpu,
+            ku.kn_n_per_m3,
+            kl.kn_n_per_m3,
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if let Some(i) = args.iter().position(|a| a == "--size") {
@@ -678,6 +824,11 @@ fn main() {
         );
         gaussian_section(&sizes_arg(&args).unwrap_or(vec![512, 1024]), dir.path());
         println!("\nload average at end: {}", load_average());
+    } else if args.iter().any(|a| a == "--plastic") {
+        let dir = tempfile::tempdir().unwrap();
+        for n in sizes_arg(&args).unwrap_or(vec![1024]) {
+            plastic_section(n, dir.path());
+        }
     } else if args.iter().any(|a| a == "--warm-start") {
         warm_start_study(1024);
     } else if args.iter().any(|a| a == "--quick") {

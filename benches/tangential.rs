@@ -75,6 +75,7 @@ fn main() {
             &NormalProblem {
                 surface: &surface,
                 e_star_pa: e_star,
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )

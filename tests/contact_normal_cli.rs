@@ -530,6 +530,7 @@ fn one_pressure_limit_through_every_door() {
         &NormalProblem {
             surface: &grid,
             e_star_pa: e_star,
+            hardness_pa: None,
         },
         NormalOptions::default(),
     )

@@ -210,6 +210,7 @@ fn bem_loop() -> (Vec<f64>, Vec<f64>) {
         &NormalProblem {
             surface: &surface,
             e_star_pa: e_star,
+            hardness_pa: None,
         },
         NormalOptions::default(),
     )

@@ -19,6 +19,7 @@ fn solver_with(surface: &Grid2, e_star: f64, method: NormalMethod) -> NormalSolv
         &NormalProblem {
             surface,
             e_star_pa: e_star,
+            hardness_pa: None,
         },
         NormalOptions {
             method,

@@ -164,6 +164,7 @@ fn contact_code_cattaneo_case() {
         &NormalProblem {
             surface: &surface,
             e_star_pa: e_star(),
+            hardness_pa: None,
         },
         NormalOptions::default(),
     )

@@ -59,6 +59,48 @@ impl NormalSolution {
         (self.inner.dx, self.inner.dy)
     }
 
+    /// Hardness H that bounded the pressure (Pa), or None for elastic contact.
+    #[getter]
+    fn hardness_pa(&self) -> Option<f64> {
+        self.inner.hardness_pa
+    }
+
+    /// Grid points in elastic contact, 0 < p < H.
+    #[getter]
+    fn elastic_points(&self) -> usize {
+        self.inner.elastic_points
+    }
+
+    /// Grid points in plastic contact, p = H.
+    #[getter]
+    fn plastic_points(&self) -> usize {
+        self.inner.plastic_points
+    }
+
+    /// Elastic contact area over nominal area (-).
+    #[getter]
+    fn elastic_area_ratio(&self) -> f64 {
+        self.inner.elastic_area_ratio
+    }
+
+    /// Plastic contact area over nominal area (-).
+    #[getter]
+    fn plastic_area_ratio(&self) -> f64 {
+        self.inner.plastic_area_ratio
+    }
+
+    /// Plastically displaced volume V_p = Σ_{p=H} max(−g, 0)·dx·dy (m³).
+    #[getter]
+    fn plastic_volume_m3(&self) -> f64 {
+        self.inner.plastic_volume_m3
+    }
+
+    /// Plastic penetration max(−g, 0) at the plastic points, zero elsewhere (m): the residual
+    /// surface after unloading is the surface's heights minus it.
+    fn plastic_penetration<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        PyArray2::from_owned_array(py, self.inner.plastic_penetration())
+    }
+
     /// True when solved with the periodic kernel.
     #[getter]
     fn periodic(&self) -> bool {
@@ -190,12 +232,15 @@ impl NormalSolver {
     /// `tolerance`: relative gap error ε to reach; `max_iterations`: cap per solve (reaching
     /// it raises `asperity.ConvergenceError`); `method`: "auto", "preconditioned" or
     /// "polonsky-keer".
+    /// `hardness_pa`: the hardness H bounding the pressure (elastic–perfectly plastic contact),
+    /// None for elastic contact.
     #[new]
-    #[pyo3(signature = (surface, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
+    #[pyo3(signature = (surface, *, e_star_pa, hardness_pa=None, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
     fn new(
         py: Python<'_>,
         surface: &Surface,
         e_star_pa: f64,
+        hardness_pa: Option<f64>,
         tolerance: f64,
         max_iterations: usize,
         method: &str,
@@ -208,6 +253,7 @@ impl NormalSolver {
                     &NormalProblem {
                         surface: grid,
                         e_star_pa,
+                        hardness_pa,
                     },
                     options,
                 )
@@ -247,6 +293,21 @@ impl NormalSolver {
         let sol = &solution.get().inner;
         let inner = &mut self.inner;
         let kn = py.detach(|| inner.contact_stiffness(sol)).py()?;
+        Ok(kn.kn_n_per_m3)
+    }
+
+    /// Loading tangent dp̄/dδ (N/m³) of a hardness-limited solution: the tangent problem on its
+    /// elastic points, the plastic ones held at H (equal to `contact_stiffness` without plastic
+    /// points). `contact_stiffness` is then the unloading/reloading stiffness, the one an
+    /// element carries.
+    fn loading_stiffness(
+        &mut self,
+        py: Python<'_>,
+        solution: Bound<'_, NormalSolution>,
+    ) -> PyResult<f64> {
+        let sol = &solution.get().inner;
+        let inner = &mut self.inner;
+        let kn = py.detach(|| inner.loading_stiffness(sol)).py()?;
         Ok(kn.kn_n_per_m3)
     }
 
@@ -348,19 +409,40 @@ fn sweep_columns<'py>(
     d.set_item("stiffness_iterations", u(|p| p.stiffness_iterations))?;
     d.set_item("residual", f(|p| p.residual))?;
     d.set_item("wall_time_s", f(|p| p.wall_time_s))?;
+    if points.iter().all(|p| p.plastic.is_some()) && !points.is_empty() {
+        let pl = |g: fn(&sweep::PlasticPoint) -> f64| {
+            PyArray1::from_vec(
+                py,
+                points
+                    .iter()
+                    .map(|p| p.plastic.as_ref().map_or(f64::NAN, g))
+                    .collect::<Vec<f64>>(),
+            )
+        };
+        d.set_item("kn_unloading_N_per_m3", f(|p| p.kn_n_per_m3))?;
+        d.set_item("kn_loading_N_per_m3", pl(|p| p.kn_loading_n_per_m3))?;
+        d.set_item("elastic_area_ratio", pl(|p| p.elastic_area_ratio))?;
+        d.set_item("plastic_area_ratio", pl(|p| p.plastic_area_ratio))?;
+        d.set_item("plastic_points", pl(|p| p.plastic_points as f64))?;
+        d.set_item("plastic_volume_m3", pl(|p| p.plastic_volume_m3))?;
+    }
     Ok(d)
 }
 
 /// The pressure sweep of `asperity contact normal` on one surface: warm-started solves at the
 /// sorted `pressures_pa` (Pa) and `kn = dp̄/dδ` (N/m³) from the tangent problem on each contact
 /// set. Returns a dict of columns named as in `normal_sweep.csv` (numpy arrays; `method` a list).
+/// `hardness_pa`: elastic–perfectly plastic contact (pressure ≤ H); the dict then also holds the
+/// unloading and loading stiffnesses, the elastic and plastic areas and the plastic volume.
 #[pyfunction]
-#[pyo3(signature = (surface, pressures_pa, *, e_star_pa, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
+#[pyo3(signature = (surface, pressures_pa, *, e_star_pa, hardness_pa=None, tolerance=NormalOptions::DEFAULT_TOLERANCE, max_iterations=5000, method="auto"))]
+#[allow(clippy::too_many_arguments)]
 pub fn normal_sweep<'py>(
     py: Python<'py>,
     surface: &Surface,
     pressures_pa: Vec<f64>,
     e_star_pa: f64,
+    hardness_pa: Option<f64>,
     tolerance: f64,
     max_iterations: usize,
     method: &str,
@@ -373,6 +455,7 @@ pub fn normal_sweep<'py>(
                 &NormalProblem {
                     surface: grid,
                     e_star_pa,
+                    hardness_pa,
                 },
                 options,
             )?;

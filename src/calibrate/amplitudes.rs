@@ -314,6 +314,7 @@ mod tests {
             &NormalProblem {
                 surface: &surface,
                 e_star_pa: composite_modulus(steel, steel).unwrap(),
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )

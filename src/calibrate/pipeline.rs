@@ -453,6 +453,7 @@ pub fn calibrate_surface(
         &NormalProblem {
             surface,
             e_star_pa: e_star,
+            hardness_pa: None,
         },
         NormalOptions {
             tolerance: config.contact.normal_tolerance,

@@ -5,6 +5,11 @@
 //! deviation over the surfaces), `area_ratio.png`, `mean_gap.png`, `kn.png` (log axes) and, with
 //! `--pressure-maps`, one pressure map PNG per surface and load.
 //!
+//! With `--hardness-pa` the contact is elastic–perfectly plastic (pressure ≤ H, see
+//! [`asperity::contact::normal`]): the table gains the unloading and loading stiffnesses and the
+//! elastic and plastic areas and the plastically displaced volume, and `--residual-surfaces`
+//! writes the residual surface after unloading from each load (`.npy` with its sidecar).
+//!
 //! With `--shard i/n` only the surfaces of shard i are solved and their results go to
 //! `<out-dir>/contact-normal.shard-i-of-n.json`; `asperity merge` turns the n files into the
 //! same outputs a single run writes (see [`asperity::core::shard`]).
@@ -51,6 +56,18 @@ pub struct NormalArgs {
     /// Poisson's ratio of both bodies (-).
     #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     poisson_ratio: f64,
+    /// Hardness H bounding the contact pressure (elastic–perfectly plastic contact): a value in
+    /// Pa, or a material whose documented hardness to use: `steel-42crmo4` (340 HV,
+    /// 3.334 GPa) or `inconel-718` (450 HV, 4.413 GPa); sources in docs/contact.md. The
+    /// elastic constants stay those of --youngs-modulus-pa and --poisson-ratio. Without it the
+    /// contact is elastic.
+    #[arg(long, allow_hyphen_values = true)]
+    hardness_pa: Option<String>,
+    /// With --hardness-pa: also write the residual (plastically deformed) surface after
+    /// unloading from each load, `residual_surface_<p>Pa.npy` (heights in m; sidecar
+    /// `.npy.json`), for an elastic re-analysis (unloading and reloading are elastic on it).
+    #[arg(long, requires = "hardness_pa")]
+    residual_surfaces: bool,
     /// Output directory.
     #[arg(long, default_value = "out/contact-normal")]
     out_dir: PathBuf,
@@ -144,6 +161,17 @@ pub fn realisations_note(n: usize) -> String {
     )
 }
 
+/// `--hardness-pa`: a value in Pa (finite, > 0) or a material grade's documented hardness.
+pub fn parse_hardness(text: &str) -> Result<f64> {
+    let flag = "--hardness-pa";
+    match text.trim().parse::<f64>() {
+        Ok(h) => asperity::core::error::require_positive(flag, h),
+        Err(_) => asperity::core::material::material_grade(text.trim())
+            .map(|g| g.hardness_pa())
+            .map_err(|e| super::rename_param(e, flag)),
+    }
+}
+
 /// The sweep from the flags, every input checked, errors naming the flag.
 fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
     asperity::core::sanity::tolerance("--tolerance", args.tolerance)?;
@@ -177,15 +205,27 @@ fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
         }
         other => other,
     })?;
+    let hardness_pa = args
+        .hardness_pa
+        .as_deref()
+        .map(parse_hardness)
+        .transpose()?;
     let sweep = SurfaceSweep {
         surfaces: surfaces(args)?,
         pressures_pa,
         material,
+        hardness_pa,
         options,
     };
     sweep.validate().map_err(|e| match e {
         Error::InvalidParameter { ref name, .. } if name == "units" => {
             super::rename_param(e, "--surface / --seeds")
+        }
+        Error::InvalidParameter { ref name, .. } if name == "pressures_pa" => {
+            super::rename_param(e, "--pressures-pa")
+        }
+        Error::InvalidParameter { ref name, .. } if name == "method" => {
+            super::rename_param(e, "--method")
         }
         e => e,
     })?;
@@ -194,14 +234,42 @@ fn sweep_from_args(args: &NormalArgs) -> Result<SurfaceSweep> {
 
 /// File name of the pressure map of `surface` (index `k` of `n`) at `pressure_pa`.
 fn pressure_map_name(sweep: &SurfaceSweep, k: usize, pressure_pa: f64) -> String {
+    per_load_name(sweep, k, pressure_pa, "pressure_map", "png")
+}
+
+/// `<stem>_<p>Pa.<ext>` with one surface, `<stem>_<slug>_<p>Pa.<ext>` with several.
+fn per_load_name(
+    sweep: &SurfaceSweep,
+    k: usize,
+    pressure_pa: f64,
+    stem: &str,
+    ext: &str,
+) -> String {
     if sweep.surfaces.len() == 1 {
-        return format!("pressure_map_{pressure_pa:e}Pa.png");
+        return format!("{stem}_{pressure_pa:e}Pa.{ext}");
     }
     let slug = match &sweep.surfaces[k] {
         SurfaceSource::Generated { spec } => format!("seed-{}", spec.seed),
         SurfaceSource::File { .. } => format!("surface-{}", k + 1),
     };
-    format!("pressure_map_{slug}_{pressure_pa:e}Pa.png")
+    format!("{stem}_{slug}_{pressure_pa:e}Pa.{ext}")
+}
+
+/// The residual surfaces after unloading from each load of surface `k`
+/// ([`NormalSolution::residual_surface`]), as `.npy` with their sidecars.
+fn write_residual_surfaces(
+    out_dir: &Path,
+    sweep: &SurfaceSweep,
+    k: usize,
+    solutions: &[NormalSolution],
+) -> Result<()> {
+    let surface = sweep.surfaces[k].load()?;
+    for sol in solutions {
+        let residual = sol.residual_surface(&surface)?;
+        let name = per_load_name(sweep, k, sol.mean_pressure_pa, "residual_surface", "npy");
+        asperity::surface::io::write(&out_dir.join(name), &residual)?;
+    }
+    Ok(())
 }
 
 fn write_pressure_maps(
@@ -246,6 +314,13 @@ const OUTPUT_FILES: [&str; 6] = [
 pub fn run(args: NormalArgs) -> Result<()> {
     // Check every input before any work or output; the files are staged and appear together
     // at the end (asperity::core::output::OutputSet).
+    if args.shard.is_some() && args.residual_surfaces {
+        return Err(asperity::Error::param(
+            "--residual-surfaces",
+            "not with --shard: the shard files hold no surfaces, so `asperity merge` cannot \
+             give the residual surfaces a single run writes; write them in a run without --shard",
+        ));
+    }
     if args.shard.is_some() && args.pressure_maps {
         // `merge` rebuilds the sweep's tables and plots from the shard files, which hold no
         // pressure fields: a merged run would lack the maps a single run writes.
@@ -260,6 +335,8 @@ pub fn run(args: NormalArgs) -> Result<()> {
     if args.shard.is_none() {
         // An earlier run's maps at pressures this run does not have are removed.
         out.owns("pressure_map_", "Pa.png")?;
+        out.owns("residual_surface_", "Pa.npy")?;
+        out.owns("residual_surface_", "Pa.npy.json")?;
     }
     if args.shard.is_none() {
         out.writes(&OUTPUT_FILES)?;
@@ -280,8 +357,12 @@ pub fn run(args: NormalArgs) -> Result<()> {
         .map_err(|e| super::rename_param(e, "--shard"))?;
     let block = shard.units(labels.len());
     eprintln!(
-        "{} surface(s), E* = {e_star:.4e} Pa, {} pressures{}",
+        "{} surface(s), E* = {e_star:.4e} Pa{}, {} pressures{}",
         labels.len(),
+        match sweep.hardness_pa {
+            Some(h) => format!(", hardness H = {h:.4e} Pa (elastic–perfectly plastic)"),
+            None => String::new(),
+        },
         sweep.pressures_pa.len(),
         if args.shard.is_some() {
             format!(
@@ -304,10 +385,15 @@ pub fn run(args: NormalArgs) -> Result<()> {
     let mut done = 0;
     let units = shard::run_units(&sweep, shard, |k| {
         bar.set_message(labels[k].clone());
-        let (result, solutions) =
-            sweep.run_unit(k, args.pressure_maps, |j| bar.set_position(done + j as u64))?;
+        let keep = args.pressure_maps || args.residual_surfaces;
+        let (result, solutions) = sweep.run_unit(k, keep, |j| bar.set_position(done + j as u64))?;
         done += per_unit;
-        write_pressure_maps(&staged, &sweep, k, &solutions)?;
+        if args.pressure_maps {
+            write_pressure_maps(&staged, &sweep, k, &solutions)?;
+        }
+        if args.residual_surfaces {
+            write_residual_surfaces(&staged, &sweep, k, &solutions)?;
+        }
         Ok(result)
     });
     bar.finish_and_clear();
@@ -368,6 +454,12 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
         sweep.options.tolerance,
         asperity::contact::resolution::RESOLVED_POINTS_ACROSS
     );
+    if let Some(h) = sweep.hardness_pa {
+        let _ = writeln!(
+            csv,
+            "# hardness_Pa = {h:e}: elastic-perfectly plastic contact (pressure <= H); kn_unloading = unloading/reloading stiffness about the plastically deformed state (tangent problem on the whole contact set; the one an element carries), kn_loading = loading tangent (plastic points held at H); elastic/plastic area = points with 0 < p < H / p = H; plastic_volume_m3 = sum over plastic points of the penetration max(-gap, 0) x dx x dy"
+        );
+    }
     let _ = writeln!(
         csv,
         "# configuration sha256 = {} (asperity {}); wall times in normal_sweep_timings.csv",
@@ -379,7 +471,8 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
             let _ = writeln!(csv, "# warning: {w}");
         }
     }
-    let mut rows = vec![[
+    let plastic = sweep.hardness_pa.is_some();
+    let mut header: Vec<String> = [
         "surface",
         "pressure_Pa",
         "contact_area_ratio",
@@ -397,10 +490,25 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
         "residual",
     ]
     .map(String::from)
-    .to_vec()];
+    .to_vec();
+    if plastic {
+        header[4] = "kn_unloading_N_per_m3".into();
+        header.insert(5, "kn_loading_N_per_m3".into());
+        header.extend(
+            [
+                "elastic_area_ratio",
+                "plastic_area_ratio",
+                "plastic_points",
+                "plastic_volume_m3",
+                "loading_stiffness_iterations",
+            ]
+            .map(String::from),
+        );
+    }
+    let mut rows = vec![header];
     for u in units {
         for p in &u.result.points {
-            rows.push(vec![
+            let mut row = vec![
                 u.label.clone(),
                 format!("{:e}", p.pressure_pa),
                 format!("{:e}", p.contact_area_ratio),
@@ -416,7 +524,24 @@ pub fn sweep_table(sweep: &SurfaceSweep, units: &[UnitRecord<SurfaceResult>]) ->
                 p.iterations.to_string(),
                 p.stiffness_iterations.to_string(),
                 format!("{:e}", p.residual),
-            ]);
+            ];
+            if plastic {
+                let pl = p.plastic.ok_or_else(|| {
+                    Error::Data(format!(
+                        "{} at {:e} Pa: no plastic part in a hardness-limited sweep",
+                        u.label, p.pressure_pa
+                    ))
+                })?;
+                row.insert(5, format!("{:e}", pl.kn_loading_n_per_m3));
+                row.extend([
+                    format!("{:e}", pl.elastic_area_ratio),
+                    format!("{:e}", pl.plastic_area_ratio),
+                    pl.plastic_points.to_string(),
+                    format!("{:e}", pl.plastic_volume_m3),
+                    pl.loading_stiffness_iterations.to_string(),
+                ]);
+            }
+            rows.push(row);
         }
     }
     csv.push_str(&csv_records(&rows)?);
@@ -629,6 +754,33 @@ pub fn print_summary(units: &[UnitRecord<SurfaceResult>]) -> Result<()> {
                 } else {
                     "  (free islands under-resolved: refine the grid)"
                 }
+            );
+        }
+        if u.result.points.iter().any(|p| p.plastic.is_some()) {
+            println!(
+                "{:>12} {:>12} {:>12} {:>14} {:>14} {:>14}",
+                "p (MPa)",
+                "plastic area",
+                "elastic area",
+                "V_p (m³)",
+                "kn unload",
+                "kn load (N/m³)"
+            );
+            for p in &u.result.points {
+                if let Some(pl) = &p.plastic {
+                    println!(
+                        "{:>12.4} {:>12.5} {:>12.5} {:>14.4e} {:>14.4e} {:>14.4e}",
+                        p.pressure_pa / 1e6,
+                        pl.plastic_area_ratio,
+                        pl.elastic_area_ratio,
+                        pl.plastic_volume_m3,
+                        p.kn_n_per_m3,
+                        pl.kn_loading_n_per_m3
+                    );
+                }
+            }
+            println!(
+                "kn above is the unloading/reloading stiffness (the one an element carries); kn load is the loading tangent"
             );
         }
         if let Ok((beta, _)) = sweep::power_law_fit(&u.result.points) {

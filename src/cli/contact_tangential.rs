@@ -231,6 +231,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         &NormalProblem {
             surface: &surface,
             e_star_pa: e_star,
+            hardness_pa: None,
         },
         NormalOptions::default(),
     )?;

@@ -37,6 +37,27 @@ impl Hertz {
     }
 }
 
+/// The load at which the Hertz peak pressure reaches the hardness `H` (N): with
+/// `p0 = (6PE*²/(π³R²))^(1/3)` (Johnson 1985, §4.2), `p0 = H` at
+///
+/// `P_H = (πH)³ R² / (6 E*²)`.
+///
+/// Below it a hardness-limited (pressure-saturated) contact is exactly Hertzian; above it the
+/// centre saturates at `H`. (This is the onset of saturation, not of yield inside the body,
+/// which starts at `p0 ≈ 1.6 Y` below the surface; Johnson 1985, §6.1.)
+pub fn hertz_saturation_load(sphere_radius: f64, hardness: f64, e_star: f64) -> f64 {
+    (std::f64::consts::PI * hardness).powi(3) * sphere_radius.powi(2) / (6.0 * e_star.powi(2))
+}
+
+/// Normal stiffness `dP/dδ = 2E*a` of a rigid flat-ended circular punch of radius `a` on an
+/// elastic half-space (N/m; Johnson 1985, §3.8; Sneddon, Int. J. Eng. Sci. 3 (1965) 47–57).
+/// By Barber's theorem it is also the unloading stiffness of any frictionless contact whose
+/// contact area is a disc of radius `a` (Pharr, Oliver & Brotzen, J. Mater. Res. 7 (1992)
+/// 613–617).
+pub fn flat_punch_stiffness(contact_radius: f64, e_star: f64) -> f64 {
+    2.0 * e_star * contact_radius
+}
+
 /// Cattaneo–Mindlin partial slip of a Hertz contact under constant normal force `P` and a
 /// tangential force `T` (Johnson, *Contact Mechanics*, 1985, §7.2; Mindlin & Deresiewicz 1953).
 ///

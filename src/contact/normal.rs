@@ -64,6 +64,49 @@
 //! a freshly convolved displacement; reaching `max_iterations` first is an
 //! [`Error::NonConvergence`], never a silent result.
 //!
+//! # Hardness-limited (elastic–perfectly plastic) contact
+//! With a hardness `H` ([`NormalProblem::hardness_pa`]) the pressure is bounded, `0 ≤ p ≤ H`: the
+//! pressure-saturation model of elastic–perfectly plastic contact (the mean pressure of a fully
+//! plastic contact is the indentation hardness, ≈ 3Y; Johnson, *Contact Mechanics*, 1985, ch. 6;
+//! used on rough surfaces by Almqvist, Sahlin, Larsson & Glavatskih, Tribol. Int. 40 (2007)
+//! 574–579; tamaas' `KatoSaturated` solves the same problem). The conditions become
+//!
+//! - free (elastic) points `0 < p < H`: `g = 0`;
+//! - plastic points `p = H`: `g ≤ 0` — they may penetrate, and leave the plastic set when their gap
+//!   opens;
+//! - points out of contact `p = 0`: `g ≥ 0`;
+//!
+//! with the load `mean(p) = p̄ < H` summed over all points. It is the minimum of the same energy over
+//! the box `0 ≤ p ≤ H` (strictly convex, so the solution is unique), solved by the same
+//! preconditioned projected CG: the CG set is the free set `F = {0 < p < H}`, which centres the gap
+//! (δ is the mean of `K⊛p + h0` over `F`) and carries the conjugate direction; plastic points keep
+//! `p = H` (`t = 0`) unless their gap opened (`g > 0`), in which case they join the direction with
+//! `t = diag(M⁻¹)·g` like the penetrating points; the projection clamps at `H` as at 0. The
+//! residual adds `H·max(g, 0)` of the plastic points. After a step that clipped or saturated points
+//! the load is restored by scaling the free points, `p ← s·p` on `F` with
+//! `s = (L − H·n_plastic)/Σ_F p`; when that would push a free point above `H` the load is restored
+//! exactly within the box instead (`p ← min(s p, H)`, the `s` found by sorting). With `H = ∞` the
+//! arithmetic is that of the elastic solve, bit for bit (`tests/plastic_contact.rs`). The
+//! Polonsky–Keer path is elastic only.
+//!
+//! Outputs ([`NormalSolution`]): elastic (`0 < p < H`) and plastic (`p = H`) contact points and
+//! area ratios, and the **plastically displaced volume**
+//!
+//! `V_p = Σ_{i: p_i = H} max(−g_i, 0)·dx·dy`  (m³),
+//!
+//! the interpenetration of the rigid equivalent surface and the elastically deformed half-space
+//! at the plastic points: the material the model removes there (it conserves no volume — no
+//! pile-up). Under monotonic loading the plastic work is `H·V_p`. The **residual surface** after
+//! unloading is `h_res = h − max(−g, 0)·1_{p=H}` ([`NormalSolution::residual_surface`]): the
+//! elastic solution of `h_res` at the same load is the elastic–plastic solution (its pressure
+//! satisfies the elastic conditions of `h_res`, and that solution is unique), so unloading and
+//! reloading up to the load are elastic on `h_res` (no reverse plasticity in this model).
+//!
+//! Stiffness: [`NormalSolver::contact_stiffness`] on the contact set `p > 0` is then the
+//! **unloading/reloading** stiffness about the plastically deformed state (the elastic tangent of
+//! `h_res`), the one a contact element carries; [`NormalSolver::loading_stiffness`] on the free set
+//! is the tangent of continued loading (plastic points held at `H`), smaller ([`stiffness`]).
+//!
 //! # Displacement control
 //! [`NormalSolver::solve_approach`] imposes the rigid approach `δ` instead of the load: the
 //! approach is a continuous increasing function of the mean pressure, `δ(p̄)`, so the solver
@@ -109,6 +152,10 @@ pub struct NormalProblem<'a> {
     pub surface: &'a Grid2,
     /// Composite modulus E* (Pa), see [`crate::core::material::composite_modulus`].
     pub e_star_pa: f64,
+    /// Hardness H (Pa): the contact pressure is bounded by it (elastic–perfectly plastic
+    /// contact, see the module documentation); `None` for purely elastic contact. Defaults per
+    /// material: [`crate::core::material::MaterialGrade`].
+    pub hardness_pa: Option<f64>,
 }
 
 /// Solver settings.
@@ -248,6 +295,21 @@ pub struct NormalSolution {
     pub approach_m: f64,
     /// Elastic energy ½ Σ p·u·dA (J); periodic patches: the energy of the zero-mean part.
     pub elastic_energy_j: f64,
+    /// Hardness H that bounded the pressure (Pa); `None` for elastic contact.
+    pub hardness_pa: Option<f64>,
+    /// Grid points in elastic contact, `0 < p < H` (every contact point without hardness).
+    pub elastic_points: usize,
+    /// Grid points in plastic contact, `p = H` (0 without hardness).
+    pub plastic_points: usize,
+    /// Elastic contact area over nominal area (-).
+    pub elastic_area_ratio: f64,
+    /// Plastic contact area over nominal area (-).
+    pub plastic_area_ratio: f64,
+    /// Plastically displaced volume `V_p = Σ_{p=H} max(−g, 0)·dx·dy` (m³): the interpenetration
+    /// of the rigid equivalent surface and the elastically deformed half-space at the plastic
+    /// points, i.e. the material the saturation model removes there (see the module
+    /// documentation). 0 without hardness.
+    pub plastic_volume_m3: f64,
     /// The iteration used ([`NormalMethod::Auto`] resolved).
     pub method: NormalMethod,
     /// Iterations (search directions) of the last (or, in displacement control, all) solves.
@@ -269,6 +331,55 @@ pub struct NormalSolution {
     pub wall_time_s: f64,
 }
 
+impl NormalSolution {
+    /// Plastic penetration `max(−g, 0)` at the plastic points (`p ≥ H`), zero elsewhere (m);
+    /// all zero without hardness. Its sum times `dx·dy` is [`NormalSolution::plastic_volume_m3`].
+    pub fn plastic_penetration(&self) -> Array2<f64> {
+        let h = self.hardness_pa.unwrap_or(f64::INFINITY);
+        let mut pen = Array2::zeros(self.pressure.dim());
+        ndarray::Zip::from(&mut pen)
+            .and(&self.pressure)
+            .and(&self.gap)
+            .for_each(|d, &p, &g| {
+                if p >= h {
+                    *d = (-g).max(0.0);
+                }
+            });
+        pen
+    }
+
+    /// Plastic work `W_p = H·V_p` (J): the work of the pressure H on the plastic penetration
+    /// under monotonic loading. 0 without hardness.
+    pub fn plastic_work_j(&self) -> f64 {
+        self.hardness_pa.map_or(0.0, |h| {
+            if self.plastic_points > 0 {
+                h * self.plastic_volume_m3
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// The residual (plastically deformed) surface after unloading: the heights of `surface`
+    /// (the equivalent surface this solution was solved on) minus the plastic penetration,
+    /// `h_res = h − max(−g, 0)·1_{p=H}` (m). Its elastic solution at this solution's load is this
+    /// solution's pressure (see the module documentation): unloading and reloading up to this
+    /// load are elastic on `h_res`.
+    pub fn residual_surface(&self, surface: &Grid2) -> Result<Grid2> {
+        if surface.heights.dim() != self.pressure.dim() {
+            let (a, b) = surface.heights.dim();
+            let (c, d) = self.pressure.dim();
+            return Err(Error::param(
+                "surface",
+                format!("grid {a} × {b} does not match the solution's grid {c} × {d}"),
+            ));
+        }
+        let mut residual = surface.clone();
+        residual.heights -= &self.plastic_penetration();
+        Ok(residual)
+    }
+}
+
 /// Polonsky–Keer solver for one surface: FFT plan, kernel spectrum and work arrays are built
 /// once by [`NormalSolver::new`] and reused by every solve (load steps, warm starts).
 pub struct NormalSolver {
@@ -278,6 +389,8 @@ pub struct NormalSolver {
     dy: f64,
     boundary: Boundary,
     e_star: f64,
+    /// Hardness H (Pa), the upper bound of the pressure; infinite for elastic contact.
+    hardness: f64,
     /// Initial separation h0 = max(h) − h (m).
     separation: Array2<f64>,
     /// Normalisation length of the residual: rms height about the mean (m).
@@ -357,6 +470,17 @@ impl NormalSolver {
     pub fn new(problem: &NormalProblem<'_>, options: NormalOptions) -> Result<Self> {
         let s = problem.surface;
         let e_star = require_positive("e_star_pa", problem.e_star_pa)?;
+        let hardness = match problem.hardness_pa {
+            Some(h) => require_positive("hardness_pa", h)?,
+            None => f64::INFINITY,
+        };
+        if hardness.is_finite() && options.method == NormalMethod::PolonskyKeer {
+            return Err(Error::param(
+                "method",
+                "the hardness-limited solve uses the preconditioned projected CG; choose `auto` \
+                 or `preconditioned`",
+            ));
+        }
         require_positive("dx", s.dx)?;
         require_positive("dy", s.dy)?;
         options.validate()?;
@@ -400,6 +524,7 @@ impl NormalSolver {
             dy: s.dy,
             boundary,
             e_star,
+            hardness,
             separation,
             height_scale,
             plan,
@@ -439,6 +564,11 @@ impl NormalSolver {
         self.e_star
     }
 
+    /// Hardness H (Pa) bounding the pressure; `None` for elastic contact.
+    pub fn hardness_pa(&self) -> Option<f64> {
+        self.hardness.is_finite().then_some(self.hardness)
+    }
+
     /// Solver settings.
     pub fn options(&self) -> &NormalOptions {
         &self.options
@@ -447,6 +577,12 @@ impl NormalSolver {
     /// Change the settings (e.g. the tolerance) without re-planning.
     pub fn set_options(&mut self, options: NormalOptions) -> Result<()> {
         options.validate()?;
+        if self.hardness.is_finite() && options.method == NormalMethod::PolonskyKeer {
+            return Err(Error::param(
+                "method",
+                "the hardness-limited solve uses the preconditioned projected CG",
+            ));
+        }
         self.options = options;
         Ok(())
     }
@@ -499,6 +635,16 @@ impl NormalSolver {
         // The same small-strain limit as every command and configuration (crate::core::sanity).
         crate::core::sanity::nominal_strain(p_mean, self.e_star)
             .map_err(|m| Error::param("mean_pressure_pa", m))?;
+        if p_mean >= self.hardness {
+            return Err(Error::param(
+                "mean_pressure_pa",
+                format!(
+                    "{p_mean:e} Pa is not below the hardness {:e} Pa: the whole patch at the \
+                     hardness carries no more",
+                    self.hardness
+                ),
+            ));
+        }
         let n = (self.nx * self.ny) as f64;
         let mut coarse_iterations = 0;
         let warm = match warm_start {
@@ -541,6 +687,11 @@ impl NormalSolver {
                 _ => self.p.fill(p_mean),
             },
         }
+        if self.hardness.is_finite() {
+            // A scaled warm start may exceed the hardness: start from its projection.
+            let h = self.hardness;
+            self.p.mapv_inplace(|p| p.min(h));
+        }
         let (iterations, residual, approach) = self.iterate(p_mean, method)?;
         let mut sol = self.solution(p_mean, approach, method, iterations, residual, start);
         sol.coarse_iterations = coarse_iterations;
@@ -582,6 +733,7 @@ impl NormalSolver {
                 &NormalProblem {
                     surface: &surface,
                     e_star_pa: self.e_star,
+                    hardness_pa: self.hardness_pa(),
                 },
                 options,
             )
@@ -615,6 +767,12 @@ impl NormalSolver {
         if !(guess.is_finite() && guess > 0.0) {
             guess = self.e_star * 1e-6;
         }
+        // With hardness the load stays below H (p̄ → H as δ → ∞, every point plastic): a trial
+        // load at or above H is replaced by the point halfway from the current one to H.
+        let hardness = self.hardness;
+        if guess >= hardness {
+            guess = 0.5 * hardness;
+        }
         let mut total_iterations = 0;
         let solve =
             |this: &mut Self, p: f64, warm: Option<&NormalSolution>| this.solve_load(p, warm);
@@ -632,7 +790,24 @@ impl NormalSolver {
         let factor: f64 = if fc < 0.0 { 4.0 } else { 0.25 };
         let mut expansions = 0;
         loop {
-            let next = solve(self, cur.mean_pressure_pa * factor, Some(&cur))?;
+            let mut trial = cur.mean_pressure_pa * factor;
+            if trial >= hardness {
+                trial = 0.5 * (cur.mean_pressure_pa + hardness);
+                // The approach of a fully plastic patch is finite (the lowest point touches at
+                // p̄ = H); a target beyond it is not reached by any load below H.
+                if trial >= hardness * (1.0 - 1e-9) {
+                    return Err(Error::param(
+                        "approach_m",
+                        format!(
+                            "{target:e} m is beyond the approach of the fully plastic patch \
+                             ({:e} m at p̄ = {:e} Pa, hardness {hardness:e} Pa): every point \
+                             is at the hardness before it",
+                            cur.approach_m, cur.mean_pressure_pa
+                        ),
+                    ));
+                }
+            }
+            let next = solve(self, trial, Some(&cur))?;
             total_iterations += next.iterations;
             let fnext = f(&next);
             if fnext.abs() <= tol {
@@ -719,6 +894,12 @@ impl NormalSolver {
         displacement.zip_mut_with(&self.separation, |u, h0| *u += approach - h0);
         let contact = pressure.mapv(|v| v > 0.0);
         let contact_points = contact.iter().filter(|c| **c).count();
+        let h = self.hardness;
+        let (plastic_points, plastic_depth) = pressure
+            .iter()
+            .zip(gap.iter())
+            .filter(|(p, _)| **p >= h)
+            .fold((0usize, 0.0), |(k, v), (_, g)| (k + 1, v + (-g).max(0.0)));
         let spots = spot_sizes(&contact, self.boundary == Boundary::Periodic);
         let mut sorted = spots.clone();
         sorted.sort_unstable();
@@ -746,6 +927,12 @@ impl NormalSolver {
             resolution: ContactResolution::of(&contact, self.boundary == Boundary::Periodic),
             approach_m: approach,
             elastic_energy_j: energy,
+            hardness_pa: self.hardness_pa(),
+            elastic_points: contact_points - plastic_points,
+            plastic_points,
+            elastic_area_ratio: (contact_points - plastic_points) as f64 / n,
+            plastic_area_ratio: plastic_points as f64 / n,
+            plastic_volume_m3: plastic_depth * self.dx * self.dy,
             method,
             iterations,
             convolutions: self.counts.0,
@@ -852,6 +1039,7 @@ mod tests {
             &NormalProblem {
                 surface: &s,
                 e_star_pa: e_star,
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )
@@ -884,6 +1072,7 @@ mod tests {
                 &NormalProblem {
                     surface: &s,
                     e_star_pa: e_star,
+                    hardness_pa: None,
                 },
                 NormalOptions {
                     warm_start_load_ratio: ratio,
@@ -923,6 +1112,7 @@ mod tests {
                 &NormalProblem {
                     surface: &s,
                     e_star_pa: e,
+                    hardness_pa: None,
                 },
                 NormalOptions::default(),
             )
@@ -943,6 +1133,7 @@ mod tests {
             &NormalProblem {
                 surface: &bad,
                 e_star_pa: 1e11,
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )
@@ -955,6 +1146,7 @@ mod tests {
             &NormalProblem {
                 surface: &other,
                 e_star_pa: 1e11,
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )
@@ -979,6 +1171,7 @@ mod tests {
             &NormalProblem {
                 surface: &s,
                 e_star_pa: 1e11,
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )
@@ -1002,6 +1195,7 @@ mod tests {
             &NormalProblem {
                 surface: &s,
                 e_star_pa: 1e11,
+                hardness_pa: None,
             },
             NormalOptions {
                 max_iterations: 3,

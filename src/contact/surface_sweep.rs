@@ -110,6 +110,10 @@ pub struct SurfaceSweep {
     pub pressures_pa: Vec<f64>,
     /// Material of both bodies.
     pub material: Material,
+    /// Hardness H bounding the contact pressure (Pa); `None` for elastic contact (see
+    /// [`crate::contact::normal`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hardness_pa: Option<f64>,
     /// Contact solver settings.
     pub options: NormalOptions,
 }
@@ -224,6 +228,26 @@ impl SurfaceSweep {
         }
         self.e_star_pa()?;
         self.options.validate()?;
+        if let Some(h) = self.hardness_pa {
+            crate::core::error::require_positive("hardness_pa", h)?;
+            if let Some(&p) = self.pressures_pa.iter().find(|&&p| p >= h) {
+                return Err(Error::param(
+                    "pressures_pa",
+                    format!(
+                        "{} Pa is not below the hardness {} Pa (the whole patch at the \
+                         hardness carries no more)",
+                        num(p),
+                        num(h)
+                    ),
+                ));
+            }
+            if self.options.method == crate::contact::normal::NormalMethod::PolonskyKeer {
+                return Err(Error::param(
+                    "method",
+                    "the hardness-limited solve uses the preconditioned projected CG",
+                ));
+            }
+        }
         for s in &self.surfaces {
             if let SurfaceSource::Generated { spec } = s {
                 spec.validate()?;
@@ -275,6 +299,7 @@ impl SurfaceSweep {
             &NormalProblem {
                 surface: &surface,
                 e_star_pa: self.e_star_pa()?,
+                hardness_pa: self.hardness_pa,
             },
             self.options,
         )?;
@@ -423,6 +448,7 @@ mod tests {
                 .collect(),
             pressures_pa: vec![1e6, 1e7],
             material: Material::STEEL,
+            hardness_pa: None,
             options: NormalOptions::default(),
         }
     }

@@ -47,7 +47,9 @@ pub struct SweepPoint {
     pub contact_area_ratio: f64,
     /// Mean gap ḡ (m).
     pub mean_gap_m: f64,
-    /// Normal contact stiffness per unit nominal area kn = dp̄/dδ (N/m³).
+    /// Normal contact stiffness per unit nominal area kn = dp̄/dδ (N/m³). Hardness-limited
+    /// contact: the unloading/reloading stiffness about the plastically deformed state (the
+    /// one an element carries; the loading tangent is in [`SweepPoint::plastic`]).
     pub kn_n_per_m3: f64,
     /// Rigid approach from first contact (m).
     pub approach_m: f64,
@@ -69,6 +71,52 @@ pub struct SweepPoint {
     pub residual: f64,
     /// Wall time of this point: contact solve and kn (s).
     pub wall_time_s: f64,
+    /// The plastic part of a hardness-limited solve; `None` for elastic contact.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plastic: Option<PlasticPoint>,
+}
+
+/// The plastic part of a hardness-limited sweep point (see [`crate::contact::normal`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PlasticPoint {
+    /// Hardness H (Pa).
+    pub hardness_pa: f64,
+    /// Loading tangent dp̄/dδ with the plastic points held at H (N/m³), ≤ the unloading kn.
+    pub kn_loading_n_per_m3: f64,
+    /// Elastic contact area (0 < p < H) over nominal area (-).
+    pub elastic_area_ratio: f64,
+    /// Plastic contact area (p = H) over nominal area (-).
+    pub plastic_area_ratio: f64,
+    /// Grid points in plastic contact.
+    pub plastic_points: usize,
+    /// Plastically displaced volume of the patch (m³), see
+    /// [`NormalSolution::plastic_volume_m3`].
+    pub plastic_volume_m3: f64,
+    /// Iterations of the tangent solve of the loading tangent.
+    pub loading_stiffness_iterations: usize,
+}
+
+impl PlasticPoint {
+    /// The plastic part of a converged hardness-limited solution and its loading tangent;
+    /// `None` for elastic contact.
+    pub fn of(
+        solver: &mut NormalSolver,
+        solution: &NormalSolution,
+    ) -> Result<Option<PlasticPoint>> {
+        let Some(hardness_pa) = solution.hardness_pa else {
+            return Ok(None);
+        };
+        let loading = solver.loading_stiffness(solution)?;
+        Ok(Some(PlasticPoint {
+            hardness_pa,
+            kn_loading_n_per_m3: loading.kn_n_per_m3,
+            elastic_area_ratio: solution.elastic_area_ratio,
+            plastic_area_ratio: solution.plastic_area_ratio,
+            plastic_points: solution.plastic_points,
+            plastic_volume_m3: solution.plastic_volume_m3,
+            loading_stiffness_iterations: loading.iterations,
+        }))
+    }
 }
 
 impl SweepPoint {
@@ -96,6 +144,26 @@ impl SweepPoint {
         ] {
             if !v.is_finite() {
                 return Err(format!("`{name}` = {} is not finite", num(v)));
+            }
+        }
+        if let Some(pl) = &self.plastic {
+            if !(pl.kn_loading_n_per_m3 >= 0.0 && pl.kn_loading_n_per_m3 <= self.kn_n_per_m3) {
+                return Err(format!(
+                    "`kn_loading_n_per_m3` = {} must lie in [0, kn] (the plastic points only \
+                     soften the loading tangent)",
+                    num(pl.kn_loading_n_per_m3)
+                ));
+            }
+            if !(pl.plastic_area_ratio >= 0.0
+                && pl.plastic_area_ratio <= self.contact_area_ratio
+                && pl.plastic_volume_m3 >= 0.0)
+            {
+                return Err(format!(
+                    "`plastic_area_ratio` = {} must lie in [0, contact_area_ratio] and \
+                     `plastic_volume_m3` = {} must be ≥ 0",
+                    num(pl.plastic_area_ratio),
+                    num(pl.plastic_volume_m3)
+                ));
             }
         }
         Ok(())
@@ -153,6 +221,7 @@ pub fn run(
         let start = std::time::Instant::now();
         let sol = solver.solve_load(p, warm.as_ref())?;
         let kn = solver.contact_stiffness(&sol)?;
+        let plastic = PlasticPoint::of(solver, &sol)?;
         points.push(SweepPoint {
             pressure_pa: p,
             contact_area_ratio: sol.contact_area_ratio,
@@ -168,6 +237,7 @@ pub fn run(
             stiffness_iterations: kn.iterations,
             residual: sol.residual,
             wall_time_s: start.elapsed().as_secs_f64(),
+            plastic,
         });
         if options.keep_solutions {
             solutions.push(sol.clone());
@@ -250,6 +320,7 @@ mod tests {
                 stiffness_iterations: 0,
                 residual: 0.0,
                 wall_time_s: 0.0,
+                plastic: None,
             })
             .collect();
         let (b, c) = power_law_fit(&pts).unwrap();
@@ -270,6 +341,7 @@ mod tests {
             &NormalProblem {
                 surface: &s,
                 e_star_pa: e_star,
+                hardness_pa: None,
             },
             NormalOptions::default(),
         )

@@ -1,5 +1,6 @@
 //! Isotropic linear-elastic materials: the constants every elastic stage reads (Young's
-//! modulus, Poisson's ratio, shear modulus).
+//! modulus, Poisson's ratio, shear modulus), and named material grades with the indentation
+//! hardness that bounds the contact pressure of the hardness-limited normal contact.
 
 use crate::core::error::{require_positive, Error, Result};
 
@@ -37,6 +38,82 @@ impl Material {
     pub fn shear_modulus_pa(&self) -> f64 {
         self.youngs_modulus_pa / (2.0 * (1.0 + self.poisson_ratio))
     }
+}
+
+/// Pascals per Vickers hardness number: HV is a load in kgf over the indent's surface area in
+/// mm², so `H = HV · 9.80665 N/kgf · 10⁶ mm²/m²`.
+pub const PA_PER_HV: f64 = 9.80665e6;
+
+/// A named material with its indentation hardness: the elastic constants and the default
+/// hardness H (Pa) of the hardness-limited normal contact ([`crate::contact::normal`]), with
+/// their sources.
+///
+/// H is the Vickers hardness in Pa (load over the indent's *surface* area, [`PA_PER_HV`]); the
+/// mean pressure over the *projected* area of a Vickers indent (Meyer hardness) is 7.9 % higher
+/// (`2 / (2 sin 68°)`), and both are ≈ 3Y for metals that do not harden much (Tabor, *The
+/// Hardness of Metals*, 1951). A measured hardness of the actual parts replaces these defaults
+/// (`--hardness-pa <Pa>`); work hardening, temperature and surface treatments move it by tens
+/// of per cent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialGrade {
+    /// Name used on the command line (`--hardness-pa <name>`).
+    pub name: &'static str,
+    /// Elastic constants.
+    pub elastic: Material,
+    /// Vickers hardness number (kgf/mm²).
+    pub vickers_hv: f64,
+    /// Where the numbers come from.
+    pub source: &'static str,
+}
+
+impl MaterialGrade {
+    /// Hardness H = HV · [`PA_PER_HV`] (Pa).
+    pub fn hardness_pa(&self) -> f64 {
+        self.vickers_hv * PA_PER_HV
+    }
+}
+
+/// The materials with a documented default hardness.
+pub const MATERIAL_GRADES: [MaterialGrade; 2] = [
+    MaterialGrade {
+        name: "steel-42crmo4",
+        // The reference case's steel constants.
+        elastic: Material::STEEL,
+        vickers_hv: 340.0,
+        source: "42CrMo4 (AISI 4140) quenched and tempered, 25–40 mm: 300–350 HBW \
+                 (EN 10083-3:2006, mechanical properties in the quenched and tempered condition, \
+                 hardness informative); 325 HBW ≈ 340 HV (ISO 18265:2013, Annex A, low-alloy \
+                 steels); E = 210 GPa, ν = 0.3",
+    },
+    MaterialGrade {
+        name: "inconel-718",
+        elastic: Material {
+            youngs_modulus_pa: 200e9,
+            poisson_ratio: 0.29,
+        },
+        vickers_hv: 450.0,
+        source: "Inconel 718 solution treated and aged: 450 HV after ageing at 680 °C (Slama & \
+                 Abdellaoui, J. Alloys Compd. 306 (2000) 277–284); E = 29.0·10³ ksi = 200 GPa, \
+                 ν = 0.29 at room temperature (Special Metals, INCONEL alloy 718, publication \
+                 SMC-045, Table 3)",
+    },
+];
+
+/// The grade named `name` (see [`MATERIAL_GRADES`]); the error lists the names.
+pub fn material_grade(name: &str) -> Result<&'static MaterialGrade> {
+    MATERIAL_GRADES
+        .iter()
+        .find(|g| g.name == name)
+        .ok_or_else(|| {
+            let names: Vec<&str> = MATERIAL_GRADES.iter().map(|g| g.name).collect();
+            Error::param(
+                "hardness_pa",
+                format!(
+                    "`{name}` is neither a hardness in Pa nor a material ({})",
+                    names.join(", ")
+                ),
+            )
+        })
 }
 
 /// Composite (contact) modulus of two elastic bodies (Johnson, *Contact Mechanics*, 1985, eq. 4.22):
@@ -79,6 +156,24 @@ mod tests {
         .to_string();
         assert!(
             e.contains("body1.poisson_ratio") && e.contains("(-1, 0.5]"),
+            "{e}"
+        );
+    }
+
+    /// The grades' hardness in Pa from HV, and their names resolve; an unknown name lists them.
+    #[test]
+    fn grades_have_hardness_and_names() {
+        let steel = material_grade("steel-42crmo4").unwrap();
+        assert!((steel.hardness_pa() / 3.334261e9 - 1.0).abs() < 1e-6);
+        let inconel = material_grade("inconel-718").unwrap();
+        assert!((inconel.hardness_pa() / 4.4129925e9 - 1.0).abs() < 1e-7);
+        for g in MATERIAL_GRADES {
+            g.elastic.validated(g.name).unwrap();
+            assert!(!g.source.is_empty());
+        }
+        let e = material_grade("brass").unwrap_err().to_string();
+        assert!(
+            e.contains("steel-42crmo4") && e.contains("inconel-718"),
             "{e}"
         );
     }

@@ -795,8 +795,10 @@ impl SurfaceStats {
         let spacing = format!(
             "spacing {}{} m",
             crate::core::error::num(self.dx_m),
-            self.dy_m
-                .map_or(String::new(), |d| format!(" × {}", crate::core::error::num(d)))
+            self.dy_m.map_or(String::new(), |d| format!(
+                " × {}",
+                crate::core::error::num(d)
+            ))
         );
         let heights = "the heights".to_string();
         let rq = format!("the heights (Rq {} m)", crate::core::error::num(self.rq_m));

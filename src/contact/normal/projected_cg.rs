@@ -120,10 +120,12 @@ struct StateSums {
     clipped: f64,
     /// Points that entered it.
     entered: f64,
+    /// Plastic points (`p = H`).
+    n_pl: f64,
 }
 
 impl StateSums {
-    const N: usize = 8;
+    const N: usize = 9;
     fn from(a: [f64; Self::N]) -> Self {
         Self {
             p: a[0],
@@ -134,19 +136,25 @@ impl StateSums {
             gt: a[5],
             clipped: a[6],
             entered: a[7],
+            n_pl: a[8],
         }
     }
 
-    /// Accumulate one point of the new state.
+    /// Accumulate one point of the new state: the sums over the free set `0 < p < H` (the
+    /// contact set without hardness) and over the plastic set `p = H`.
     #[inline(always)]
-    fn add(s: &mut [f64; Self::N], p: f64, g: f64, t: f64) {
+    fn add(s: &mut [f64; Self::N], p: f64, g: f64, t: f64, h: f64) {
         s[0] += p;
         if p > 0.0 {
-            s[1] += 1.0;
-            s[2] += g;
-            s[3] += g * g;
-            s[4] += t;
-            s[5] += g * t;
+            if p < h {
+                s[1] += 1.0;
+                s[2] += g;
+                s[3] += g * g;
+                s[4] += t;
+                s[5] += g * t;
+            } else {
+                s[8] += 1.0;
+            }
         }
     }
 
@@ -155,15 +163,24 @@ impl StateSums {
     }
 }
 
-// Sums of the pass that reads the current state (the residual and the penetrating points).
-const R_COMPL: usize = 0; // Σ_Ic p |g|
+// Sums of the pass that reads the current state (the residual, the penetrating points and the
+// plastic points whose gap opened).
+const R_COMPL: usize = 0; // Σ_F p |g| + Σ_Pl p max(g, 0)
 const R_PEN: usize = 1; // Σ_{p=0} max(−g, 0)
+const R_REL: usize = 2; // Σ_Pl max(g, 0)
+const R_N: usize = 3;
 
-/// Residual terms of one point of the centred gap `g`.
+/// Residual terms of one point of the centred gap `g` (hardness `h`, infinite without).
 #[inline(always)]
-fn residual_terms(s: &mut [f64], p: f64, g: f64) {
+fn residual_terms(s: &mut [f64], p: f64, g: f64, h: f64) {
     if p > 0.0 {
-        s[R_COMPL] += p * g.abs();
+        if p < h {
+            s[R_COMPL] += p * g.abs();
+        } else if g > 0.0 {
+            // A plastic point whose gap opened: its pressure must drop below H.
+            s[R_COMPL] += p * g;
+            s[R_REL] += g;
+        }
     } else if g < 0.0 {
         s[R_PEN] -= g;
     }
@@ -273,7 +290,23 @@ impl NormalSolver {
         let mut approach = 0.0;
         let mut sum_p = self.p.sum();
         check_load(sum_p, 0)?;
-        let mut state = self.refresh(judge.total_load / sum_p, approach)?;
+        let mut state = if self.hardness.is_finite() {
+            let h = self.hardness;
+            let [n_f, n_pl] = rows_sum(self.nx, |i| {
+                row(&self.p, i).iter().fold([0.0; 2], |[f, pl], &p| {
+                    if p >= h {
+                        [f, pl + 1.0]
+                    } else if p > 0.0 {
+                        [f + 1.0, pl]
+                    } else {
+                        [f, pl]
+                    }
+                })
+            });
+            self.restore_load(judge.total_load, sum_p, n_f, n_pl, approach)?
+        } else {
+            self.refresh(judge.total_load / sum_p, approach)?.0
+        };
         let mut exact = true;
         let mut since_refresh = 0usize;
         let mut conjugate = false;
@@ -287,24 +320,33 @@ impl NormalSolver {
                 conjugate = state.entered == 0.0 || preconditioned;
                 check_load(state.p, iterations)?;
                 sum_p = state.p;
-                state = self.refresh(judge.total_load / sum_p, approach)?;
+                state =
+                    self.restore_load(judge.total_load, sum_p, state.n_c, state.n_pl, approach)?;
                 exact = true;
                 since_refresh = 0;
             }
+            // n_c: the free set 0 < p < H (the contact set without hardness).
             let n_c = state.n_c;
-            if n_c == 0.0 {
+            if n_c == 0.0 && state.n_pl == 0.0 {
                 return Err(Error::Data(
                     "normal contact: the pressure vanished everywhere (no contact set)".into(),
                 ));
             }
             sum_p = state.p;
             check_load(sum_p, iterations)?;
-            let c = state.g / n_c;
+            // δ is the mean over the free set. With every contact point plastic (the load is a
+            // whole number of points at H) the free set does not fix it: see
+            // `degenerate_centre`.
+            let c = if n_c > 0.0 {
+                state.g / n_c
+            } else {
+                self.degenerate_centre()
+            };
             approach += c;
-            // Σ_Ic g² and Σ_Ic g·t_old of the centred gap g = g_s − c.
+            // Σ_F g² and Σ_F g·t_old of the centred gap g = g_s − c.
             let g2 = (state.g2 - n_c * c * c).max(0.0);
             let gt_old = state.gt - c * state.t;
-            let t_mean = state.t / n_c;
+            let t_mean = if n_c > 0.0 { state.t / n_c } else { 0.0 };
             let refresh_due = since_refresh >= REFRESH_INTERVAL;
             let at_cap = iterations >= self.options.max_iterations;
             let mut verdict = Verdict::Continue;
@@ -330,8 +372,14 @@ impl NormalSolver {
                         beta = 0.0;
                     }
                     rho_old = rho;
-                    // Σ_E t = γ Σ_E g = −γ·pen: the contact part is shifted to keep Σ t = 0.
-                    let offset = z_mean + beta * t_mean - gamma * r[R_PEN] / n_c;
+                    // Σ_E t = γ Σ_E g = γ(rel − pen) over the entering points E (penetrating,
+                    // and plastic points whose gap opened): the free part is shifted to keep
+                    // Σ t = 0.
+                    let offset = if n_c > 0.0 {
+                        z_mean + beta * t_mean - gamma * (r[R_PEN] - r[R_REL]) / n_c
+                    } else {
+                        0.0
+                    };
                     self.step_preconditioned(c, beta, offset, gamma)
                 })
             } else {
@@ -373,7 +421,8 @@ impl NormalSolver {
                 if verdict == Verdict::Converged {
                     return Ok((iterations, residual, approach));
                 }
-                state = self.refresh(judge.total_load / sum_p, approach)?;
+                state =
+                    self.restore_load(judge.total_load, sum_p, state.n_c, state.n_pl, approach)?;
                 exact = true;
                 since_refresh = 0;
                 continue;
@@ -396,6 +445,61 @@ impl NormalSolver {
         }
     }
 
+    /// The centring `c` of the stored gap when every contact point is plastic (no free point
+    /// fixes δ): the root of `φ(c) = Σ_{p=0, g_s<c} (g_s − c) + Σ_{p=H, g_s>c} (g_s − c)`,
+    /// decreasing in `c`, so that the direction of the entering points (penetrating, and
+    /// plastic points whose gap opened), `t = γ (g_s − c)`, has zero sum and exchanges load
+    /// between them. When the largest plastic gap is below the smallest open one, every `c`
+    /// between them is a root and the state is a solution (residual 0): the largest plastic gap
+    /// is returned. Otherwise bisection on `[min open gap, max plastic gap]`. Rare: only when
+    /// the load is a whole number of points at H.
+    fn degenerate_centre(&self) -> f64 {
+        let h = self.hardness;
+        let extremes = |i: usize| {
+            let mut e = [f64::INFINITY, f64::NEG_INFINITY];
+            for (&p, &g) in row(&self.p, i).iter().zip(row(&self.g, i)) {
+                if p >= h {
+                    e[1] = e[1].max(g);
+                } else if p <= 0.0 {
+                    e[0] = e[0].min(g);
+                }
+            }
+            e
+        };
+        let [min_open, max_plastic] = (0..self.nx).into_par_iter().map(extremes).reduce(
+            || [f64::INFINITY, f64::NEG_INFINITY],
+            |a, b| [a[0].min(b[0]), a[1].max(b[1])],
+        );
+        if max_plastic <= min_open {
+            return max_plastic;
+        }
+        let phi = |c: f64| {
+            let [v] = rows_sum(self.nx, |i| {
+                let mut s = 0.0;
+                for (&p, &g) in row(&self.p, i).iter().zip(row(&self.g, i)) {
+                    if (p <= 0.0 && g < c) || (p >= h && g > c) {
+                        s += g - c;
+                    }
+                }
+                [s]
+            });
+            v
+        };
+        let (mut lo, mut hi) = (min_open, max_plastic);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if phi(mid) > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+
     /// Build the preconditioner on first use.
     pub(super) fn ensure_preconditioner(&mut self) {
         if self.precond.is_none() {
@@ -413,42 +517,125 @@ impl NormalSolver {
         }
     }
 
-    /// `p ← s p` (exact load), `g_s = K⊛p + h0 − δ` with the current approach estimate `δ`;
-    /// returns the sums of the new state (its mean over `Ic` is the correction of `δ`).
-    fn refresh(&mut self, scale: f64, approach: f64) -> Result<StateSums> {
+    /// The load restored and the displacement recomputed. Without hardness `p ← s p` with
+    /// `s = L / Σp`. With hardness H the free points are scaled, `p ← s p` on `0 < p < H` with
+    /// `s = (L − H·n_pl) / Σ_F p` (the plastic points carry `H` each); when that pushes a free
+    /// point above H (or no free load is left) the load is restored exactly by
+    /// [`NormalSolver::project_load`] instead. Returns the sums of the new state.
+    fn restore_load(
+        &mut self,
+        total_load: f64,
+        sum_p: f64,
+        n_free: f64,
+        n_plastic: f64,
+        approach: f64,
+    ) -> Result<StateSums> {
+        let h = self.hardness;
+        if !h.is_finite() {
+            return Ok(self.refresh(total_load / sum_p, approach)?.0);
+        }
+        let free_load = sum_p - h * n_plastic;
+        let free_target = total_load - h * n_plastic;
+        if n_free > 0.0 && free_load > 0.0 && free_target > 0.0 {
+            let (state, saturated) = self.refresh(free_target / free_load, approach)?;
+            if saturated == 0.0 {
+                return Ok(state);
+            }
+        }
+        self.project_load(total_load);
+        Ok(self.refresh(1.0, approach)?.0)
+    }
+
+    /// The load `Σp = L` restored exactly within `0 ≤ p ≤ H`, keeping the shape of the pressure:
+    /// `p ← min(s p, H)` with the `s` that carries `L` (`Σ min(s p_i, H)` is increasing and
+    /// piecewise linear in `s`: the points are sorted once), or, when the contact points at H
+    /// cannot carry `L`, all of them at H and the rest on the non-contact points of smallest gap,
+    /// H each (one partly). Needs `L < N·H` (checked by the caller of the solve).
+    fn project_load(&mut self, total_load: f64) {
+        let h = self.hardness;
+        let p = self.p.as_slice_mut().expect("standard layout");
+        let mut contact: Vec<f64> = p.iter().copied().filter(|&v| v > 0.0).collect();
+        let capacity = h * contact.len() as f64;
+        if capacity > total_load {
+            contact.sort_unstable_by(|a, b| b.total_cmp(a));
+            // With the k largest saturated: s_k = (L − kH) / Σ_{i ≥ k} p_(i), valid when
+            // s_k p_(k) ≤ H.
+            let mut rest: f64 = contact.iter().sum();
+            let mut s = total_load / rest;
+            for (k, &pk) in contact.iter().enumerate() {
+                s = (total_load - h * k as f64) / rest;
+                if s * pk <= h {
+                    break;
+                }
+                rest -= pk;
+            }
+            for v in p.iter_mut().filter(|v| **v > 0.0) {
+                *v = (s * *v).min(h);
+            }
+        } else {
+            for v in p.iter_mut().filter(|v| **v > 0.0) {
+                *v = h;
+            }
+            let g = self.g.as_slice().expect("standard layout");
+            let mut order: Vec<usize> = (0..p.len()).filter(|&i| p[i] == 0.0).collect();
+            order.sort_unstable_by(|&a, &b| g[a].total_cmp(&g[b]));
+            let mut remaining = total_load - capacity;
+            for i in order {
+                if remaining <= 0.0 {
+                    break;
+                }
+                p[i] = remaining.min(h);
+                remaining -= p[i];
+            }
+        }
+    }
+
+    /// `p ← s p` on the points below the hardness (all points without hardness), clamped at H;
+    /// `g_s = K⊛p + h0 − δ` with the current approach estimate `δ`. Returns the sums of the new
+    /// state (its mean over the free set is the correction of `δ`) and the number of points the
+    /// scaling pushed to H.
+    fn refresh(&mut self, scale: f64, approach: f64) -> Result<(StateSums, f64)> {
         self.counts.0 += 1;
         let ny = self.ny;
+        let h = self.hardness;
         let pp = Ptr::of(&mut self.p);
         let gp = Ptr::of(&mut self.g);
         let (h0, t) = (&self.separation, &self.t);
-        let (_, rest) = self.plan.convolve_fused::<0, { StateSums::N }, ()>(
+        let ([saturated], rest) = self.plan.convolve_fused::<1, { StateSums::N }, ()>(
             &self.kernel,
             &mut self.ws,
             |i, buf| {
                 // SAFETY: row i is written by this call only.
                 let p = unsafe { pp.row(i, ny) };
+                let mut saturated = 0.0;
                 for (b, v) in buf.iter_mut().zip(p.iter_mut()) {
-                    *v *= scale;
+                    if *v < h {
+                        *v *= scale;
+                        if *v > h {
+                            *v = h;
+                            saturated += 1.0;
+                        }
+                    }
                     *b = *v;
                 }
-                []
+                [saturated]
             },
             |_| Some(()),
             |_, _, i, res| {
                 // SAFETY: the load phase is over; row i is touched by this call only.
                 let (p, g) = unsafe { (pp.row(i, ny), gp.row(i, ny)) };
-                let (h, t) = (row(h0, i), row(t, i));
+                let (h0, t) = (row(h0, i), row(t, i));
                 let mut s = [0.0; StateSums::N];
                 for k in 0..ny {
-                    let v = res[k] + h[k] - approach;
+                    let v = res[k] + h0[k] - approach;
                     g[k] = v;
-                    StateSums::add(&mut s, p[k], v, t[k]);
+                    StateSums::add(&mut s, p[k], v, t[k], h);
                 }
                 s
             },
         );
         let (_, sums) = rest.expect("the recomputation always proceeds");
-        Ok(StateSums::from(sums))
+        Ok((StateSums::from(sums), saturated))
     }
 
     /// The preconditioner transform, `z = P M⁻¹ P g` (`g = g_s − c`), with the residual of the
@@ -457,22 +644,27 @@ impl NormalSolver {
     fn precondition(
         &mut self,
         c: f64,
-        go: impl FnOnce(&[f64; 2]) -> bool,
-    ) -> ([f64; 2], Option<[f64; 3]>) {
+        go: impl FnOnce(&[f64; R_N]) -> bool,
+    ) -> ([f64; R_N], Option<[f64; 3]>) {
         let ny = self.ny;
+        let h = self.hardness;
         let zp = Ptr::of(&mut self.z);
         let (p, g) = (&self.p, &self.g);
         let m = self.precond.as_mut().expect("preconditioner built");
-        let (load, rest) = m.plan.convolve_fused::<2, 3, ()>(
+        let (load, rest) = m.plan.convolve_fused::<R_N, 3, ()>(
             &m.spectrum,
             &mut m.ws,
             |i, buf| {
                 let (p, g) = (row(p, i), row(g, i));
-                let mut s = [0.0; 2];
+                let mut s = [0.0; R_N];
                 for k in 0..ny {
                     let gk = g[k] - c;
-                    residual_terms(&mut s, p[k], gk);
-                    buf[k] = if p[k] > 0.0 { gk as f32 } else { 0.0 };
+                    residual_terms(&mut s, p[k], gk, h);
+                    buf[k] = if p[k] > 0.0 && p[k] < h {
+                        gk as f32
+                    } else {
+                        0.0
+                    };
                 }
                 s
             },
@@ -483,7 +675,7 @@ impl NormalSolver {
                 let (p, g) = (row(p, i), row(g, i));
                 let mut s = [0.0; 3];
                 for k in 0..ny {
-                    if p[k] > 0.0 {
+                    if p[k] > 0.0 && p[k] < h {
                         let gk = g[k] - c;
                         let zk = f64::from(res[k]);
                         s[2] += gk * z[k];
@@ -503,9 +695,10 @@ impl NormalSolver {
         (load, rest.map(|(_, s)| s))
     }
 
-    /// Preconditioned direction and step: `t = z + β t − offset` on `Ic`, `t = γ g` on the
-    /// penetrating points; `K⊛t` with the update `p ← max(p − τ t, 0)`, `g_s ← g − τ K⊛t` in
-    /// its output pass. Returns the energy `t·K⊛t` and the sums of the new state.
+    /// Preconditioned direction and step: `t = z + β t − offset` on the free set, `t = γ g` on
+    /// the penetrating points and on the plastic points whose gap opened, 0 on the other plastic
+    /// points; `K⊛t` with the update `p ← min(max(p − τ t, 0), H)`, `g_s ← g − τ K⊛t` in its
+    /// output pass. Returns the energy `t·K⊛t` and the sums of the new state.
     fn step_preconditioned(
         &mut self,
         c: f64,
@@ -515,6 +708,7 @@ impl NormalSolver {
     ) -> (f64, StateSums) {
         self.counts.0 += 1;
         let ny = self.ny;
+        let h = self.hardness;
         let tp = Ptr::of(&mut self.t);
         let pp = Ptr::of(&mut self.p);
         let gp = Ptr::of(&mut self.g);
@@ -530,7 +724,13 @@ impl NormalSolver {
                 for k in 0..ny {
                     let gk = g[k] - c;
                     let v = if p[k] > 0.0 {
-                        z[k] + beta * t[k] - offset
+                        if p[k] < h {
+                            z[k] + beta * t[k] - offset
+                        } else if gk > 0.0 {
+                            gamma * gk
+                        } else {
+                            0.0
+                        }
                     } else if gk < 0.0 {
                         gamma * gk
                     } else {
@@ -552,7 +752,7 @@ impl NormalSolver {
             |step, energy, i, r| {
                 // SAFETY: the load phase is over; row i is touched by this call only.
                 let (t, p, g) = unsafe { (tp.row(i, ny), pp.row(i, ny), gp.row(i, ny)) };
-                update_row(step, step.tau(energy), p, g, t, r)
+                update_row(step, step.tau(energy), h, p, g, t, r)
             },
         );
         let (energy, sums) = rest.expect("the step always proceeds");
@@ -571,37 +771,40 @@ impl NormalSolver {
         decide: impl FnOnce(&[f64; 2], f64) -> Option<Step>,
     ) -> Option<(f64, StateSums)> {
         let ny = self.ny;
+        let h = self.hardness;
         let tp = Ptr::of(&mut self.t);
         let pp = Ptr::of(&mut self.p);
         let gp = Ptr::of(&mut self.g);
-        let (_, rest) = self.plan.convolve_fused::<3, { StateSums::N }, Step>(
-            &self.kernel,
-            &mut self.ws,
-            |i, buf| {
-                // SAFETY: rows of t are written by one call; p and g are only read here.
-                let (t, p, g) = unsafe { (tp.row(i, ny), pp.row(i, ny), gp.row(i, ny)) };
-                let mut s = [0.0; 3];
-                for k in 0..ny {
-                    let gk = g[k] - c;
-                    residual_terms(&mut s, p[k], gk);
-                    let v = if p[k] > 0.0 {
-                        gk + beta * t[k] - offset
-                    } else {
-                        0.0
-                    };
-                    t[k] = v;
-                    buf[k] = v;
-                    s[2] += gk * v;
-                }
-                s
-            },
-            |s| decide(&[s[R_COMPL], s[R_PEN]], s[2]),
-            |step, energy, i, r| {
-                // SAFETY: the load phase is over; row i is touched by this call only.
-                let (t, p, g) = unsafe { (tp.row(i, ny), pp.row(i, ny), gp.row(i, ny)) };
-                update_row(step, step.tau(energy), p, g, t, r)
-            },
-        );
+        let (_, rest) = self
+            .plan
+            .convolve_fused::<{ R_N + 1 }, { StateSums::N }, Step>(
+                &self.kernel,
+                &mut self.ws,
+                |i, buf| {
+                    // SAFETY: rows of t are written by one call; p and g are only read here.
+                    let (t, p, g) = unsafe { (tp.row(i, ny), pp.row(i, ny), gp.row(i, ny)) };
+                    let mut s = [0.0; R_N + 1];
+                    for k in 0..ny {
+                        let gk = g[k] - c;
+                        residual_terms(&mut s, p[k], gk, h);
+                        let v = if p[k] > 0.0 {
+                            gk + beta * t[k] - offset
+                        } else {
+                            0.0
+                        };
+                        t[k] = v;
+                        buf[k] = v;
+                        s[R_N] += gk * v;
+                    }
+                    s
+                },
+                |s| decide(&[s[R_COMPL], s[R_PEN]], s[R_N]),
+                |step, energy, i, r| {
+                    // SAFETY: the load phase is over; row i is touched by this call only.
+                    let (t, p, g) = unsafe { (tp.row(i, ny), pp.row(i, ny), gp.row(i, ny)) };
+                    update_row(step, step.tau(energy), h, p, g, t, r)
+                },
+            );
         if rest.is_some() {
             self.counts.0 += 1;
         }
@@ -609,11 +812,13 @@ impl NormalSolver {
     }
 }
 
-/// One row of the step: `p ← max(p − τ t, 0)` (Polonsky–Keer: penetrating points enter with
-/// `p = −entry·g`), `g_s ← g − τ r` with `g = g_s − c`; returns the sums of the new state.
+/// One row of the step: `p ← min(max(p − τ t, 0), H)` (Polonsky–Keer: penetrating points enter
+/// with `p = −entry·g`), `g_s ← g − τ r` with `g = g_s − c`; returns the sums of the new state.
+/// Points that reach 0 or H count as clipped, points that leave 0 or H as entered.
 fn update_row(
     step: &Step,
     tau: f64,
+    h: f64,
     p: &mut [f64],
     g: &mut [f64],
     t: &[f64],
@@ -642,16 +847,17 @@ fn update_row(
         } else {
             0.0
         };
-        if was && q <= 0.0 {
+        let bounded = new.min(h);
+        if (was && q <= 0.0) || new > h {
             s[6] += 1.0;
         }
-        if new > 0.0 && !(was && q > 0.0) {
+        if (new > 0.0 && !(was && q > 0.0)) || (p[k] >= h && bounded < h) {
             s[7] += 1.0;
         }
-        p[k] = new;
+        p[k] = bounded;
         let gk = g_old - tau * r[k];
         g[k] = gk;
-        StateSums::add(&mut s, new, gk, t[k]);
+        StateSums::add(&mut s, bounded, gk, t[k], h);
     }
     s
 }

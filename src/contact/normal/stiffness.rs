@@ -26,6 +26,21 @@
 //! the unloaded surface inside the window. For a periodic patch `−dp̄/dḡ = dp̄/dδ` (the periodic
 //! displacement has zero mean), so both definitions agree. A periodic patch in full contact
 //! cannot approach further: kn is infinite.
+//!
+//! # Hardness-limited contact: unloading and loading stiffness
+//! With a hardness H (see [`crate::contact::normal`]) two stiffnesses differ:
+//!
+//! - **unloading/reloading** ([`NormalSolver::contact_stiffness`]): on unloading every contact
+//!   point, plastic ones included, responds elastically — the state is the elastic state of
+//!   the residual surface `h_res` at the same load — so `dp̄/dδ` is the tangent problem above on
+//!   the whole contact set `p > 0`: the stiffness of a rigid punch of the contact area (Barber's
+//!   theorem again). This is the stiffness of the joint under the small oscillations about a
+//!   preload that the dynamics see, and the one a contact element (and a calibration table)
+//!   carries: a flat punch gives `2E*a` whatever the plastic ring at its edge, as unloading
+//!   curves of indentation do (Pharr, Oliver & Brotzen 1992).
+//! - **loading tangent** ([`NormalSolver::loading_stiffness`]): under more load the plastic
+//!   points hold `p = H` (`dp = 0`) and penetrate further, so the tangent problem is solved on
+//!   the free set `0 < p < H` only: smaller, and zero in the fully plastic limit.
 
 use super::projected_cg::{row, rows_sum, Ptr};
 use super::{NormalSolution, NormalSolver};
@@ -57,24 +72,66 @@ pub struct ContactStiffness {
 
 impl NormalSolver {
     /// The normal contact stiffness `kn = dp̄/dδ` (N/m³) of `solution` (a converged solution of
-    /// this solver's surface), from the tangent problem on its contact set (see
+    /// this solver's surface), from the tangent problem on its contact set `p > 0` (see
     /// [`crate::contact::normal::stiffness`]). Uses the solver's work arrays.
+    ///
+    /// For a hardness-limited solution this is the **unloading/reloading** stiffness: the
+    /// elastic stiffness about the plastically deformed state, whose every contact point
+    /// (plastic ones included) responds elastically to unloading. It is the stiffness a contact
+    /// element carries; [`NormalSolver::loading_stiffness`] is the tangent of continued loading.
     pub fn contact_stiffness(&mut self, solution: &NormalSolution) -> Result<ContactStiffness> {
+        let mask: Vec<bool> = solution.pressure.iter().map(|&p| p > 0.0).collect();
+        self.stiffness_on_set(
+            solution,
+            mask,
+            "no contact point: the contact stiffness is zero",
+        )
+    }
+
+    /// The loading tangent `dp̄/dδ` (N/m³) of a hardness-limited `solution`: the tangent
+    /// problem on its elastic (free) points `0 < p < H`, the plastic points holding `p = H`
+    /// while they penetrate further. Equal to [`NormalSolver::contact_stiffness`] without
+    /// plastic points; smaller with them. Zero when every contact point is plastic (the load
+    /// then grows only by new points entering the contact, which a tangent on the current set
+    /// does not see).
+    pub fn loading_stiffness(&mut self, solution: &NormalSolution) -> Result<ContactStiffness> {
+        let h = solution.hardness_pa.unwrap_or(f64::INFINITY);
+        let mask: Vec<bool> = solution
+            .pressure
+            .iter()
+            .map(|&p| p > 0.0 && p < h)
+            .collect();
+        if solution.contact_points > 0 && !mask.iter().any(|m| *m) {
+            return Ok(ContactStiffness {
+                kn_n_per_m3: 0.0,
+                iterations: 0,
+                residual: 0.0,
+                converged: true,
+                wall_time_s: 0.0,
+            });
+        }
+        self.stiffness_on_set(
+            solution,
+            mask,
+            "no contact point: the contact stiffness is zero",
+        )
+    }
+
+    /// `dp̄/dδ` from the tangent problem on the points of `mask`.
+    fn stiffness_on_set(
+        &mut self,
+        solution: &NormalSolution,
+        mask: Vec<bool>,
+        empty: &str,
+    ) -> Result<ContactStiffness> {
         let start = Instant::now();
         self.check_shape("solution", solution.pressure.dim())?;
         self.ensure_preconditioner();
         let (nx, ny) = (self.nx, self.ny);
         let n = (nx * ny) as f64;
-        let mut mask = vec![false; nx * ny];
-        for (m, p) in mask.iter_mut().zip(solution.pressure.iter()) {
-            *m = *p > 0.0;
-        }
         let n_c = mask.iter().filter(|m| **m).count() as f64;
         if n_c == 0.0 {
-            return Err(Error::param(
-                "solution",
-                "no contact point: the contact stiffness is zero",
-            ));
+            return Err(Error::param("solution", empty));
         }
         let done = |kn: f64, iterations, residual| ContactStiffness {
             kn_n_per_m3: kn,
@@ -86,7 +143,7 @@ impl NormalSolver {
         if self.boundary == Boundary::Periodic && n_c == n {
             return Ok(done(f64::INFINITY, 0, 0.0));
         }
-        let mask = &mask;
+        let mask = &mask[..];
         let at = |i: usize, k: usize| mask[i * ny + k];
         // x = uniform unit mean-pressure increment on S, res = K⊛x.
         let x0 = n / n_c;
