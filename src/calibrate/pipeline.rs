@@ -40,6 +40,7 @@ use crate::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
 use crate::contact::resolution::RESOLVED_POINTS_ACROSS;
 use crate::contact::sweep::{self, SweepOptions, SweepPoint};
 use crate::contact::tangential::{TangentialOptions, TangentialProblem, TangentialSolver};
+use crate::element::ContactParamsPerArea;
 use crate::error::{Error, Result};
 use crate::grid::Grid2;
 use crate::halfspace::Boundary;
@@ -860,11 +861,13 @@ fn table_of(config: &CalibrationConfig, rs: &[Realisation]) -> Result<Calibratio
         rows.push(CalibrationRow {
             pressure_pa: p,
             contact_area_ratio: area.mean,
-            kn_n_per_m3: skn.mean,
-            e0_n_per_m3: se0.mean,
-            k: sk.mean,
-            mu: config.contact.mu,
-            et_n_per_m3: set.mean,
+            element: ContactParamsPerArea {
+                kn_n_per_m3: skn.mean,
+                e0_n_per_m3: se0.mean,
+                k: sk.mean,
+                mu: config.contact.mu,
+                et_n_per_m3: set.mean,
+            },
             fit_r2: s(&|pc| pc.fit.r2).mean,
             energy_per_cycle_j_per_m2: sen.mean,
         });

@@ -9,7 +9,7 @@
 //! `P_e = R·(Φ_a − Φ_b)`). Units: SI (kg, N/m, N·s/m; modal coordinates in m·kg^½ with mass
 //! normalised shapes in kg^-½).
 
-use crate::dynamics::nonlinear::HystereticElement;
+use crate::element::HystereticElement;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;

@@ -15,7 +15,7 @@
 
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::model::Structure;
-use crate::dynamics::nonlinear::StepPartials;
+use crate::element::StepPartials;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;

@@ -56,6 +56,8 @@
 //!
 //! Two in-plane directions are two uncoupled elements ([`integrate_in_plane`]).
 
+use crate::element::hysteretic::StepPartials as ElementPartials;
+use crate::element::unilateral::recontact_fraction;
 use crate::error::{Error, Result};
 
 /// Parameters of a Valanis element (see the module documentation for units).
@@ -127,16 +129,6 @@ pub fn force_slope(p: &ValanisParams, x: f64) -> f64 {
     p.e0 * (1.0 + x) / (1.0 + p.k * x)
 }
 
-/// Normal load `Fz = max(0, N0 + kn·uz)` (zero on separation; `uz > 0` closes the contact).
-pub fn normal_load(n0: f64, kn: f64, uz: f64) -> f64 {
-    (n0 + kn * uz).max(0.0)
-}
-
-/// [`normal_load`] for a whole history of normal displacements.
-pub fn normal_load_history(n0: f64, kn: f64, uz: &[f64]) -> Vec<f64> {
-    uz.iter().map(|&u| normal_load(n0, kn, u)).collect()
-}
-
 /// State of one element after a step: everything the next step needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ValanisState {
@@ -187,12 +179,31 @@ fn contact_transition(
         });
     }
     if state.fz <= 0.0 {
-        // Re-contact where the linearly interpolated load crosses zero: θ* = fz0/(fz0 − fz1).
-        let theta = state.fz / (state.fz - fz1);
+        // Re-contact where the linearly interpolated load crosses zero.
+        let (theta, _, _) = recontact_fraction(state.fz, fz1);
         let q_contact = state.q + theta * (q1 - state.q);
         return Ok(ValanisState::virgin(q_contact, 0.0));
     }
     Ok(*state)
+}
+
+/// The root `x1` of the backward-Euler quadratic `k·x² + (1 − A·k + B)·x + (B − A) = 0` of
+/// [`implicit_euler_step`] (`A = g·(Et·(q1 − q_ref) − F0)`, `B = λ1·|Δq| ≥ 0`): the larger root,
+/// the unique one with `1 + k·x > 0` (the discriminant exceeds `(1 − B + A·k)²` by `4B(1 − k)`),
+/// in the cancellation-free form; for `k = 0` the linear equation's root `(A − B)/(1 + B)`.
+fn implicit_euler_root(p: &ValanisParams, a: f64, b: f64) -> f64 {
+    if p.k == 0.0 {
+        return (a - b) / (1.0 + b);
+    }
+    let bb = 1.0 - a * p.k + b;
+    let c = b - a;
+    let disc = (bb * bb - 4.0 * p.k * c).max(0.0).sqrt();
+    if bb > 0.0 {
+        // x₊ = (−b + √Δ)/(2k) = 2c/(−b − √Δ)
+        2.0 * c / (-bb - disc)
+    } else {
+        (-bb + disc) / (2.0 * p.k)
+    }
 }
 
 /// One backward-Euler increment of the Valanis element from `state` to displacement `q1` under
@@ -219,23 +230,8 @@ pub fn implicit_euler_step(
     let mut force = start.force;
     if dq != 0.0 {
         let lam = p.lambda(fz1);
-        let s = dq.signum();
-        let g = s * lam / p.e0;
-        let a_coef = g * (p.et * (q1 - q_ref) - start.force);
-        let b_coef = lam * dq.abs();
-        let x = if p.k == 0.0 {
-            (a_coef - b_coef) / (1.0 + b_coef)
-        } else {
-            let b = 1.0 - a_coef * p.k + b_coef;
-            let c = b_coef - a_coef;
-            let disc = (b * b - 4.0 * p.k * c).max(0.0).sqrt();
-            if b > 0.0 {
-                // x₊ = (−b + √Δ)/(2k) = 2c/(−b − √Δ)
-                2.0 * c / (-b - disc)
-            } else {
-                (-b + disc) / (2.0 * p.k)
-            }
-        };
+        let g = dq.signum() * lam / p.e0;
+        let x = implicit_euler_root(p, g * (p.et * (q1 - q_ref) - start.force), lam * dq.abs());
         force = p.et * (q1 - q_ref) - x / g;
     }
     ValanisState {
@@ -246,7 +242,7 @@ pub fn implicit_euler_step(
     }
 }
 
-/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in the arrays of [`StepPartials`].
+/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in the arrays of [`ValanisPartials`].
 pub const F0: usize = 0;
 pub const QR0: usize = 1;
 pub const Q0: usize = 2;
@@ -265,10 +261,7 @@ fn smooth_start(
     fz1: f64,
 ) -> (f64, f64, f64, [f64; 6], [f64; 6], [f64; 6]) {
     if state.fz <= 0.0 {
-        let theta = state.fz / (state.fz - fz1);
-        let den = (state.fz - fz1) * (state.fz - fz1);
-        let dth_dfz0 = -fz1 / den;
-        let dth_dfz1 = state.fz / den;
+        let (theta, dth_dfz0, dth_dfz1) = recontact_fraction(state.fz, fz1);
         let qc = state.q + theta * (q1 - state.q);
         let mut dqc = [0.0; 6];
         dqc[Q0] = 1.0 - theta;
@@ -288,8 +281,8 @@ fn smooth_start(
 }
 
 /// The partials of an increment that ends separated: `F1 = 0`, `q_ref1 = q1`.
-fn separated_partials() -> StepPartials {
-    let mut d = StepPartials::default();
+fn separated_partials() -> ValanisPartials {
+    let mut d = ValanisPartials::default();
     d.q_ref[Q1] = 1.0;
     d
 }
@@ -328,7 +321,7 @@ fn projected_partials(
 /// `(F0, q_ref0, q0, Fz0, q1, Fz1)` (start force, start reference displacement, start
 /// displacement, start normal load, end displacement, end normal load).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StepPartials {
+pub struct ValanisPartials {
     /// `∂F1/∂(F0, q_ref0, q0, Fz0, q1, Fz1)`.
     pub force: [f64; 6],
     /// `∂q_ref1/∂(F0, q_ref0, q0, Fz0, q1, Fz1)`.
@@ -336,7 +329,7 @@ pub struct StepPartials {
 }
 
 /// [`implicit_euler_step`] together with the exact derivatives of the discrete update
-/// ([`StepPartials`]), for Newton solvers that differentiate a time-discrete element (e.g. the
+/// ([`ValanisPartials`]), for Newton solvers that differentiate a time-discrete element (e.g. the
 /// alternating frequency–time method of `crate::dynamics::aft`).
 ///
 /// Derivation: the quadratic `P(x) = k·x² + (1 − A·k + B)·x + (B − A) = 0` of
@@ -351,13 +344,12 @@ pub fn implicit_euler_step_partials(
     state: &ValanisState,
     q1: f64,
     fz1: f64,
-) -> (ValanisState, StepPartials) {
-    let out = implicit_euler_step(p, state, q1, fz1);
+) -> (ValanisState, ValanisPartials) {
     if fz1 <= 0.0 {
-        return (out, separated_partials());
+        return (implicit_euler_step(p, state, q1, fz1), separated_partials());
     }
     let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    let mut d = StepPartials {
+    let mut d = ValanisPartials {
         q_ref: dqrs,
         ..Default::default()
     };
@@ -383,18 +375,7 @@ pub fn implicit_euler_step_partials(
         let dvar = p.et * (q1 - qrs) - fs;
         let a = g * dvar;
         let b = lam * dq.abs();
-        let x = if p.k == 0.0 {
-            (a - b) / (1.0 + b)
-        } else {
-            let bb = 1.0 - a * p.k + b;
-            let c = b - a;
-            let disc = (bb * bb - 4.0 * p.k * c).max(0.0).sqrt();
-            if bb > 0.0 {
-                2.0 * c / (-bb - disc)
-            } else {
-                (-bb + disc) / (2.0 * p.k)
-            }
-        };
+        let x = implicit_euler_root(p, a, b);
         let px = 2.0 * p.k * x + 1.0 - a * p.k + b;
         let pa = -p.k * x - 1.0;
         let pb = x + 1.0;
@@ -411,6 +392,13 @@ pub fn implicit_euler_step_partials(
         (centre - x / g, df)
     };
     d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
+    // The state of [`implicit_euler_step`], from the same values (the step is not taken twice).
+    let out = ValanisState {
+        force: project(p, force, q1, qrs, fz1),
+        q: q1,
+        fz: fz1,
+        q_ref: qrs,
+    };
     (out, d)
 }
 
@@ -481,7 +469,7 @@ pub fn frozen_load_step(
     }
 }
 
-/// [`frozen_load_step`] together with the exact derivatives of the update ([`StepPartials`]),
+/// [`frozen_load_step`] together with the exact derivatives of the update ([`ValanisPartials`]),
 /// for the alternating frequency–time method, whose Newton iteration differentiates the
 /// element through the period.
 ///
@@ -499,12 +487,12 @@ pub fn frozen_load_step_partials(
     state: &ValanisState,
     q1: f64,
     fz1: f64,
-) -> (ValanisState, StepPartials) {
+) -> (ValanisState, ValanisPartials) {
     if fz1 <= 0.0 {
         return (frozen_load_step(p, state, q1, fz1), separated_partials());
     }
     let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    let mut d = StepPartials {
+    let mut d = ValanisPartials {
         q_ref: dqrs,
         ..Default::default()
     };
@@ -868,6 +856,82 @@ fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1:
     }
 }
 
+/// A Valanis element is reported in gross slip when its force is within 1 % of the sliding
+/// asymptote, `|F − Et·(q − q_ref)| ≥ 0.99·μ·Fz·(1 − Et/E0)`; below it, stick includes microslip.
+pub const GROSS_SLIP_FRACTION: f64 = 0.99;
+
+/// Where one Valanis direction of a [`HystereticElement`] keeps its state and reads its
+/// displacement (indices into the element's vectors).
+///
+/// [`HystereticElement`]: crate::element::HystereticElement
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Direction {
+    /// Index of the force and of `q_ref` in the state vector.
+    pub force: usize,
+    pub q_ref: usize,
+    /// Index of the tangential displacement in `u` (and of the force in `f`).
+    pub u: usize,
+    /// Index of the normal approach `un` in `u` and the normal stiffness `kn` when the normal
+    /// load is `N0 + kn·un` (a contact element); `None` for a constant normal load.
+    pub normal: Option<(usize, f64)>,
+}
+
+/// One [`frozen_load_step`] of a Valanis direction `c` of an element, from state `s0` at `u0`
+/// to `u1` under normal loads `fz0` → `fz1`: its force and `q_ref` into `s1`, its force into `f1`
+/// and, with `partials`, the derivatives of [`frozen_load_step_partials`] in the element's
+/// layout (chained through `∂Fz/∂un = kn` for a contact).
+#[allow(clippy::too_many_arguments)]
+pub fn direction_step(
+    p: &ValanisParams,
+    c: Direction,
+    s0: &[f64],
+    u0: &[f64],
+    u1: &[f64],
+    fz0: f64,
+    fz1: f64,
+    s1: &mut [f64],
+    f1: &mut [f64],
+    partials: Option<&mut ElementPartials>,
+) {
+    let st = ValanisState {
+        force: s0[c.force],
+        q: u0[c.u],
+        fz: fz0,
+        q_ref: s0[c.q_ref],
+    };
+    let out = match partials {
+        None => frozen_load_step(p, &st, u1[c.u], fz1),
+        Some(e) => {
+            let (out, d) = frozen_load_step_partials(p, &st, u1[c.u], fz1);
+            let (m, dim) = (e.m, e.d);
+            // Rows: the two states, then the force (which acts on the displacement's component).
+            for (row, g) in [(c.force, d.force), (c.q_ref, d.q_ref)] {
+                e.ds_ds0[row * m + c.force] = g[F0];
+                e.ds_ds0[row * m + c.q_ref] = g[QR0];
+                e.ds_du0[row * dim + c.u] = g[Q0];
+                e.ds_du1[row * dim + c.u] = g[Q1];
+                if let Some((n, kn)) = c.normal {
+                    e.ds_du0[row * dim + n] = g[FZ0] * kn;
+                    e.ds_du1[row * dim + n] = g[FZ1] * kn;
+                }
+            }
+            let row = c.u;
+            e.df_ds0[row * m + c.force] = d.force[F0];
+            e.df_ds0[row * m + c.q_ref] = d.force[QR0];
+            e.df_du0[row * dim + c.u] = d.force[Q0];
+            e.df_du1[row * dim + c.u] = d.force[Q1];
+            if let Some((n, kn)) = c.normal {
+                e.df_du0[row * dim + n] = d.force[FZ0] * kn;
+                e.df_du1[row * dim + n] = d.force[FZ1] * kn;
+            }
+            out
+        }
+    };
+    s1[c.force] = out.force;
+    s1[c.q_ref] = out.q_ref;
+    f1[c.u] = out.force;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -979,7 +1043,7 @@ mod tests {
         let uz: Vec<f64> = (0..q.len())
             .map(|i| 0.3 * n0 / kn * (2.0 * std::f64::consts::PI * i as f64 / per as f64).cos())
             .collect();
-        let fz = normal_load_history(n0, kn, &uz);
+        let fz = crate::element::unilateral::normal_load_history(n0, kn, &uz);
         let fe = integrate_implicit_euler(&p, &q, &fz).unwrap();
         let fr = integrate_reference(&p, &q, &fz).unwrap();
         let max_dev = fe
@@ -1081,7 +1145,8 @@ mod tests {
     #[test]
     fn step_partials_match_finite_differences() {
         type Step = fn(&ValanisParams, &ValanisState, f64, f64) -> ValanisState;
-        type Partials = fn(&ValanisParams, &ValanisState, f64, f64) -> (ValanisState, StepPartials);
+        type Partials =
+            fn(&ValanisParams, &ValanisState, f64, f64) -> (ValanisState, ValanisPartials);
         let p = ValanisParams::new(2.0e7, 0.5, 1.0e6, 0.6).unwrap();
         // k = 0 and Et = 0: the asymptote x∞ = −1 is reached.
         let p0 = ValanisParams::new(2.0e7, 0.0, 0.0, 0.6).unwrap();
