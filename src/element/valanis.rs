@@ -254,12 +254,17 @@ pub const FZ1: usize = 5;
 /// (`fz1 > 0`) — the state itself, or the virgin state at the re-contact point
 /// `q_c = q0 + θ·(q1 − q0)`, `θ = Fz0/(Fz0 − Fz1)` — and its derivatives with respect to the six
 /// inputs.
-#[allow(clippy::type_complexity)]
-fn smooth_start(
-    state: &ValanisState,
-    q1: f64,
-    fz1: f64,
-) -> (f64, f64, f64, [f64; 6], [f64; 6], [f64; 6]) {
+struct SmoothStart {
+    force: f64,
+    q: f64,
+    q_ref: f64,
+    /// Derivatives of `force`, `q` and `q_ref` with respect to the six inputs.
+    dforce: [f64; 6],
+    dq: [f64; 6],
+    dq_ref: [f64; 6],
+}
+
+fn smooth_start(state: &ValanisState, q1: f64, fz1: f64) -> SmoothStart {
     if state.fz <= 0.0 {
         let (theta, dth_dfz0, dth_dfz1) = recontact_fraction(state.fz, fz1);
         let qc = state.q + theta * (q1 - state.q);
@@ -268,16 +273,58 @@ fn smooth_start(
         dqc[Q1] = theta;
         dqc[FZ0] = (q1 - state.q) * dth_dfz0;
         dqc[FZ1] = (q1 - state.q) * dth_dfz1;
-        (0.0, qc, qc, [0.0; 6], dqc, dqc)
+        SmoothStart {
+            force: 0.0,
+            q: qc,
+            q_ref: qc,
+            dforce: [0.0; 6],
+            dq: dqc,
+            dq_ref: dqc,
+        }
     } else {
-        let mut df = [0.0; 6];
-        df[F0] = 1.0;
-        let mut dq = [0.0; 6];
-        dq[Q0] = 1.0;
-        let mut dqr = [0.0; 6];
-        dqr[QR0] = 1.0;
-        (state.force, state.q, state.q_ref, df, dq, dqr)
+        SmoothStart {
+            force: state.force,
+            q: state.q,
+            q_ref: state.q_ref,
+            dforce: unit(F0),
+            dq: unit(Q0),
+            dq_ref: unit(QR0),
+        }
     }
+}
+
+/// The frame shared by the differentiated steps ([`implicit_euler_step_partials`],
+/// [`frozen_load_step_partials`]): an increment that ends separated; otherwise the smooth start,
+/// the centre `Et·(q1 − q_ref)` of the band and its derivative, the integrator's unprojected end
+/// force with its derivative (`unprojected(start, centre, dcentre)`), and their projection onto
+/// the band of `Fz1`. The state is built from the same values (the step is not taken twice).
+fn differentiated_step(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+    step: fn(&ValanisParams, &ValanisState, f64, f64) -> ValanisState,
+    unprojected: impl FnOnce(&SmoothStart, f64, &[f64; 6]) -> (f64, [f64; 6]),
+) -> (ValanisState, ValanisPartials) {
+    if fz1 <= 0.0 {
+        return (step(p, state, q1, fz1), separated_partials());
+    }
+    let st = smooth_start(state, q1, fz1);
+    let dq1 = unit(Q1);
+    let centre = p.et * (q1 - st.q_ref);
+    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - st.dq_ref[i]));
+    let (force, dforce) = unprojected(&st, centre, &dcentre);
+    let d = ValanisPartials {
+        force: projected_partials(p, force, centre, &dcentre, fz1, dforce),
+        q_ref: st.dq_ref,
+    };
+    let out = ValanisState {
+        force: project(p, force, q1, st.q_ref, fz1),
+        q: q1,
+        fz: fz1,
+        q_ref: st.q_ref,
+    };
+    (out, d)
 }
 
 /// The partials of an increment that ends separated: `F1 = 0`, `q_ref1 = q1`.
@@ -345,61 +392,51 @@ pub fn implicit_euler_step_partials(
     q1: f64,
     fz1: f64,
 ) -> (ValanisState, ValanisPartials) {
-    if fz1 <= 0.0 {
-        return (implicit_euler_step(p, state, q1, fz1), separated_partials());
-    }
-    let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    let mut d = ValanisPartials {
-        q_ref: dqrs,
-        ..Default::default()
-    };
-    let (dq1, dfz1) = (unit(Q1), unit(FZ1));
-    let centre = p.et * (q1 - qrs);
-    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
-    let dq = q1 - qs;
-    // Unprojected force and its derivative.
-    let (force, dforce) = if dq == 0.0 {
-        // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
-        let lam = p.lambda(fz1);
-        let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
-        let slope = force_slope(p, x);
-        let mut df = dfs;
-        for i in 0..6 {
-            df[i] += slope * (dq1[i] - dqs[i]);
-        }
-        (fs, df)
-    } else {
-        let lam = p.lambda(fz1);
-        let s = dq.signum();
-        let g = s * lam / p.e0;
-        let dvar = p.et * (q1 - qrs) - fs;
-        let a = g * dvar;
-        let b = lam * dq.abs();
-        let x = implicit_euler_root(p, a, b);
-        let px = 2.0 * p.k * x + 1.0 - a * p.k + b;
-        let pa = -p.k * x - 1.0;
-        let pb = x + 1.0;
-        let mut df = [0.0; 6];
-        for i in 0..6 {
-            let dlam = -lam / fz1 * dfz1[i];
-            let dg = s * dlam / p.e0;
-            let dd = p.et * (dq1[i] - dqrs[i]) - dfs[i];
-            let da = g * dd + dvar * dg;
-            let db = dq.abs() * dlam + lam * s * (dq1[i] - dqs[i]);
-            let dx = -(pa * da + pb * db) / px;
-            df[i] = dcentre[i] - dx / g + x / (g * g) * dg;
-        }
-        (centre - x / g, df)
-    };
-    d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
-    // The state of [`implicit_euler_step`], from the same values (the step is not taken twice).
-    let out = ValanisState {
-        force: project(p, force, q1, qrs, fz1),
-        q: q1,
-        fz: fz1,
-        q_ref: qrs,
-    };
-    (out, d)
+    differentiated_step(
+        p,
+        state,
+        q1,
+        fz1,
+        implicit_euler_step,
+        |st, centre, dcentre| {
+            let (fs, qs, qrs) = (st.force, st.q, st.q_ref);
+            let (dfs, dqs, dqrs) = (&st.dforce, &st.dq, &st.dq_ref);
+            let (dq1, dfz1) = (unit(Q1), unit(FZ1));
+            let dq = q1 - qs;
+            if dq == 0.0 {
+                // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
+                let lam = p.lambda(fz1);
+                let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
+                let slope = force_slope(p, x);
+                let mut df = *dfs;
+                for i in 0..6 {
+                    df[i] += slope * (dq1[i] - dqs[i]);
+                }
+                return (fs, df);
+            }
+            let lam = p.lambda(fz1);
+            let s = dq.signum();
+            let g = s * lam / p.e0;
+            let dvar = p.et * (q1 - qrs) - fs;
+            let a = g * dvar;
+            let b = lam * dq.abs();
+            let x = implicit_euler_root(p, a, b);
+            let px = 2.0 * p.k * x + 1.0 - a * p.k + b;
+            let pa = -p.k * x - 1.0;
+            let pb = x + 1.0;
+            let mut df = [0.0; 6];
+            for i in 0..6 {
+                let dlam = -lam / fz1 * dfz1[i];
+                let dg = s * dlam / p.e0;
+                let dd = p.et * (dq1[i] - dqrs[i]) - dfs[i];
+                let da = g * dd + dvar * dg;
+                let db = dq.abs() * dlam + lam * s * (dq1[i] - dqs[i]);
+                let dx = -(pa * da + pb * db) / px;
+                df[i] = dcentre[i] - dx / g + x / (g * g) * dg;
+            }
+            (centre - x / g, df)
+        },
+    )
 }
 
 /// Relative tolerance of [`reference_step`], as a fraction of the slip force scale.
@@ -488,68 +525,60 @@ pub fn frozen_load_step_partials(
     q1: f64,
     fz1: f64,
 ) -> (ValanisState, ValanisPartials) {
-    if fz1 <= 0.0 {
-        return (frozen_load_step(p, state, q1, fz1), separated_partials());
-    }
-    let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    let mut d = ValanisPartials {
-        q_ref: dqrs,
-        ..Default::default()
-    };
-    let (dq1, dfz1) = (unit(Q1), unit(FZ1));
-    // The start force on the band of Fz1.
-    let centre0 = p.et * (qs - qrs);
-    let dcentre0: [f64; 6] = std::array::from_fn(|i| p.et * (dqs[i] - dqrs[i]));
-    let f0 = project(p, fs, qs, qrs, fz1);
-    let df0 = projected_partials(p, fs, centre0, &dcentre0, fz1, dfs);
-    let centre = p.et * (q1 - qrs);
-    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
-    let dq = q1 - qs;
-    let (force, dforce) = if dq == 0.0 {
-        // F1 = F0' and, for Δq → 0+, dF1/dq1 = the branch's slope at the start.
-        let x = p.lambda(fz1) / p.e0 * (centre - f0);
-        let slope = force_slope(p, x);
-        (
-            f0,
-            std::array::from_fn(|i| df0[i] + slope * (dq1[i] - dqs[i])),
-        )
-    } else {
-        let b = branch_solution(p, fz1, qrs, qs, f0, q1);
-        let dd = p.et / p.e0 * p.k - 1.0;
-        // λ and g depend on Fz1 only.
-        let dlam_dfz1 = -b.lam / fz1;
-        let dg_dfz1 = b.s * dlam_dfz1 / p.e0;
-        // dx1 = c_x0·dx0 + c_t·d(λ·|Δq|), from dx1 = eʷ·(dr0 + r0·dw)/D with dr0 = D·dx0.
-        let (c_x0, c_t) = if b.r0 >= 0.0 {
-            (1.0, 0.0)
-        } else {
-            let psi_w = p.k * b.r0 * b.ew + (p.k - 1.0);
-            (
-                b.ew * (1.0 - b.r0 * p.k * (b.ew - 1.0) / psi_w),
-                b.ew * b.r0 * dd / psi_w,
-            )
-        };
-        let inv_g = 1.0 / b.g;
-        let gap0 = if b.clamped { 0.0 } else { centre0 - f0 };
-        let g0 = if b.clamped { 0.0 } else { b.g };
-        let df: [f64; 6] = std::array::from_fn(|i| {
-            let dg = dg_dfz1 * dfz1[i];
-            let dx0 = dg * gap0 + g0 * (dcentre0[i] - df0[i]);
-            let dtarget = dlam_dfz1 * dfz1[i] * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]);
-            let dx1 = c_x0 * dx0 + c_t * dtarget;
-            dcentre[i] - dx1 * inv_g + b.x1 * inv_g * inv_g * dg
-        });
-        (centre - b.x1 / b.g, df)
-    };
-    d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
-    // The state of [`frozen_load_step`], from the same values (its branch is not solved twice).
-    let out = ValanisState {
-        force: project(p, force, q1, qrs, fz1),
-        q: q1,
-        fz: fz1,
-        q_ref: qrs,
-    };
-    (out, d)
+    differentiated_step(
+        p,
+        state,
+        q1,
+        fz1,
+        frozen_load_step,
+        |st, centre, dcentre| {
+            let (fs, qs, qrs) = (st.force, st.q, st.q_ref);
+            let (dfs, dqs, dqrs) = (&st.dforce, &st.dq, &st.dq_ref);
+            let (dq1, dfz1) = (unit(Q1), unit(FZ1));
+            // The start force on the band of Fz1.
+            let centre0 = p.et * (qs - qrs);
+            let dcentre0: [f64; 6] = std::array::from_fn(|i| p.et * (dqs[i] - dqrs[i]));
+            let f0 = project(p, fs, qs, qrs, fz1);
+            let df0 = projected_partials(p, fs, centre0, &dcentre0, fz1, *dfs);
+            let dq = q1 - qs;
+            if dq == 0.0 {
+                // F1 = F0' and, for Δq → 0+, dF1/dq1 = the branch's slope at the start.
+                let x = p.lambda(fz1) / p.e0 * (centre - f0);
+                let slope = force_slope(p, x);
+                (
+                    f0,
+                    std::array::from_fn(|i| df0[i] + slope * (dq1[i] - dqs[i])),
+                )
+            } else {
+                let b = branch_solution(p, fz1, qrs, qs, f0, q1);
+                let dd = p.et / p.e0 * p.k - 1.0;
+                // λ and g depend on Fz1 only.
+                let dlam_dfz1 = -b.lam / fz1;
+                let dg_dfz1 = b.s * dlam_dfz1 / p.e0;
+                // dx1 = c_x0·dx0 + c_t·d(λ·|Δq|), from dx1 = eʷ·(dr0 + r0·dw)/D with dr0 = D·dx0.
+                let (c_x0, c_t) = if b.r0 >= 0.0 {
+                    (1.0, 0.0)
+                } else {
+                    let psi_w = p.k * b.r0 * b.ew + (p.k - 1.0);
+                    (
+                        b.ew * (1.0 - b.r0 * p.k * (b.ew - 1.0) / psi_w),
+                        b.ew * b.r0 * dd / psi_w,
+                    )
+                };
+                let inv_g = 1.0 / b.g;
+                let gap0 = if b.clamped { 0.0 } else { centre0 - f0 };
+                let g0 = if b.clamped { 0.0 } else { b.g };
+                let df: [f64; 6] = std::array::from_fn(|i| {
+                    let dg = dg_dfz1 * dfz1[i];
+                    let dx0 = dg * gap0 + g0 * (dcentre0[i] - df0[i]);
+                    let dtarget = dlam_dfz1 * dfz1[i] * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]);
+                    let dx1 = c_x0 * dx0 + c_t * dtarget;
+                    dcentre[i] - dx1 * inv_g + b.x1 * inv_g * inv_g * dg
+                });
+                (centre - b.x1 / b.g, df)
+            }
+        },
+    )
 }
 
 /// One increment by adaptive Dormand–Prince 5(4) (see [`reference_step`]); `state` must be in
