@@ -24,6 +24,7 @@ const NORMAL: usize = 2;
 
 /// Write the normal component of a contact element's force, `N − N0` at the trial load `n1`
 /// (the load at the end of the increment), and its derivative `∂f_n/∂u1_n`.
+#[inline]
 fn normal_force(
     normal: &UnilateralNormal,
     n1: f64,
@@ -66,6 +67,7 @@ impl MicroslipContact {
     }
 
     /// Tangential direction `j` (0 or 1): state `(F_tj, q_ref_tj)`, normal load from `un`.
+    #[inline]
     fn direction(&self, j: usize) -> Direction {
         Direction {
             force: j,

@@ -41,12 +41,14 @@ impl UnilateralNormal {
 
     /// The load before the unilateral cut, `N0 + kn·un` (`≤ 0`: separated). The friction laws
     /// take it as their normal load (they treat `≤ 0` as separation).
+    #[inline]
     pub fn trial_load(&self, un: f64) -> f64 {
         self.n0 + self.kn * un
     }
 
     /// The normal force change `max(0, N) − N0` at the trial load `n` ([`Self::trial_load`])
     /// and its derivative with respect to the approach `un`: `kn` in contact, 0 separated.
+    #[inline]
     pub fn force_change(&self, n: f64) -> (f64, f64) {
         (n.max(0.0) - self.n0, if n > 0.0 { self.kn } else { 0.0 })
     }

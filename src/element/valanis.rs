@@ -298,6 +298,7 @@ fn smooth_start(state: &ValanisState, q1: f64, fz1: f64) -> SmoothStart {
 /// the centre `Et·(q1 − q_ref)` of the band and its derivative, the integrator's unprojected end
 /// force with its derivative (`unprojected(start, centre, dcentre)`), and their projection onto
 /// the band of `Fz1`. The state is built from the same values (the step is not taken twice).
+#[inline(always)]
 fn differentiated_step(
     p: &ValanisParams,
     state: &ValanisState,
@@ -909,7 +910,10 @@ pub struct Direction {
 /// to `u1` under normal loads `fz0` → `fz1`: its force and `q_ref` into `s1`, its force into `f1`
 /// and, with `partials`, the derivatives of [`frozen_load_step_partials`] in the element's
 /// layout (chained through `∂Fz/∂un = kn` for a contact).
+// Inlined into its two callers: the indices of `c` are then constants (one AFT period calls it
+// once per sample and direction).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub fn direction_step(
     p: &ValanisParams,
     c: Direction,
