@@ -71,7 +71,7 @@ fn peer(case: &PeerCase) {
     .unwrap();
     st.attach(
         "jenkins",
-        Arc::new(asperity::dynamics::nonlinear::Jenkins::new(case.kt, case.fs).unwrap()),
+        Arc::new(asperity::element::Jenkins::new(case.kt, case.fs).unwrap()),
         jmap,
     )
     .unwrap();

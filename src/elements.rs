@@ -2,9 +2,10 @@
 //!
 //! For each contact element (a node with tributary area `A`, local pressure `p`, preload
 //! `N0 = p·A`), the calibration table is interpolated at `p` (see
-//! [`crate::calibrate::table::CalibrationTable::interpolate`]) and its per-unit-area stiffnesses
-//! are scaled by the element's area: `kn = kn″(p)·A`, `E0 = E0″(p)·A`, `Et = Et″(p)·A` (N/m from
-//! N/m³ × m²); the shape parameter `k` and friction coefficient `mu` are taken as they are.
+//! [`crate::calibrate::table::CalibrationTable::interpolate`]) and its per-unit-area record
+//! becomes the element's ([`crate::element::ContactParamsPerArea::over_area`]):
+//! `kn = kn″(p)·A`, `E0 = E0″(p)·A`, `Et = Et″(p)·A` (N/m from N/m³ × m²); the shape parameter
+//! `k` and friction coefficient `mu` are taken as they are.
 //! Elements whose pressure lies outside the table's range get the end pair's power law
 //! (`kn ∝ p^m`, see [`crate::calibrate::table`]; the end row's values would leave a node at a
 //! tenth of the first row's pressure about four times too stiff), are flagged in the
@@ -31,6 +32,7 @@ use crate::calibrate::convergence::Verdict;
 use crate::calibrate::table::{CalibrationTable, RangeFlag};
 use crate::core::error::{Error, Result};
 use crate::core::hash::sha256_file;
+use crate::element::ContactParams;
 use crate::film::nodes::Preload;
 use std::path::Path;
 
@@ -43,11 +45,9 @@ pub struct ElementRow {
     pub area_m2: f64,
     pub pressure_pa: f64,
     pub n0_n: f64,
-    pub kn_n_per_m: f64,
-    pub e0_n_per_m: f64,
-    pub k: f64,
-    pub mu: f64,
-    pub et_n_per_m: f64,
+    /// kn, E0, k, μ, Et of the element (N/m).
+    #[serde(flatten)]
+    pub element: ContactParams,
     /// −1 below the table's range, 0 within, +1 above.
     pub out_of_range: i8,
 }
@@ -125,11 +125,7 @@ pub fn join(
             area_m2: p.area_m2,
             pressure_pa: p.pressure_pa,
             n0_n: p.n0_n,
-            kn_n_per_m: v.kn_n_per_m3 * p.area_m2,
-            e0_n_per_m: v.e0_n_per_m3 * p.area_m2,
-            k: v.k,
-            mu: v.mu,
-            et_n_per_m: v.et_n_per_m3 * p.area_m2,
+            element: v.element.over_area(p.area_m2),
             out_of_range: flag,
         });
     }
@@ -216,11 +212,11 @@ pub fn write_csv(path: &Path, rows: &[ElementRow]) -> Result<()> {
                 r.area_m2,
                 r.pressure_pa,
                 r.n0_n,
-                r.kn_n_per_m,
-                r.e0_n_per_m,
-                r.k,
-                r.mu,
-                r.et_n_per_m,
+                r.element.kn_n_per_m,
+                r.element.e0_n_per_m,
+                r.element.k,
+                r.element.mu,
+                r.element.et_n_per_m,
                 r.out_of_range
             )
             .map_err(io)?;
@@ -275,16 +271,19 @@ pub fn provenance_json(
 mod tests {
     use super::*;
     use crate::calibrate::table::CalibrationRow;
+    use crate::element::ContactParamsPerArea;
 
     fn table() -> CalibrationTable {
         let row = |p: f64, kn: f64| CalibrationRow {
             pressure_pa: p,
             contact_area_ratio: 0.1,
-            kn_n_per_m3: kn,
-            e0_n_per_m3: 2.0 * kn,
-            k: 0.5,
-            mu: 0.6,
-            et_n_per_m3: 0.01 * kn,
+            element: ContactParamsPerArea {
+                kn_n_per_m3: kn,
+                e0_n_per_m3: 2.0 * kn,
+                k: 0.5,
+                mu: 0.6,
+                et_n_per_m3: 0.01 * kn,
+            },
             fit_r2: 0.99,
             energy_per_cycle_j_per_m2: 1.0,
         };
@@ -364,12 +363,12 @@ mod tests {
         )
         .unwrap();
         // At a tabulated pressure the interpolation passes through the row.
-        assert!((rows[0].kn_n_per_m - 2e13 * 1e-6).abs() < 1e-6 * 2e7);
-        assert!((rows[0].e0_n_per_m - 4e13 * 1e-6).abs() < 1e-6 * 4e7);
+        assert!((rows[0].element.kn_n_per_m - 2e13 * 1e-6).abs() < 1e-6 * 2e7);
+        assert!((rows[0].element.e0_n_per_m - 4e13 * 1e-6).abs() < 1e-6 * 4e7);
         assert_eq!(rows[0].out_of_range, 0);
         assert_eq!(rows[1].out_of_range, -1);
         // Below the table: its first pair's power law (here kn ∝ p), times the area.
-        assert!((rows[1].kn_n_per_m - 0.5e13 * 2e-6).abs() < 1e-9 * 1e7);
+        assert!((rows[1].element.kn_n_per_m - 0.5e13 * 2e-6).abs() < 1e-9 * 1e7);
         assert_eq!(rows[2].out_of_range, 1);
         assert_eq!((s.n_below_range, s.n_above_range), (1, 1));
         assert_eq!(s.below_range_ids, vec![2]);

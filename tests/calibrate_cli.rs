@@ -78,7 +78,10 @@ fn reference_chain_on_a_coarse_grid_writes_table_plots_and_sidecar() {
         .iter()
         .all(|i| i.realisations == 3 && i.kn_n_per_m3 > 0.0));
     for w in table.rows.windows(2) {
-        assert!(w[1].kn_n_per_m3 > w[0].kn_n_per_m3, "kn not rising: {w:?}");
+        assert!(
+            w[1].element.kn_n_per_m3 > w[0].element.kn_n_per_m3,
+            "kn not rising: {w:?}"
+        );
         assert!(w[1].contact_area_ratio > w[0].contact_area_ratio);
         // Energy per cycle at the largest amplitude grows with pressure (μp and δ_gs grow).
         assert!(w[1].energy_per_cycle_j_per_m2 > w[0].energy_per_cycle_j_per_m2);
@@ -86,14 +89,15 @@ fn reference_chain_on_a_coarse_grid_writes_table_plots_and_sidecar() {
     let nu: f64 = 0.3;
     let mindlin = 2.0 * (1.0 - nu) / (2.0 - nu);
     for r in &table.rows {
-        assert_eq!(r.mu, 0.6);
-        assert_eq!(r.et_n_per_m3, 0.0);
+        let e = &r.element;
+        assert_eq!(e.mu, 0.6);
+        assert_eq!(e.et_n_per_m3, 0.0);
         assert!(r.fit_r2 > 0.95, "R² {} at {} Pa", r.fit_r2, r.pressure_pa);
         // Independent physics check: the initial tangential stiffness of the contact is
         // Mindlin's kt = kn·2(1−ν)/(2−ν) for quasi-identical elastic bodies; the element's
         // stiffness lies between its initial slope E0 and its reload slope 2E0/(1+k).
-        let kt = mindlin * r.kn_n_per_m3;
-        let (lo, hi) = (r.e0_n_per_m3, 2.0 * r.e0_n_per_m3 / (1.0 + r.k));
+        let kt = mindlin * e.kn_n_per_m3;
+        let (lo, hi) = (e.e0_n_per_m3, 2.0 * e.e0_n_per_m3 / (1.0 + e.k));
         assert!(
             lo < 1.3 * kt && hi > 0.5 * kt,
             "E0 {lo:e} .. {hi:e} vs Mindlin kt {kt:e} at {} Pa",
@@ -281,11 +285,11 @@ fn measured_surfaces_go_through_the_chain() {
     for t in &tables[1..] {
         for (a, b) in t.rows.iter().zip(&tables[0].rows) {
             assert!(
-                (a.kn_n_per_m3 / b.kn_n_per_m3 - 1.0).abs() < 1e-4,
+                (a.element.kn_n_per_m3 / b.element.kn_n_per_m3 - 1.0).abs() < 1e-4,
                 "{a:?} vs {b:?}"
             );
             assert!(
-                (a.e0_n_per_m3 / b.e0_n_per_m3 - 1.0).abs() < 1e-3,
+                (a.element.e0_n_per_m3 / b.element.e0_n_per_m3 - 1.0).abs() < 1e-3,
                 "{a:?} vs {b:?}"
             );
         }
@@ -301,7 +305,7 @@ fn measured_surfaces_go_through_the_chain() {
     assert!(stderr.contains("equivalent surface h1 - h2"), "{stderr}");
     let two = CalibrationTable::read_csv(&out.join("calibration_table.csv")).unwrap();
     // The rougher equivalent surface (Rq √2 larger) is less stiff at the same pressure.
-    assert!(two.rows[0].kn_n_per_m3 < tables[0].rows[0].kn_n_per_m3);
+    assert!(two.rows[0].element.kn_n_per_m3 < tables[0].rows[0].element.kn_n_per_m3);
     // A profile is not an area; --grid does not apply to a file.
     let profile = Path::new(env!("CARGO_MANIFEST_DIR")).join("surfaces/example-profile.csv");
     let out = dir.path().join("out-profile");
@@ -338,12 +342,12 @@ fn measured_surfaces_go_through_the_chain() {
         csv.contains("periodic = false") && csv.contains("b1.npy"),
         "{csv}"
     );
-    // The same body twice is a flat equivalent surface: refused before the sweep, naming it.
+    // The same body twice (a flat equivalent surface): refused before the sweep, naming it.
     let out = dir.path().join("out-same");
     let o = calibrate_surfaces(&cfg, &[&f1, &f1], &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && err.contains("b1.npy") && err.contains("flat"),
+        !o.status.success() && err.contains("b1.npy") && err.contains("identical bodies"),
         "{err}"
     );
     assert!(!out.exists());

@@ -6,10 +6,10 @@ use asperity::dynamics::aft::Harmonics;
 use asperity::dynamics::continuation::{sweep, Branch, ContinuationSettings};
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmPoint, HbmSystem};
 use asperity::dynamics::model::Structure;
-use asperity::dynamics::nonlinear::{CubicSpring, GaulLenz, Jenkins, MicroslipContact};
 use asperity::dynamics::time_integration::{
     initial_conditions, steady_state, TimeIntegrationSettings,
 };
+use asperity::element::{CubicSpring, GaulLenz, Jenkins, MicroslipContact};
 use asperity::element::{GaulLenzParams, ValanisParams};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;

@@ -5,6 +5,7 @@
 //! outside the map.
 
 use asperity::calibrate::table::{CalibrationRow, CalibrationTable};
+use asperity::element::ContactParamsPerArea;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -262,11 +263,13 @@ fn film_to_preloads_to_reduced_nodes_to_elements() {
             .map(|&p| CalibrationRow {
                 pressure_pa: p,
                 contact_area_ratio: 0.05 * p / 2e6,
-                kn_n_per_m3: 4e13 * p / 2e6,
-                e0_n_per_m3: 8e13 * p / 2e6,
-                k: 0.9,
-                mu: 0.6,
-                et_n_per_m3: 1e11,
+                element: ContactParamsPerArea {
+                    kn_n_per_m3: 4e13 * p / 2e6,
+                    e0_n_per_m3: 8e13 * p / 2e6,
+                    k: 0.9,
+                    mu: 0.6,
+                    et_n_per_m3: 1e11,
+                },
                 fit_r2: 0.99,
                 energy_per_cycle_j_per_m2: 10.0,
             })
@@ -294,9 +297,18 @@ fn film_to_preloads_to_reduced_nodes_to_elements() {
         let p = num(e, "pressure_Pa");
         let a = num(e, "area_m2");
         let v = example.interpolate(p);
-        assert!((num(e, "kn_N_per_m") - v.kn_n_per_m3 * a).abs() <= 1e-8 * v.kn_n_per_m3 * a);
-        assert!((num(e, "E0_N_per_m") - v.e0_n_per_m3 * a).abs() <= 1e-8 * v.e0_n_per_m3 * a);
-        assert!((num(e, "Et_N_per_m") - v.et_n_per_m3 * a).abs() <= 1e-8 * v.et_n_per_m3 * a);
+        assert!(
+            (num(e, "kn_N_per_m") - v.element.kn_n_per_m3 * a).abs()
+                <= 1e-8 * v.element.kn_n_per_m3 * a
+        );
+        assert!(
+            (num(e, "E0_N_per_m") - v.element.e0_n_per_m3 * a).abs()
+                <= 1e-8 * v.element.e0_n_per_m3 * a
+        );
+        assert!(
+            (num(e, "Et_N_per_m") - v.element.et_n_per_m3 * a).abs()
+                <= 1e-8 * v.element.et_n_per_m3 * a
+        );
         assert_eq!(num(e, "mu"), 0.6);
         let flag: i32 = e["out_of_range"].parse().unwrap();
         assert_eq!(
@@ -363,9 +375,15 @@ fn element_table_from_the_reference_calibration_table() {
             (1e5..=1e7).contains(&p),
             "pressure {p} Pa, flag {flag}"
         );
-        assert!((num(e, "kn_N_per_m") - v.kn_n_per_m3 * a).abs() <= 1e-8 * v.kn_n_per_m3 * a);
-        assert!((num(e, "E0_N_per_m") - v.e0_n_per_m3 * a).abs() <= 1e-8 * v.e0_n_per_m3 * a);
-        assert!((num(e, "k") - v.k).abs() <= 1e-9);
+        assert!(
+            (num(e, "kn_N_per_m") - v.element.kn_n_per_m3 * a).abs()
+                <= 1e-8 * v.element.kn_n_per_m3 * a
+        );
+        assert!(
+            (num(e, "E0_N_per_m") - v.element.e0_n_per_m3 * a).abs()
+                <= 1e-8 * v.element.e0_n_per_m3 * a
+        );
+        assert!((num(e, "k") - v.element.k).abs() <= 1e-9);
         assert_eq!(num(e, "mu"), 0.6);
     }
 }

@@ -3,11 +3,12 @@
 //! accepted where none was put in, and the effect put in is the one chosen — in 10 of 10 noise
 //! realisations each.
 
+use asperity::element::PowerLawDamper;
 use asperity::identify::backbone::resonance;
 use asperity::identify::effects::Effect;
 use asperity::identify::fit::FitOptions;
 use asperity::identify::measured::Sweep;
-use asperity::identify::model::{Drive, Family, Model, ModelSpec, PowerLawDamper};
+use asperity::identify::model::{Drive, Family, Model, ModelSpec};
 use asperity::identify::select::Verdict;
 use asperity::identify::{identify, Options};
 use std::f64::consts::TAU;

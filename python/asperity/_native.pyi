@@ -272,9 +272,10 @@ class TangentialSolver:
 # ---------------------------------------------------------------- Valanis element
 
 class ValanisParams:
-    """Valanis element: e0 (N/m³ per area or N/m per element), 0 ≤ k < 1, 0 ≤ et < e0, mu > 0."""
+    """Valanis element, in the order of the Rust constructor: e0 (N/m³ per area or N/m per
+    element), 0 ≤ k < 1, 0 ≤ et < e0, mu > 0."""
 
-    def __init__(self, e0: float, k: float, mu: float, et: float = 0.0) -> None: ...
+    def __init__(self, e0: float, k: float, et: float, mu: float) -> None: ...
     @property
     def e0(self) -> float: ...
     @property

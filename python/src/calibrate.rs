@@ -51,11 +51,11 @@ impl CalibrationTable {
         let fields: [fn(&table::CalibrationRow) -> f64; 9] = [
             |r| r.pressure_pa,
             |r| r.contact_area_ratio,
-            |r| r.kn_n_per_m3,
-            |r| r.e0_n_per_m3,
-            |r| r.k,
-            |r| r.mu,
-            |r| r.et_n_per_m3,
+            |r| r.element.kn_n_per_m3,
+            |r| r.element.e0_n_per_m3,
+            |r| r.element.k,
+            |r| r.element.mu,
+            |r| r.element.et_n_per_m3,
             |r| r.fit_r2,
             |r| r.energy_per_cycle_j_per_m2,
         ];
@@ -108,11 +108,11 @@ impl CalibrationTable {
             let v = self.inner.interpolate(p);
             d.set_item("pressure_Pa", v.pressure_pa)?;
             d.set_item("contact_area_ratio", v.contact_area_ratio)?;
-            d.set_item("kn_N_per_m3", v.kn_n_per_m3)?;
-            d.set_item("E0_N_per_m3", v.e0_n_per_m3)?;
-            d.set_item("k", v.k)?;
-            d.set_item("mu", v.mu)?;
-            d.set_item("Et_N_per_m3", v.et_n_per_m3)?;
+            d.set_item("kn_N_per_m3", v.element.kn_n_per_m3)?;
+            d.set_item("E0_N_per_m3", v.element.e0_n_per_m3)?;
+            d.set_item("k", v.element.k)?;
+            d.set_item("mu", v.element.mu)?;
+            d.set_item("Et_N_per_m3", v.element.et_n_per_m3)?;
             d.set_item("range", range_code(v.range))?;
             return Ok(d);
         }
@@ -128,11 +128,11 @@ impl CalibrationTable {
         };
         d.set_item("pressure_Pa", col(|v| v.pressure_pa))?;
         d.set_item("contact_area_ratio", col(|v| v.contact_area_ratio))?;
-        d.set_item("kn_N_per_m3", col(|v| v.kn_n_per_m3))?;
-        d.set_item("E0_N_per_m3", col(|v| v.e0_n_per_m3))?;
-        d.set_item("k", col(|v| v.k))?;
-        d.set_item("mu", col(|v| v.mu))?;
-        d.set_item("Et_N_per_m3", col(|v| v.et_n_per_m3))?;
+        d.set_item("kn_N_per_m3", col(|v| v.element.kn_n_per_m3))?;
+        d.set_item("E0_N_per_m3", col(|v| v.element.e0_n_per_m3))?;
+        d.set_item("k", col(|v| v.element.k))?;
+        d.set_item("mu", col(|v| v.element.mu))?;
+        d.set_item("Et_N_per_m3", col(|v| v.element.et_n_per_m3))?;
         d.set_item(
             "range",
             PyArray1::from_vec(
@@ -231,11 +231,11 @@ fn element_columns<'py>(py: Python<'py>, rows: &[ElementRow]) -> PyResult<Bound<
     let col = |f: fn(&ElementRow) -> f64| {
         PyArray1::from_vec(py, rows.iter().map(f).collect::<Vec<f64>>())
     };
-    d.set_item("kn_N_per_m", col(|r| r.kn_n_per_m))?;
-    d.set_item("E0_N_per_m", col(|r| r.e0_n_per_m))?;
-    d.set_item("k", col(|r| r.k))?;
-    d.set_item("mu", col(|r| r.mu))?;
-    d.set_item("Et_N_per_m", col(|r| r.et_n_per_m))?;
+    d.set_item("kn_N_per_m", col(|r| r.element.kn_n_per_m))?;
+    d.set_item("E0_N_per_m", col(|r| r.element.e0_n_per_m))?;
+    d.set_item("k", col(|r| r.element.k))?;
+    d.set_item("mu", col(|r| r.element.mu))?;
+    d.set_item("Et_N_per_m", col(|r| r.element.et_n_per_m))?;
     d.set_item(
         "out_of_range",
         PyArray1::from_vec(py, rows.iter().map(|r| r.out_of_range).collect::<Vec<i8>>()),

@@ -11,10 +11,10 @@ use asperity::dynamics::continuation::{sweep, ContinuationSettings};
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use asperity::dynamics::model::{CoordinateKind, Structure};
 use asperity::dynamics::model_file::{self, ModelFile};
-use asperity::dynamics::nonlinear::{
+use asperity::dynamics::report;
+use asperity::element::{
     CubicSpring, HystereticElement, Jenkins, JenkinsContact, MicroslipContact,
 };
-use asperity::dynamics::report;
 use nalgebra::{DMatrix, DVector};
 use ndarray::{Array3, Ix1, Ix2};
 use numpy::{PyArray1, PyArray2, PyArray3};

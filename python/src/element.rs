@@ -10,8 +10,9 @@ use ndarray::Ix1;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-/// Valanis element parameters: initial stiffness `e0` (N/m³ or N/m), shape `k` (0 ≤ k < 1),
-/// residual stiffness `et` (0 ≤ et < e0, same unit as e0), friction coefficient `mu` (> 0).
+/// Valanis element parameters, in the order of the Rust constructor: initial stiffness `e0`
+/// (N/m³ or N/m), shape `k` (0 ≤ k < 1), residual stiffness `et` (0 ≤ et < e0, same unit as
+/// e0), friction coefficient `mu` (> 0).
 #[pyclass(frozen, module = "asperity", skip_from_py_object)]
 #[derive(Clone, Copy)]
 pub struct ValanisParams {
@@ -21,8 +22,8 @@ pub struct ValanisParams {
 #[pymethods]
 impl ValanisParams {
     #[new]
-    #[pyo3(signature = (e0, k, mu, et=0.0))]
-    fn new(e0: f64, k: f64, mu: f64, et: f64) -> PyResult<Self> {
+    #[pyo3(signature = (e0, k, et, mu))]
+    fn new(e0: f64, k: f64, et: f64, mu: f64) -> PyResult<Self> {
         Ok(Self {
             inner: valanis::ValanisParams::new(e0, k, et, mu).py()?,
         })
@@ -62,8 +63,8 @@ impl ValanisParams {
     fn __repr__(&self) -> String {
         let p = &self.inner;
         format!(
-            "ValanisParams(e0={:e}, k={}, mu={}, et={:e})",
-            p.e0, p.k, p.mu, p.et
+            "ValanisParams(e0={:e}, k={}, et={:e}, mu={})",
+            p.e0, p.k, p.et, p.mu
         )
     }
 
@@ -126,7 +127,7 @@ pub fn normal_load_history<'py>(
     let uz = finite_slice(py, &uz, "uz")?;
     Ok(PyArray1::from_vec(
         py,
-        valanis::normal_load_history(n0, kn, uz),
+        element::unilateral::normal_load_history(n0, kn, uz),
     ))
 }
 

@@ -41,7 +41,7 @@ def test_nan_and_inf_name_the_point():
         ap.Surface(h, 1e-6)
     q = np.array([0.0, 1e-6, np.nan])
     with pytest.raises(ap.ParameterError, match="index 2"):
-        ap.valanis_integrate(ap.ValanisParams(1e12, 0.5, 0.6), q, 1e6)
+        ap.valanis_integrate(ap.ValanisParams(1e12, 0.5, 0.0, 0.6), q, 1e6)
     with pytest.raises(ap.ParameterError, match="pressure"):
         ap.NormalSolver(ap.Surface.generate(nx=64, lx_m=100e-6, clx_m=5e-6), e_star_pa=E_STAR).displacement_of(
             np.zeros((64, 63)))
@@ -52,7 +52,7 @@ def test_parameter_values_are_named():
         ap.Surface.generate(nx=16)  # correlation length under two spacings
     assert e.value.name == "clx_m"
     with pytest.raises(ap.ParameterError, match="k"):
-        ap.ValanisParams(1e12, 1.2, 0.6)
+        ap.ValanisParams(1e12, 1.2, 0.0, 0.6)
     with pytest.raises(ValueError, match="dx"):
         ap.Surface(np.zeros((4, 4)), -1.0)
     s = ap.Surface.generate(nx=64, lx_m=100e-6, clx_m=5e-6)

@@ -45,8 +45,8 @@ def array_model():
     )
     # Element on m2 against ground: local (t1, t2, n) = (x, y, z) of m2; only x is a coordinate.
     local = np.array([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]])
-    m.attach_valanis_contact("7", ap.ValanisParams(2.0e4, 0.3, 0.5), 1e6, 2.0, local)
-    m.attach_valanis_contact("11", ap.ValanisParams(1.0e4, 0.5, 0.5), 1e6, 1.0, local)
+    m.attach_valanis_contact("7", ap.ValanisParams(2.0e4, 0.3, 0.0, 0.5), 1e6, 2.0, local)
+    m.attach_valanis_contact("11", ap.ValanisParams(1.0e4, 0.5, 0.0, 0.5), 1e6, 1.0, local)
     return m
 
 

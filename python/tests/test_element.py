@@ -8,8 +8,15 @@ import pytest
 import asperity as ap
 
 
+def test_arguments_follow_the_rust_constructor():
+    # ValanisParams::new(e0, k, et, mu): positional arguments in the same order.
+    p = ap.ValanisParams(1e12, 0.4, 1e10, 0.6)
+    assert (p.e0, p.k, p.et, p.mu) == (1e12, 0.4, 1e10, 0.6)
+    assert p == ap.ValanisParams(e0=1e12, k=0.4, et=1e10, mu=0.6)
+
+
 def test_virgin_loading_slope_and_coulomb_limit():
-    p = ap.ValanisParams(e0=2e12, k=0.4, mu=0.5)
+    p = ap.ValanisParams(e0=2e12, k=0.4, et=0.0, mu=0.5)
     fz = 3e6
     q = np.linspace(0.0, 40 * p.mu * fz / p.e0, 4001)  # far into gross slip
     f = ap.valanis_integrate(p, q, fz, method="reference")
@@ -22,7 +29,7 @@ def test_virgin_loading_slope_and_coulomb_limit():
 
 
 def test_reload_slope_after_gross_slip():
-    p = ap.ValanisParams(e0=1e12, k=0.6, mu=0.6)
+    p = ap.ValanisParams(e0=1e12, k=0.6, et=0.0, mu=0.6)
     fz, qmax = 1e6, 30 * 0.6 * 1e6 / 1e12
     n = 20001
     q = np.concatenate([np.linspace(0, qmax, n), qmax - np.linspace(0, 1e-3 * qmax, 101)[1:]])
@@ -33,7 +40,7 @@ def test_reload_slope_after_gross_slip():
 
 
 def test_fit_recovers_known_parameters():
-    truth = ap.ValanisParams(e0=3e12, k=0.35, mu=0.6)
+    truth = ap.ValanisParams(e0=3e12, k=0.35, et=0.0, mu=0.6)
     fz = 2e6
     q = ap.sine_history(2.5 * truth.mu * fz / truth.e0, 2, 60)
     f = ap.valanis_integrate(truth, q, fz, method="reference")

@@ -406,7 +406,7 @@ fn parameter_plots(run: &CalibrationRun, out_dir: &Path, written: &mut Vec<PathB
             "kn (10¹² N/m³)",
             Scale::Log,
             1e-12,
-            |r| r.kn_n_per_m3,
+            |r| r.element.kn_n_per_m3,
             0,
         ),
         (
@@ -415,7 +415,7 @@ fn parameter_plots(run: &CalibrationRun, out_dir: &Path, written: &mut Vec<PathB
             "E0 (10¹² N/m³)",
             Scale::Log,
             1e-12,
-            |r| r.e0_n_per_m3,
+            |r| r.element.e0_n_per_m3,
             1,
         ),
         (
@@ -424,7 +424,7 @@ fn parameter_plots(run: &CalibrationRun, out_dir: &Path, written: &mut Vec<PathB
             "k (-)",
             Scale::Linear,
             1.0,
-            |r| r.k,
+            |r| r.element.k,
             2,
         ),
     ];
@@ -442,9 +442,9 @@ fn parameter_plots(run: &CalibrationRun, out_dir: &Path, written: &mut Vec<PathB
                 .zip(&mpa)
                 .map(|((r, iv), &x)| {
                     let (m, h) = match q {
-                        0 => (r.kn_n_per_m3, iv.kn_n_per_m3),
-                        1 => (r.e0_n_per_m3, iv.e0_n_per_m3),
-                        _ => (r.k, iv.k),
+                        0 => (r.element.kn_n_per_m3, iv.kn_n_per_m3),
+                        1 => (r.element.e0_n_per_m3, iv.e0_n_per_m3),
+                        _ => (r.element.k, iv.k),
                     };
                     let lo = m - h;
                     // A log axis cannot show a non-positive lower edge.
@@ -469,9 +469,9 @@ fn parameter_plots(run: &CalibrationRun, out_dir: &Path, written: &mut Vec<PathB
                 let p = p_lo * (p_hi / p_lo).powf(i as f64 / 200.0);
                 let v = run.table.interpolate(p);
                 let y = match q {
-                    0 => v.kn_n_per_m3,
-                    1 => v.e0_n_per_m3,
-                    _ => v.k,
+                    0 => v.element.kn_n_per_m3,
+                    1 => v.element.e0_n_per_m3,
+                    _ => v.element.k,
                 };
                 (p / 1e6, y * scale)
             })
@@ -727,9 +727,19 @@ fn sidecar(
         ConfigSource::File { path, sha256 } => (path.display().to_string(), Some(sha256.clone())),
     };
     let pressures: Vec<f64> = run.table.rows.iter().map(|r| r.pressure_pa).collect();
-    let ks: Vec<f64> = run.table.rows.iter().map(|r| r.k).collect();
-    let kn: Vec<f64> = run.table.rows.iter().map(|r| r.kn_n_per_m3).collect();
-    let e0: Vec<f64> = run.table.rows.iter().map(|r| r.e0_n_per_m3).collect();
+    let ks: Vec<f64> = run.table.rows.iter().map(|r| r.element.k).collect();
+    let kn: Vec<f64> = run
+        .table
+        .rows
+        .iter()
+        .map(|r| r.element.kn_n_per_m3)
+        .collect();
+    let e0: Vec<f64> = run
+        .table
+        .rows
+        .iter()
+        .map(|r| r.element.e0_n_per_m3)
+        .collect();
     let realisations: Vec<serde_json::Value> = run
         .realisations
         .iter()

@@ -45,6 +45,7 @@ use crate::core::fft::Boundary;
 use crate::core::grid::Grid2;
 use crate::core::hash::sha256_hex;
 use crate::core::material::{composite_modulus, Material};
+use crate::element::ContactParamsPerArea;
 use crate::surface::generate::{generate, GaussianSurfaceSpec};
 use indicatif::ProgressBar;
 use std::time::Instant;
@@ -851,11 +852,13 @@ fn table_of(config: &CalibrationConfig, rs: &[Realisation]) -> Result<Calibratio
         rows.push(CalibrationRow {
             pressure_pa: p,
             contact_area_ratio: area.mean,
-            kn_n_per_m3: skn.mean,
-            e0_n_per_m3: se0.mean,
-            k: sk.mean,
-            mu: config.contact.mu,
-            et_n_per_m3: set.mean,
+            element: ContactParamsPerArea {
+                kn_n_per_m3: skn.mean,
+                e0_n_per_m3: se0.mean,
+                k: sk.mean,
+                mu: config.contact.mu,
+                et_n_per_m3: set.mean,
+            },
             fit_r2: s(&|pc| pc.fit.r2).mean,
             energy_per_cycle_j_per_m2: sen.mean,
         });

@@ -56,6 +56,7 @@
 use crate::calibrate::convergence::Verdict;
 use crate::core::error::{Error, Result};
 use crate::core::output::write_atomic;
+use crate::element::ContactParamsPerArea;
 use std::path::Path;
 
 /// The CSV header, exactly.
@@ -142,16 +143,9 @@ pub struct CalibrationRow {
     pub pressure_pa: f64,
     /// Real over nominal contact area (–).
     pub contact_area_ratio: f64,
-    /// Normal contact stiffness per unit area, dp/dδ (N/m³).
-    pub kn_n_per_m3: f64,
-    /// Valanis initial-loading stiffness per unit area (N/m³).
-    pub e0_n_per_m3: f64,
-    /// Valanis shape parameter, 0 ≤ k < 1 (–).
-    pub k: f64,
-    /// Friction coefficient (–).
-    pub mu: f64,
-    /// Valanis residual stiffness per unit area (N/m³).
-    pub et_n_per_m3: f64,
+    /// kn, E0, k, μ, Et per unit area (N/m³).
+    #[serde(flatten)]
+    pub element: ContactParamsPerArea,
     /// Coefficient of determination of the fit (–).
     pub fit_r2: f64,
     /// Energy dissipated per cycle by the BEM loop, per unit nominal area (J/m²).
@@ -163,11 +157,11 @@ impl CalibrationRow {
         [
             self.pressure_pa,
             self.contact_area_ratio,
-            self.kn_n_per_m3,
-            self.e0_n_per_m3,
-            self.k,
-            self.mu,
-            self.et_n_per_m3,
+            self.element.kn_n_per_m3,
+            self.element.e0_n_per_m3,
+            self.element.k,
+            self.element.mu,
+            self.element.et_n_per_m3,
             self.fit_r2,
             self.energy_per_cycle_j_per_m2,
         ]
@@ -177,11 +171,13 @@ impl CalibrationRow {
         Self {
             pressure_pa: v[0],
             contact_area_ratio: v[1],
-            kn_n_per_m3: v[2],
-            e0_n_per_m3: v[3],
-            k: v[4],
-            mu: v[5],
-            et_n_per_m3: v[6],
+            element: ContactParamsPerArea {
+                kn_n_per_m3: v[2],
+                e0_n_per_m3: v[3],
+                k: v[4],
+                mu: v[5],
+                et_n_per_m3: v[6],
+            },
             fit_r2: v[7],
             energy_per_cycle_j_per_m2: v[8],
         }
@@ -196,17 +192,18 @@ impl CalibrationRow {
         }
         let positive = [
             ("pressure_Pa", self.pressure_pa),
-            ("kn_N_per_m3", self.kn_n_per_m3),
-            ("E0_N_per_m3", self.e0_n_per_m3),
-            ("mu", self.mu),
+            ("kn_N_per_m3", self.element.kn_n_per_m3),
+            ("E0_N_per_m3", self.element.e0_n_per_m3),
+            ("mu", self.element.mu),
         ];
         for (name, v) in positive {
             if v <= 0.0 {
                 return Err(format!("`{name}` must be > 0, got {v}"));
             }
         }
-        if !(0.0..1.0).contains(&self.k) {
-            return Err(format!("`k` must satisfy 0 <= k < 1, got {}", self.k));
+        let e = &self.element;
+        if !(0.0..1.0).contains(&e.k) {
+            return Err(format!("`k` must satisfy 0 <= k < 1, got {}", e.k));
         }
         if !(0.0..=1.0).contains(&self.contact_area_ratio) {
             return Err(format!(
@@ -214,10 +211,10 @@ impl CalibrationRow {
                 self.contact_area_ratio
             ));
         }
-        if self.et_n_per_m3 < 0.0 || self.et_n_per_m3 >= self.e0_n_per_m3 {
+        if e.et_n_per_m3 < 0.0 || e.et_n_per_m3 >= e.e0_n_per_m3 {
             return Err(format!(
                 "`Et_N_per_m3` must satisfy 0 <= Et < E0 = {}, got {}",
-                self.e0_n_per_m3, self.et_n_per_m3
+                e.e0_n_per_m3, e.et_n_per_m3
             ));
         }
         // R² = 1 − SS_res/SS_tot with SS_res ≥ 0: a coefficient of determination above 1 is
@@ -256,16 +253,8 @@ pub struct Interpolated {
     pub pressure_pa: f64,
     /// Real over nominal contact area (–).
     pub contact_area_ratio: f64,
-    /// Normal stiffness per unit area (N/m³).
-    pub kn_n_per_m3: f64,
-    /// Valanis E0 per unit area (N/m³).
-    pub e0_n_per_m3: f64,
-    /// Valanis k (–).
-    pub k: f64,
-    /// Friction coefficient (–).
-    pub mu: f64,
-    /// Valanis Et per unit area (N/m³).
-    pub et_n_per_m3: f64,
+    /// kn, E0, k, μ, Et per unit area (N/m³).
+    pub element: ContactParamsPerArea,
     /// True when the pressure lies within the table's range (values interpolated, not
     /// extrapolated).
     pub in_range: bool,
@@ -528,11 +517,13 @@ impl CalibrationTable {
         Interpolated {
             pressure_pa,
             contact_area_ratio: column(|r| r.contact_area_ratio),
-            kn_n_per_m3: column(|r| r.kn_n_per_m3),
-            e0_n_per_m3: column(|r| r.e0_n_per_m3),
-            k: column(|r| r.k),
-            mu: column(|r| r.mu),
-            et_n_per_m3: column(|r| r.et_n_per_m3),
+            element: ContactParamsPerArea {
+                kn_n_per_m3: column(|r| r.element.kn_n_per_m3),
+                e0_n_per_m3: column(|r| r.element.e0_n_per_m3),
+                k: column(|r| r.element.k),
+                mu: column(|r| r.element.mu),
+                et_n_per_m3: column(|r| r.element.et_n_per_m3),
+            },
             in_range: true,
             range: RangeFlag::Within,
         }
@@ -575,20 +566,22 @@ fn extrapolate(
             pressure_pa,
         )
     };
-    let e0 = column(|r| r.e0_n_per_m3);
-    let et_ratio = if end.e0_n_per_m3 > 0.0 {
-        end.et_n_per_m3 / end.e0_n_per_m3
+    let e0 = column(|r| r.element.e0_n_per_m3);
+    let et_ratio = if end.element.e0_n_per_m3 > 0.0 {
+        end.element.et_n_per_m3 / end.element.e0_n_per_m3
     } else {
         0.0
     };
     Interpolated {
         pressure_pa,
         contact_area_ratio: column(|r| r.contact_area_ratio).min(1.0),
-        kn_n_per_m3: column(|r| r.kn_n_per_m3),
-        e0_n_per_m3: e0,
-        k: end.k,
-        mu: end.mu,
-        et_n_per_m3: et_ratio * e0,
+        element: ContactParamsPerArea {
+            kn_n_per_m3: column(|r| r.element.kn_n_per_m3),
+            e0_n_per_m3: e0,
+            k: end.element.k,
+            mu: end.element.mu,
+            et_n_per_m3: et_ratio * e0,
+        },
         in_range: range == RangeFlag::Within,
         range,
     }
@@ -652,11 +645,13 @@ mod tests {
         CalibrationRow {
             pressure_pa: p,
             contact_area_ratio: 0.01,
-            kn_n_per_m3: kn,
-            e0_n_per_m3: e0,
-            k,
-            mu: 0.6,
-            et_n_per_m3: 0.0,
+            element: ContactParamsPerArea {
+                kn_n_per_m3: kn,
+                e0_n_per_m3: e0,
+                k,
+                mu: 0.6,
+                et_n_per_m3: 0.0,
+            },
             fit_r2: 0.99,
             energy_per_cycle_j_per_m2: 1e-3,
         }
@@ -678,17 +673,20 @@ mod tests {
         for r in &t.rows {
             let i = t.interpolate(r.pressure_pa);
             assert!(i.in_range);
-            assert!((i.kn_n_per_m3 - r.kn_n_per_m3).abs() < 1e-6 * r.kn_n_per_m3);
-            assert!((i.k - r.k).abs() < 1e-12);
+            assert!(
+                (i.element.kn_n_per_m3 - r.element.kn_n_per_m3).abs()
+                    < 1e-6 * r.element.kn_n_per_m3
+            );
+            assert!((i.element.k - r.element.k).abs() < 1e-12);
         }
         let mut prev = 0.0;
         for j in 0..=400 {
             let p = 1e5 * 100f64.powf(j as f64 / 400.0);
             let i = t.interpolate(p);
-            assert!(i.kn_n_per_m3 >= prev, "kn not monotone at {p}");
-            prev = i.kn_n_per_m3;
+            assert!(i.element.kn_n_per_m3 >= prev, "kn not monotone at {p}");
+            prev = i.element.kn_n_per_m3;
             // No overshoot in the non-monotone k column: stays within neighbours' range.
-            assert!(i.k >= 0.2 - 1e-12 && i.k <= 0.5 + 1e-12);
+            assert!(i.element.k >= 0.2 - 1e-12 && i.element.k <= 0.5 + 1e-12);
         }
     }
 
@@ -709,11 +707,13 @@ mod tests {
         let law = |p: f64| CalibrationRow {
             pressure_pa: p,
             contact_area_ratio: 1e-9 * p,
-            kn_n_per_m3: 3e8 * p.powf(0.8),
-            e0_n_per_m3: 2e7 * p.powf(0.9),
-            k: 0.5 + 1e-8 * p,
-            mu: 0.6,
-            et_n_per_m3: 0.1 * 2e7 * p.powf(0.9),
+            element: ContactParamsPerArea {
+                kn_n_per_m3: 3e8 * p.powf(0.8),
+                e0_n_per_m3: 2e7 * p.powf(0.9),
+                k: 0.5 + 1e-8 * p,
+                mu: 0.6,
+                et_n_per_m3: 0.1 * 2e7 * p.powf(0.9),
+            },
             fit_r2: 0.99,
             energy_per_cycle_j_per_m2: 1e-3,
         };
@@ -728,9 +728,18 @@ mod tests {
             let truth = law(p);
             assert_eq!(v.range, flag);
             assert!(!v.in_range);
-            assert!(rel(v.kn_n_per_m3, truth.kn_n_per_m3) < 1e-12, "kn at {p}");
-            assert!(rel(v.e0_n_per_m3, truth.e0_n_per_m3) < 1e-12, "E0 at {p}");
-            assert!(rel(v.et_n_per_m3, truth.et_n_per_m3) < 1e-12, "Et at {p}");
+            assert!(
+                rel(v.element.kn_n_per_m3, truth.element.kn_n_per_m3) < 1e-12,
+                "kn at {p}"
+            );
+            assert!(
+                rel(v.element.e0_n_per_m3, truth.element.e0_n_per_m3) < 1e-12,
+                "E0 at {p}"
+            );
+            assert!(
+                rel(v.element.et_n_per_m3, truth.element.et_n_per_m3) < 1e-12,
+                "Et at {p}"
+            );
             assert!(rel(v.contact_area_ratio, truth.contact_area_ratio) < 1e-12);
             // k and μ keep the end row's values.
             let end = if flag == RangeFlag::Below {
@@ -738,21 +747,25 @@ mod tests {
             } else {
                 &t.rows[4]
             };
-            assert_eq!((v.k, v.mu), (end.k, end.mu));
+            assert_eq!((v.element.k, v.element.mu), (end.element.k, end.element.mu));
         }
         // Open contact: no stiffness, no area; a negative pressure reads as zero.
         for p in [0.0, -1e3] {
             let v = t.interpolate(p);
             assert_eq!(v.range, RangeFlag::Below);
             assert_eq!(
-                (v.kn_n_per_m3, v.e0_n_per_m3, v.et_n_per_m3),
+                (
+                    v.element.kn_n_per_m3,
+                    v.element.e0_n_per_m3,
+                    v.element.et_n_per_m3
+                ),
                 (0.0, 0.0, 0.0)
             );
             assert_eq!(v.contact_area_ratio, 0.0);
         }
         let nan = t.interpolate(f64::NAN);
         assert_eq!(nan.range, RangeFlag::Below);
-        assert!(nan.kn_n_per_m3.is_nan());
+        assert!(nan.element.kn_n_per_m3.is_nan());
         // The contact area ratio is a fraction: at most 1 however far above.
         assert_eq!(t.interpolate(1e13).contact_area_ratio, 1.0);
     }
@@ -763,12 +776,12 @@ mod tests {
     fn without_a_stiffening_end_pair_the_end_value_is_kept() {
         let t = table(); // E0: 5e12 at 2 MPa, 1e13 at 10 MPa; k falls 0.5 → 0.4 → 0.45
         let mut rows = t.rows.clone();
-        rows[0].kn_n_per_m3 = 6e12; // kn falls from the first to the second row
+        rows[0].element.kn_n_per_m3 = 6e12; // kn falls from the first to the second row
         let falling = CalibrationTable::new(rows).unwrap();
-        assert_eq!(falling.interpolate(1e3).kn_n_per_m3, 6e12);
+        assert_eq!(falling.interpolate(1e3).element.kn_n_per_m3, 6e12);
         let one = CalibrationTable::new(vec![t.rows[1]]).unwrap();
         for p in [1e3, 1e6, 1e9] {
-            assert_eq!(one.interpolate(p).kn_n_per_m3, 5e12);
+            assert_eq!(one.interpolate(p).element.kn_n_per_m3, 5e12);
         }
         assert_eq!(one.interpolate(1e6).range, RangeFlag::Within);
     }

@@ -230,17 +230,17 @@ pub fn write_and_report(
             "{:>12.3}  {:>10.3e}  {:>10.4e}{:<13}  {:>10.4e}{:<13}  {:>6.4}{:<10}  {:>7.5}",
             r.pressure_pa / 1e6,
             r.contact_area_ratio,
-            r.kn_n_per_m3,
+            r.element.kn_n_per_m3,
             pm(iv.map(|v| v.kn_n_per_m3)),
-            r.e0_n_per_m3,
+            r.element.e0_n_per_m3,
             pm(iv.map(|v| v.e0_n_per_m3)),
-            r.k,
+            r.element.k,
             iv.map_or(String::new(), |v| format!(" ± {:.3}", v.k)),
             r.fit_r2
         );
     }
     let p: Vec<f64> = result.table.rows.iter().map(|r| r.pressure_pa).collect();
-    let k: Vec<f64> = result.table.rows.iter().map(|r| r.k).collect();
+    let k: Vec<f64> = result.table.rows.iter().map(|r| r.element.k).collect();
     println!("mean k(p): {}", describe_shape(&p, &k));
     println!(
         "resolution and convergence (grid: same surfaces at half the points per side; patch: half the patch side, same spacing):"

@@ -3,7 +3,6 @@ use asperity::calibrate::table::CalibrationTable;
 use asperity::core::error::require_positive;
 use asperity::diagnose::report::{self, InputInfo, Outputs, Report};
 use asperity::diagnose::{diagnose, Baseline, BaselineSource, Columns, Options, Record};
-use asperity::element::valanis::ValanisParams;
 use asperity::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -59,7 +58,7 @@ fn table_baseline(path: &Path, p: f64, a: f64) -> Result<(BaselineSource, String
     asperity::core::limits::check_file_size(path, asperity::core::limits::MAX_TEXT_FILE_BYTES)?;
     let table = CalibrationTable::read_csv(path)?;
     let row = table.interpolate(p);
-    let valanis = ValanisParams::new(row.e0_n_per_m3 * a, row.k, row.et_n_per_m3 * a, row.mu)?;
+    let valanis = row.element.over_area(a).valanis()?;
     let mut source = format!(
         "from calibration table {} at {p:.4e} Pa over {a:.4e} m²",
         path.display()

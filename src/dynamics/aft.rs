@@ -28,7 +28,7 @@
 //!
 //! Exact derivative of the time-discrete procedure: forward sensitivities of the state and the
 //! force with respect to the displacement harmonics (chain rule through every sample of the
-//! period, [`crate::dynamics::nonlinear::StepPartials`]) and with respect to the start state;
+//! period, [`crate::element::StepPartials`]) and with respect to the start state;
 //! the start state's own dependence follows from the implicit-function theorem on the periodicity
 //! condition, `(I − Φ)·ds0/dU = ∂s_N/∂U`, with neutral directions inheriting the derivative of
 //! the virgin start. Checked against finite differences in the tests below. For an element on
@@ -39,7 +39,7 @@
 //! `recorded_sensitivities_equal_the_general_chain_rule`).
 
 use crate::core::error::{Error, Result};
-use crate::dynamics::nonlinear::{ContactStatus, HystereticElement, StepPartials};
+use crate::element::{ContactStatus, HystereticElement, StepPartials};
 use bumpalo::Bump;
 use nalgebra::DMatrix;
 use realfft::RealFftPlanner;
@@ -1041,7 +1041,7 @@ mod tests {
 
     #[test]
     fn valanis_aft_forces_converge_with_the_sampling() {
-        use crate::dynamics::nonlinear::GaulLenz;
+        use crate::element::GaulLenz;
         use crate::element::GaulLenzParams;
         let gl = GaulLenz::new(&GaulLenzParams {
             e0: 1.0,
@@ -1077,10 +1077,10 @@ mod tests {
     }
 
     use super::*;
-    use crate::dynamics::nonlinear::{
+    use crate::element::ValanisParams;
+    use crate::element::{
         CubicSpring, GaulLenz, Jenkins, JenkinsContact, MicroslipContact, QuadraticSpring,
     };
-    use crate::element::ValanisParams;
 
     #[test]
     fn transforms_round_trip_and_match_the_dense_matrices() {
@@ -1215,7 +1215,7 @@ mod tests {
             sigma0: 1.0,
         })
         .unwrap();
-        let damper = crate::identify::model::PowerLawDamper {
+        let damper = crate::element::PowerLawDamper {
             c: 0.3,
             exponent: 0.7,
             sample_rate: 80.0 * h.n_time() as f64,

@@ -9,11 +9,20 @@
 //! orthogonal to `n`, `t2 = n × t1`.
 
 use crate::core::error::{Error, Result};
-use crate::dynamics::nonlinear::{ContactLaw, HystereticElement, JenkinsContact, MicroslipContact};
-use crate::element::ValanisParams;
+use crate::element::{ContactParams, HystereticElement, JenkinsContact, MicroslipContact};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
+
+/// Constitutive law named in a model file for the rows of an element table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactLaw {
+    /// [`MicroslipContact`]: E0, k, Et, μ, kn, N0 from the table.
+    Valanis,
+    /// [`JenkinsContact`]: kt = E0 of the table (the initial tangential stiffness), μ, kn, N0.
+    Jenkins,
+}
 
 /// One row of an element table with the line it came from.
 #[derive(Debug, Clone, PartialEq)]
@@ -21,12 +30,10 @@ pub struct TableElement {
     pub id: u64,
     /// 1-based line in the file.
     pub line: usize,
+    /// Normal preload (N).
     pub n0_n: f64,
-    pub kn_n_per_m: f64,
-    pub e0_n_per_m: f64,
-    pub k: f64,
-    pub mu: f64,
-    pub et_n_per_m: f64,
+    /// kn, E0, k, μ, Et of the element (N/m).
+    pub element: ContactParams,
     /// −1 / 0 / +1 as written by `asperity elements` (0 when the column is absent).
     pub out_of_range: i8,
 }
@@ -98,11 +105,13 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
             id,
             line,
             n0_n: field(ci[1], "N0_N")?,
-            kn_n_per_m: field(ci[2], "kn_N_per_m")?,
-            e0_n_per_m: field(ci[3], "E0_N_per_m")?,
-            k: field(ci[4], "k")?,
-            mu: field(ci[5], "mu")?,
-            et_n_per_m: field(ci[6], "Et_N_per_m")?,
+            element: ContactParams {
+                kn_n_per_m: field(ci[2], "kn_N_per_m")?,
+                e0_n_per_m: field(ci[3], "E0_N_per_m")?,
+                k: field(ci[4], "k")?,
+                mu: field(ci[5], "mu")?,
+                et_n_per_m: field(ci[6], "Et_N_per_m")?,
+            },
             out_of_range: match flag_col {
                 Some(i) => field(i, "out_of_range")? as i8,
                 None => 0,
@@ -110,9 +119,9 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
         };
         for (name, v) in [
             ("N0_N", e.n0_n),
-            ("kn_N_per_m", e.kn_n_per_m),
-            ("E0_N_per_m", e.e0_n_per_m),
-            ("mu", e.mu),
+            ("kn_N_per_m", e.element.kn_n_per_m),
+            ("E0_N_per_m", e.element.e0_n_per_m),
+            ("mu", e.element.mu),
         ] {
             if v <= 0.0 {
                 return Err(Error::parse(
@@ -122,7 +131,8 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
                 ));
             }
         }
-        ValanisParams::new(e.e0_n_per_m, e.k, e.et_n_per_m, e.mu)
+        e.element
+            .valanis()
             .map_err(|err| Error::parse(path, line, format!("element {id}: {err}")))?;
         out.push(e);
     }
@@ -206,17 +216,8 @@ pub fn contact_frame(normal: [f64; 3], tangent: [f64; 3]) -> Result<[[f64; 3]; 3
 /// The element of `law` for one table row.
 pub fn element_for(law: ContactLaw, e: &TableElement) -> Result<Arc<dyn HystereticElement>> {
     Ok(match law {
-        ContactLaw::Valanis => Arc::new(MicroslipContact::new(
-            ValanisParams::new(e.e0_n_per_m, e.k, e.et_n_per_m, e.mu)?,
-            e.kn_n_per_m,
-            e.n0_n,
-        )?),
-        ContactLaw::Jenkins => Arc::new(JenkinsContact::new(
-            e.e0_n_per_m,
-            e.mu,
-            e.kn_n_per_m,
-            e.n0_n,
-        )?),
+        ContactLaw::Valanis => Arc::new(MicroslipContact::from_params(&e.element, e.n0_n)?),
+        ContactLaw::Jenkins => Arc::new(JenkinsContact::from_params(&e.element, e.n0_n)?),
     })
 }
 

@@ -844,7 +844,7 @@ pub fn solve_linear(a: &DMatrix<f64>, b: &DVector<f64>, omega: f64) -> Result<DV
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::nonlinear::MicroslipContact;
+    use crate::element::MicroslipContact;
     use crate::element::ValanisParams;
     use std::f64::consts::{PI, TAU};
     use std::sync::Arc;
@@ -862,7 +862,7 @@ mod tests {
         let c = 2.0 * zeta * TAU * f0;
         let (kt, fs) = (0.3 * k, 0.3 * k * 1e-4);
         let mut s = Structure::modal(&[f0], &[zeta]).unwrap();
-        let jenkins = crate::dynamics::nonlinear::Jenkins::new(kt, fs).unwrap();
+        let jenkins = crate::element::Jenkins::new(kt, fs).unwrap();
         s.attach("joint", Arc::new(jenkins), DMatrix::from_element(1, 1, 1.0))
             .unwrap();
         let sys = HbmSystem::new(

@@ -5,7 +5,8 @@
 //!
 //! ```text
 //! model (linear part: lumped M, C, K or a reduced modal model; elements on node pairs)
-//!   ──► nonlinear (time-discrete hysteretic elements) ──► aft (harmonics ⇄ time, periodic state)
+//!   ──► crate::element (the laws, as time-discrete hysteretic elements)
+//!   ──► aft (harmonics ⇄ time, periodic state)
 //!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
 //!   ──► continuation (pseudo-arclength in frequency, turning points)
 //! time_integration: reference steady state by Newmark time stepping (validation)
@@ -19,9 +20,7 @@ pub mod condensation;
 pub mod contact;
 pub mod continuation;
 pub mod hbm;
-pub mod iwan;
 pub mod model;
 pub mod model_file;
-pub mod nonlinear;
 pub mod report;
 pub mod time_integration;

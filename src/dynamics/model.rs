@@ -10,7 +10,7 @@
 //! normalised shapes in kg^-½).
 
 use crate::core::error::{Error, Result};
-use crate::dynamics::nonlinear::HystereticElement;
+use crate::element::HystereticElement;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 

@@ -39,10 +39,10 @@
 //! Paths are relative to the model file. Every error names the file, line and key or column.
 
 use crate::core::error::{Error, Result};
+use crate::dynamics::contact::ContactLaw;
 use crate::dynamics::contact::{self, contact_frame, TableElement};
 use crate::dynamics::hbm::FormulationChoice;
 use crate::dynamics::model::Structure;
-use crate::dynamics::nonlinear::ContactLaw;
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -16,7 +16,7 @@
 use crate::core::error::{Error, Result};
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::model::Structure;
-use crate::dynamics::nonlinear::StepPartials;
+use crate::element::StepPartials;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
 

@@ -3,6 +3,8 @@
 //! (e.g. Nayfeh & Mook, *Nonlinear Oscillations*, 1979, §4.1). Units: `q` in m, `F` in N,
 //! `k3` in N/m³ (or per unit area: Pa and N/m⁵).
 
+use crate::element::hysteretic::MemorylessSpring;
+
 /// Force of the cubic spring.
 pub fn force(k3: f64, q: f64) -> f64 {
     k3 * q * q * q
@@ -11,6 +13,25 @@ pub fn force(k3: f64, q: f64) -> f64 {
 /// Tangent stiffness `dF/dq = 3·k3·q²`.
 pub fn stiffness(k3: f64, q: f64) -> f64 {
     3.0 * k3 * q * q
+}
+
+/// Cubic spring `f = k3·u³` on one displacement component (the Duffing nonlinearity), no memory.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CubicSpring {
+    /// Cubic stiffness (N/m³).
+    pub k3: f64,
+}
+
+impl MemorylessSpring for CubicSpring {
+    fn law_name(&self) -> &'static str {
+        "cubic"
+    }
+    fn force_and_stiffness(&self, u: f64) -> (f64, f64) {
+        (force(self.k3, u), stiffness(self.k3, u))
+    }
+    fn scale(&self) -> f64 {
+        self.k3.abs()
+    }
 }
 
 #[cfg(test)]

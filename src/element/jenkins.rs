@@ -7,6 +7,7 @@
 //! N/m³ with forces in Pa, or N/m with forces in N.
 
 use crate::core::error::{Error, Result};
+use crate::element::hysteretic::{ContactStatus, HystereticElement, StepPartials};
 
 /// Jenkins element parameters.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -97,9 +98,92 @@ pub fn step_2d_partials(
     ([limit * u[0], limit * u[1]], dt, [p.mu * u[0], p.mu * u[1]])
 }
 
+/// One-dimensional Jenkins element at a constant normal load `N` (slip force `μ·N`) as a
+/// [`HystereticElement`]. State: the force. Update: [`step`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Jenkins {
+    pub params: JenkinsParams,
+    /// Constant normal load `N` (N).
+    pub normal_load: f64,
+}
+
+impl Jenkins {
+    /// Jenkins element with stiffness `kt` (N/m) and slip force `slip_force` (N) (`μ = 1`,
+    /// `N = slip force`).
+    pub fn new(kt: f64, slip_force: f64) -> Result<Self> {
+        crate::core::error::require_positive("slip_force", slip_force)?;
+        Ok(Self {
+            params: JenkinsParams::new(kt, 1.0)?,
+            normal_load: slip_force,
+        })
+    }
+    fn slip_force(&self) -> f64 {
+        self.params.mu * self.normal_load
+    }
+}
+
+impl HystereticElement for Jenkins {
+    fn name(&self) -> &'static str {
+        "jenkins-1d"
+    }
+    fn dofs(&self) -> usize {
+        1
+    }
+    fn state_len(&self) -> usize {
+        1
+    }
+    fn virgin_state(&self, s: &mut [f64]) {
+        s[0] = 0.0;
+    }
+    fn state_scales(&self, scales: &mut [f64]) {
+        scales[0] = self.slip_force();
+    }
+    fn force_scale(&self) -> f64 {
+        self.slip_force()
+    }
+    /// In stick the force follows the spring (`∂F1/∂F0 = 1`, `∂F1/∂u1 = −∂F1/∂u0 = kt`); on the
+    /// slip limit it is constant.
+    fn step(
+        &self,
+        s0: &[f64],
+        u0: &[f64],
+        u1: &[f64],
+        s1: &mut [f64],
+        f1: &mut [f64],
+        partials: Option<&mut StepPartials>,
+    ) {
+        let f = step(&self.params, s0[0], u1[0] - u0[0], self.normal_load);
+        s1[0] = f;
+        f1[0] = f;
+        if let Some(p) = partials {
+            let trial = s0[0] + self.params.kt * (u1[0] - u0[0]);
+            if trial.abs() <= self.slip_force() {
+                let kt = self.params.kt;
+                p.ds_ds0[0] = 1.0;
+                p.ds_du0[0] = -kt;
+                p.ds_du1[0] = kt;
+                p.df_ds0[0] = 1.0;
+                p.df_du0[0] = -kt;
+                p.df_du1[0] = kt;
+            }
+        }
+    }
+    fn status(&self, s: &[f64], _u: &[f64], _f: &[f64]) -> ContactStatus {
+        ContactStatus::classify(
+            self.normal_load,
+            s[0].abs(),
+            JENKINS_SLIP_THRESHOLD * self.slip_force(),
+        )
+    }
+}
+
+/// A Jenkins slider is reported slipping when its force is within round-off of the limit.
+pub const JENKINS_SLIP_THRESHOLD: f64 = 1.0 - 1e-12;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::hysteretic::check_partials;
     use crate::element::{dissipated_energy, sine_history};
 
     #[test]
@@ -153,5 +237,12 @@ mod tests {
         let f = integrate(&p, &[0.0, 0.5, 0.5], &[1.0, 1.0, 0.0]).unwrap();
         assert_eq!(f, vec![0.0, 0.5, 0.0]);
         assert!(JenkinsParams::new(0.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn element_partials_match_finite_differences() {
+        let j = Jenkins::new(1e5, 1.0).unwrap();
+        let w = check_partials(&j, &[0.2], &[0.0], &[3e-6], 1e-10, &[1e-6]).unwrap();
+        assert!(w < 1e-6, "jenkins: {w}");
     }
 }

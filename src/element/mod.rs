@@ -1,24 +1,52 @@
-//! Contact elements for nonlinear dynamic solvers: Valanis microslip, Gaul–Lenz, Jenkins (1-D and
-//! 2-D with a circular slip limit), Iwan (power-law slip-strength density), Bouc–Wen, the
-//! cubic spring used to validate solvers and the quadratic spring of amplitude-proportional stiffness.
+//! Constitutive laws of contact elements and joints, one file each, and the interface through
+//! which every solver drives them.
 //!
-//! Each element is a parameters struct, a pure force update for one displacement increment and a
-//! loop integrator mapping a displacement history (and a normal-load history) to a force history.
+//! | file | law | implements [`HystereticElement`] as |
+//! |---|---|---|
+//! | [`hysteretic`] | the interface: state, step with exact partial derivatives, status; [`check_partials`] | – |
+//! | [`valanis`] | Valanis microslip, time-varying normal load (implicit Euler, frozen-load, reference integrators) | (through [`gaul_lenz`] and [`contact3d`]) |
+//! | [`gaul_lenz`] | Valanis with a constant stick limit `σ0` | [`GaulLenz`] |
+//! | [`jenkins`] | spring + Coulomb slider (1-D, and 2-D with a circular limit) | [`Jenkins`] |
+//! | [`iwan`] | Segalman's four-parameter Iwan element, parallel Jenkins sliders | [`IwanElement`] |
+//! | [`bouc_wen`] | Bouc–Wen | [`BoucWen`] |
+//! | [`cubic`] | cubic (Duffing) spring | [`CubicSpring`] (memoryless) |
+//! | [`quadratic_spring`] | quadratic spring `k2·|q|·q` | [`QuadraticSpring`] (memoryless) |
+//! | [`power_law_damper`] | power-law damper `c·|u̇|^p·u̇` | [`PowerLawDamper`] |
+//! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring | [`MicroslipContact`], [`JenkinsContact`] |
+//! | [`unilateral`] | unilateral normal contact `N = max(0, N0 + kn·un)`, re-contact point | – |
+//! | [`params`] | the contact-element record `(kn, E0, k, μ, Et)` per area and per element | – |
+//!
+//! Each law is a parameters struct, a pure update for one displacement increment, a loop
+//! integrator mapping a displacement history (and a normal-load history) to a force history, and
+//! its [`HystereticElement`] implementation. A new law is one more file here.
 //! Units: either per unit nominal area (displacement m, force Pa, stiffness N/m³) or per element
-//! (m, N, N/m) — the mathematics is the same; see [`valanis`].
+//! (m, N, N/m) — the mathematics is the same; see [`valanis`]. The solvers use per-element units.
 
 pub mod bouc_wen;
+pub mod contact3d;
 pub mod cubic;
 pub mod gaul_lenz;
+pub mod hysteretic;
 pub mod iwan;
 pub mod jenkins;
+pub mod params;
+pub mod power_law_damper;
 pub mod quadratic_spring;
+pub mod unilateral;
 pub mod valanis;
 
-pub use bouc_wen::BoucWenParams;
-pub use gaul_lenz::GaulLenzParams;
+pub use bouc_wen::{BoucWen, BoucWenParams};
+pub use contact3d::{JenkinsContact, MicroslipContact};
+pub use cubic::CubicSpring;
+pub use gaul_lenz::{GaulLenz, GaulLenzParams};
+pub use hysteretic::{
+    check_partials, ContactStatus, HystereticElement, MemorylessSpring, StepPartials,
+};
 pub use iwan::{IwanElement, IwanParams};
-pub use jenkins::JenkinsParams;
+pub use jenkins::{Jenkins, JenkinsParams};
+pub use params::{ContactParams, ContactParamsPerArea};
+pub use power_law_damper::PowerLawDamper;
+pub use quadratic_spring::QuadraticSpring;
 pub use valanis::{Integrator, ValanisParams, ValanisState};
 
 /// Energy dissipated over a closed cycle, `W = ∮ F dq` (trapezoidal rule over consecutive

@@ -6,6 +6,7 @@
 //! gain is `a^n·I(n+2)/π` with `I(m) = ∫₀^{2π}|cos θ|^m dθ`, here `I(3) = 8/3`), where the cubic
 //! spring's is `¾·k3·a²`. Units: `q` in m, `F` in N, `k2` in N/m².
 
+use crate::element::hysteretic::MemorylessSpring;
 use std::f64::consts::PI;
 
 /// Force of the quadratic spring.
@@ -16,6 +17,26 @@ pub fn force(k2: f64, q: f64) -> f64 {
 /// Tangent stiffness `dF/dq = 2·k2·|q|`.
 pub fn stiffness(k2: f64, q: f64) -> f64 {
     2.0 * k2 * q.abs()
+}
+
+/// Quadratic spring `f = k2·|u|·u` on one displacement component (stiffness changing in
+/// proportion to the amplitude), no memory.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuadraticSpring {
+    /// Quadratic stiffness (N/m²).
+    pub k2: f64,
+}
+
+impl MemorylessSpring for QuadraticSpring {
+    fn law_name(&self) -> &'static str {
+        "quadratic-spring"
+    }
+    fn force_and_stiffness(&self, u: f64) -> (f64, f64) {
+        (force(self.k2, u), stiffness(self.k2, u))
+    }
+    fn scale(&self) -> f64 {
+        self.k2.abs()
+    }
 }
 
 /// Equivalent (describing-function) stiffness `8·k2·a/(3π)` (N/m) under `q = a·cos θ`.

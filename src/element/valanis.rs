@@ -57,6 +57,8 @@
 //! Two in-plane directions are two uncoupled elements ([`integrate_in_plane`]).
 
 use crate::core::error::{Error, Result};
+use crate::element::hysteretic::StepPartials as ElementPartials;
+use crate::element::unilateral::recontact_fraction;
 
 /// Parameters of a Valanis element (see the module documentation for units).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -127,16 +129,6 @@ pub fn force_slope(p: &ValanisParams, x: f64) -> f64 {
     p.e0 * (1.0 + x) / (1.0 + p.k * x)
 }
 
-/// Normal load `Fz = max(0, N0 + kn·uz)` (zero on separation; `uz > 0` closes the contact).
-pub fn normal_load(n0: f64, kn: f64, uz: f64) -> f64 {
-    (n0 + kn * uz).max(0.0)
-}
-
-/// [`normal_load`] for a whole history of normal displacements.
-pub fn normal_load_history(n0: f64, kn: f64, uz: &[f64]) -> Vec<f64> {
-    uz.iter().map(|&u| normal_load(n0, kn, u)).collect()
-}
-
 /// State of one element after a step: everything the next step needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ValanisState {
@@ -187,12 +179,31 @@ fn contact_transition(
         });
     }
     if state.fz <= 0.0 {
-        // Re-contact where the linearly interpolated load crosses zero: θ* = fz0/(fz0 − fz1).
-        let theta = state.fz / (state.fz - fz1);
+        // Re-contact where the linearly interpolated load crosses zero.
+        let (theta, _, _) = recontact_fraction(state.fz, fz1);
         let q_contact = state.q + theta * (q1 - state.q);
         return Ok(ValanisState::virgin(q_contact, 0.0));
     }
     Ok(*state)
+}
+
+/// The root `x1` of the backward-Euler quadratic `k·x² + (1 − A·k + B)·x + (B − A) = 0` of
+/// [`implicit_euler_step`] (`A = g·(Et·(q1 − q_ref) − F0)`, `B = λ1·|Δq| ≥ 0`): the larger root,
+/// the unique one with `1 + k·x > 0` (the discriminant exceeds `(1 − B + A·k)²` by `4B(1 − k)`),
+/// in the cancellation-free form; for `k = 0` the linear equation's root `(A − B)/(1 + B)`.
+fn implicit_euler_root(p: &ValanisParams, a: f64, b: f64) -> f64 {
+    if p.k == 0.0 {
+        return (a - b) / (1.0 + b);
+    }
+    let bb = 1.0 - a * p.k + b;
+    let c = b - a;
+    let disc = (bb * bb - 4.0 * p.k * c).max(0.0).sqrt();
+    if bb > 0.0 {
+        // x₊ = (−b + √Δ)/(2k) = 2c/(−b − √Δ)
+        2.0 * c / (-bb - disc)
+    } else {
+        (-bb + disc) / (2.0 * p.k)
+    }
 }
 
 /// One backward-Euler increment of the Valanis element from `state` to displacement `q1` under
@@ -219,23 +230,8 @@ pub fn implicit_euler_step(
     let mut force = start.force;
     if dq != 0.0 {
         let lam = p.lambda(fz1);
-        let s = dq.signum();
-        let g = s * lam / p.e0;
-        let a_coef = g * (p.et * (q1 - q_ref) - start.force);
-        let b_coef = lam * dq.abs();
-        let x = if p.k == 0.0 {
-            (a_coef - b_coef) / (1.0 + b_coef)
-        } else {
-            let b = 1.0 - a_coef * p.k + b_coef;
-            let c = b_coef - a_coef;
-            let disc = (b * b - 4.0 * p.k * c).max(0.0).sqrt();
-            if b > 0.0 {
-                // x₊ = (−b + √Δ)/(2k) = 2c/(−b − √Δ)
-                2.0 * c / (-b - disc)
-            } else {
-                (-b + disc) / (2.0 * p.k)
-            }
-        };
+        let g = dq.signum() * lam / p.e0;
+        let x = implicit_euler_root(p, g * (p.et * (q1 - q_ref) - start.force), lam * dq.abs());
         force = p.et * (q1 - q_ref) - x / g;
     }
     ValanisState {
@@ -246,7 +242,7 @@ pub fn implicit_euler_step(
     }
 }
 
-/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in the arrays of [`StepPartials`].
+/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in the arrays of [`ValanisPartials`].
 pub const F0: usize = 0;
 pub const QR0: usize = 1;
 pub const Q0: usize = 2;
@@ -258,38 +254,83 @@ pub const FZ1: usize = 5;
 /// (`fz1 > 0`) — the state itself, or the virgin state at the re-contact point
 /// `q_c = q0 + θ·(q1 − q0)`, `θ = Fz0/(Fz0 − Fz1)` — and its derivatives with respect to the six
 /// inputs.
-#[allow(clippy::type_complexity)]
-fn smooth_start(
-    state: &ValanisState,
-    q1: f64,
-    fz1: f64,
-) -> (f64, f64, f64, [f64; 6], [f64; 6], [f64; 6]) {
+struct SmoothStart {
+    force: f64,
+    q: f64,
+    q_ref: f64,
+    /// Derivatives of `force`, `q` and `q_ref` with respect to the six inputs.
+    dforce: [f64; 6],
+    dq: [f64; 6],
+    dq_ref: [f64; 6],
+}
+
+fn smooth_start(state: &ValanisState, q1: f64, fz1: f64) -> SmoothStart {
     if state.fz <= 0.0 {
-        let theta = state.fz / (state.fz - fz1);
-        let den = (state.fz - fz1) * (state.fz - fz1);
-        let dth_dfz0 = -fz1 / den;
-        let dth_dfz1 = state.fz / den;
+        let (theta, dth_dfz0, dth_dfz1) = recontact_fraction(state.fz, fz1);
         let qc = state.q + theta * (q1 - state.q);
         let mut dqc = [0.0; 6];
         dqc[Q0] = 1.0 - theta;
         dqc[Q1] = theta;
         dqc[FZ0] = (q1 - state.q) * dth_dfz0;
         dqc[FZ1] = (q1 - state.q) * dth_dfz1;
-        (0.0, qc, qc, [0.0; 6], dqc, dqc)
+        SmoothStart {
+            force: 0.0,
+            q: qc,
+            q_ref: qc,
+            dforce: [0.0; 6],
+            dq: dqc,
+            dq_ref: dqc,
+        }
     } else {
-        let mut df = [0.0; 6];
-        df[F0] = 1.0;
-        let mut dq = [0.0; 6];
-        dq[Q0] = 1.0;
-        let mut dqr = [0.0; 6];
-        dqr[QR0] = 1.0;
-        (state.force, state.q, state.q_ref, df, dq, dqr)
+        SmoothStart {
+            force: state.force,
+            q: state.q,
+            q_ref: state.q_ref,
+            dforce: unit(F0),
+            dq: unit(Q0),
+            dq_ref: unit(QR0),
+        }
     }
 }
 
+/// The frame shared by the differentiated steps ([`implicit_euler_step_partials`],
+/// [`frozen_load_step_partials`]): an increment that ends separated; otherwise the smooth start,
+/// the centre `Et·(q1 − q_ref)` of the band and its derivative, the integrator's unprojected end
+/// force with its derivative (`unprojected(start, centre, dcentre)`), and their projection onto
+/// the band of `Fz1`. The state is built from the same values (the step is not taken twice).
+#[inline(always)]
+fn differentiated_step(
+    p: &ValanisParams,
+    state: &ValanisState,
+    q1: f64,
+    fz1: f64,
+    step: fn(&ValanisParams, &ValanisState, f64, f64) -> ValanisState,
+    unprojected: impl FnOnce(&SmoothStart, f64, &[f64; 6]) -> (f64, [f64; 6]),
+) -> (ValanisState, ValanisPartials) {
+    if fz1 <= 0.0 {
+        return (step(p, state, q1, fz1), separated_partials());
+    }
+    let st = smooth_start(state, q1, fz1);
+    let dq1 = unit(Q1);
+    let centre = p.et * (q1 - st.q_ref);
+    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - st.dq_ref[i]));
+    let (force, dforce) = unprojected(&st, centre, &dcentre);
+    let d = ValanisPartials {
+        force: projected_partials(p, force, centre, &dcentre, fz1, dforce),
+        q_ref: st.dq_ref,
+    };
+    let out = ValanisState {
+        force: project(p, force, q1, st.q_ref, fz1),
+        q: q1,
+        fz: fz1,
+        q_ref: st.q_ref,
+    };
+    (out, d)
+}
+
 /// The partials of an increment that ends separated: `F1 = 0`, `q_ref1 = q1`.
-fn separated_partials() -> StepPartials {
-    let mut d = StepPartials::default();
+fn separated_partials() -> ValanisPartials {
+    let mut d = ValanisPartials::default();
     d.q_ref[Q1] = 1.0;
     d
 }
@@ -328,7 +369,7 @@ fn projected_partials(
 /// `(F0, q_ref0, q0, Fz0, q1, Fz1)` (start force, start reference displacement, start
 /// displacement, start normal load, end displacement, end normal load).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StepPartials {
+pub struct ValanisPartials {
     /// `∂F1/∂(F0, q_ref0, q0, Fz0, q1, Fz1)`.
     pub force: [f64; 6],
     /// `∂q_ref1/∂(F0, q_ref0, q0, Fz0, q1, Fz1)`.
@@ -336,7 +377,7 @@ pub struct StepPartials {
 }
 
 /// [`implicit_euler_step`] together with the exact derivatives of the discrete update
-/// ([`StepPartials`]), for Newton solvers that differentiate a time-discrete element (e.g. the
+/// ([`ValanisPartials`]), for Newton solvers that differentiate a time-discrete element (e.g. the
 /// alternating frequency–time method of `crate::dynamics::aft`).
 ///
 /// Derivation: the quadratic `P(x) = k·x² + (1 − A·k + B)·x + (B − A) = 0` of
@@ -351,67 +392,52 @@ pub fn implicit_euler_step_partials(
     state: &ValanisState,
     q1: f64,
     fz1: f64,
-) -> (ValanisState, StepPartials) {
-    let out = implicit_euler_step(p, state, q1, fz1);
-    if fz1 <= 0.0 {
-        return (out, separated_partials());
-    }
-    let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    let mut d = StepPartials {
-        q_ref: dqrs,
-        ..Default::default()
-    };
-    let (dq1, dfz1) = (unit(Q1), unit(FZ1));
-    let centre = p.et * (q1 - qrs);
-    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
-    let dq = q1 - qs;
-    // Unprojected force and its derivative.
-    let (force, dforce) = if dq == 0.0 {
-        // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
-        let lam = p.lambda(fz1);
-        let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
-        let slope = force_slope(p, x);
-        let mut df = dfs;
-        for i in 0..6 {
-            df[i] += slope * (dq1[i] - dqs[i]);
-        }
-        (fs, df)
-    } else {
-        let lam = p.lambda(fz1);
-        let s = dq.signum();
-        let g = s * lam / p.e0;
-        let dvar = p.et * (q1 - qrs) - fs;
-        let a = g * dvar;
-        let b = lam * dq.abs();
-        let x = if p.k == 0.0 {
-            (a - b) / (1.0 + b)
-        } else {
-            let bb = 1.0 - a * p.k + b;
-            let c = b - a;
-            let disc = (bb * bb - 4.0 * p.k * c).max(0.0).sqrt();
-            if bb > 0.0 {
-                2.0 * c / (-bb - disc)
-            } else {
-                (-bb + disc) / (2.0 * p.k)
+) -> (ValanisState, ValanisPartials) {
+    differentiated_step(
+        p,
+        state,
+        q1,
+        fz1,
+        implicit_euler_step,
+        |st, centre, dcentre| {
+            let (fs, qs, qrs) = (st.force, st.q, st.q_ref);
+            let (dfs, dqs, dqrs) = (&st.dforce, &st.dq, &st.dq_ref);
+            let (dq1, dfz1) = (unit(Q1), unit(FZ1));
+            let dq = q1 - qs;
+            if dq == 0.0 {
+                // F1 = F0 + Δq·E0·(1 + x)/(1 + k·x) + O(Δq²): the one-sided slope for Δq → 0+.
+                let lam = p.lambda(fz1);
+                let x = lam / p.e0 * (p.et * (q1 - qrs) - fs);
+                let slope = force_slope(p, x);
+                let mut df = *dfs;
+                for i in 0..6 {
+                    df[i] += slope * (dq1[i] - dqs[i]);
+                }
+                return (fs, df);
             }
-        };
-        let px = 2.0 * p.k * x + 1.0 - a * p.k + b;
-        let pa = -p.k * x - 1.0;
-        let pb = x + 1.0;
-        let mut df = [0.0; 6];
-        for i in 0..6 {
-            let dlam = -lam / fz1 * dfz1[i];
-            let dg = s * dlam / p.e0;
-            let dd = p.et * (dq1[i] - dqrs[i]) - dfs[i];
-            let da = g * dd + dvar * dg;
-            let db = dq.abs() * dlam + lam * s * (dq1[i] - dqs[i]);
-            let dx = -(pa * da + pb * db) / px;
-            df[i] = dcentre[i] - dx / g + x / (g * g) * dg;
-        }
-        (centre - x / g, df)
-    };
-    d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
-    (out, d)
+            let lam = p.lambda(fz1);
+            let s = dq.signum();
+            let g = s * lam / p.e0;
+            let dvar = p.et * (q1 - qrs) - fs;
+            let a = g * dvar;
+            let b = lam * dq.abs();
+            let x = implicit_euler_root(p, a, b);
+            let px = 2.0 * p.k * x + 1.0 - a * p.k + b;
+            let pa = -p.k * x - 1.0;
+            let pb = x + 1.0;
+            let mut df = [0.0; 6];
+            for i in 0..6 {
+                let dlam = -lam / fz1 * dfz1[i];
+                let dg = s * dlam / p.e0;
+                let dd = p.et * (dq1[i] - dqrs[i]) - dfs[i];
+                let da = g * dd + dvar * dg;
+                let db = dq.abs() * dlam + lam * s * (dq1[i] - dqs[i]);
+                let dx = -(pa * da + pb * db) / px;
+                df[i] = dcentre[i] - dx / g + x / (g * g) * dg;
+            }
+            (centre - x / g, df)
+        },
+    )
 }
 
 /// Relative tolerance of [`reference_step`], as a fraction of the slip force scale.
@@ -481,7 +507,7 @@ pub fn frozen_load_step(
     }
 }
 
-/// [`frozen_load_step`] together with the exact derivatives of the update ([`StepPartials`]),
+/// [`frozen_load_step`] together with the exact derivatives of the update ([`ValanisPartials`]),
 /// for the alternating frequency–time method, whose Newton iteration differentiates the
 /// element through the period.
 ///
@@ -499,69 +525,61 @@ pub fn frozen_load_step_partials(
     state: &ValanisState,
     q1: f64,
     fz1: f64,
-) -> (ValanisState, StepPartials) {
-    if fz1 <= 0.0 {
-        return (frozen_load_step(p, state, q1, fz1), separated_partials());
-    }
-    let (fs, qs, qrs, dfs, dqs, dqrs) = smooth_start(state, q1, fz1);
-    let mut d = StepPartials {
-        q_ref: dqrs,
-        ..Default::default()
-    };
-    let (dq1, dfz1) = (unit(Q1), unit(FZ1));
-    // The start force on the band of Fz1.
-    let centre0 = p.et * (qs - qrs);
-    let dcentre0: [f64; 6] = std::array::from_fn(|i| p.et * (dqs[i] - dqrs[i]));
-    let f0 = project(p, fs, qs, qrs, fz1);
-    let df0 = projected_partials(p, fs, centre0, &dcentre0, fz1, dfs);
-    let centre = p.et * (q1 - qrs);
-    let dcentre: [f64; 6] = std::array::from_fn(|i| p.et * (dq1[i] - dqrs[i]));
-    let dq = q1 - qs;
-    let (force, dforce) = if dq == 0.0 {
-        // F1 = F0' and, for Δq → 0+, dF1/dq1 = the branch's slope at the start.
-        let x = p.lambda(fz1) / p.e0 * (centre - f0);
-        let slope = force_slope(p, x);
-        (
-            f0,
-            std::array::from_fn(|i| df0[i] + slope * (dq1[i] - dqs[i])),
-        )
-    } else {
-        let b = branch_solution(p, fz1, qrs, qs, f0, q1);
-        let dd = p.et / p.e0 * p.k - 1.0;
-        // λ and g depend on Fz1 only.
-        let dlam_dfz1 = -b.lam / fz1;
-        let dg_dfz1 = b.s * dlam_dfz1 / p.e0;
-        // dx1 = c_x0·dx0 + c_t·d(λ·|Δq|), from dx1 = eʷ·(dr0 + r0·dw)/D with dr0 = D·dx0.
-        let (c_x0, c_t) = if b.r0 >= 0.0 {
-            (1.0, 0.0)
-        } else {
-            let psi_w = p.k * b.r0 * b.ew + (p.k - 1.0);
-            (
-                b.ew * (1.0 - b.r0 * p.k * (b.ew - 1.0) / psi_w),
-                b.ew * b.r0 * dd / psi_w,
-            )
-        };
-        let inv_g = 1.0 / b.g;
-        let gap0 = if b.clamped { 0.0 } else { centre0 - f0 };
-        let g0 = if b.clamped { 0.0 } else { b.g };
-        let df: [f64; 6] = std::array::from_fn(|i| {
-            let dg = dg_dfz1 * dfz1[i];
-            let dx0 = dg * gap0 + g0 * (dcentre0[i] - df0[i]);
-            let dtarget = dlam_dfz1 * dfz1[i] * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]);
-            let dx1 = c_x0 * dx0 + c_t * dtarget;
-            dcentre[i] - dx1 * inv_g + b.x1 * inv_g * inv_g * dg
-        });
-        (centre - b.x1 / b.g, df)
-    };
-    d.force = projected_partials(p, force, centre, &dcentre, fz1, dforce);
-    // The state of [`frozen_load_step`], from the same values (its branch is not solved twice).
-    let out = ValanisState {
-        force: project(p, force, q1, qrs, fz1),
-        q: q1,
-        fz: fz1,
-        q_ref: qrs,
-    };
-    (out, d)
+) -> (ValanisState, ValanisPartials) {
+    differentiated_step(
+        p,
+        state,
+        q1,
+        fz1,
+        frozen_load_step,
+        |st, centre, dcentre| {
+            let (fs, qs, qrs) = (st.force, st.q, st.q_ref);
+            let (dfs, dqs, dqrs) = (&st.dforce, &st.dq, &st.dq_ref);
+            let (dq1, dfz1) = (unit(Q1), unit(FZ1));
+            // The start force on the band of Fz1.
+            let centre0 = p.et * (qs - qrs);
+            let dcentre0: [f64; 6] = std::array::from_fn(|i| p.et * (dqs[i] - dqrs[i]));
+            let f0 = project(p, fs, qs, qrs, fz1);
+            let df0 = projected_partials(p, fs, centre0, &dcentre0, fz1, *dfs);
+            let dq = q1 - qs;
+            if dq == 0.0 {
+                // F1 = F0' and, for Δq → 0+, dF1/dq1 = the branch's slope at the start.
+                let x = p.lambda(fz1) / p.e0 * (centre - f0);
+                let slope = force_slope(p, x);
+                (
+                    f0,
+                    std::array::from_fn(|i| df0[i] + slope * (dq1[i] - dqs[i])),
+                )
+            } else {
+                let b = branch_solution(p, fz1, qrs, qs, f0, q1);
+                let dd = p.et / p.e0 * p.k - 1.0;
+                // λ and g depend on Fz1 only.
+                let dlam_dfz1 = -b.lam / fz1;
+                let dg_dfz1 = b.s * dlam_dfz1 / p.e0;
+                // dx1 = c_x0·dx0 + c_t·d(λ·|Δq|), from dx1 = eʷ·(dr0 + r0·dw)/D with dr0 = D·dx0.
+                let (c_x0, c_t) = if b.r0 >= 0.0 {
+                    (1.0, 0.0)
+                } else {
+                    let psi_w = p.k * b.r0 * b.ew + (p.k - 1.0);
+                    (
+                        b.ew * (1.0 - b.r0 * p.k * (b.ew - 1.0) / psi_w),
+                        b.ew * b.r0 * dd / psi_w,
+                    )
+                };
+                let inv_g = 1.0 / b.g;
+                let gap0 = if b.clamped { 0.0 } else { centre0 - f0 };
+                let g0 = if b.clamped { 0.0 } else { b.g };
+                let df: [f64; 6] = std::array::from_fn(|i| {
+                    let dg = dg_dfz1 * dfz1[i];
+                    let dx0 = dg * gap0 + g0 * (dcentre0[i] - df0[i]);
+                    let dtarget = dlam_dfz1 * dfz1[i] * dq.abs() + b.lam * b.s * (dq1[i] - dqs[i]);
+                    let dx1 = c_x0 * dx0 + c_t * dtarget;
+                    dcentre[i] - dx1 * inv_g + b.x1 * inv_g * inv_g * dg
+                });
+                (centre - b.x1 / b.g, df)
+            }
+        },
+    )
 }
 
 /// One increment by adaptive Dormand–Prince 5(4) (see [`reference_step`]); `state` must be in
@@ -868,6 +886,85 @@ fn branch_solution(p: &ValanisParams, fz: f64, q_ref: f64, q0: f64, f0: f64, q1:
     }
 }
 
+/// A Valanis element is reported in gross slip when its force is within 1 % of the sliding
+/// asymptote, `|F − Et·(q − q_ref)| ≥ 0.99·μ·Fz·(1 − Et/E0)`; below it, stick includes microslip.
+pub const GROSS_SLIP_FRACTION: f64 = 0.99;
+
+/// Where one Valanis direction of a [`HystereticElement`] keeps its state and reads its
+/// displacement (indices into the element's vectors).
+///
+/// [`HystereticElement`]: crate::element::HystereticElement
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Direction {
+    /// Index of the force and of `q_ref` in the state vector.
+    pub force: usize,
+    pub q_ref: usize,
+    /// Index of the tangential displacement in `u` (and of the force in `f`).
+    pub u: usize,
+    /// Index of the normal approach `un` in `u` and the normal stiffness `kn` when the normal
+    /// load is `N0 + kn·un` (a contact element); `None` for a constant normal load.
+    pub normal: Option<(usize, f64)>,
+}
+
+/// One [`frozen_load_step`] of a Valanis direction `c` of an element, from state `s0` at `u0`
+/// to `u1` under normal loads `fz0` → `fz1`: its force and `q_ref` into `s1`, its force into `f1`
+/// and, with `partials`, the derivatives of [`frozen_load_step_partials`] in the element's
+/// layout (chained through `∂Fz/∂un = kn` for a contact).
+// Inlined into its two callers: the indices of `c` are then constants (one AFT period calls it
+// once per sample and direction).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn direction_step(
+    p: &ValanisParams,
+    c: Direction,
+    s0: &[f64],
+    u0: &[f64],
+    u1: &[f64],
+    fz0: f64,
+    fz1: f64,
+    s1: &mut [f64],
+    f1: &mut [f64],
+    partials: Option<&mut ElementPartials>,
+) {
+    let st = ValanisState {
+        force: s0[c.force],
+        q: u0[c.u],
+        fz: fz0,
+        q_ref: s0[c.q_ref],
+    };
+    let out = match partials {
+        None => frozen_load_step(p, &st, u1[c.u], fz1),
+        Some(e) => {
+            let (out, d) = frozen_load_step_partials(p, &st, u1[c.u], fz1);
+            let (m, dim) = (e.m, e.d);
+            // Rows: the two states, then the force (which acts on the displacement's component).
+            for (row, g) in [(c.force, d.force), (c.q_ref, d.q_ref)] {
+                e.ds_ds0[row * m + c.force] = g[F0];
+                e.ds_ds0[row * m + c.q_ref] = g[QR0];
+                e.ds_du0[row * dim + c.u] = g[Q0];
+                e.ds_du1[row * dim + c.u] = g[Q1];
+                if let Some((n, kn)) = c.normal {
+                    e.ds_du0[row * dim + n] = g[FZ0] * kn;
+                    e.ds_du1[row * dim + n] = g[FZ1] * kn;
+                }
+            }
+            let row = c.u;
+            e.df_ds0[row * m + c.force] = d.force[F0];
+            e.df_ds0[row * m + c.q_ref] = d.force[QR0];
+            e.df_du0[row * dim + c.u] = d.force[Q0];
+            e.df_du1[row * dim + c.u] = d.force[Q1];
+            if let Some((n, kn)) = c.normal {
+                e.df_du0[row * dim + n] = d.force[FZ0] * kn;
+                e.df_du1[row * dim + n] = d.force[FZ1] * kn;
+            }
+            out
+        }
+    };
+    s1[c.force] = out.force;
+    s1[c.q_ref] = out.q_ref;
+    f1[c.u] = out.force;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -979,7 +1076,7 @@ mod tests {
         let uz: Vec<f64> = (0..q.len())
             .map(|i| 0.3 * n0 / kn * (2.0 * std::f64::consts::PI * i as f64 / per as f64).cos())
             .collect();
-        let fz = normal_load_history(n0, kn, &uz);
+        let fz = crate::element::unilateral::normal_load_history(n0, kn, &uz);
         let fe = integrate_implicit_euler(&p, &q, &fz).unwrap();
         let fr = integrate_reference(&p, &q, &fz).unwrap();
         let max_dev = fe
@@ -1081,7 +1178,8 @@ mod tests {
     #[test]
     fn step_partials_match_finite_differences() {
         type Step = fn(&ValanisParams, &ValanisState, f64, f64) -> ValanisState;
-        type Partials = fn(&ValanisParams, &ValanisState, f64, f64) -> (ValanisState, StepPartials);
+        type Partials =
+            fn(&ValanisParams, &ValanisState, f64, f64) -> (ValanisState, ValanisPartials);
         let p = ValanisParams::new(2.0e7, 0.5, 1.0e6, 0.6).unwrap();
         // k = 0 and Et = 0: the asymptote x∞ = −1 is reached.
         let p0 = ValanisParams::new(2.0e7, 0.0, 0.0, 0.6).unwrap();

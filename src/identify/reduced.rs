@@ -96,7 +96,7 @@ use crate::dynamics::contact::element_for;
 use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use crate::dynamics::model::Structure;
 use crate::dynamics::model_file::{self, LoadedModel};
-use crate::dynamics::nonlinear::{CubicSpring, QuadraticSpring};
+use crate::element::{CubicSpring, QuadraticSpring};
 use nalgebra::{DMatrix, DVector};
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -335,10 +335,7 @@ impl ReducedModel {
         s.damping *= sz * sf;
         for (att, (law, row)) in s.elements.iter_mut().zip(&l.element_rows) {
             let mut r = row.clone();
-            r.e0_n_per_m *= sk * preload;
-            r.et_n_per_m *= sk * preload;
-            r.kn_n_per_m *= sk * preload;
-            r.mu *= smu * preload;
+            r.element = r.element.scaled(sk * preload, smu * preload);
             att.element = element_for(*law, &r)?;
         }
         let map = DMatrix::from_row_slice(1, s.n(), l.responses[0].1.as_slice());

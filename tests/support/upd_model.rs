@@ -4,7 +4,7 @@
 //! refinement of a sampled peak. Units: SI (m, N, kg, Hz).
 
 use asperity::dynamics::model::Structure;
-use asperity::dynamics::nonlinear::MicroslipContact;
+use asperity::element::MicroslipContact;
 use asperity::element::ValanisParams;
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
