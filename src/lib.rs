@@ -18,6 +18,7 @@
 pub mod build_info;
 pub mod calibrate;
 pub mod contact;
+pub mod core;
 pub mod diagnose;
 pub mod dynamics;
 pub mod element;
