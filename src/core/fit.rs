@@ -729,6 +729,22 @@ pub fn search<O: Objective + ?Sized>(
     })
 }
 
+/// Nelder–Mead from each of `local_starts` (coordinates); the best (the first of equal costs).
+pub fn local_search<O: Objective + ?Sized>(
+    params: &[ParamSpec],
+    objective: &O,
+    local_starts: &[Vec<f64>],
+    local: &LocalSearch,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Search> {
+    let none = SwarmSettings {
+        particles: 0,
+        iterations: 0,
+        seed: 0,
+    };
+    search(params, objective, local_starts, 0, &none, local, progress)
+}
+
 /// Held-out selection: what the effect searches of `diagnose` (cycles of a loop record) and
 /// `identify` (rows of frequency sweeps) share.
 ///
@@ -771,29 +787,31 @@ pub mod held_out {
         n_eff * (cost_new / cost_old).ln() + added_params as f64 * n_eff.ln()
     }
 
-    /// One round of a greedy search: the candidates judged, and the one accepted (index).
+    /// One round of a greedy search: what the round started from (`meta`), the candidates
+    /// judged, and the one accepted (index).
     #[derive(Debug, Clone)]
-    pub struct Round<C> {
+    pub struct Round<C, M = ()> {
+        pub meta: M,
         pub candidates: Vec<C>,
         pub accepted: Option<usize>,
     }
 
     /// Greedy forward selection. From `state`, round after round while fewer than
     /// `max_rounds` rounds have run and `more(&state)` holds: `round(&state)` fits and judges
-    /// every candidate that may extend the state (an empty list ends the search), `pick` names
-    /// the one to accept (none: the search ends) and `accept` extends the state by it. Returns
-    /// the final state and the rounds.
-    pub fn rounds<S, C>(
+    /// every candidate that may extend the state, with what the round needs to say about its
+    /// start (an empty list ends the search), `pick` names the one to accept (none: the search
+    /// ends) and `accept` extends the state by it. Returns the final state and the rounds.
+    pub fn rounds<S, C, M>(
         mut state: S,
         max_rounds: usize,
         more: impl Fn(&S) -> bool,
-        mut round: impl FnMut(&S) -> crate::error::Result<Vec<C>>,
+        mut round: impl FnMut(&S) -> crate::error::Result<(M, Vec<C>)>,
         pick: impl Fn(&S, &[C]) -> Option<usize>,
         accept: impl Fn(S, &C) -> crate::error::Result<S>,
-    ) -> crate::error::Result<(S, Vec<Round<C>>)> {
+    ) -> crate::error::Result<(S, Vec<Round<C, M>>)> {
         let mut out = Vec::new();
         while out.len() < max_rounds && more(&state) {
-            let candidates = round(&state)?;
+            let (meta, candidates) = round(&state)?;
             if candidates.is_empty() {
                 break;
             }
@@ -802,6 +820,7 @@ pub mod held_out {
                 state = accept(state, &candidates[i])?;
             }
             out.push(Round {
+                meta,
                 candidates,
                 accepted,
             });
@@ -978,10 +997,13 @@ mod tests {
             5,
             |s: &Vec<usize>| s.len() < 3,
             |s: &Vec<usize>| {
-                Ok((0..3)
-                    .filter(|k| !s.contains(k))
-                    .map(|k| (k, gains[k]))
-                    .collect())
+                Ok((
+                    (),
+                    (0..3)
+                        .filter(|k| !s.contains(k))
+                        .map(|k| (k, gains[k]))
+                        .collect(),
+                ))
             },
             |_, c: &[(usize, f64)]| {
                 c.iter()
