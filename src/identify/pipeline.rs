@@ -63,6 +63,10 @@ pub const FAST_TOLERANCE: f64 = 1e-5;
 /// Relative Nelder–Mead tolerance of the default search's final refits on all rows (the
 /// reported parameters).
 pub const FAST_FINAL_TOLERANCE: f64 = 1e-6;
+/// Nelder–Mead iteration cap per run (up to five parameters, in proportion beyond) of the
+/// default search's screening fit of every candidate; those the held-out evidence leans to are
+/// refined ([`SelectOptions::refine`]).
+pub const SCREEN_ITERATIONS: u64 = 120;
 /// Steps of each Metropolis chain of the default run's prediction bands (the thorough run:
 /// [`uncertainty::CHAIN_STEPS`]).
 pub const FAST_CHAIN_STEPS: usize = 3000;
@@ -72,8 +76,9 @@ impl Options {
     /// from the data's scales and one swarm start; each candidate by Nelder–Mead from the
     /// current optimum and from it with the joint at the data's scales (no swarm,
     /// [`SelectOptions::joint_restart`]), every round's candidates in parallel and each fit
-    /// evaluated at its training rows only; early stopping at a relative tolerance of
-    /// [`FAST_TOLERANCE`] with one restart as the convergence test; final refits to
+    /// evaluated at its training rows only, screened ([`SCREEN_ITERATIONS`]) and the promising
+    /// ones refined; early stopping at a relative tolerance of [`FAST_TOLERANCE`] with one
+    /// restart as the convergence test; final refits to
     /// [`FAST_FINAL_TOLERANCE`]; chains of [`FAST_CHAIN_STEPS`] steps.
     pub fn new(family: Family) -> Self {
         let fast = FitOptions {
@@ -89,9 +94,14 @@ impl Options {
                 candidates: super::effects::Effect::ALL.to_vec(),
                 max_effects: 3,
                 baseline_fit: fast,
-                candidate_fit: FitOptions { starts: 0, ..fast },
+                candidate_fit: FitOptions {
+                    starts: 0,
+                    local_iterations: SCREEN_ITERATIONS,
+                    ..fast
+                },
                 training_rows_only: true,
                 joint_restart: true,
+                refine: Some(FitOptions { starts: 0, ..fast }),
             },
             final_fit: FitOptions {
                 tolerance: FAST_FINAL_TOLERANCE,
@@ -117,6 +127,7 @@ impl Options {
                 },
                 training_rows_only: false,
                 joint_restart: false,
+                refine: None,
                 ..Self::new(family).select
             },
             final_fit: FitOptions::default(),
@@ -142,7 +153,15 @@ impl Options {
         let n = self.select.candidates.len() as u64;
         let rounds = self.select.max_effects as u64 + 1;
         let final_dim = dim + 2 * self.select.max_effects;
-        let candidate = c.swarm_evaluations() + expected_local_evaluations(c, final_dim);
+        // Local starts per candidate, and the share of candidates refined (a third, as on the
+        // Brake–Reuss beam).
+        let local_starts = 1 + u64::from(self.select.joint_restart);
+        let candidate = c.swarm_evaluations()
+            + local_starts * expected_local_evaluations(c, final_dim)
+            + self
+                .select
+                .refine
+                .map_or(0, |r| expected_local_evaluations(&r, final_dim) / 3);
         let refits = 3 * expected_local_evaluations(&self.final_fit, final_dim);
         let chains = (uncertainty::CHAINS * self.chain_steps + 2 * final_dim + 1) as u64;
         match stage {

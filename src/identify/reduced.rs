@@ -701,6 +701,7 @@ impl ReducedOptions {
             candidate_fit: local,
             training_rows_only: false,
             joint_restart: false,
+            refine: None,
         }
     }
 }

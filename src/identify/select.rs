@@ -1,19 +1,26 @@
 //! Which effect does the model lack? Candidate effects accepted only on strong held-out
 //! evidence, against the measurement scatter estimated from the data.
 //!
-//! The approach is that of `crate::diagnose::select` (held-out data, ΔBIC with an effective
-//! sample size, a "very strong" threshold), adapted to frequency responses:
+//! The approach is that of `crate::diagnose::select` (held-out data, a "very strong"
+//! threshold; the split, the effective sample size, the `ΔBIC` and the greedy rounds are
+//! [`crate::core::fit::held_out`]'s), adapted to frequency responses:
 //!
 //! 1. **Split.** The rows of every fit level are split alternately into training rows (even
-//!    positions in the sweep) and held-out rows (odd positions). Models are always evaluated
-//!    along the whole sweep (warm starts follow the test), and fitted on training rows only.
+//!    positions in the sweep) and held-out rows (odd positions). Models are fitted on training
+//!    rows only: evaluated along the whole sweep with the held-out rows masked (the thorough
+//!    search), or along the training rows alone (the default, [`SelectOptions::training_rows_only`]:
+//!    the same objective to the balance's tolerance at half the cost).
 //! 2. **Candidates.** Each admissible effect ([`Extensible::admits`]: every candidate for the
-//!    single mode, [`super::reduced::REDUCED_EFFECTS`] for a reduced model) is added and
-//!    the model refitted: a particle swarm over the whole box (one start) and Nelder–Mead from
-//!    the current model's optimum with the effect's parameters at their neutral values; the
-//!    better of the two is kept. An effect with a neutral value (zero stiffness change, zero
+//!    single mode, [`super::reduced::REDUCED_EFFECTS`] for a reduced model) is added and the
+//!    model refitted, every candidate of a round in parallel, by Nelder–Mead from the current
+//!    model's optimum with the effect's parameters at their neutral values, and (thorough) a
+//!    particle swarm over the whole box followed by Nelder–Mead, or (default) Nelder–Mead from
+//!    the current optimum with the joint back at the data's scales
+//!    ([`SelectOptions::joint_restart`]); the best is kept. The default screens each candidate
+//!    with a low iteration cap and refines those the held-out evidence leans to
+//!    ([`SelectOptions::refine`]). An effect with a neutral value (zero stiffness change, zero
 //!    delay, ...) therefore never fits worse than the current model; a joint family has none
-//!    (its joint replaces the Jenkins slider), so its fit rests on the swarm.
+//!    (its joint replaces the Jenkins slider).
 //! 3. **Evidence.** On the held-out rows, `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)`
 //!    (Schwarz 1978), `J` the objective of [`super::fit`] on held-out rows, `n = 2·rows`
 //!    (real and imaginary parts), `n_eff = n·(1 − ρ)/(1 + ρ)` with `ρ` the lag-1
@@ -249,6 +256,12 @@ pub struct Candidate<M = Model> {
     /// Every fit level's held-out residual fell.
     pub improves_every_level: bool,
     pub converged: bool,
+    /// Model evaluations of the candidate's fit (screening and refinement).
+    pub evaluations: u64,
+    /// Wall time of the candidate's fit (s).
+    pub wall_time_s: f64,
+    /// Refitted from its screening optimum ([`SelectOptions::refine`]).
+    pub refined: bool,
     #[serde(skip)]
     pub fit: FitResult<M>,
 }
@@ -321,6 +334,11 @@ pub struct SelectOptions {
     /// in another basin that a local start from the current optimum does not reach and a
     /// swarm per candidate finds at a dozen times the cost.
     pub joint_restart: bool,
+    /// Screening: with `Some`, [`SelectOptions::candidate_fit`] is a screening fit (a low
+    /// iteration cap), and the candidates whose held-out evidence leans to them (`ΔBIC` below
+    /// [`REFINE_BELOW`]) are refitted from their screening optimum with these settings before
+    /// the round decides; the others are refused on their screening fit.
+    pub refine: Option<FitOptions>,
 }
 
 /// Fit a candidate spec: Nelder–Mead from each of `starts` (physical values) and one swarm
@@ -547,8 +565,13 @@ pub fn select<S: Extensible>(
                 .filter(|&&e| waits(e))
                 .map(|&e| fit_one(e, &first))
                 .collect::<Result<_>>()?;
-            let mut candidates: Vec<Candidate<S::Model>> =
-                first.into_iter().chain(second).collect();
+            let mut candidates: Vec<Candidate<S::Model>> = first
+                .into_iter()
+                .chain(second)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|c| evidence.refined(c, fit_levels, train, opts, progress))
+                .collect::<Result<_>>()?;
             candidates.sort_by_key(|c| tried.iter().position(|&e| e == c.effect));
             // Interacting effects: when two new effects each have strong evidence on the
             // pooled held-out rows but raise some level's residual (on the Brake–Reuss beam
@@ -586,7 +609,8 @@ pub fn select<S: Extensible>(
                         );
                         let fit =
                             fit_candidate(&cspec, &[start], fit_levels, train, opts, progress)?;
-                        evidence.judge(&cspec, a.effect, Some(b.effect), None, fit)
+                        let c = evidence.judge(&cspec, a.effect, Some(b.effect), None, fit)?;
+                        evidence.refined(c, fit_levels, train, opts, progress)
                     })
                     .collect::<Result<_>>()?;
                 candidates.extend(pairs);
@@ -702,10 +726,46 @@ impl<S: Extensible> Evidence<'_, S> {
                 .all(|(a, b)| a < b),
             held_out: h,
             converged: fit.converged,
+            evaluations: fit.evaluations,
+            wall_time_s: fit.wall_time_s,
+            refined: false,
             fit,
         })
     }
+
+    /// With [`SelectOptions::refine`], a screened candidate whose held-out `ΔBIC` is below
+    /// [`REFINE_BELOW`] refitted from its optimum by Nelder–Mead with those settings and judged
+    /// again; any other candidate as it is.
+    fn refined(
+        &self,
+        c: Candidate<S::Model>,
+        fit_levels: &[LevelData],
+        train: &[Vec<bool>],
+        opts: &SelectOptions,
+        progress: Option<&indicatif::ProgressBar>,
+    ) -> Result<Candidate<S::Model>> {
+        let Some(refine) = &opts.refine else {
+            return Ok(c);
+        };
+        if c.delta_bic.is_nan() || c.delta_bic >= REFINE_BELOW {
+            return Ok(c);
+        }
+        let cspec = S::spec_of(&c.fit.model).clone();
+        let start = S::values_of(&c.fit.model).to_vec();
+        let fit = fit_local(&cspec, fit_levels, train, &[start], refine, progress)?;
+        let evaluations = c.evaluations + fit.evaluations;
+        let wall_time_s = c.wall_time_s + fit.wall_time_s;
+        let mut r = self.judge(&cspec, c.effect, c.jointly_with, c.generalises, fit)?;
+        r.evaluations = evaluations;
+        r.wall_time_s = wall_time_s;
+        r.refined = true;
+        Ok(r)
+    }
 }
+
+/// A screened candidate is refined when its held-out `ΔBIC` is below this (the evidence leans
+/// to it; the acceptance threshold [`BIC_THRESHOLD`] is ten below).
+pub const REFINE_BELOW: f64 = 0.0;
 
 /// Refit a model on all rows of the fit levels (local, from its training optimum).
 pub fn refit_all_rows<S: Extensible>(
