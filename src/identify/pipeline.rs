@@ -73,18 +73,20 @@ pub const FAST_CHAIN_STEPS: usize = 3000;
 
 impl Options {
     /// Default options for a family, fast: all candidates, up to three effects; the baseline
-    /// from the data's scales and one swarm start; each candidate by Nelder–Mead from the
+    /// from the data's scales and one swarm start; each candidate screened by Nelder–Mead
+    /// ([`SCREEN_ITERATIONS`], relative tolerance [`FAST_TOLERANCE`], one restart) from the
     /// current optimum and from it with the joint at the data's scales (no swarm,
     /// [`SelectOptions::joint_restart`]), every round's candidates in parallel and each fit
-    /// evaluated at its training rows only, screened ([`SCREEN_ITERATIONS`]) and the promising
-    /// ones refined; early stopping at a relative tolerance of [`FAST_TOLERANCE`] with one
-    /// restart as the convergence test; final refits to
+    /// evaluated at its training rows only; the candidates the held-out evidence leans to
+    /// refined as the baseline is fitted (to the thorough tolerance, so that the model a round
+    /// starts from and the candidates it accepts are converged alike); final refits to
     /// [`FAST_FINAL_TOLERANCE`]; chains of [`FAST_CHAIN_STEPS`] steps.
     pub fn new(family: Family) -> Self {
-        let fast = FitOptions {
-            starts: 1,
+        let screen = FitOptions {
+            starts: 0,
             restarts: 1,
             tolerance: FAST_TOLERANCE,
+            local_iterations: SCREEN_ITERATIONS,
             ..FitOptions::default()
         };
         Self {
@@ -93,15 +95,17 @@ impl Options {
             select: SelectOptions {
                 candidates: super::effects::Effect::ALL.to_vec(),
                 max_effects: 3,
-                baseline_fit: fast,
-                candidate_fit: FitOptions {
-                    starts: 0,
-                    local_iterations: SCREEN_ITERATIONS,
-                    ..fast
+                baseline_fit: FitOptions {
+                    starts: 1,
+                    ..FitOptions::default()
                 },
+                candidate_fit: screen,
                 training_rows_only: true,
                 joint_restart: true,
-                refine: Some(FitOptions { starts: 0, ..fast }),
+                refine: Some(FitOptions {
+                    starts: 0,
+                    ..FitOptions::default()
+                }),
             },
             final_fit: FitOptions {
                 tolerance: FAST_FINAL_TOLERANCE,
