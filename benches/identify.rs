@@ -99,7 +99,7 @@ fn main() {
         // A joint slipping over part of the measured range: κ = 5 %, δ = 100 µm.
         m.values[3] = 0.05;
         m.values[4] = 1e-4;
-        let obj = Objective::new(spec, &levels, &masks, None);
+        let obj = Objective::new(spec, &levels, &masks);
         let per = pool.install(|| {
             obj.cost_of(&m);
             // At least 2 s of CPU time (a shared machine's CPU time per evaluation scatters by

@@ -105,6 +105,7 @@ fn fit_options(seed: u64) -> FitOptions {
         starts: 1,
         seed,
         local_iterations: 600,
+        ..FitOptions::default()
     }
 }
 

@@ -51,7 +51,7 @@ fn sweep(model: &Model, force: f64, seed: u64) -> Sweep {
 }
 
 fn options(candidates: Vec<Effect>) -> Options {
-    let mut o = Options::new(Family::Jenkins);
+    let mut o = Options::thorough(Family::Jenkins);
     o.fit_levels = Some(vec![1, 3]);
     o.select.candidates = candidates;
     o.select.max_effects = 1;
@@ -64,6 +64,7 @@ fn options(candidates: Vec<Effect>) -> Options {
         starts: 1,
         seed: 1,
         local_iterations: 600,
+        ..FitOptions::default()
     };
     o.select.candidate_fit = FitOptions {
         starts: 0,

@@ -22,9 +22,10 @@
 //!
 //! # Method
 //!
-//! Nelder–Mead simplex (argmin) on transformed parameters that keep the constraints by
-//! construction: `E0 = E0_ref·exp(θ₀)` (> 0), `k = σ(θ₁)` (in (0, 1)), `Et = E0·σ(θ₂)` (in
-//! [0, E0)), with `σ` the logistic function. Several starts (default k₀ = 0.1, 0.5, 0.9) with `E0` from the
+//! Nelder–Mead simplex of [`crate::core::fit`] on transformed parameters that keep the
+//! constraints by construction: `E0 = E0_ref·exp(θ₀)` (> 0, [`ParamSpec::exp`]),
+//! `k = σ(θ₁)` (in (0, 1)), `Et = E0·σ(θ₂)` (in [0, E0)), with `σ` the logistic function
+//! ([`ParamSpec::logit`]). Several starts (default k₀ = 0.1, 0.5, 0.9) with `E0` from the
 //! steepest slope of the data (the reload slope `2E0/(1+k)`), best result kept.
 //!
 //! # Reported quality
@@ -33,10 +34,9 @@
 //! cycle) and the relative error of the energy dissipated per cycle `∮F dq`.
 
 use crate::core::error::{Error, Result};
+use crate::core::fit::{self as core_fit, LocalSearch, ParamSpec, Restarts, Tolerance};
 use crate::element::dissipated_energy;
 use crate::element::valanis::{integrate_reference, ValanisParams};
-use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
-use argmin::solver::neldermead::NelderMead;
 use std::ops::Range;
 use std::time::{Duration, Instant};
 
@@ -183,37 +183,22 @@ pub fn goodness_of_fit(data: &[f64], model: &[f64]) -> (f64, f64) {
     (r2, (ss_res / n).sqrt() / (hi - lo))
 }
 
-fn logistic(t: f64) -> f64 {
-    1.0 / (1.0 + (-t).exp())
-}
-
-fn logit(p: f64) -> f64 {
-    (p / (1.0 - p)).ln()
-}
-
-#[derive(Clone)]
+/// The loops and what the fit holds fixed: the cost of a parameter set.
 struct Problem<'a> {
     loops: &'a [LoopData],
     mu: f64,
     fit_et: bool,
-    e0_ref: f64,
     /// Total sum of squares of each loop's steady cycle.
     ss_tot: Vec<f64>,
 }
 
 impl Problem<'_> {
-    fn params(&self, theta: &[f64]) -> ValanisParams {
-        let e0 = self.e0_ref * theta[0].clamp(-50.0, 50.0).exp();
-        let k = logistic(theta[1]).min(1.0 - 1e-12);
-        let et = if self.fit_et {
-            e0 * logistic(theta[2]).min(1.0 - 1e-9)
-        } else {
-            0.0
-        };
+    /// The element of the fitted values `[E0, k]` or `[E0, k, Et/E0]`.
+    fn params(&self, v: &[f64]) -> ValanisParams {
         ValanisParams {
-            e0,
-            k,
-            et,
+            e0: v[0],
+            k: v[1],
+            et: if self.fit_et { v[0] * v[2] } else { 0.0 },
             mu: self.mu,
         }
     }
@@ -240,14 +225,23 @@ impl Problem<'_> {
     }
 }
 
-impl CostFunction for Problem<'_> {
-    type Param = Vec<f64>;
-    type Output = f64;
-
-    fn cost(&self, theta: &Vec<f64>) -> std::result::Result<f64, argmin::core::Error> {
+impl core_fit::Objective for Problem<'_> {
+    fn cost(&self, values: &[f64]) -> f64 {
         // Parameters the integrator cannot follow are simply bad parameters.
-        Ok(self.cost(&self.params(theta)).unwrap_or(f64::MAX))
+        self.cost(&self.params(values)).unwrap_or(f64::MAX)
     }
+}
+
+/// The fitted parameters: `E0` about the data's steepest slope, `k`, and `Et/E0` if fitted.
+fn param_specs(slope: f64, k0: f64, fit_et: bool) -> Vec<ParamSpec> {
+    let mut p = vec![
+        ParamSpec::exp("E0", "Pa/m", slope, slope * (1.0 + k0) / 2.0),
+        ParamSpec::logit("k", "-", 0.0, 1.0, k0),
+    ];
+    if fit_et {
+        p.push(ParamSpec::logit("Et/E0", "-", 0.0, 1.0, 0.01));
+    }
+    p
 }
 
 /// Fit E0, k (and Et if `opts.fit_et`) of a Valanis element to `data` with μ fixed.
@@ -294,57 +288,47 @@ pub fn fit_valanis_loops(loops: &[LoopData], opts: &FitOptions) -> Result<FitRes
         loops,
         mu: opts.mu,
         fit_et: opts.fit_et,
-        e0_ref: slope,
         ss_tot,
     };
-    let mut best: Option<(Vec<f64>, f64, bool)> = None;
-    let mut iterations = 0;
     if opts.k_starts.is_empty() {
         return Err(Error::param("k_starts", "give at least one start"));
     }
-    for &k_start in &opts.k_starts {
-        if !(k_start.is_finite() && (0.0..1.0).contains(&k_start)) {
-            return Err(Error::param(
-                "k_starts",
-                format!("each k must satisfy 0 <= k < 1, got {k_start}"),
-            ));
-        }
-        let k0 = k_start.clamp(1e-6, 1.0 - 1e-6);
-        let e0_0 = slope * (1.0 + k0) / 2.0;
-        let mut x0 = vec![(e0_0 / slope).ln(), logit(k0)];
-        if opts.fit_et {
-            x0.push(logit(0.01));
-        }
-        let dim = x0.len();
-        let mut simplex = vec![x0.clone()];
-        for j in 0..dim {
-            let mut v = x0.clone();
-            v[j] += if j == 0 { 0.3 } else { 1.0 };
-            simplex.push(v);
-        }
-        let solver = NelderMead::new(simplex)
-            .with_sd_tolerance(1e-12)
-            .map_err(|e| Error::Data(format!("Nelder–Mead setup: {e}")))?;
-        let res = Executor::new(problem.clone(), solver)
-            .configure(|s| s.max_iters(opts.max_iters))
-            .run()
-            .map_err(|e| Error::Data(format!("Valanis fit failed: {e}")))?;
-        let state = res.state();
-        iterations += state.get_iter();
-        let converged = matches!(
-            state.get_termination_status(),
-            TerminationStatus::Terminated(TerminationReason::SolverConverged)
-        );
-        if let Some(p) = state.get_best_param() {
-            let c = state.get_best_cost();
-            if best.as_ref().is_none_or(|b| c < b.1) {
-                best = Some((p.clone(), c, converged));
-            }
-        }
+    if let Some(k) = opts
+        .k_starts
+        .iter()
+        .find(|k| !(k.is_finite() && (0.0..1.0).contains(*k)))
+    {
+        return Err(Error::param(
+            "k_starts",
+            format!("each k must satisfy 0 <= k < 1, got {k}"),
+        ));
     }
-    let (theta, cost, converged) =
-        best.ok_or_else(|| Error::Data("Valanis fit found no parameters".into()))?;
-    let params = problem.params(&theta);
+    // One Nelder–Mead run per start of k, E0 from the slope; the transforms do not depend on
+    // the start, only the start points do.
+    let params = param_specs(slope, 0.5, opts.fit_et);
+    let starts: Vec<Vec<f64>> = opts
+        .k_starts
+        .iter()
+        .map(|&k_start| {
+            let k0 = k_start.clamp(1e-6, 1.0 - 1e-6);
+            param_specs(slope, k0, opts.fit_et)
+                .iter()
+                .map(|p| p.start_coordinate())
+                .collect()
+        })
+        .collect();
+    let local = LocalSearch {
+        max_iters: opts.max_iters,
+        tolerance: Tolerance::Absolute(1e-12),
+        first_step: 1.0,
+        restart_step: 1.0,
+        restarts: Restarts::UntilConverged(0),
+    };
+    let search = core_fit::local_search(&params, &problem, &starts, &local, None)
+        .map_err(|e| Error::Data(format!("Valanis fit failed: {e}")))?;
+    let iterations = search.starts.iter().map(|s| s.local_iterations).sum();
+    let (cost, converged) = (search.best.cost, search.best.converged);
+    let params = problem.params(&search.best.values);
     let mut fits = Vec::with_capacity(loops.len());
     for data in loops {
         let model_force = problem.model(&params, data)?;

@@ -55,22 +55,32 @@ pub struct IdentifyArgs {
     /// Maximum number of effects added (each needs strong held-out evidence).
     #[arg(long, default_value_t = 3)]
     pub max_effects: usize,
-    /// Particle-swarm starts of the baseline fit (each followed by Nelder–Mead). With
-    /// `--structure`, 0 is allowed: Nelder–Mead from the model as given only.
-    #[arg(long, default_value_t = 3)]
-    pub starts: usize,
-    /// Particles of the swarm.
-    #[arg(long, default_value_t = 32)]
-    pub particles: usize,
-    /// Swarm iterations per start.
-    #[arg(long, default_value_t = 40)]
-    pub swarm_iterations: u64,
+    /// The thorough search: three particle-swarm starts for the baseline and one for every
+    /// candidate beside its local start, Nelder–Mead to a relative tolerance of 1e-7 with up to
+    /// three restarts, every row evaluated, chains of 6000 steps (about 20 CPU-minutes on four
+    /// Brake–Reuss levels where the default takes about one). The default: the baseline from
+    /// the data's scales and one swarm start, each candidate by Nelder–Mead from the current
+    /// optimum (in parallel), early stopping at 1e-5 with one restart as the convergence test,
+    /// training rows only, chains of 3000 steps.
+    #[arg(long, conflicts_with = "structure")]
+    pub thorough: bool,
+    /// Particle-swarm starts of the baseline fit (each followed by Nelder–Mead); default 1, 3
+    /// with `--thorough`. With `--structure` (default 3), 0 is allowed: Nelder–Mead from the
+    /// model as given only.
+    #[arg(long)]
+    pub starts: Option<usize>,
+    /// Particles of the swarm (default 32).
+    #[arg(long)]
+    pub particles: Option<usize>,
+    /// Swarm iterations per start (default 40).
+    #[arg(long)]
+    pub swarm_iterations: Option<u64>,
     /// Nelder–Mead iteration cap per run for up to five parameters, scaled in proportion to the
-    /// parameter count beyond (each fit runs Nelder–Mead and restarts it from its optimum, up to
-    /// three times, until a restart stops on its tolerance; one that never does has not
-    /// converged, which is an error for the final models).
-    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u64).range(1..))]
-    pub local_iterations: u64,
+    /// parameter count beyond (each fit runs Nelder–Mead and restarts it from its optimum until
+    /// a restart stops on its tolerance; one that never does has not converged, which is an
+    /// error for the final models); default 600.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub local_iterations: Option<u64>,
     /// Seed of the first start (start k uses seed + k).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -80,8 +90,8 @@ pub struct IdentifyArgs {
     #[arg(long, value_delimiter = ',')]
     pub response_amplitude: Option<Vec<f64>>,
     /// Steps of each of the two Metropolis chains that sample the models fitting about as well
-    /// (the 95 % bands of the predictions; 0: no bands, otherwise at least 1000). Default 6000;
-    /// with `--structure` the default bands are left out when they would take more than ten
+    /// (the 95 % bands of the predictions; 0: no bands, otherwise at least 1000). Default 3000,
+    /// 6000 with `--thorough` and `--structure`; with `--structure` the default bands are left out when they would take more than ten
     /// minutes (the report gives the expected time), and an explicit value runs them.
     #[arg(long)]
     pub chain_steps: Option<usize>,
@@ -141,16 +151,16 @@ fn chain_steps(args: &IdentifyArgs) -> Result<Option<usize>> {
 /// The search settings within the resource limits (before anything is read or fitted).
 fn check_limits(args: &IdentifyArgs) -> Result<()> {
     use asperity::core::limits::*;
-    check_count("--starts", args.starts, MAX_FIT_STARTS)?;
-    check_count("--particles", args.particles, MAX_PARTICLES)?;
+    check_count("--starts", args.starts.unwrap_or(0), MAX_FIT_STARTS)?;
+    check_count("--particles", args.particles.unwrap_or(0), MAX_PARTICLES)?;
     check_count(
         "--swarm-iterations",
-        args.swarm_iterations as usize,
+        args.swarm_iterations.unwrap_or(0) as usize,
         MAX_SWARM_ITERATIONS as usize,
     )?;
     check_count(
         "--local-iterations",
-        args.local_iterations as usize,
+        args.local_iterations.unwrap_or(0) as usize,
         MAX_LOCAL_ITERATIONS as usize,
     )?;
     check_count(
@@ -170,14 +180,29 @@ fn check_limits(args: &IdentifyArgs) -> Result<()> {
 }
 
 /// The search settings must allow a swarm.
-fn check_search(args: &IdentifyArgs) -> Result<()> {
-    if args.starts == 0 || args.particles < 2 {
+fn check_search(starts: usize, particles: usize) -> Result<()> {
+    if starts == 0 || particles < 2 {
         return Err(Error::param(
             "--starts/--particles",
             "at least one start and two particles",
         ));
     }
     Ok(())
+}
+
+/// The swarm and Nelder–Mead settings of `--particles`, `--swarm-iterations`,
+/// `--local-iterations` and `--seed` applied to `fit` (those not given keep its values).
+fn apply_search_args(
+    fit: asperity::identify::fit::FitOptions,
+    args: &IdentifyArgs,
+) -> asperity::identify::fit::FitOptions {
+    asperity::identify::fit::FitOptions {
+        particles: args.particles.unwrap_or(fit.particles),
+        swarm_iterations: args.swarm_iterations.unwrap_or(fit.swarm_iterations),
+        local_iterations: args.local_iterations.unwrap_or(fit.local_iterations),
+        seed: args.seed,
+        ..fit
+    }
 }
 
 pub fn run_identify(args: IdentifyArgs) -> Result<()> {
@@ -190,27 +215,31 @@ pub fn run_identify(args: IdentifyArgs) -> Result<()> {
         FamilyArg::Valanis => Family::Valanis,
         FamilyArg::Iwan => Family::Iwan,
     };
-    let mut opts = Options::new(family);
+    let mut opts = if args.thorough {
+        Options::thorough(family)
+    } else {
+        Options::new(family)
+    };
     opts.fit_levels = args.fit_levels.clone();
     if let Some(c) = &args.candidates {
         opts.select.candidates = parse_candidates(c, &Effect::ALL)?;
     }
-    check_search(&args)?;
     opts.select.max_effects = args.max_effects;
-    opts.select.baseline_fit.starts = args.starts;
-    for f in [
-        &mut opts.select.baseline_fit,
-        &mut opts.select.candidate_fit,
-        &mut opts.final_fit,
-    ] {
-        f.local_iterations = args.local_iterations;
-        f.particles = args.particles;
-        f.swarm_iterations = args.swarm_iterations;
-        f.seed = args.seed;
+    if let Some(n) = args.starts {
+        opts.select.baseline_fit.starts = n;
     }
+    check_search(
+        opts.select.baseline_fit.starts,
+        args.particles.unwrap_or(opts.select.baseline_fit.particles),
+    )?;
+    opts.select.baseline_fit = apply_search_args(opts.select.baseline_fit, &args);
+    opts.select.candidate_fit = apply_search_args(opts.select.candidate_fit, &args);
+    opts.final_fit = apply_search_args(opts.final_fit, &args);
     opts.response_amplitudes = args.response_amplitude.clone();
     opts.rows = fit_rows(args.rows);
-    opts.chain_steps = chain_steps(&args)?.unwrap_or(asperity::identify::uncertainty::CHAIN_STEPS);
+    if let Some(n) = chain_steps(&args)? {
+        opts.chain_steps = n;
+    }
     let out = identify_outputs(&args)?;
     let sweeps = read_sweeps(&args.files)?;
     if let Some(note) = work_note(opts.estimated_evaluations(), &sweeps) {
@@ -305,8 +334,12 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     use asperity::identify::reduced::{
         identify_reduced, ReducedOptions, ReducedSpec, REDUCED_EFFECTS,
     };
-    if args.starts > 0 {
-        check_search(args)?;
+    let starts = args.starts.unwrap_or(FitOptions::default().starts);
+    if starts > 0 {
+        check_search(
+            starts,
+            args.particles.unwrap_or(FitOptions::default().particles),
+        )?;
     }
     let mut out = identify_outputs(args)?;
     for (role, p) in asperity::dynamics::model_file::referenced_files(structure)? {
@@ -317,11 +350,8 @@ fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Res
     let fit_levels =
         asperity::identify::pipeline::choose_fit_levels(&sweeps, args.fit_levels.as_deref())?;
     let opts = FitOptions {
-        particles: args.particles,
-        swarm_iterations: args.swarm_iterations,
-        starts: args.starts,
-        seed: args.seed,
-        local_iterations: args.local_iterations,
+        starts,
+        ..apply_search_args(FitOptions::default(), args)
     };
     let dim = spec.params().len() as u64;
     let local = asperity::identify::fit::local_iteration_cap(opts.local_iterations, dim as usize);

@@ -6,6 +6,7 @@
 //! | [`material`] | isotropic elastic materials, composite modulus |
 //! | [`grid`] | [`grid::Grid2`], heights on a regular grid with their spacing |
 //! | [`stats`] | median, percentiles, quantiles, Student-t quantiles |
+//! | [`fit`] | the one fitting layer: bounded parameter specs and transforms, restarted Nelder–Mead (argmin), particle swarm, held-out helpers |
 //! | [`hash`] | SHA-256 of files and bytes (provenance) |
 //! | [`error`] | the crate's [`error::Error`] and [`error::Result`] |
 //! | [`input`] | CSV/TOML readers that name the file and line of a bad value |
@@ -22,6 +23,7 @@
 pub mod build_info;
 pub mod error;
 pub mod fft;
+pub mod fit;
 pub mod grid;
 pub mod hash;
 pub mod input;

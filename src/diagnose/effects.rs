@@ -143,27 +143,23 @@ impl Effect {
         let (f, a, v) = (drive.force_scale_n, drive.amplitude_m, drive.velocity_scale);
         let stiff = f / a;
         match self {
-            Effect::MacroslipSlope => vec![ParamSpec::log(
-                "et",
-                "N/m",
-                1e-4 * stiff,
-                stiff,
-                0.05 * stiff,
-            )],
+            Effect::MacroslipSlope => {
+                vec![log_param("et", "N/m", 1e-4 * stiff, stiff, 0.05 * stiff)]
+            }
             Effect::VelocityDependentFriction => vec![
-                ParamSpec::log("static_excess", "-", 1e-3, 2.0, 0.1),
-                ParamSpec::log("decay_velocity", "m/s", 1e-3 * v, v, 0.2 * v),
+                log_param("static_excess", "-", 1e-3, 2.0, 0.1),
+                log_param("decay_velocity", "m/s", 1e-3 * v, v, 0.2 * v),
             ],
-            Effect::ViscousDamping => vec![ParamSpec::log(
+            Effect::ViscousDamping => vec![log_param(
                 "damping",
                 "N*s/m",
                 1e-4 * f / v,
                 f / v,
                 0.02 * f / v,
             )],
-            Effect::Backlash => vec![ParamSpec::log("gap", "m", 1e-4 * a, 0.5 * a, 0.005 * a)],
+            Effect::Backlash => vec![log_param("gap", "m", 1e-4 * a, 0.5 * a, 0.005 * a)],
             Effect::SeriesCompliance => {
-                vec![ParamSpec::log(
+                vec![log_param(
                     "series_stiffness",
                     "N/m",
                     stiff,
@@ -176,163 +172,57 @@ impl Effect {
                     vec![]
                 } else {
                     vec![
-                        ParamSpec::linear("normal_cos_amplitude", "-", -0.5, 0.5, 0.0),
-                        ParamSpec::linear("normal_sin_amplitude", "-", -0.5, 0.5, 0.0),
+                        linear_param("normal_cos_amplitude", "-", -0.5, 0.5, 0.0),
+                        linear_param("normal_sin_amplitude", "-", -0.5, 0.5, 0.0),
                     ]
                 }
             }
             Effect::StaticFrictionPeak => vec![
-                ParamSpec::log("static_excess", "-", 1e-3, 2.0, 0.1),
-                ParamSpec::log("decay_slip_distance", "m", 1e-3 * a, a, 0.05 * a),
+                log_param("static_excess", "-", 1e-3, 2.0, 0.1),
+                log_param("decay_slip_distance", "m", 1e-3 * a, a, 0.05 * a),
             ],
             Effect::DirectionalFriction => {
-                vec![ParamSpec::linear(
-                    "direction_asymmetry",
-                    "-",
-                    -0.5,
-                    0.5,
-                    0.0,
-                )]
+                vec![linear_param("direction_asymmetry", "-", -0.5, 0.5, 0.0)]
             }
         }
     }
 }
 
-/// How the bounded interval `[lower, upper]` of a parameter is spanned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Transform {
-    /// Linearly: `value = lower + (upper − lower)·u`.
-    Linear,
-    /// Logarithmically (a scale parameter spanning decades): `value = lower·(upper/lower)^u`.
-    Log,
-}
-
-/// Which bound a fitted parameter sits on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Bound {
-    Lower,
-    Upper,
-}
-
-impl Bound {
-    pub fn name(self) -> &'static str {
-        match self {
-            Bound::Lower => "lower",
-            Bound::Upper => "upper",
-        }
-    }
-}
+pub use crate::core::fit::{Bound, ParamSpec};
 
 /// A parameter within this fraction of its (linear or logarithmic) interval from a bound is
 /// reported as sitting on that bound.
 pub const AT_BOUND_FRACTION: f64 = 2e-3;
 
-/// One model parameter: name, unit, physical bounds and starting value.
-///
-/// The optimiser works on an unconstrained variable `z`; the fraction of the interval is
-/// `u = (sin z + 1)/2 ∈ [0, 1]` (the MINUIT transform for doubly bounded parameters; James &
-/// Roos 1975), so every trial value is inside the bounds and the sensitivity does not vanish
-/// near them as with logistic maps.
-#[derive(Debug, Clone, Serialize)]
-pub struct ParamSpec {
-    pub name: &'static str,
-    pub unit: &'static str,
-    pub transform: Transform,
-    pub lower: f64,
-    pub upper: f64,
-    /// Starting value (physical units, inside the bounds).
-    pub start: f64,
+/// A scale parameter bounded in `[lower, upper]` (both > 0), spanned logarithmically, on the
+/// MINUIT coordinate: the optimiser works on an unconstrained `z` and the fraction of the
+/// interval is `u = (sin z + 1)/2` (James & Roos 1975), so every trial value is inside the bounds
+/// and the sensitivity does not vanish near them as with logistic maps
+/// ([`crate::core::fit::Coordinate::Sine`]).
+pub fn log_param(
+    name: &'static str,
+    unit: &'static str,
+    lower: f64,
+    upper: f64,
+    start: f64,
+) -> ParamSpec {
+    ParamSpec::log(name, unit, lower, upper, start).on_sine()
 }
 
-impl ParamSpec {
-    /// A scale parameter bounded in `[lower, upper]` (both > 0), spanned logarithmically.
-    pub fn log(name: &'static str, unit: &'static str, lower: f64, upper: f64, start: f64) -> Self {
-        Self {
-            name,
-            unit,
-            transform: Transform::Log,
-            lower,
-            upper,
-            start,
-        }
-    }
+/// A parameter bounded in `[lower, upper]`, spanned linearly, on the MINUIT coordinate.
+pub fn linear_param(
+    name: &'static str,
+    unit: &'static str,
+    lower: f64,
+    upper: f64,
+    start: f64,
+) -> ParamSpec {
+    ParamSpec::linear(name, unit, lower, upper, start).on_sine()
+}
 
-    /// A parameter bounded in `[lower, upper]`, spanned linearly.
-    pub fn linear(
-        name: &'static str,
-        unit: &'static str,
-        lower: f64,
-        upper: f64,
-        start: f64,
-    ) -> Self {
-        Self {
-            name,
-            unit,
-            transform: Transform::Linear,
-            lower,
-            upper,
-            start,
-        }
-    }
-
-    /// Physical value at the interval fraction `u ∈ [0, 1]`.
-    fn at_fraction(&self, u: f64) -> f64 {
-        let u = u.clamp(0.0, 1.0);
-        match self.transform {
-            Transform::Linear => self.lower + (self.upper - self.lower) * u,
-            Transform::Log => self.lower * (self.upper / self.lower).powf(u),
-        }
-    }
-
-    /// Interval fraction `u ∈ [0, 1]` of a physical value (clamped to the bounds).
-    pub fn fraction(&self, value: f64) -> f64 {
-        let u = match self.transform {
-            Transform::Linear => (value - self.lower) / (self.upper - self.lower),
-            Transform::Log => {
-                (value / self.lower).max(1e-300).ln() / (self.upper / self.lower).ln()
-            }
-        };
-        if u.is_finite() {
-            u.clamp(0.0, 1.0)
-        } else {
-            0.5
-        }
-    }
-
-    /// Physical value of the optimisation variable `z`.
-    pub fn value(&self, z: f64) -> f64 {
-        self.at_fraction(0.5 * (z.sin() + 1.0))
-    }
-
-    /// Optimisation variable of a physical value (inverse of [`ParamSpec::value`] on
-    /// `z ∈ [−π/2, π/2]`).
-    pub fn z_of(&self, value: f64) -> f64 {
-        (2.0 * self.fraction(value) - 1.0).asin()
-    }
-
-    /// Optimisation variable of the starting value.
-    pub fn start_z(&self) -> f64 {
-        self.z_of(self.start)
-    }
-
-    /// Initial simplex step in `z`.
-    pub fn step(&self) -> f64 {
-        0.3
-    }
-
-    /// The bound a value sits on (within [`AT_BOUND_FRACTION`] of the interval), if any.
-    pub fn at_bound(&self, value: f64) -> Option<Bound> {
-        let u = self.fraction(value);
-        if u <= AT_BOUND_FRACTION {
-            Some(Bound::Lower)
-        } else if u >= 1.0 - AT_BOUND_FRACTION {
-            Some(Bound::Upper)
-        } else {
-            None
-        }
-    }
+/// The bound a value of `p` sits on (within [`AT_BOUND_FRACTION`] of the interval), if any.
+pub fn at_bound(p: &ParamSpec, value: f64) -> Option<Bound> {
+    p.bound_at(value, AT_BOUND_FRACTION)
 }
 
 /// The inputs of a simulation, derived once from a record.
@@ -679,19 +569,19 @@ mod tests {
     #[test]
     fn transforms_round_trip_and_stay_in_bounds() {
         for s in [
-            ParamSpec::log("a", "-", 1e-3, 2.0, 0.1),
-            ParamSpec::linear("b", "-", -0.5, 0.5, 0.0),
+            log_param("a", "-", 1e-3, 2.0, 0.1),
+            linear_param("b", "-", -0.5, 0.5, 0.0),
         ] {
             let z = 0.37;
-            assert!((s.z_of(s.value(z)) - z).abs() < 1e-9);
-            assert!((s.value(s.start_z()) - s.start).abs() < 1e-12);
+            assert!((s.coordinate_of(s.value(z)) - z).abs() < 1e-9);
+            assert!((s.value(s.start_coordinate()) - s.start).abs() < 1e-12);
             for z in [-40.0, -1.0, 0.0, 3.0, 1e3] {
                 let v = s.value(z);
-                assert!(v >= s.lower && v <= s.upper, "{v}");
+                assert!(v >= s.lo && v <= s.hi, "{v}");
             }
-            assert_eq!(s.at_bound(s.lower), Some(Bound::Lower));
-            assert_eq!(s.at_bound(s.upper), Some(Bound::Upper));
-            assert_eq!(s.at_bound(s.start), None);
+            assert_eq!(at_bound(&s, s.lo), Some(Bound::Lower));
+            assert_eq!(at_bound(&s, s.hi), Some(Bound::Upper));
+            assert_eq!(at_bound(&s, s.start), None);
         }
     }
 }

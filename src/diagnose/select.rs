@@ -53,16 +53,17 @@
 //!    candidates, and the report says so where less than a quarter of the gain carries over.
 
 use super::cycles::{segment, Cycles, Phase};
-use super::effects::{Baseline, Bound, Drive, Effect, Model, ParamSpec};
+use super::effects::{
+    at_bound, linear_param, log_param, Baseline, Bound, Drive, Effect, Model, ParamSpec,
+};
 use super::noise::{self, NoiseFloor};
 use super::record::Record;
 use super::residual::{self, ClearanceRegion, PhaseStats, Ringing};
 use super::stationarity::Stationarity;
 use crate::core::error::{Error, Result};
+use crate::core::fit::{self as core_fit, LocalSearch, Restarts, Tolerance};
 use crate::core::stats::percentile_nearest;
 use crate::element::valanis::ValanisParams;
-use argmin::core::{CostFunction, Executor, State};
-use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -250,14 +251,12 @@ pub fn prepare(record: &Record) -> Result<Prepared> {
     };
     let (fsm, _) = savitzky_golay(&record.force_n, (per_cycle / 64).max(2));
     let noise = noise::estimate(&drive.q_m, &record.force_n, &cycles, force_scale);
+    // Alternate complete cycles for training and held out, as sample masks.
+    let (train_cycles, _) = core_fit::held_out::alternate(cycles.cycles.len());
     let mut train = vec![false; n];
     let mut held_out = vec![false; n];
-    for (k, &(a, b)) in cycles.cycles.iter().enumerate() {
-        let mask = if k % 2 == 0 {
-            &mut train
-        } else {
-            &mut held_out
-        };
+    for (&(a, b), &training) in cycles.cycles.iter().zip(&train_cycles) {
+        let mask = if training { &mut train } else { &mut held_out };
         mask[a..b].iter_mut().for_each(|m| *m = true);
     }
     Ok(Prepared {
@@ -285,18 +284,22 @@ struct Structure {
 }
 
 impl Structure {
+    /// The model at optimiser coordinates `z`.
     fn decode(&self, z: &[f64]) -> Model {
+        let specs: Vec<ParamSpec> = self.specs().copied().collect();
+        self.model(&core_fit::values(&specs, z))
+    }
+
+    /// The model at physical values (baseline parameters, then each effect's).
+    fn model(&self, v: &[f64]) -> Model {
         let mut i = 0;
         let baseline = match self.given {
             Some(b) => b,
             None => {
-                let e0 = self.baseline_specs[0].value(z[0]);
+                let e0 = v[0];
                 let (k, slip) = match self.fixed_k {
-                    Some(k) => (k, self.baseline_specs[1].value(z[1])),
-                    None => (
-                        self.baseline_specs[1].value(z[1]),
-                        self.baseline_specs[2].value(z[2]),
-                    ),
+                    Some(k) => (k, v[1]),
+                    None => (v[1], v[2]),
                 };
                 i = self.baseline_specs.len();
                 Baseline {
@@ -314,15 +317,9 @@ impl Structure {
             .effects
             .iter()
             .map(|(e, specs)| {
-                let v = specs
-                    .iter()
-                    .map(|s| {
-                        let v = s.value(z[i]);
-                        i += 1;
-                        v
-                    })
-                    .collect();
-                (*e, v)
+                let values = v[i..i + specs.len()].to_vec();
+                i += specs.len();
+                (*e, values)
             })
             .collect();
         Model { baseline, effects }
@@ -347,13 +344,10 @@ struct Problem<'a> {
     mask: &'a [bool],
 }
 
-impl CostFunction for Problem<'_> {
-    type Param = Vec<f64>;
-    type Output = f64;
-    fn cost(&self, z: &Vec<f64>) -> std::result::Result<f64, argmin::core::Error> {
-        let f = self.structure.decode(z).simulate(&self.prep.drive);
-        Ok(masked_mse(&f, &self.prep.record.force_n, self.mask)
-            / self.prep.drive.force_scale_n.powi(2))
+impl core_fit::Objective for Problem<'_> {
+    fn cost(&self, values: &[f64]) -> f64 {
+        let f = self.structure.model(values).simulate(&self.prep.drive);
+        masked_mse(&f, &self.prep.record.force_n, self.mask) / self.prep.drive.force_scale_n.powi(2)
     }
 }
 
@@ -379,6 +373,8 @@ pub struct FitInfo {
     pub wall_time_s: f64,
 }
 
+/// Nelder–Mead (bounded variables on the MINUIT coordinate), restarted once from its optimum
+/// with a fresh simplex of 0.3 of the first one's edge (Numerical Recipes §10.5).
 fn fit(
     structure: &Structure,
     z0: Vec<f64>,
@@ -387,13 +383,13 @@ fn fit(
     max_iter: u64,
 ) -> (Vec<f64>, FitInfo) {
     let start = std::time::Instant::now();
-    let problem = || Problem {
+    let problem = Problem {
         structure,
         prep,
         mask,
     };
     if z0.is_empty() {
-        let cost = problem().cost(&z0).unwrap_or(f64::INFINITY);
+        let cost = core_fit::Objective::cost(&problem, &[]);
         return (
             z0,
             FitInfo {
@@ -404,43 +400,24 @@ fn fit(
             },
         );
     }
-    let steps: Vec<f64> = structure.specs().map(|s| s.step()).collect();
-    let (mut z, mut iterations, mut converged, mut cost) = (z0, 0, false, f64::INFINITY);
-    // Nelder–Mead, restarted from its optimum with a fresh simplex (Numerical Recipes §10.5).
-    for round in 0..2 {
-        let scale = if round == 0 { 1.0 } else { 0.3 };
-        let mut simplex = vec![z.clone()];
-        for (j, s) in steps.iter().enumerate() {
-            let mut v = z.clone();
-            v[j] += s * scale;
-            simplex.push(v);
-        }
-        let solver = NelderMead::new(simplex)
-            .with_sd_tolerance(1e-13)
-            .expect("valid tolerance");
-        match Executor::new(problem(), solver)
-            .configure(|s| s.max_iters(max_iter))
-            .run()
-        {
-            Ok(res) => {
-                let st = res.state();
-                iterations += st.get_iter();
-                if st.get_best_cost() <= cost {
-                    cost = st.get_best_cost();
-                    if let Some(p) = st.get_best_param() {
-                        z = p.clone();
-                    }
-                }
-                converged = st.get_iter() < max_iter;
-            }
-            Err(_) => break,
-        }
-    }
+    let specs: Vec<ParamSpec> = structure.specs().copied().collect();
+    let local = LocalSearch {
+        max_iters: max_iter,
+        tolerance: Tolerance::Absolute(1e-13),
+        first_step: 1.0,
+        restart_step: 0.3,
+        restarts: Restarts::Always(1),
+    };
+    let (z, iterations, final_cost, converged) =
+        match core_fit::minimise(&specs, &problem, &z0, &local, None) {
+            Ok(m) => (m.z, m.iterations, m.cost, m.converged),
+            Err(_) => (z0, 0, f64::INFINITY, false),
+        };
     (
         z,
         FitInfo {
             iterations,
-            final_cost: cost,
+            final_cost,
             converged,
             wall_time_s: start.elapsed().as_secs_f64(),
         },
@@ -721,17 +698,17 @@ fn initial_stiffness(prep: &Prepared) -> f64 {
 fn baseline_specs(prep: &Prepared, e0_start: f64, k: Option<f64>) -> Vec<ParamSpec> {
     let (f, a) = (prep.drive.force_scale_n, prep.drive.amplitude_m);
     let stiff = f / a;
-    let e0 = ParamSpec::log(
+    let e0 = log_param(
         "e0",
         "N/m",
         0.5 * stiff,
         1e4 * stiff,
         e0_start.clamp(0.6 * stiff, 0.9e4 * stiff),
     );
-    let slip = ParamSpec::log("slip_force", "N", 0.2 * f, 5.0 * f, f);
+    let slip = log_param("slip_force", "N", 0.2 * f, 5.0 * f, f);
     match k {
         Some(_) => vec![e0, slip],
-        None => vec![e0, ParamSpec::linear("k", "-", 0.0, 0.98, 0.5), slip],
+        None => vec![e0, linear_param("k", "-", 0.0, 0.98, 0.5), slip],
     }
 }
 
@@ -740,10 +717,7 @@ fn bound_hits(specs: &[&ParamSpec], values: &[f64]) -> Vec<(String, Bound)> {
     specs
         .iter()
         .zip(values)
-        .filter_map(|(s, &v)| {
-            s.at_bound(v)
-                .map(|b| (format!("{} ({})", s.name, s.unit), b))
-        })
+        .filter_map(|(s, &v)| at_bound(s, v).map(|b| (format!("{} ({})", s.name, s.unit), b)))
         .collect()
 }
 
@@ -810,13 +784,11 @@ fn stationarity(prep: &Prepared, baseline: &Baseline, max_iter: u64) -> Stationa
         effects: vec![],
         baseline_specs: vec![
             ParamSpec {
-                start: v.e0.clamp(specs[0].lower, specs[0].upper),
+                start: v.e0.clamp(specs[0].lo, specs[0].hi),
                 ..specs[0].clone()
             },
             ParamSpec {
-                start: baseline
-                    .slip_force_n()
-                    .clamp(specs[1].lower, specs[1].upper),
+                start: baseline.slip_force_n().clamp(specs[1].lo, specs[1].hi),
                 ..specs[1].clone()
             },
         ],
@@ -824,7 +796,7 @@ fn stationarity(prep: &Prepared, baseline: &Baseline, max_iter: u64) -> Stationa
     let z0: Vec<f64> = structure
         .baseline_specs
         .iter()
-        .map(|s| s.start_z())
+        .map(|s| s.start_coordinate())
         .collect();
     let n = prep.record.len();
     let (x, y) = (&prep.record.displacement_m, &prep.record.force_n);
@@ -881,7 +853,7 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
         }
         BaselineSource::Fitted => {
             let specs = baseline_specs(&prep, initial_stiffness(&prep), None);
-            let z = specs.iter().map(|s| s.start_z()).collect();
+            let z = specs.iter().map(|s| s.start_coordinate()).collect();
             (None, specs, z)
         }
     };
@@ -898,7 +870,7 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
     if given.is_none() {
         for k in [0.15, 0.8] {
             let mut z = z_base.clone();
-            z[1] = base_structure.baseline_specs[1].z_of(k);
+            z[1] = base_structure.baseline_specs[1].coordinate_of(k);
             starts.push(z);
         }
     }
@@ -930,120 +902,118 @@ pub fn diagnose(record: &Record, options: &Options) -> Result<Diagnosis> {
         &prep.cycles,
         prep.drive.force_scale_n,
     );
-    let mut current = (base_structure.clone(), z_b.clone(), baseline_force.clone());
-    let mut rounds = Vec::new();
-    for _ in 0..options.max_effects {
+    // The structure of the current model with `effect` added, its parameters' specs (a series
+    // spring starts stiff: nearly no effect relative to the current element).
+    let extended = |current: &(Structure, Vec<f64>, Vec<f64>), effect: Effect| {
+        let mut specs = effect.params(drive);
+        if effect == Effect::SeriesCompliance {
+            let e0 = current.0.decode(&current.1).baseline.valanis.e0;
+            specs[0].start = (20.0 * e0).clamp(specs[0].lo, specs[0].hi);
+        }
+        let mut structure = current.0.clone();
+        structure.effects.push((effect, specs.clone()));
+        (structure, specs)
+    };
+    let half_cycles = prep.cycles.half_cycles.len();
+    let (current, core_rounds) = core_fit::held_out::rounds(
+        (base_structure.clone(), z_b.clone(), baseline_force.clone()),
+        options.max_effects,
         // A model at the noise floor needs no further effect: what a candidate could still
         // "explain" is then as likely the baseline's own shape error as a physical effect.
-        if characterise(&prep, &current.2, &clearances).adequate {
-            break;
-        }
-        let remaining: Vec<Effect> = options
-            .candidates
-            .iter()
-            .copied()
-            .filter(|e| !current.0.effects.iter().any(|(k, _)| k == e))
-            .collect();
-        if remaining.is_empty() {
-            break;
-        }
-        let current_model = current.0.decode(&current.1);
-        let half_cycles = prep.cycles.half_cycles.len();
-        let candidates: Vec<Candidate> = remaining
-            .par_iter()
-            .map(|&effect| {
-                let mut specs = effect.params(drive);
-                if effect == Effect::SeriesCompliance {
-                    // Start stiff (nearly no effect) relative to the current element.
-                    let e0 = current_model.baseline.valanis.e0;
-                    specs[0].start = (20.0 * e0).clamp(specs[0].lower, specs[0].upper);
-                }
-                let mut structure = current.0.clone();
-                let mut z0 = current.1.clone();
-                z0.extend(specs.iter().map(|s| s.start_z()));
-                structure.effects.push((effect, specs.clone()));
-                let (z, info) = fit(&structure, z0, &prep, &prep.train, options.max_iterations);
-                let model = structure.decode(&z);
-                let f = model.simulate(drive);
-                let (d_rss, ev, explained, improved) = held_out_evidence(&prep, &current.2, &f);
-                let params = model
-                    .effects
-                    .last()
-                    .map(|(_, v)| v.clone())
-                    .unwrap_or_default();
-                let spec_refs: Vec<&ParamSpec> = specs.iter().collect();
-                let at_bound = bound_hits(&spec_refs, &params);
-                let decision = if ev.is_nan() || ev < EVIDENCE_Z {
-                    format!("evidence z = {ev:.1} < {EVIDENCE_Z}")
-                } else if explained.is_some_and(|e| e < MIN_EXPLAINED) {
-                    format!(
-                        "explains {:.0} % of the excess residual (< {:.0} %)",
-                        100.0 * explained.unwrap_or(0.0),
-                        100.0 * MIN_EXPLAINED
-                    )
-                } else if improved.0 < improved.1 {
-                    format!(
-                        "improves only {} of {} held-out cycles",
-                        improved.0, improved.1
-                    )
-                } else if let Some((name, b)) = at_bound.first() {
-                    format!("{name} on its {} bound", b.name())
-                } else if effect == Effect::Backlash && 2 * clearances.len() < half_cycles {
-                    "no zero-force plateau in the measured force".to_string()
-                } else {
-                    "eligible".to_string()
-                };
-                let n_held = prep.held_out.iter().filter(|m| **m).count().max(1) as f64;
-                let rss_new = masked_mse(&f, &prep.record.force_n, &prep.held_out) * n_held;
-                Candidate {
-                    effect,
-                    parameters: specs
-                        .iter()
-                        .zip(params)
-                        .map(|(s, v)| (format!("{} ({})", s.name, s.unit), v))
-                        .collect(),
-                    at_bound,
-                    extra_parameters: specs.len(),
-                    train_nrms: info.final_cost.sqrt(),
-                    held_out_nrms: (rss_new / n_held).sqrt() / drive.force_scale_n,
-                    held_out_rms_over_noise: (rss_new / n_held).sqrt() / prep.noise.sigma_n,
-                    delta_rss: d_rss,
-                    evidence_z: ev,
-                    explained_fraction: explained,
-                    improved_cycles: improved,
-                    eligible: decision == "eligible",
-                    decision,
-                    fit: info,
-                    model,
-                    z,
-                }
-            })
-            .collect();
-        let best = candidates
-            .iter()
-            .filter(|c| c.eligible)
-            .max_by(|a, b| a.delta_rss.total_cmp(&b.delta_rss))
-            .cloned();
-        let accepted = best.as_ref().map(|c| c.effect);
-        rounds.push(Round {
-            candidates,
-            accepted,
-        });
-        match best {
-            Some(c) => {
-                let mut s = current.0.clone();
-                let mut specs = c.effect.params(drive);
-                if c.effect == Effect::SeriesCompliance {
-                    let e0 = current_model.baseline.valanis.e0;
-                    specs[0].start = (20.0 * e0).clamp(specs[0].lower, specs[0].upper);
-                }
-                s.effects.push((c.effect, specs));
-                let f = c.model.simulate(drive);
-                current = (s, c.z, f);
-            }
-            None => break,
-        }
-    }
+        |current| !characterise(&prep, &current.2, &clearances).adequate,
+        |current| {
+            let remaining: Vec<Effect> = options
+                .candidates
+                .iter()
+                .copied()
+                .filter(|e| !current.0.effects.iter().any(|(k, _)| k == e))
+                .collect();
+            let candidates: Vec<Candidate> = remaining
+                .par_iter()
+                .map(|&effect| {
+                    let (structure, specs) = extended(current, effect);
+                    let mut z0 = current.1.clone();
+                    z0.extend(specs.iter().map(|s| s.start_coordinate()));
+                    let (z, info) = fit(&structure, z0, &prep, &prep.train, options.max_iterations);
+                    let model = structure.decode(&z);
+                    let f = model.simulate(drive);
+                    let (d_rss, ev, explained, improved) = held_out_evidence(&prep, &current.2, &f);
+                    let params = model
+                        .effects
+                        .last()
+                        .map(|(_, v)| v.clone())
+                        .unwrap_or_default();
+                    let spec_refs: Vec<&ParamSpec> = specs.iter().collect();
+                    let at_bound = bound_hits(&spec_refs, &params);
+                    let decision = if ev.is_nan() || ev < EVIDENCE_Z {
+                        format!("evidence z = {ev:.1} < {EVIDENCE_Z}")
+                    } else if explained.is_some_and(|e| e < MIN_EXPLAINED) {
+                        format!(
+                            "explains {:.0} % of the excess residual (< {:.0} %)",
+                            100.0 * explained.unwrap_or(0.0),
+                            100.0 * MIN_EXPLAINED
+                        )
+                    } else if improved.0 < improved.1 {
+                        format!(
+                            "improves only {} of {} held-out cycles",
+                            improved.0, improved.1
+                        )
+                    } else if let Some((name, b)) = at_bound.first() {
+                        format!("{name} on its {} bound", b.name())
+                    } else if effect == Effect::Backlash && 2 * clearances.len() < half_cycles {
+                        "no zero-force plateau in the measured force".to_string()
+                    } else {
+                        "eligible".to_string()
+                    };
+                    let n_held = prep.held_out.iter().filter(|m| **m).count().max(1) as f64;
+                    let rss_new = masked_mse(&f, &prep.record.force_n, &prep.held_out) * n_held;
+                    Candidate {
+                        effect,
+                        parameters: specs
+                            .iter()
+                            .zip(params)
+                            .map(|(s, v)| (format!("{} ({})", s.name, s.unit), v))
+                            .collect(),
+                        at_bound,
+                        extra_parameters: specs.len(),
+                        train_nrms: info.final_cost.sqrt(),
+                        held_out_nrms: (rss_new / n_held).sqrt() / drive.force_scale_n,
+                        held_out_rms_over_noise: (rss_new / n_held).sqrt() / prep.noise.sigma_n,
+                        delta_rss: d_rss,
+                        evidence_z: ev,
+                        explained_fraction: explained,
+                        improved_cycles: improved,
+                        eligible: decision == "eligible",
+                        decision,
+                        fit: info,
+                        model,
+                        z,
+                    }
+                })
+                .collect();
+            Ok(((), candidates))
+        },
+        |_, candidates| {
+            candidates
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.eligible)
+                .max_by(|a, b| a.1.delta_rss.total_cmp(&b.1.delta_rss))
+                .map(|(i, _)| i)
+        },
+        |current, c| {
+            let (structure, _) = extended(&current, c.effect);
+            let f = c.model.simulate(drive);
+            Ok((structure, c.z.clone(), f))
+        },
+    )?;
+    let rounds: Vec<Round> = core_rounds
+        .into_iter()
+        .map(|r| Round {
+            accepted: r.accepted.map(|i| r.candidates[i].effect),
+            candidates: r.candidates,
+        })
+        .collect();
     let final_model = current.0.decode(&current.1);
     let final_force = current.2;
     let swapped_split = (!current.0.effects.is_empty()).then(|| {

@@ -106,73 +106,43 @@ impl Scales {
     }
 }
 
-/// A bounded physical parameter.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ParamSpec {
-    pub name: &'static str,
-    pub unit: &'static str,
-    pub lo: f64,
-    pub hi: f64,
-    /// Searched in `ln` (positive parameters spanning decades).
-    pub log: bool,
-    /// Value of "effect absent" (or a central start), used as the first local start.
-    pub neutral: f64,
+/// A bounded physical parameter ([`crate::core::fit::ParamSpec`]: searched on the unit box,
+/// linearly or in `ln` between its bounds; its start is the value of "effect absent", or a
+/// central start, used as the first local start).
+pub use crate::core::fit::ParamSpec;
+
+/// A parameter within this fraction of its box of a bound is reported as sitting on it (a
+/// parameter on a bound is not identified by the data).
+pub const AT_BOUND_MARGIN: f64 = 0.005;
+
+/// Serialise parameters as reports state them: name, unit, bounds `lo`, `hi`, whether searched
+/// in `ln` (`log`) and the start (`neutral`).
+pub fn serialize_params<S: serde::Serializer>(
+    params: &[ParamSpec],
+    serializer: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct Stated<'a> {
+        name: &'a str,
+        unit: &'a str,
+        lo: f64,
+        hi: f64,
+        log: bool,
+        neutral: f64,
+    }
+    serializer.collect_seq(params.iter().map(|p| Stated {
+        name: p.name,
+        unit: p.unit,
+        lo: p.lo,
+        hi: p.hi,
+        log: p.transform == crate::core::fit::Transform::Log,
+        neutral: p.start,
+    }))
 }
 
-impl ParamSpec {
-    /// A parameter searched linearly between its bounds.
-    pub fn lin(name: &'static str, unit: &'static str, lo: f64, hi: f64, neutral: f64) -> Self {
-        Self {
-            name,
-            unit,
-            lo,
-            hi,
-            log: false,
-            neutral,
-        }
-    }
-    /// A positive parameter searched in `ln` between its bounds.
-    pub fn log(name: &'static str, unit: &'static str, lo: f64, hi: f64, neutral: f64) -> Self {
-        Self {
-            name,
-            unit,
-            lo,
-            hi,
-            log: true,
-            neutral,
-        }
-    }
-
-    /// Physical value of the unit-box coordinate `z ∈ [0, 1]` (clamped).
-    pub fn value(&self, z: f64) -> f64 {
-        let z = z.clamp(0.0, 1.0);
-        if self.log {
-            self.lo * (self.hi / self.lo).powf(z)
-        } else {
-            self.lo + (self.hi - self.lo) * z
-        }
-    }
-
-    /// Unit-box coordinate of a physical value.
-    pub fn coordinate(&self, v: f64) -> f64 {
-        let z = if self.log {
-            (v / self.lo).ln() / (self.hi / self.lo).ln()
-        } else {
-            (v - self.lo) / (self.hi - self.lo)
-        };
-        z.clamp(0.0, 1.0)
-    }
-
-    /// Whether `v` lies within 0.5 % of the box width of a bound (reported: a parameter on a
-    /// bound is not identified by the data).
-    pub fn at_bound(&self, v: f64) -> bool {
-        let z = if self.log {
-            (v / self.lo).ln() / (self.hi / self.lo).ln()
-        } else {
-            (v - self.lo) / (self.hi - self.lo)
-        };
-        !(0.005..=0.995).contains(&z)
-    }
+/// Whether `v` lies within [`AT_BOUND_MARGIN`] of the box width of a bound of `p`.
+pub fn at_bound(p: &ParamSpec, v: f64) -> bool {
+    p.bound_at(v, AT_BOUND_MARGIN).is_some()
 }
 
 /// Structure of a model: the joint family, the effects added and the scales.
@@ -261,7 +231,7 @@ impl ModelSpec {
     pub fn params(&self) -> Vec<ParamSpec> {
         let s = &self.scales;
         let mut p = vec![
-            ParamSpec::lin(
+            ParamSpec::linear(
                 "frequency_Hz",
                 "Hz",
                 0.97 * s.frequency_hz,
@@ -299,13 +269,13 @@ impl ModelSpec {
 
 fn iwan_shape() -> [ParamSpec; 2] {
     [
-        ParamSpec::lin("iwan_exponent_chi", "-", -0.9, 0.0, -0.5),
-        ParamSpec::lin("iwan_strength_ratio_beta", "-", 0.0, 4.0, 0.5),
+        ParamSpec::linear("iwan_exponent_chi", "-", -0.9, 0.0, -0.5),
+        ParamSpec::linear("iwan_strength_ratio_beta", "-", 0.0, 4.0, 0.5),
     ]
 }
 
 fn valanis_shape() -> ParamSpec {
-    ParamSpec::lin("valanis_shape_k", "-", 0.0, 0.95, 0.5)
+    ParamSpec::linear("valanis_shape_k", "-", 0.0, 0.95, 0.5)
 }
 
 /// Parameters of one effect (see [`super::effects`] for the laws).
@@ -313,14 +283,14 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
     match e {
         Effect::ValanisJoint => vec![valanis_shape()],
         Effect::IwanJoint => iwan_shape().to_vec(),
-        Effect::AmplitudeStiffness => vec![ParamSpec::lin(
+        Effect::AmplitudeStiffness => vec![ParamSpec::linear(
             "stiffness_change_at_ref_amplitude",
             "-",
             -0.05,
             0.05,
             0.0,
         )],
-        Effect::QuadraticStiffness => vec![ParamSpec::lin(
+        Effect::QuadraticStiffness => vec![ParamSpec::linear(
             "proportional_stiffness_change_at_ref_amplitude",
             "-",
             -0.05,
@@ -342,7 +312,7 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
                 0.05,
                 1e-6,
             ),
-            ParamSpec::lin(
+            ParamSpec::linear(
                 "power_law_damping_exponent",
                 "-",
                 POWER_LAW_EXPONENT_MIN,
@@ -350,7 +320,7 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
                 1.0,
             ),
         ],
-        Effect::PreloadLoss => vec![ParamSpec::lin(
+        Effect::PreloadLoss => vec![ParamSpec::linear(
             "preload_loss_per_ref_force",
             "-",
             0.0,
@@ -358,7 +328,7 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
             0.0,
         )],
         Effect::HigherHarmonics => vec![],
-        Effect::OutOfBandModes => vec![ParamSpec::lin(
+        Effect::OutOfBandModes => vec![ParamSpec::linear(
             "residual_flexibility_ratio",
             "-",
             -3.0,
@@ -367,7 +337,7 @@ pub fn effect_params(e: Effect, s: &Scales) -> Vec<ParamSpec> {
         )],
         Effect::ShakerInteraction => {
             let t = 1.0 / (20.0 * s.frequency_hz);
-            vec![ParamSpec::lin("force_delay_s", "s", -t, t, 0.0)]
+            vec![ParamSpec::linear("force_delay_s", "s", -t, t, 0.0)]
         }
     }
 }
@@ -480,7 +450,7 @@ impl Model {
 
     /// The model at the neutral values of every parameter.
     pub fn neutral(spec: ModelSpec) -> Self {
-        let values = spec.params().iter().map(|p| p.neutral).collect();
+        let values = spec.params().iter().map(|p| p.start).collect();
         Self { spec, values }
     }
 
@@ -900,24 +870,7 @@ fn solve_robust(
 
 /// Check a set of physical values against the parameters: one per parameter, finite and inside
 /// its bounds (to 1e-9 of the box); the error names the parameter.
-pub fn check_values(params: &[ParamSpec], values: &[f64]) -> Result<()> {
-    if params.len() != values.len() {
-        return Err(Error::param(
-            "values",
-            format!("{} parameters expected, got {}", params.len(), values.len()),
-        ));
-    }
-    for (s, &v) in params.iter().zip(values) {
-        let tol = 1e-9 * (s.hi - s.lo).abs().max(s.hi.abs());
-        if !(v.is_finite() && v >= s.lo - tol && v <= s.hi + tol) {
-            return Err(Error::param(
-                s.name,
-                format!("{v} is outside its bounds [{}, {}] {}", s.lo, s.hi, s.unit),
-            ));
-        }
-    }
-    Ok(())
-}
+pub use crate::core::fit::check_values;
 
 #[cfg(test)]
 mod tests {

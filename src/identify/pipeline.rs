@@ -55,41 +55,194 @@ pub enum FitRows {
     Settled,
 }
 
+/// Relative Nelder–Mead tolerance of the default (fast) search's baseline and candidate fits:
+/// the held-out `ΔBIC` that decides between candidates needs each training cost to about
+/// `1/n_eff` of itself (a few per cent), far coarser than the thorough search's
+/// [`super::fit::THOROUGH_TOLERANCE`].
+pub const FAST_TOLERANCE: f64 = 1e-5;
+/// Relative Nelder–Mead tolerance of the default search's final refits on all rows (the
+/// reported parameters).
+pub const FAST_FINAL_TOLERANCE: f64 = 1e-6;
+/// Nelder–Mead iteration cap per run (up to five parameters, in proportion beyond) of the
+/// default search's screening fit of every candidate; those the held-out evidence leans to are
+/// refined ([`SelectOptions::refine`]).
+pub const SCREEN_ITERATIONS: u64 = 120;
+/// Steps of each Metropolis chain of the default run's prediction bands (the thorough run:
+/// [`uncertainty::CHAIN_STEPS`]; chains this short that disagree are run again at that length).
+pub const FAST_CHAIN_STEPS: usize = 3000;
+
 impl Options {
-    /// Default options for a family: all candidates, up to three effects, three swarm starts for
-    /// the baseline, one for each candidate.
+    /// Default options for a family, fast: all candidates, up to three effects; the baseline
+    /// from the data's scales and one swarm start; each candidate screened by Nelder–Mead
+    /// ([`SCREEN_ITERATIONS`], relative tolerance [`FAST_TOLERANCE`], one restart) from the
+    /// current optimum and from it with the joint at the data's scales (no swarm,
+    /// [`SelectOptions::joint_restart`]), every round's candidates in parallel and each fit
+    /// evaluated at its training rows only; the candidates the held-out evidence leans to
+    /// refined as the baseline is fitted (to the thorough tolerance, so that the model a round
+    /// starts from and the candidates it accepts are converged alike); final refits to
+    /// [`FAST_FINAL_TOLERANCE`]; chains of [`FAST_CHAIN_STEPS`] steps.
     pub fn new(family: Family) -> Self {
+        let screen = FitOptions {
+            starts: 0,
+            restarts: 1,
+            tolerance: FAST_TOLERANCE,
+            local_iterations: SCREEN_ITERATIONS,
+            ..FitOptions::default()
+        };
         Self {
             family,
             fit_levels: None,
             select: SelectOptions {
                 candidates: super::effects::Effect::ALL.to_vec(),
                 max_effects: 3,
+                baseline_fit: FitOptions {
+                    starts: 1,
+                    ..FitOptions::default()
+                },
+                candidate_fit: screen,
+                training_rows_only: true,
+                joint_restart: true,
+                refine: Some(FitOptions {
+                    starts: 0,
+                    ..FitOptions::default()
+                }),
+            },
+            final_fit: FitOptions {
+                tolerance: FAST_FINAL_TOLERANCE,
+                ..FitOptions::default()
+            },
+            response_amplitudes: None,
+            chain_steps: FAST_CHAIN_STEPS,
+            rows: FitRows::All,
+        }
+    }
+
+    /// The thorough search (`--thorough`): three swarm starts for the baseline, one for each
+    /// candidate beside its local start, Nelder–Mead to a relative tolerance of
+    /// [`super::fit::THOROUGH_TOLERANCE`] with up to three restarts, every row evaluated, chains
+    /// of [`uncertainty::CHAIN_STEPS`] steps.
+    pub fn thorough(family: Family) -> Self {
+        Self {
+            select: SelectOptions {
                 baseline_fit: FitOptions::default(),
                 candidate_fit: FitOptions {
                     starts: 1,
                     ..FitOptions::default()
                 },
+                training_rows_only: false,
+                joint_restart: false,
+                refine: None,
+                ..Self::new(family).select
             },
             final_fit: FitOptions::default(),
-            response_amplitudes: None,
             chain_steps: uncertainty::CHAIN_STEPS,
-            rows: FitRows::All,
+            ..Self::new(family)
         }
     }
 
-    /// Model evaluations the whole run is expected to take (progress-bar length).
+    /// Model evaluations the whole run is expected to take (progress-bar length): the
+    /// baseline fit, up to `max_effects + 1` rounds of every candidate, the refits and the
+    /// chains. Each stage's end re-plans the rest ([`Options::evaluations_after`]).
     pub fn estimated_evaluations(&self) -> u64 {
-        let swarm = |o: &FitOptions| o.swarm_evaluations();
-        let local = |o: &FitOptions| o.local_iterations;
         let b = &self.select.baseline_fit;
+        let dim = super::model::BASE_PARAMS;
+        b.swarm_evaluations()
+            + (b.starts as u64 + 1) * expected_local_evaluations(b, dim)
+            + self.evaluations_after(Stage::Baseline, dim)
+    }
+
+    /// Evaluations expected after `stage` for a model of `dim` parameters at that point.
+    pub fn evaluations_after(&self, stage: Stage, dim: usize) -> u64 {
         let c = &self.select.candidate_fit;
         let n = self.select.candidates.len() as u64;
-        swarm(b)
-            + b.starts as u64 * local(b)
-            + (self.select.max_effects as u64).max(1) * n * (swarm(c) + 2 * local(c))
-            + 2 * local(&self.final_fit)
+        let rounds = self.select.max_effects as u64 + 1;
+        let final_dim = dim + 2 * self.select.max_effects;
+        // Local starts per candidate, and the share of candidates refined (a third, as on the
+        // Brake–Reuss beam).
+        let local_starts = 1 + u64::from(self.select.joint_restart);
+        let candidate = c.swarm_evaluations()
+            + local_starts * expected_local_evaluations(c, final_dim)
+            + self
+                .select
+                .refine
+                .map_or(0, |r| expected_local_evaluations(&r, final_dim) / 3);
+        let refits = 3 * expected_local_evaluations(&self.final_fit, final_dim);
+        let chains = (uncertainty::CHAINS * self.chain_steps + 2 * final_dim + 1) as u64;
+        match stage {
+            Stage::Baseline => rounds * n * candidate + refits + chains,
+            Stage::Search => refits + chains,
+            Stage::Refits => chains,
+        }
     }
+}
+
+/// A stage of an identification after which the progress bar is re-planned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    Baseline,
+    Search,
+    Refits,
+}
+
+/// Evaluations a Nelder–Mead fit of `dim` parameters is expected to take with `o`: about
+/// 40 per parameter for a run to a relative tolerance of 10⁻⁵, 60 at 10⁻⁷, and half of that per
+/// restart, up to the cap.
+pub fn expected_local_evaluations(o: &FitOptions, dim: usize) -> u64 {
+    let per = if o.tolerance >= 1e-5 { 40 } else { 60 } * dim as u64;
+    let restarts = if o.tolerance >= 1e-5 { 1 } else { 2 }.min(o.restarts as u64);
+    (per + restarts * per / 2).min(super::fit::local_iteration_cap(o.local_iterations, dim) * 2)
+}
+
+/// Set the progress bar's length to what is done plus `remaining`, and name the stage.
+fn replan(progress: Option<&indicatif::ProgressBar>, remaining: u64, stage: &'static str) {
+    if let Some(b) = progress {
+        b.set_length(b.position() + remaining);
+        b.set_message(stage);
+    }
+}
+
+/// Wall time of one stage of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct StageTime {
+    pub stage: &'static str,
+    pub wall_time_s: f64,
+}
+
+/// The clock of a run's stages.
+struct Stages {
+    t: std::time::Instant,
+    done: Vec<StageTime>,
+}
+
+impl Stages {
+    fn new() -> Self {
+        Self {
+            t: std::time::Instant::now(),
+            done: Vec::new(),
+        }
+    }
+
+    /// Close the running stage under `name`.
+    fn end(&mut self, name: &'static str) {
+        self.done.push(StageTime {
+            stage: name,
+            wall_time_s: self.t.elapsed().as_secs_f64(),
+        });
+        self.t = std::time::Instant::now();
+    }
+}
+
+/// Report lines of the stage times.
+pub fn stage_times_text(stages: &[StageTime]) -> String {
+    let mut s = String::from(
+        "
+time per stage (wall):
+",
+    );
+    for t in stages {
+        s += &format!("  {:<52} {:>8.1} s\n", t.stage, t.wall_time_s);
+    }
+    s
 }
 
 /// The response-controlled FRF of the identified model at one response amplitude.
@@ -146,6 +299,8 @@ pub struct Identification {
     pub backbone_after: Vec<BackbonePoint>,
     pub response_controlled: Vec<ResponseControlled>,
     pub options: Options,
+    /// Wall time of each stage.
+    pub stage_times: Vec<StageTime>,
     pub wall_time_s: f64,
 }
 
@@ -654,6 +809,7 @@ pub fn identify(
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Identification> {
     let t0 = std::time::Instant::now();
+    let mut stages = Stages::new();
     let mut sweeps = sweeps;
     sweeps.sort_by(|a, b| a.mean_force_n().total_cmp(&b.mean_force_n()));
     let fit_levels = choose_fit_levels(&sweeps, opts.fit_levels.as_deref())?;
@@ -673,6 +829,10 @@ pub fn identify(
         .map(|(&i, first)| first.map_or_else(|| levels[i].clone(), |r| levels[i].from_row(r)))
         .collect();
     let baseline = ModelSpec::baseline(opts.family, scales);
+    stages.end("reading, backbones, stationarity");
+    if let Some(b) = progress {
+        b.set_message("baseline fit and effect search");
+    }
     let selection = select::select(
         &baseline,
         &select::neutral_start(&baseline),
@@ -680,6 +840,12 @@ pub fn identify(
         &opts.select,
         progress,
     )?;
+    stages.end("baseline fit and effect search");
+    replan(
+        progress,
+        opts.evaluations_after(Stage::Search, selection.final_train_fit.model.values.len()),
+        "refits on all rows",
+    );
     let before = refit_all_rows::<ModelSpec>(
         &selection.baseline_train_fit,
         &fit_data,
@@ -701,6 +867,7 @@ pub fn identify(
         a
     };
     let alternative = alternative(&selection, &fit_data, &levels, &fit_levels, opts, progress)?;
+    stages.end("refits on all rows (baseline, final, alternative)");
     let errors_before = level_errors(&before.model, &levels, &fit_levels)?;
     let errors_after = level_errors(&after.model, &levels, &fit_levels)?;
     let model_free = model_free::check(&sweeps, &frfs, &levels, &fit_levels, &errors_after)
@@ -713,6 +880,12 @@ pub fn identify(
         &errors_after,
         &stationarity,
     );
+    stages.end("model-free check");
+    replan(
+        progress,
+        opts.evaluations_after(Stage::Refits, after.model.values.len()),
+        "prediction bands (Metropolis chains)",
+    );
     let roles = level_roles(levels.len(), &fit_levels);
     let uncertainty = uncertainty::estimate(
         &after.model.spec,
@@ -721,7 +894,9 @@ pub fn identify(
         &levels,
         &roles,
         opts.chain_steps,
+        progress,
     );
+    stages.end("prediction bands (Metropolis chains)");
     let backbone_before = model_backbone(&before.model, &data_backbone)?;
     let backbone_after = model_backbone(&after.model, &data_backbone)?;
     let quantity = sweeps[0].quantity;
@@ -734,6 +909,7 @@ pub fn identify(
             response_controlled(&after.model, quantity, a, (flo, fhi), scales.force_n)
         })
         .collect::<Result<Vec<_>>>()?;
+    stages.end("backbones, response control");
     Ok(Identification {
         sweeps,
         convention,
@@ -755,6 +931,7 @@ pub fn identify(
         backbone_after,
         response_controlled,
         options: opts.clone(),
+        stage_times: stages.done,
         wall_time_s: t0.elapsed().as_secs_f64(),
     })
 }
@@ -881,7 +1058,7 @@ pub fn parameter_table(m: &Model) -> Vec<serde_json::Value> {
         .zip(&m.values)
         .map(|(p, v)| {
             serde_json::json!({"name": p.name, "unit": p.unit, "value": v, "lower_bound": p.lo,
-                "upper_bound": p.hi, "at_bound": p.at_bound(*v)})
+                "upper_bound": p.hi, "at_bound": super::model::at_bound(&p, *v)})
         })
         .collect()
 }
@@ -897,7 +1074,11 @@ fn params_text(m: &Model) -> String {
             p.unit,
             p.lo,
             p.hi,
-            if p.at_bound(*v) { "  (at a bound)" } else { "" }
+            if super::model::at_bound(&p, *v) {
+                "  (at a bound)"
+            } else {
+                ""
+            }
         );
     }
     s += &format!(
@@ -1137,6 +1318,7 @@ impl Identification {
             );
         }
         s += &response_controlled_text(&self.response_controlled);
+        s += &stage_times_text(&self.stage_times);
         s += &format!("\nwall time {:.1} s\n", self.wall_time_s);
         s
     }
@@ -1249,7 +1431,7 @@ impl Identification {
             "method": {
                 "model": "single mass-normalised mode + joint element on the modal coordinate (drive-point form m u'' + c u' + k u + f_joint(u) + effects = F cos wt), harmonic balance with odd harmonics 1,3 (1..9 with higher_harmonics), warm starts along each sweep",
                 "objective": "mean over levels of mean over rows of |Y_model - Y_meas|^2 / max|Y_meas|^2 (complex response per unit force)",
-                "search": "argmin particle swarm (seeded xoshiro256++) then Nelder-Mead restarted once, several starts; bounds in 'parameters'",
+                "search": "argmin particle swarm (seeded xoshiro256++) then Nelder-Mead restarted from its optimum, several starts (settings in 'options'); bounds in 'parameters'",
                 "selection": "training = even rows, held-out = odd rows of the fit levels; held-out dBIC with AR(1) effective sample size < -10 and every fit level better",
                 "scatter": "median |third difference| / (1.1774 sqrt(20)) per level"
             },
@@ -1268,6 +1450,7 @@ impl Identification {
             "response_controlled": self.response_controlled.iter().map(|r| serde_json::json!({
                 "amplitude": r.amplitude, "unit": r.quantity.unit(), "peak_frf": r.peak_frf, "peak_frequency_Hz": r.peak_frequency_hz
             })).collect::<Vec<_>>(),
+            "stage_times": self.stage_times,
             "wall_time_s": self.wall_time_s,
         });
         write_json(&p, &json)?;

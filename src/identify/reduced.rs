@@ -170,6 +170,9 @@ impl Extensible for ReducedSpec {
     fn spec_of(model: &ReducedModel) -> &Self {
         &model.spec
     }
+    fn joint_at_data_scales(&self, _values: &[f64]) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// A reduced model with values of its updating factors.
@@ -235,7 +238,7 @@ impl Parametrised for ReducedSpec {
         let (lo, hi) = (1.0 / FACTOR_RANGE, FACTOR_RANGE);
         let (flo, fhi) = FREQUENCY_FACTOR;
         let mut p = vec![
-            ParamSpec::lin("frequency_factor", "-", flo, fhi, 1.0),
+            ParamSpec::linear("frequency_factor", "-", flo, fhi, 1.0),
             ParamSpec::log("damping_factor", "-", lo, hi, 1.0),
             ParamSpec::log("contact_stiffness_factor", "-", lo, hi, 1.0),
             ParamSpec::log("friction_factor", "-", lo, hi, 1.0),
@@ -546,6 +549,7 @@ pub struct ReducedIdentification {
     pub phase_convention: String,
     /// 0-based fit levels (by increasing mean force).
     pub fit_levels: Vec<usize>,
+    #[serde(serialize_with = "super::model::serialize_params")]
     pub parameters: Vec<ParamSpec>,
     /// The final update on all rows of the fit levels: the four factors and the effects the
     /// search accepted.
@@ -693,6 +697,9 @@ impl ReducedOptions {
             max_effects: self.max_effects,
             baseline_fit: local,
             candidate_fit: local,
+            training_rows_only: false,
+            joint_restart: false,
+            refine: None,
         }
     }
 }
@@ -959,6 +966,7 @@ pub fn identify_reduced(
             &levels,
             &roles,
             steps,
+            None,
         ),
         Err(reason) => Uncertainty::NotEstimated { reason },
     };
@@ -1172,7 +1180,11 @@ impl ReducedIdentification {
                 p.unit,
                 p.lo,
                 p.hi,
-                if p.at_bound(*v) { "  AT BOUND" } else { "" }
+                if super::model::at_bound(&p, *v) {
+                    "  AT BOUND"
+                } else {
+                    ""
+                }
             );
         }
         s += &format!(

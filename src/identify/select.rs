@@ -1,19 +1,26 @@
 //! Which effect does the model lack? Candidate effects accepted only on strong held-out
 //! evidence, against the measurement scatter estimated from the data.
 //!
-//! The approach is that of `crate::diagnose::select` (held-out data, ΔBIC with an effective
-//! sample size, a "very strong" threshold), adapted to frequency responses:
+//! The approach is that of `crate::diagnose::select` (held-out data, a "very strong"
+//! threshold; the split, the effective sample size, the `ΔBIC` and the greedy rounds are
+//! [`crate::core::fit::held_out`]'s), adapted to frequency responses:
 //!
 //! 1. **Split.** The rows of every fit level are split alternately into training rows (even
-//!    positions in the sweep) and held-out rows (odd positions). Models are always evaluated
-//!    along the whole sweep (warm starts follow the test), and fitted on training rows only.
+//!    positions in the sweep) and held-out rows (odd positions). Models are fitted on training
+//!    rows only: evaluated along the whole sweep with the held-out rows masked (the thorough
+//!    search), or along the training rows alone (the default, [`SelectOptions::training_rows_only`]:
+//!    the same objective to the balance's tolerance at half the cost).
 //! 2. **Candidates.** Each admissible effect ([`Extensible::admits`]: every candidate for the
-//!    single mode, [`super::reduced::REDUCED_EFFECTS`] for a reduced model) is added and
-//!    the model refitted: a particle swarm over the whole box (one start) and Nelder–Mead from
-//!    the current model's optimum with the effect's parameters at their neutral values; the
-//!    better of the two is kept. An effect with a neutral value (zero stiffness change, zero
+//!    single mode, [`super::reduced::REDUCED_EFFECTS`] for a reduced model) is added and the
+//!    model refitted, every candidate of a round in parallel, by Nelder–Mead from the current
+//!    model's optimum with the effect's parameters at their neutral values, and (thorough) a
+//!    particle swarm over the whole box followed by Nelder–Mead, or (default) Nelder–Mead from
+//!    the current optimum with the joint back at the data's scales
+//!    ([`SelectOptions::joint_restart`]); the best is kept. The default screens each candidate
+//!    with a low iteration cap and refines those the held-out evidence leans to
+//!    ([`SelectOptions::refine`]). An effect with a neutral value (zero stiffness change, zero
 //!    delay, ...) therefore never fits worse than the current model; a joint family has none
-//!    (its joint replaces the Jenkins slider), so its fit rests on the swarm.
+//!    (its joint replaces the Jenkins slider).
 //! 3. **Evidence.** On the held-out rows, `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)`
 //!    (Schwarz 1978), `J` the objective of [`super::fit`] on held-out rows, `n = 2·rows`
 //!    (real and imaginary parts), `n_eff = n·(1 − ρ)/(1 + ρ)` with `ρ` the lag-1
@@ -54,6 +61,8 @@ use super::fit::{
 };
 use super::model::{Model, ModelSpec, NUMERICAL_COST_FLOOR};
 use crate::core::error::Result;
+use crate::core::fit::held_out;
+use rayon::prelude::*;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
 
@@ -83,6 +92,10 @@ pub trait Extensible: Parametrised + PartialEq {
     fn generalised(&self, e: Effect, values: &[f64]) -> Option<(Self, Vec<f64>)>;
     /// The family a member belongs to.
     fn spec_of(model: &Self::Model) -> &Self;
+    /// `values` (a member of this family) with its joint back at the data's own scales, if the
+    /// family has a joint: the second start of a candidate's fit in the default search
+    /// ([`SelectOptions::joint_restart`]).
+    fn joint_at_data_scales(&self, values: &[f64]) -> Option<Vec<f64>>;
 }
 
 impl Extensible for ModelSpec {
@@ -100,6 +113,15 @@ impl Extensible for ModelSpec {
     }
     fn spec_of(model: &Model) -> &Self {
         &model.spec
+    }
+    /// The joint's stiffness share and slip displacement at their starts ([`Model::neutral`]:
+    /// a 1 % share slipping at the lowest fit level's peak amplitude).
+    fn joint_at_data_scales(&self, values: &[f64]) -> Option<Vec<f64>> {
+        let p = self.params();
+        let mut v = values.to_vec();
+        v[3] = p[3].start;
+        v[4] = p[4].start;
+        Some(v)
     }
 }
 
@@ -153,15 +175,10 @@ pub fn scatter_floor(levels: &[LevelData]) -> f64 {
 
 /// Training (even positions) and held-out (odd) masks of each level.
 pub fn split(levels: &[LevelData]) -> (Vec<Vec<bool>>, Vec<Vec<bool>>) {
-    let train = levels
+    levels
         .iter()
-        .map(|l| (0..l.drives.len()).map(|i| i % 2 == 0).collect())
-        .collect();
-    let held = levels
-        .iter()
-        .map(|l| (0..l.drives.len()).map(|i| i % 2 == 1).collect())
-        .collect();
-    (train, held)
+        .map(|l| held_out::alternate(l.drives.len()))
+        .unzip()
 }
 
 /// Held-out score of a model: objective over the held-out rows, per level and pooled, and the
@@ -239,6 +256,12 @@ pub struct Candidate<M = Model> {
     /// Every fit level's held-out residual fell.
     pub improves_every_level: bool,
     pub converged: bool,
+    /// Model evaluations of the candidate's fit (screening and refinement).
+    pub evaluations: u64,
+    /// Wall time of the candidate's fit (s).
+    pub wall_time_s: f64,
+    /// Refitted from its screening optimum ([`SelectOptions::refine`]).
+    pub refined: bool,
     #[serde(skip)]
     pub fit: FitResult<M>,
 }
@@ -299,6 +322,23 @@ pub struct SelectOptions {
     pub baseline_fit: FitOptions,
     /// Global part of each candidate's fit (usually one start).
     pub candidate_fit: FitOptions,
+    /// Training fits evaluate the model at the training rows only (warm-started along them)
+    /// instead of along every row with the held-out rows masked: the same objective to the
+    /// harmonic balance's tolerance at half the rows.
+    pub training_rows_only: bool,
+    /// Each new candidate is fitted also from the current optimum with the joint back at the
+    /// data's own scales ([`Extensible::joint_at_data_scales`]): an effect can take over what
+    /// the joint did (a damper the joint's dissipation, on the Brake–Reuss beam: the Jenkins
+    /// baseline's joint carries half the stiffness and slips at the highest level's amplitude,
+    /// the model with quadratic damping a 1 % share slipping at every amplitude), an optimum
+    /// in another basin that a local start from the current optimum does not reach and a
+    /// swarm per candidate finds at a dozen times the cost.
+    pub joint_restart: bool,
+    /// Screening: with `Some`, [`SelectOptions::candidate_fit`] is a screening fit (a low
+    /// iteration cap), and the candidates whose held-out evidence leans to them (`ΔBIC` below
+    /// [`REFINE_BELOW`]) are refitted from their screening optimum with these settings before
+    /// the round decides; the others are refused on their screening fit.
+    pub refine: Option<FitOptions>,
 }
 
 /// Fit a candidate spec: Nelder–Mead from each of `starts` (physical values) and one swarm
@@ -358,9 +398,47 @@ pub fn neutral_start(baseline: &ModelSpec) -> Vec<Vec<f64>> {
     vec![Model::neutral(baseline.clone()).values]
 }
 
+/// What a round of the search starts from.
+struct RoundStart {
+    base_effects: Vec<Effect>,
+    base_held_out: HeldOut,
+    rho: f64,
+    n_eff: f64,
+}
+
+/// The fit levels restricted to their training rows (each level's peak and mean force kept,
+/// so that the objective is the one on all rows with the held-out rows masked), for searches
+/// that evaluate the training rows only ([`SelectOptions::training_rows_only`]).
+fn training_levels(levels: &[LevelData], train: &[Vec<bool>]) -> Vec<LevelData> {
+    levels
+        .iter()
+        .zip(train)
+        .map(|(l, m)| {
+            fn keep<T: Copy>(v: &[T], m: &[bool]) -> Vec<T> {
+                v.iter()
+                    .zip(m)
+                    .filter(|(_, &k)| k)
+                    .map(|(x, _)| *x)
+                    .collect()
+            }
+            LevelData {
+                name: l.name.clone(),
+                quantity: l.quantity,
+                drives: keep(&l.drives, m),
+                measured: keep(&l.measured, m),
+                lines: keep(&l.lines, m),
+                mean_force_n: l.mean_force_n,
+                peak: l.peak,
+            }
+        })
+        .collect()
+}
+
 /// Run the search on the fit levels; the baseline's training fit starts from `baseline_starts`
 /// (physical values; [`neutral_start`] for the single mode) and, with swarm starts in
-/// [`SelectOptions::baseline_fit`], from the swarm.
+/// [`SelectOptions::baseline_fit`], from the swarm. The candidates of a round are fitted in
+/// parallel (a candidate that starts from a nested candidate's optimum after it; the report
+/// keeps the order of [`SelectOptions::candidates`]).
 pub fn select<S: Extensible>(
     baseline: &S,
     baseline_starts: &[Vec<f64>],
@@ -369,141 +447,215 @@ pub fn select<S: Extensible>(
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Selection<S>> {
     let (train, held) = split(levels);
+    // The levels and masks the training fits evaluate.
+    let (fit_levels, fit_masks) = if opts.training_rows_only {
+        let t = training_levels(levels, &train);
+        let all = t.iter().map(|l| vec![true; l.drives.len()]).collect();
+        (t, all)
+    } else {
+        (levels.to_vec(), train.clone())
+    };
+    let (fit_levels, train) = (&fit_levels[..], &fit_masks[..]);
     let base_fit = fit_baseline(
         baseline,
         baseline_starts,
-        levels,
-        &train,
+        fit_levels,
+        train,
         &opts.baseline_fit,
         progress,
     )?;
     let floor = scatter_floor(levels);
-    let mut current = base_fit.clone();
-    let mut rounds = Vec::new();
-    let mut accepted_effects = Vec::new();
-    loop {
-        let spec = S::spec_of(&current.model).clone();
-        let base_held = score::<S>(&current.model, levels, &held)?;
-        let rho = lag1_autocorrelation(&base_held.residuals);
-        let n: usize = base_held.residuals.iter().map(|r| 2 * r.len()).sum();
-        let n_eff = (n as f64 * (1.0 - rho) / (1.0 + rho)).max(2.0);
-        let evidence = Evidence::<S> {
-            levels,
-            held: &held,
-            base_held: &base_held,
-            n_eff,
-            base_params: spec.params().len(),
-            family: std::marker::PhantomData,
-        };
-        // New effects while fewer than `max_effects` are in, and generalisations of accepted
-        // ones (one extra parameter each, not counted as a new effect) in every round.
-        let room = accepted_effects.len() < opts.max_effects;
-        let mut candidates = Vec::new();
-        for &e in &opts.candidates {
-            let generalisation = spec.generalised(e, S::values_of(&current.model));
-            if generalisation.is_none() && !(room && spec.admits(e)) {
-                continue;
-            }
-            let generalises = e.nests().filter(|_| generalisation.is_some());
-            let (cspec, fit) = match generalisation {
-                Some((cspec, start)) => {
-                    let fit = fit_local(
-                        &cspec,
-                        levels,
-                        &train,
-                        &[start],
-                        &opts.candidate_fit,
-                        progress,
-                    )?;
-                    (cspec, fit)
-                }
-                None => {
-                    // From the current optimum with the effect at its neutral values, and from
-                    // the optimum of a nested candidate of the same round (extended to this
-                    // effect by [`Effect::nested_values`]).
-                    let cspec = spec.with(e);
-                    let mut start = S::values_of(&current.model).to_vec();
-                    start.extend(cspec.params()[start.len()..].iter().map(|p| p.neutral));
-                    let nested = e.nests().and_then(|n| {
-                        let c = candidates
-                            .iter()
-                            .find(|c: &&Candidate<S::Model>| c.effect == n)?;
-                        let mut v = S::values_of(&c.fit.model).to_vec();
-                        v.extend(e.nested_values());
-                        Some(v)
-                    });
-                    let starts: Vec<Vec<f64>> = std::iter::once(start).chain(nested).collect();
-                    let fit = fit_candidate(&cspec, &starts, levels, &train, opts, progress)?;
-                    (cspec, fit)
-                }
+    // State: the current model's training fit and the effects accepted so far.
+    let state = (base_fit.clone(), Vec::<Effect>::new());
+    let (state, core_rounds) = held_out::rounds(
+        state,
+        usize::MAX,
+        |_| true,
+        |(current, accepted_effects): &(FitResult<S::Model>, Vec<Effect>)| {
+            let spec = S::spec_of(&current.model).clone();
+            let base_held = score::<S>(&current.model, levels, &held)?;
+            let rho = lag1_autocorrelation(&base_held.residuals);
+            let n: usize = base_held.residuals.iter().map(|r| 2 * r.len()).sum();
+            let n_eff = held_out::effective_samples(n, rho);
+            let evidence = Evidence::<S> {
+                levels,
+                held: &held,
+                base_held: &base_held,
+                n_eff,
+                base_params: spec.params().len(),
+                family: std::marker::PhantomData,
             };
-            candidates.push(evidence.judge(&cspec, e, None, generalises, fit)?);
-        }
-        let accepts =
-            |c: &Candidate<S::Model>| c.delta_bic < BIC_THRESHOLD && c.improves_every_level;
-        // Interacting effects: when two new effects each have strong evidence on the pooled
-        // held-out rows but raise some level's residual (on the Brake–Reuss beam fitted on all
-        // four levels: a stiffness softening ∝ A suits level 2, hardening ∝ A² levels 1 and 4,
-        // and the resonance needs both), every two of them (the strongest
-        // [`MAX_PAIRED`]) are also tested together, `Δp` their parameters together, and compete
-        // with the single candidates by ΔBIC.
-        if accepted_effects.len() + 2 <= opts.max_effects {
-            let mut strong: Vec<&Candidate<S::Model>> = candidates
+            // New effects while fewer than `max_effects` are in, and generalisations of
+            // accepted ones (one extra parameter each, not counted as a new effect) in every
+            // round.
+            let room = accepted_effects.len() < opts.max_effects;
+            let tried: Vec<Effect> = opts
+                .candidates
                 .iter()
-                .filter(|c| {
-                    c.generalises.is_none()
-                        && c.delta_bic < BIC_THRESHOLD
-                        && !c.improves_every_level
+                .copied()
+                .filter(|&e| {
+                    spec.generalised(e, S::values_of(&current.model)).is_some()
+                        || (room && spec.admits(e))
                 })
                 .collect();
-            strong.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
-            strong.truncate(MAX_PAIRED);
-            let mut pairs = Vec::new();
-            for (k, a) in strong.iter().enumerate() {
-                for b in &strong[k + 1..] {
-                    let pair = spec.with(a.effect);
-                    if !pair.admits(b.effect) {
-                        continue;
+            // A new candidate that nests another one tried before it in this round starts
+            // also from that one's optimum, so it is fitted after it.
+            let waits = |e: Effect| {
+                let before = &tried[..tried.iter().position(|&x| x == e).unwrap_or(0)];
+                spec.generalised(e, S::values_of(&current.model)).is_none()
+                    && e.nests().is_some_and(|n| before.contains(&n))
+            };
+            let fit_one =
+                |e: Effect, earlier: &[Candidate<S::Model>]| -> Result<Candidate<S::Model>> {
+                    let generalisation = spec.generalised(e, S::values_of(&current.model));
+                    let generalises = e.nests().filter(|_| generalisation.is_some());
+                    let (cspec, fit) = match generalisation {
+                        Some((cspec, start)) => {
+                            let fit = fit_local(
+                                &cspec,
+                                fit_levels,
+                                train,
+                                &[start],
+                                &opts.candidate_fit,
+                                progress,
+                            )?;
+                            (cspec, fit)
+                        }
+                        None => {
+                            // From the current optimum with the effect at its neutral values, and
+                            // from the optimum of a nested candidate of the same round (extended
+                            // to this effect by [`Effect::nested_values`]).
+                            let cspec = spec.with(e);
+                            let mut start = S::values_of(&current.model).to_vec();
+                            start.extend(cspec.params()[start.len()..].iter().map(|p| p.start));
+                            let nested = e.nests().and_then(|n| {
+                                let c = earlier.iter().find(|c| c.effect == n)?;
+                                let mut v = S::values_of(&c.fit.model).to_vec();
+                                v.extend(e.nested_values());
+                                Some(v)
+                            });
+                            let extra = cspec.params()[S::values_of(&current.model).len()..]
+                                .iter()
+                                .map(|p| p.start)
+                                .collect::<Vec<_>>();
+                            let joint = opts
+                                .joint_restart
+                                .then(|| spec.joint_at_data_scales(S::values_of(&current.model)))
+                                .flatten()
+                                .map(|mut v| {
+                                    v.extend(&extra);
+                                    v
+                                });
+                            let starts: Vec<Vec<f64>> =
+                                std::iter::once(start).chain(joint).chain(nested).collect();
+                            let fit =
+                                fit_candidate(&cspec, &starts, fit_levels, train, opts, progress)?;
+                            (cspec, fit)
+                        }
+                    };
+                    evidence.judge(&cspec, e, None, generalises, fit)
+                };
+            let first: Vec<Candidate<S::Model>> = tried
+                .par_iter()
+                .filter(|&&e| !waits(e))
+                .map(|&e| fit_one(e, &[]))
+                .collect::<Result<_>>()?;
+            let second: Vec<Candidate<S::Model>> = tried
+                .par_iter()
+                .filter(|&&e| waits(e))
+                .map(|&e| fit_one(e, &first))
+                .collect::<Result<_>>()?;
+            let mut candidates: Vec<Candidate<S::Model>> = first
+                .into_iter()
+                .chain(second)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|c| evidence.refined(c, fit_levels, train, opts, progress))
+                .collect::<Result<_>>()?;
+            candidates.sort_by_key(|c| tried.iter().position(|&e| e == c.effect));
+            // Interacting effects: when two new effects each have strong evidence on the
+            // pooled held-out rows but raise some level's residual (on the Brake–Reuss beam
+            // fitted on all four levels: a stiffness softening ∝ A suits level 2, hardening ∝
+            // A² levels 1 and 4, and the resonance needs both), every two of them (the
+            // strongest [`MAX_PAIRED`]) are also tested together, `Δp` their parameters
+            // together, and compete with the single candidates by ΔBIC.
+            if accepted_effects.len() + 2 <= opts.max_effects {
+                let mut strong: Vec<&Candidate<S::Model>> = candidates
+                    .iter()
+                    .filter(|c| {
+                        c.generalises.is_none()
+                            && c.delta_bic < BIC_THRESHOLD
+                            && !c.improves_every_level
+                    })
+                    .collect();
+                strong.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+                strong.truncate(MAX_PAIRED);
+                let mut pairs = Vec::new();
+                for (k, a) in strong.iter().enumerate() {
+                    for b in &strong[k + 1..] {
+                        let pair = spec.with(a.effect);
+                        if pair.admits(b.effect) {
+                            pairs.push((a, b, pair.with(b.effect)));
+                        }
                     }
-                    // From the two single candidates' optima combined.
-                    let cspec = pair.with(b.effect);
-                    let mut start = S::values_of(&a.fit.model).to_vec();
-                    start.extend(&S::values_of(&b.fit.model)[S::values_of(&current.model).len()..]);
-                    let fit = fit_candidate(&cspec, &[start], levels, &train, opts, progress)?;
-                    pairs.push(evidence.judge(&cspec, a.effect, Some(b.effect), None, fit)?);
                 }
+                let pairs: Vec<Candidate<S::Model>> = pairs
+                    .into_par_iter()
+                    .map(|(a, b, cspec)| {
+                        // From the two single candidates' optima combined.
+                        let mut start = S::values_of(&a.fit.model).to_vec();
+                        start.extend(
+                            &S::values_of(&b.fit.model)[S::values_of(&current.model).len()..],
+                        );
+                        let fit =
+                            fit_candidate(&cspec, &[start], fit_levels, train, opts, progress)?;
+                        let c = evidence.judge(&cspec, a.effect, Some(b.effect), None, fit)?;
+                        evidence.refined(c, fit_levels, train, opts, progress)
+                    })
+                    .collect::<Result<_>>()?;
+                candidates.extend(pairs);
             }
-            candidates.extend(pairs);
-        }
-        let best = candidates
-            .iter()
-            .filter(|c| accepts(c))
-            .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
-            .map(|c| (c.effect, c.jointly_with, c.generalises, c.fit.clone()));
-        if candidates.is_empty() {
-            break;
-        }
-        rounds.push(Round {
-            base_effects: spec.effects().to_vec(),
-            base_held_out: base_held,
-            lag1_autocorrelation: rho,
-            effective_samples: n_eff,
-            candidates,
-            accepted: best.as_ref().map(|b| b.0),
-            accepted_with: best.as_ref().and_then(|b| b.1),
-        });
-        match best {
-            Some((e, jointly, replaced, fit)) => {
-                match replaced.and_then(|r| accepted_effects.iter().position(|&x| x == r)) {
-                    Some(i) => accepted_effects[i] = e,
-                    None => accepted_effects.push(e),
-                }
-                accepted_effects.extend(jointly);
-                current = fit;
+            let start = RoundStart {
+                base_effects: spec.effects().to_vec(),
+                base_held_out: base_held,
+                rho,
+                n_eff,
+            };
+            Ok((start, candidates))
+        },
+        |_, candidates| {
+            candidates
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.delta_bic < BIC_THRESHOLD && c.improves_every_level)
+                .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic))
+                .map(|(i, _)| i)
+        },
+        |(_, mut accepted_effects), c| {
+            match c
+                .generalises
+                .and_then(|r| accepted_effects.iter().position(|&x| x == r))
+            {
+                Some(i) => accepted_effects[i] = c.effect,
+                None => accepted_effects.push(c.effect),
             }
-            None => break,
-        }
-    }
+            accepted_effects.extend(c.jointly_with);
+            Ok((c.fit.clone(), accepted_effects))
+        },
+    )?;
+    let (current, accepted_effects) = state;
+    let rounds: Vec<Round<S::Model>> = core_rounds
+        .into_iter()
+        .map(|r| Round {
+            base_effects: r.meta.base_effects,
+            base_held_out: r.meta.base_held_out,
+            lag1_autocorrelation: r.meta.rho,
+            effective_samples: r.meta.n_eff,
+            accepted: r.accepted.map(|i| r.candidates[i].effect),
+            accepted_with: r.accepted.and_then(|i| r.candidates[i].jointly_with),
+            candidates: r.candidates,
+        })
+        .collect();
     let final_held = score::<S>(&current.model, levels, &held)?;
     let base_held = score::<S>(&base_fit.model, levels, &held)?;
     let verdict = if !accepted_effects.is_empty() {
@@ -561,10 +713,12 @@ impl<S: Extensible> Evidence<'_, S> {
             meaning: effect.meaning(),
             added_parameters: dp as usize,
             train_cost: fit.cost,
-            delta_bic: self.n_eff
-                * ((h.cost + NUMERICAL_COST_FLOOR) / (self.base_held.cost + NUMERICAL_COST_FLOOR))
-                    .ln()
-                + dp * self.n_eff.ln(),
+            delta_bic: held_out::delta_bic(
+                self.n_eff,
+                h.cost + NUMERICAL_COST_FLOOR,
+                self.base_held.cost + NUMERICAL_COST_FLOOR,
+                dp as usize,
+            ),
             improves_every_level: h
                 .per_level
                 .iter()
@@ -572,10 +726,46 @@ impl<S: Extensible> Evidence<'_, S> {
                 .all(|(a, b)| a < b),
             held_out: h,
             converged: fit.converged,
+            evaluations: fit.evaluations,
+            wall_time_s: fit.wall_time_s,
+            refined: false,
             fit,
         })
     }
+
+    /// With [`SelectOptions::refine`], a screened candidate whose held-out `ΔBIC` is below
+    /// [`REFINE_BELOW`] refitted from its optimum by Nelder–Mead with those settings and judged
+    /// again; any other candidate as it is.
+    fn refined(
+        &self,
+        c: Candidate<S::Model>,
+        fit_levels: &[LevelData],
+        train: &[Vec<bool>],
+        opts: &SelectOptions,
+        progress: Option<&indicatif::ProgressBar>,
+    ) -> Result<Candidate<S::Model>> {
+        let Some(refine) = &opts.refine else {
+            return Ok(c);
+        };
+        if c.delta_bic.is_nan() || c.delta_bic >= REFINE_BELOW {
+            return Ok(c);
+        }
+        let cspec = S::spec_of(&c.fit.model).clone();
+        let start = S::values_of(&c.fit.model).to_vec();
+        let fit = fit_local(&cspec, fit_levels, train, &[start], refine, progress)?;
+        let evaluations = c.evaluations + fit.evaluations;
+        let wall_time_s = c.wall_time_s + fit.wall_time_s;
+        let mut r = self.judge(&cspec, c.effect, c.jointly_with, c.generalises, fit)?;
+        r.evaluations = evaluations;
+        r.wall_time_s = wall_time_s;
+        r.refined = true;
+        Ok(r)
+    }
 }
+
+/// A screened candidate is refined when its held-out `ΔBIC` is below this (the evidence leans
+/// to it; the acceptance threshold [`BIC_THRESHOLD`] is ten below).
+pub const REFINE_BELOW: f64 = 0.0;
 
 /// Refit a model on all rows of the fit levels (local, from its training optimum).
 pub fn refit_all_rows<S: Extensible>(
@@ -598,9 +788,7 @@ pub fn refit_all_rows<S: Extensible>(
 /// The objective of a model of the family `spec` over all rows of some levels.
 pub fn cost_all_rows<S: Parametrised>(spec: &S, model: &S::Model, levels: &[LevelData]) -> f64 {
     let all: Vec<Vec<bool>> = levels.iter().map(|l| vec![true; l.drives.len()]).collect();
-    Objective::new(spec.clone(), levels, &all, None)
-        .cost_of(model)
-        .0
+    Objective::new(spec.clone(), levels, &all).cost_of(model).0
 }
 
 #[cfg(test)]

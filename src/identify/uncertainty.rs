@@ -158,7 +158,7 @@ pub fn parameter_covariance<S: Parametrised>(
     let params = spec.params();
     let values = S::values_of(model);
     let free: Vec<usize> = (0..params.len())
-        .filter(|&j| !params[j].at_bound(values[j]))
+        .filter(|&j| !super::model::at_bound(&params[j], values[j]))
         .collect();
     if free.is_empty() {
         return Err(Error::Data("every parameter is on a bound".into()));
@@ -166,7 +166,7 @@ pub fn parameter_covariance<S: Parametrised>(
     let z: Vec<f64> = params
         .iter()
         .zip(values)
-        .map(|(p, &v)| p.coordinate(v))
+        .map(|(p, &v)| p.coordinate_of(v))
         .collect();
     let at = |zj: &[f64]| spec.model(params.iter().zip(zj).map(|(p, &v)| p.value(v)).collect());
     let per_level = all_residuals::<S>(model, levels)?;
@@ -272,11 +272,26 @@ pub fn posterior_ensemble<S: Parametrised>(
     steps: usize,
     seed: u64,
 ) -> Result<Ensemble> {
+    sample_posterior(spec, model, cov, fit_levels, draws, steps, seed, None)
+}
+
+/// [`posterior_ensemble`], advancing `progress` by one per chain step.
+#[allow(clippy::too_many_arguments)]
+fn sample_posterior<S: Parametrised>(
+    spec: &S,
+    model: &S::Model,
+    cov: &ParameterCovariance,
+    fit_levels: &[LevelData],
+    draws: usize,
+    steps: usize,
+    seed: u64,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Ensemble> {
     let params = spec.params();
     let z_hat: Vec<f64> = params
         .iter()
         .zip(S::values_of(model))
-        .map(|(p, &v)| p.coordinate(v))
+        .map(|(p, &v)| p.coordinate_of(v))
         .collect();
     let dim = cov.free.len();
     let n_eff = cov.effective_components();
@@ -291,6 +306,9 @@ pub fn posterior_ensemble<S: Parametrised>(
     let ln_post = |zf: &DVector<f64>| -> f64 {
         if zf.iter().any(|v| !(0.0..=1.0).contains(v)) {
             return f64::NEG_INFINITY;
+        }
+        if let Some(b) = progress {
+            b.inc(1);
         }
         let j = cost_all_rows(spec, &spec.model(values_of(zf)), fit_levels);
         -0.5 * n_eff * (j + NUMERICAL_COST_FLOOR).ln()
@@ -601,6 +619,7 @@ pub fn estimate<S: Parametrised>(
     levels: &[LevelData],
     roles: &[&str],
     steps: usize,
+    progress: Option<&indicatif::ProgressBar>,
 ) -> Uncertainty {
     if steps == 0 {
         return Uncertainty::NotEstimated {
@@ -609,15 +628,30 @@ pub fn estimate<S: Parametrised>(
     }
     let run = || -> Result<Uncertainty> {
         let covariance = parameter_covariance(spec, model, fit_levels)?;
-        let ensemble = posterior_ensemble(
-            spec,
-            model,
-            &covariance,
-            fit_levels,
-            ENSEMBLE_DRAWS,
-            steps,
-            ENSEMBLE_SEED,
-        )?;
+        let sample = |steps: usize| {
+            sample_posterior(
+                spec,
+                model,
+                &covariance,
+                fit_levels,
+                ENSEMBLE_DRAWS,
+                steps,
+                ENSEMBLE_SEED,
+                progress,
+            )
+        };
+        // Short chains (the fast default) that disagree are run again at the thorough length
+        // before the bands are given up: a slow-mixing posterior needs the longer chains, an
+        // unidentifiable one still fails at that length and says so.
+        let ensemble = match sample(steps) {
+            Err(_) if steps < CHAIN_STEPS => {
+                if let Some(p) = progress {
+                    p.inc_length((CHAINS * CHAIN_STEPS) as u64);
+                }
+                sample(CHAIN_STEPS)?
+            }
+            r => r?,
+        };
         let bands = prediction_bands(spec, model, &ensemble, levels, roles)?;
         Ok(Uncertainty::Estimated(Box::new(Estimate {
             intervals: ensemble.intervals(&spec.params(), S::values_of(model), &covariance.free),
