@@ -16,10 +16,15 @@
 //! # Periodic state
 //!
 //! The element starts virgin at the static equilibrium `u = 0` and is loaded in one increment to
-//! the first sample; from there its state at the start of the period is made periodic by Newton's
+//! the mean displacement (the static offset the vibration starts from) and in a second to the
+//! first sample; from there its state at the start of the period is made periodic by Newton's
 //! method on the one-period map, `s0 ← s0 + (I − Φ)⁺·(s_N − s0)` with `Φ = ∂s_N/∂s0` the
 //! monodromy of the discrete update (`⁺`: pseudo-inverse; directions with `Φ = I`, e.g. a fully
-//! stuck Jenkins slider, are neutral and keep the start value). It converges in one update for
+//! stuck Jenkins slider, are neutral and keep the start value: loading first to the mean makes
+//! that value independent of where the samples fall, so that a slider that never slips holds the
+//! offset of the static loading and no other; loaded straight to the first sample it slipped
+//! whenever that sample lay beyond the stick range, and the harmonic balance gained spurious mean
+//! displacements). It converges in one update for
 //! elements that slip somewhere in the cycle (`Φ = 0`) and quadratically for Valanis elements,
 //! whose plain period-by-period iteration contracts very slowly at small amplitudes. A period is
 //! periodic when `|s_N − s0| ≤ tolerance × scale` for every state component.
@@ -1085,22 +1090,43 @@ fn periodic_cycle<'a>(
     if m > 0 {
         p.reversals = find_reversals(h, u_coeffs, d, arena);
     }
-    // Virgin element at u = 0 loaded to the first sample.
+    // Virgin element at u = 0 loaded to the mean displacement, then to the first sample (the
+    // start of the neutral directions: a slider that never slips keeps the offset of this
+    // loading, independent of where the samples fall).
     let virgin = zeros(arena, m);
     el.virgin_state(virgin);
     let zero = zeros(arena, d);
+    let mean = zeros(arena, d);
+    if h.has_mean() {
+        for c in 0..d {
+            mean[c] = u_coeffs[c * len];
+        }
+    }
     let u_first = zeros(arena, d);
     sample(p.u, n, d, 0, u_first);
     let f1 = zeros(arena, d);
+    let s_mean = zeros(arena, m);
     part.clear();
-    el.step(virgin, zero, u_first, p.s0, f1, Some(part));
+    el.step(virgin, zero, mean, s_mean, f1, Some(part));
+    let ds_mean_du: &[f64] = arena.alloc_slice_copy(&part.ds_du1);
+    part.clear();
+    el.step(s_mean, mean, u_first, p.s0, f1, Some(part));
+    // ∂s_init/∂U: through the first sample (synthesis row 0) and, with the mean retained,
+    // through the mean (coefficient 0 of each component), directly and through `s_mean`.
     let e0 = h.synthesis_row(0);
     let ds_init = zeros(arena, m * d * len);
     for r in 0..m {
         for c in 0..d {
             let b = part.ds_du1[r * d + c];
-            for (k, e) in e0.iter().enumerate() {
-                ds_init[r * d * len + c * len + k] = b * e;
+            let row = &mut ds_init[r * d * len + c * len..r * d * len + (c + 1) * len];
+            for (o, e) in row.iter_mut().zip(e0) {
+                *o = b * e;
+            }
+            if h.has_mean() {
+                row[0] += part.ds_du0[r * d + c]
+                    + (0..m)
+                        .map(|j| part.ds_ds0[r * m + j] * ds_mean_du[j * d + c])
+                        .sum::<f64>();
             }
         }
     }
@@ -1123,12 +1149,22 @@ fn periodic_cycle<'a>(
     // neutral components are reset to the virgin start's below, so the cycle found does not
     // depend on where it started.
     let s_init: &[f64] = arena.alloc_slice_copy(p.s0);
+    let mut periods = 0;
     if let Some(w) = warm {
         if w.len() == m && w.iter().all(|v| v.is_finite()) {
-            p.s0.copy_from_slice(w);
+            // Where the virgin start is itself periodic (a slider that sticks throughout), that
+            // is the cycle: a warm start that slips in its first period would end on the
+            // cycle that just touches the slip limit, another static offset.
+            run_plain(el, n, &mut p, arena, |_, _, _, _| {});
+            periods += 1;
+            let virgin_periodic = (0..m).all(|j| {
+                (p.s_end[j] - s_init[j]).abs() <= settings.periodicity_tolerance * scales[j]
+            });
+            if !virgin_periodic {
+                p.s0.copy_from_slice(w);
+            }
         }
     }
-    let mut periods = 0;
     let mut error = f64::INFINITY;
     let mut previous_error = f64::INFINITY;
     // (I − Φ)⁺ and the projector P = (I − Φ)⁺·(I − Φ) of the last monodromy computed.
