@@ -515,6 +515,98 @@ pub fn sweep_partial(
     })
 }
 
+/// The solution on the branch between three consecutive points `points` at arclength `at`
+/// (measured from the middle point, in the scaled variables of [`point_arclengths`]): the
+/// parabola through the three points in arclength predicts it, and the bordered corrector finds
+/// it on the hyperplane normal to the parabola's tangent there. `None` when the corrector fails.
+pub fn point_between(
+    system: &HbmSystem<'_>,
+    level: f64,
+    points: [&HbmPoint; 3],
+    at: f64,
+) -> Option<HbmPoint> {
+    let n = system.unknowns();
+    let (zs, ws, s) = point_arclengths(points);
+    let y: Vec<DVector<f64>> = points
+        .iter()
+        .map(|p| {
+            let mut v = DVector::zeros(n + 1);
+            v.rows_mut(0, n).copy_from(&(&p.z / zs));
+            v[n] = p.omega / ws;
+            v
+        })
+        .collect();
+    // Lagrange basis of the parabola through (s_k, y_k) and its derivative at `at`.
+    let mut yp = DVector::zeros(n + 1);
+    let mut t = DVector::zeros(n + 1);
+    for k in 0..3 {
+        let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+        let den = (s[k] - s[a]) * (s[k] - s[b]);
+        let l = (at - s[a]) * (at - s[b]) / den;
+        let dl = (2.0 * at - s[a] - s[b]) / den;
+        yp.axpy(l, &y[k], 1.0);
+        t.axpy(dl, &y[k], 1.0);
+    }
+    let norm = t.norm();
+    if !(norm > 0.0) {
+        return None;
+    }
+    t /= norm;
+    let settings = ContinuationSettings::new(1.0, 2.0);
+    let c = correct(
+        system,
+        level,
+        &yp,
+        &t,
+        zs,
+        ws,
+        &settings,
+        system.newton.tolerance,
+        None,
+        &[],
+    )
+    .ok()?;
+    Some(HbmPoint {
+        omega: c.omega,
+        level,
+        z: c.z,
+        iterations: c.iterations,
+        residual: c.residual,
+        converged: true,
+        periodicity_error: c.periodicity,
+        wall_time_s: 0.0,
+    })
+}
+
+/// Scales and arclengths of three consecutive branch points: the unknowns' scale (their largest
+/// magnitude), the frequency scale (the three points' frequency range, or the middle frequency
+/// if they share it) and the signed distances of the points from the middle one in the scaled
+/// variables.
+pub fn point_arclengths(points: [&HbmPoint; 3]) -> (f64, f64, [f64; 3]) {
+    let zs = points
+        .iter()
+        .map(|p| p.z.amax())
+        .fold(f64::MIN_POSITIVE, f64::max);
+    let (lo, hi) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.omega), hi.max(p.omega))
+        });
+    let ws = if hi > lo {
+        hi - lo
+    } else {
+        points[1].omega.abs().max(1.0)
+    };
+    let d = |a: &HbmPoint, b: &HbmPoint| {
+        (((&a.z - &b.z) / zs).norm_squared() + ((a.omega - b.omega) / ws).powi(2)).sqrt()
+    };
+    (
+        zs,
+        ws,
+        [-d(points[0], points[1]), 0.0, d(points[1], points[2])],
+    )
+}
+
 /// Bordered corrector from the predicted point `yp` on the hyperplane `tᵀ·(ŷ − ŷ_p) = 0`:
 /// Newton's method with the Jacobian kept (chord iterations, residual-only AFT evaluations warm
 /// started from the previous iterate's periodic states) while the residual falls at least by
