@@ -2,7 +2,7 @@
 
 use asperity::core::output::{write_string_atomic, OutputSet};
 use asperity::dynamics::aft::Harmonics;
-use asperity::dynamics::continuation::{sweep, ContinuationSettings};
+use asperity::dynamics::continuation::{sweep_partial, ContinuationSettings};
 use asperity::dynamics::hbm::{Excitation, HbmSystem};
 use asperity::dynamics::model_file;
 use asperity::dynamics::report::{self, LevelResult};
@@ -56,6 +56,10 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     let mut settings =
         ContinuationSettings::new(f.sweep.frequency_start_hz, f.sweep.frequency_end_hz);
     settings.points = f.sweep.points;
+    settings.max_points = f
+        .sweep
+        .max_points
+        .unwrap_or(settings.max_points.max(20 * f.sweep.points));
     let n_el = model.structure.elements.len();
     println!(
         "{} coordinates ({:?}), {} elements ({} contact DOFs{}); harmonics {:?}, {} samples per period; formulation: {:?} with {} unknowns",
@@ -79,13 +83,15 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     // The levels are independent sweeps: they run concurrently (rayon tasks; the element loop
     // inside each evaluation is parallel too and rayon shares the cores between both), so the
     // slow gross-slip level overlaps the fast microslip ones. Progress: the sum of the levels'
-    // fractions of their span. Every error of `sweep` names its level and frequency.
+    // fractions of their span. A level whose sweep stops early keeps its points (written, and
+    // reported with the reason); one whose first point fails has nothing to write. Either way
+    // the other levels are written, and the run ends with an error naming the levels.
     let progress: Vec<AtomicU64> = levels.iter().map(|_| AtomicU64::new(0)).collect();
-    let results: Vec<LevelResult> = levels
+    let outcomes: Vec<Result<LevelResult>> = levels
         .par_iter()
         .enumerate()
         .map(|(i, &level)| {
-            let branch = sweep(&system, level, &settings, &mut |frac| {
+            let branch = sweep_partial(&system, level, &settings, &mut |frac| {
                 progress[i].store((frac * 1000.0) as u64, Ordering::Relaxed);
                 bar.set_position(progress.iter().map(|p| p.load(Ordering::Relaxed)).sum());
             })?;
@@ -96,14 +102,29 @@ pub fn run(args: ResponseArgs) -> Result<()> {
                 &model.responses[0].1,
             ))
         })
-        .collect::<Result<Vec<_>>>()
-        .inspect_err(|_| bar.abandon())
-        // A sweep's error names the model file its settings come from.
-        .map_err(|e| match e {
-            Error::Data(m) => Error::Data(format!("{}: {m}", args.model.display())),
-            e => e,
-        })?;
+        .collect();
     bar.finish_and_clear();
+    let mut failures: Vec<String> = Vec::new();
+    let mut results: Vec<LevelResult> = Vec::new();
+    // 1-based position of each result's level in the model file (its files' number).
+    let mut numbers: Vec<usize> = Vec::new();
+    for (i, (&level, outcome)) in levels.iter().zip(outcomes).enumerate() {
+        match outcome {
+            Ok(r) => {
+                if let Some(why) = &r.branch.stopped {
+                    failures.push(format!(
+                        "level {level} N: {why} (the points up to there are written)"
+                    ));
+                }
+                results.push(r);
+                numbers.push(i + 1);
+            }
+            Err(e) => failures.push(format!("level {level} N: nothing computed: {e}")),
+        }
+    }
+    if results.is_empty() {
+        return Err(Error::Data(failures.join("; ")));
+    }
     // Everything computed: write the files.
     let header = format!(
         "asperity {} response: model {}; {:?} formulation, {} unknowns; harmonics {:?}, {} samples per period",
@@ -115,10 +136,10 @@ pub fn run(args: ResponseArgs) -> Result<()> {
         system.harmonics.n_time()
     );
     let mut level_summaries = Vec::new();
-    for (i, r) in results.iter().enumerate() {
-        let csv = out.path(&format!("response_level_{}.csv", i + 1))?;
+    for (&number, r) in numbers.iter().zip(&results) {
+        let csv = out.path(&format!("response_level_{number}.csv"))?;
         report::write_level_csv(&csv, &system, &model.responses, r, &header)?;
-        let el = out.path(&format!("elements_level_{}.csv", i + 1))?;
+        let el = out.path(&format!("elements_level_{number}.csv"))?;
         report::write_elements_csv(&el, &system, r)?;
         let tol = system.aft.periodicity_tolerance;
         let non_periodic = r.branch.non_periodic_points(tol);
@@ -133,37 +154,46 @@ pub fn run(args: ResponseArgs) -> Result<()> {
                 system.aft.max_periods
             );
         }
-        let p = &r.branch.points[r.peak];
-        let x = system.coordinates(p);
-        let (amp, _) =
-            report::harmonic_of(&system, &x, &model.responses[0].1, f.excitation.harmonic);
-        let fpk = p.omega / (2.0 * std::f64::consts::PI);
+        let pk = r.interpolated_peak;
         println!(
-            "level {} N: {} points, peak {:.6e} m at {:.4} Hz ({}), energy/cycle at peak {:.4e} J, slip {:.3}, separation {:.3}; {} steps rejected, {} turning points, {:.2} s",
+            "level {} N: {} points, peak {:.6e} m at {:.4} Hz ({}, interpolated), energy/cycle at the largest point {:.4e} J, slip {:.3}, separation {:.3}; {} steps rejected, {} kinks, {} turning points, {:.2} s{}",
             r.level_n,
             r.branch.points.len(),
-            amp,
-            fpk,
+            pk.amplitude_m,
+            pk.frequency_hz,
             model.responses[0].0,
             r.totals[r.peak][0],
             r.totals[r.peak][2],
             r.totals[r.peak][3],
             r.branch.rejected_steps,
+            r.branch.kinks,
             r.branch.turning_points,
-            r.branch.wall_time_s
+            r.branch.wall_time_s,
+            if r.branch.stopped.is_some() { "; INCOMPLETE" } else { "" }
         );
+        if pk.at_sweep_end {
+            println!(
+                "warning: level {} N: the largest amplitude is at the end of the sweep ({:.4} Hz): the peak may lie outside the span; widen it",
+                r.level_n, pk.frequency_hz
+            );
+        }
         level_summaries.push(serde_json::json!({
             "level_N": r.level_n,
             "csv": out.final_path(&csv).display().to_string(),
             "elements_csv": out.final_path(&el).display().to_string(),
             "points": r.branch.points.len(),
-            "peak_frequency_Hz": fpk,
-            "peak_amplitude_m": amp,
+            "complete": r.branch.stopped.is_none(),
+            "stopped": r.branch.stopped,
+            "peak_frequency_Hz": pk.frequency_hz,
+            "peak_amplitude_m": pk.amplitude_m,
+            "peak_at_sweep_end": pk.at_sweep_end,
+            "largest_point_frequency_Hz": r.branch.points[r.peak].omega / (2.0 * std::f64::consts::PI),
             "peak_dissipated_energy_J": r.totals[r.peak][0],
             "peak_slip_fraction": r.totals[r.peak][2],
             "peak_separation_fraction": r.totals[r.peak][3],
             "rejected_steps": r.branch.rejected_steps,
             "turning_points": r.branch.turning_points,
+            "kinks": r.branch.kinks,
             "jacobians": r.branch.jacobians,
             "max_relative_residual": r.branch.points.iter().map(|p| p.residual).fold(0.0, f64::max),
             "max_periodicity_error": worst,
@@ -171,7 +201,7 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             "wall_time_s": r.branch.wall_time_s,
         }));
     }
-    for (label, row) in &model.responses {
+    for (k, (label, row)) in model.responses.iter().enumerate() {
         let safe: String = label
             .chars()
             .map(|c| {
@@ -183,7 +213,7 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             })
             .collect();
         let png = out.path(&format!("frf_{safe}.png"))?;
-        report::plot_frf_family(&png, &system, label, row, &results)?;
+        report::plot_frf_family(&png, &system, label, row, &results, k == 0)?;
     }
     let inputs: Vec<InputFile> = model
         .inputs
@@ -208,6 +238,7 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             "elements": n_el,
             "elements_out_of_calibration_range": model.out_of_range,
             "levels": level_summaries,
+            "failed_levels": failures,
         }),
     );
     write_string_atomic(
@@ -216,5 +247,13 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     )?;
     out.commit()?;
     println!("wrote {}", args.out_dir.display());
+    if !failures.is_empty() {
+        return Err(Error::Data(format!(
+            "{} of {} levels did not complete: {}",
+            failures.len(),
+            levels.len(),
+            failures.join("; ")
+        )));
+    }
     Ok(())
 }

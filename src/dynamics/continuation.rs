@@ -17,9 +17,38 @@
 //! value advances the frequency by at most `span/points` (so a sweep has about `points` points
 //! where the response is smooth, and more where the path turns: at resonance peaks and folds)
 //! and moves along the path by at most [`MAX_ARC_STEP`] (a tenth of the largest unknown, so a
-//! peak gets some twenty points even where it is steep); its smallest is `10⁻⁴/points`. When
-//! the step falls below its minimum the sweep stops with an error that names the frequency, the
-//! residual, and what was tried.
+//! peak gets some twenty points even where it is steep); its smallest is `10⁻⁴/points`.
+//!
+//! # Non-smooth transitions
+//!
+//! Where a contact starts or stops slipping (or separates) the branch is only piecewise smooth:
+//! the describing function of a Jenkins slider, for one, has a slope discontinuity at the stick
+//! limit `a = Fs/kt` (Caughey 1960), so the path has a kink whose angle does not shrink with the
+//! step. Pseudo-arclength continuation assumes a smooth path and fails there in two ways
+//! (on continuation through such points: Leine & Nijmeijer, *Dynamics and Bifurcations of
+//! Non-Smooth Mechanical Systems*, Springer 2004; on the step control it builds on: Allgower &
+//! Georg, *Introduction to Numerical Continuation Methods*, SIAM 2003, ch. 6):
+//! the turning-angle test rejects every step across the kink, so the step collapses onto it; and
+//! past the kink the corrector's hyperplane, normal to the secant, meets the continuation of the
+//! old branch behind as well as the new one ahead, and Newton's method from the predictor may
+//! end on either — a spurious fold that walks the sweep back. The step control here handles
+//! both:
+//!
+//! * **Distance test**: a corrected point farther than [`MAX_CORRECTION`] steps from its
+//!   predictor is on another branch (on a smooth path the distance is about the step times the
+//!   turning angle); the step is halved and the next corrector starts from a fresh Jacobian at
+//!   its predictor, so that Newton's method converges to the nearby branch.
+//! * **Kink test**: when halving the step leaves the turning angle above the limit and no
+//!   smaller than [`KINK_ANGLE_RATIO`] of its value (on a smooth path it shrinks with the step),
+//!   the point is past a kink and is accepted, provided the turn is below [`MAX_KINK_ANGLE`] and
+//!   the point lies within the reach of the new branch from the predictor (`1 + 1.2·tan(angle)`
+//!   steps, the geometry of a hyperplane crossing a branch at that angle) and within
+//!   [`KINK_JUMP`] of it; the secant through it then points along the new branch.
+//!
+//! Kinks passed are counted in [`Branch::kinks`]; turning points (sign changes of `dω/ds`) are
+//! counted separately and are real folds. When the step still falls below its minimum, or the
+//! point cap is reached, the sweep stops: [`sweep_partial`] keeps the points computed and says
+//! why and what to change in [`Branch::stopped`]; [`sweep`] makes that an error.
 
 use crate::core::error::{Error, Result};
 use crate::dynamics::hbm::{HbmPoint, HbmSystem};
@@ -28,6 +57,26 @@ use std::rc::Rc;
 use std::time::Instant;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// A step is rejected when the corrector ends farther than this many steps from its predictor
+/// (on a smooth path the distance is of the order of the step times the turning angle): the
+/// corrector's hyperplane crosses another branch, e.g. the continuation of the branch before a
+/// kink.
+const MAX_CORRECTION: f64 = 1.0;
+
+/// Halving the step shrinks the angle between successive secants on a smooth path; at a kink it
+/// does not. A turn above the angle limit that shrank by less than this factor when the step was
+/// halved is taken as a kink and passed.
+const KINK_ANGLE_RATIO: f64 = 0.9;
+
+/// The largest turn passed as a kink (degrees): beyond, the hyperplane of the corrector meets
+/// the branch behind as readily as the one ahead.
+const MAX_KINK_ANGLE: f64 = 80.0;
+
+/// Farthest a point past a kink may lie from the predictor, in the scaled variables: a farther
+/// one makes a long secant along the new branch, which may curve away (the Nyquist circle of a
+/// linear branch); the step is halved instead.
+const KINK_JUMP: f64 = 0.02;
 
 /// Largest step along the path in the scaled variables (unknowns relative to the largest seen,
 /// frequency relative to the span).
@@ -98,9 +147,15 @@ pub struct Branch {
     pub rejected_steps: usize,
     /// Turning points passed (sign changes of dω/ds).
     pub turning_points: usize,
+    /// Kinks passed: points where the path turned by more than the angle limit whatever the
+    /// step (non-smooth transitions, e.g. where a contact starts to slip).
+    pub kinks: usize,
     /// Jacobian evaluations (each with one AFT Jacobian per element).
     pub jacobians: usize,
     pub wall_time_s: f64,
+    /// Why the sweep stopped before the end of its span, with what to change (`None`: it
+    /// reached the end). The points computed up to there are kept.
+    pub stopped: Option<String>,
 }
 
 impl Branch {
@@ -201,8 +256,27 @@ impl Bordered {
 
 /// Follow the frequency response of `system` at excitation `level` over the settings' span.
 /// `progress(fraction)` is called after each accepted point with the fraction of the span
-/// covered.
+/// covered. A sweep that stops before the end of its span is an error naming the level, the
+/// frequency and what to change ([`sweep_partial`] keeps the points computed).
 pub fn sweep(
+    system: &HbmSystem<'_>,
+    level: f64,
+    settings: &ContinuationSettings,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Branch> {
+    let branch = sweep_partial(system, level, settings, progress)?;
+    match &branch.stopped {
+        None => Ok(branch),
+        Some(why) => Err(Error::Data(format!(
+            "continuation at level {level:.4e}: {why}"
+        ))),
+    }
+}
+
+/// [`sweep`] that keeps the points computed when the sweep stops before the end of its span
+/// ([`Branch::stopped`] says why and what to change). `Err` only when not even the first point
+/// was solved or the settings are invalid.
+pub fn sweep_partial(
     system: &HbmSystem<'_>,
     level: f64,
     settings: &ContinuationSettings,
@@ -246,6 +320,8 @@ pub fn sweep(
     let mut turning = 0;
     progress(0.0);
     let max_angle = settings.max_angle_deg.to_radians();
+    let mut stopped = None;
+    let mut kinks = 0;
     let scaled = |p: &HbmPoint, zs: f64| {
         let mut y = DVector::zeros(n + 1);
         y.rows_mut(0, n).copy_from(&(&p.z / zs));
@@ -257,9 +333,10 @@ pub fn sweep(
         let y_hat = scaled(last, zs);
         // Predictor + corrector, halving the step on failure.
         let mut halvings = 0;
-        let mut last_failure: String;
+        let mut last_failure = String::new();
+        let mut previous_angle: Option<f64> = None;
         let step_tried = step;
-        let (corr, tn, angle) = loop {
+        let accepted = loop {
             let yp = &y_hat + &t * step;
             match correct(
                 system,
@@ -286,12 +363,44 @@ pub fn sweep(
                         tn.copy_from(&t);
                     }
                     let angle = t.dot(&tn).clamp(-1.0, 1.0).acos();
-                    factorised = c.factorised.clone();
-                    if angle > max_angle && step > 2.0 * min_step {
-                        last_failure = format!("path turned by {:.1}°", angle.to_degrees());
+                    // Distance of the corrected point from the predictor, in steps.
+                    let mut yc = DVector::zeros(n + 1);
+                    yc.rows_mut(0, n).copy_from(&(&c.z / zs));
+                    yc[n] = c.omega / ws;
+                    let moved = (&yc - &yp).norm() / step;
+                    // A kink: halving the step did not shrink the turn (on a smooth path the
+                    // angle between secants shrinks with the step).
+                    let kink = previous_angle.is_some_and(|a| angle > KINK_ANGLE_RATIO * a);
+                    previous_angle = Some(angle);
+                    // Past a kink by a fraction of the step, the corrector's hyperplane meets
+                    // the new branch `tan(angle)` steps from the predictor at most.
+                    let reach = if angle < MAX_KINK_ANGLE.to_radians() {
+                        MAX_CORRECTION + 1.2 * angle.tan()
                     } else {
-                        break (c, tn, angle);
+                        0.0
+                    };
+                    let smooth = angle <= max_angle && moved <= MAX_CORRECTION;
+                    let passes_kink = (kink || step <= 2.0 * min_step)
+                        && moved <= reach
+                        && moved * step <= KINK_JUMP;
+                    factorised = c.factorised.clone();
+                    if smooth || passes_kink {
+                        if !smooth {
+                            kinks += 1;
+                        }
+                        break Some((c, tn, angle));
                     }
+                    last_failure = if moved > MAX_CORRECTION.max(reach) {
+                        // Another branch crossing the corrector's hyperplane: retry closer,
+                        // from a Jacobian at the new predictor.
+                        factorised = None;
+                        format!(
+                            "the corrector moved {moved:.1} steps from the predictor (to another \
+                             branch)"
+                        )
+                    } else {
+                        format!("path turned by {:.1}°", angle.to_degrees())
+                    };
                 }
                 Err(msg) => {
                     jacobians += settings.max_corrector_iterations;
@@ -303,19 +412,20 @@ pub fn sweep(
             halvings += 1;
             step *= 0.5;
             if step < min_step {
-                return Err(Error::NonConvergence {
-                    solver: format!(
-                        "pseudo-arclength continuation after {:.6} Hz (level {level:.4e}, {} points): \
-                         step halved {halvings} times from {step_tried:.3e} to below {min_step:.3e}; \
-                         last attempt: {last_failure}",
-                        last.omega / TWO_PI,
-                        points.len()
-                    ),
-                    iterations: settings.max_corrector_iterations,
-                    residual: f64::NAN,
-                    tolerance: tol,
-                });
+                break None;
             }
+        };
+        let Some((corr, tn, angle)) = accepted else {
+            stopped = Some(format!(
+                "continuation stopped after {:.6} Hz ({} points): step halved {halvings} times from \
+                 {step_tried:.3e} to below {min_step:.3e}; last attempt: {last_failure}. \
+                 More time_samples or harmonics resolve a non-smooth response better; a sweep \
+                 started just beyond {:.6} Hz continues from there",
+                last.omega / TWO_PI,
+                points.len(),
+                last.omega / TWO_PI
+            ));
+            break;
         };
         if tn[n].signum() != t[n].signum() && tn[n] != 0.0 && t[n] != 0.0 {
             turning += 1;
@@ -359,31 +469,41 @@ pub fn sweep(
             let prev = points.last().expect("non-empty");
             let a = (w1 - prev.omega) / (point.omega - prev.omega);
             let guess = &prev.z + (&point.z - &prev.z) * a;
-            let end = system.solve(w1, level, Some(&guess))?;
-            jacobians += end.iterations + 1;
-            points.push(end);
-            progress(1.0);
+            match system.solve(w1, level, Some(&guess)) {
+                Ok(end) => {
+                    jacobians += end.iterations + 1;
+                    points.push(end);
+                    progress(1.0);
+                }
+                Err(e) => {
+                    stopped = Some(format!(
+                        "the end frequency was not solved from the branch's last points: {e}"
+                    ))
+                }
+            }
             break;
         }
         if before_start {
-            return Err(Error::Data(format!(
-                "continuation at level {level:.4e} turned back below the start frequency ({:.6} Hz) after {} points",
+            stopped = Some(format!(
+                "the branch turned back below the start frequency ({:.6} Hz) after {} points: a \
+                 fold whose other side lies before the span; start the sweep lower",
                 point.omega / TWO_PI,
                 points.len()
-            )));
+            ));
+            break;
         }
         points.push(point);
         progress(((corr.omega - w0) / (w1 - w0)).clamp(0.0, 1.0));
         if points.len() >= settings.max_points {
-            return Err(Error::Data(format!(
-                "continuation at level {level:.4e} reached its cap of {} accepted points (4 × \
-                 the largest `sweep.points`) at {:.6} Hz, with `sweep.points` = {}: the branch \
-                 folds or refines more than a response sweep should; fewer `sweep.points` or a \
-                 narrower frequency span",
+            stopped = Some(format!(
+                "reached its cap of {} accepted points (`sweep.max_points`; by default the \
+                 larger of 20 000 and 20 × `sweep.points`) at {:.6} Hz: the branch folds or \
+                 refines more than a response sweep should; raise `sweep.max_points` or narrow \
+                 the frequency span",
                 settings.max_points,
                 corr.omega / TWO_PI,
-                settings.points
-            )));
+            ));
+            break;
         }
     }
     Ok(Branch {
@@ -391,9 +511,103 @@ pub fn sweep(
         points,
         rejected_steps: rejected,
         turning_points: turning,
+        kinks,
         jacobians,
         wall_time_s: t0.elapsed().as_secs_f64(),
+        stopped,
     })
+}
+
+/// The solution on the branch between three consecutive points `points` at arclength `at`
+/// (measured from the middle point, in the scaled variables of [`point_arclengths`]): the
+/// parabola through the three points in arclength predicts it, and the bordered corrector finds
+/// it on the hyperplane normal to the parabola's tangent there. `None` when the corrector fails.
+pub fn point_between(
+    system: &HbmSystem<'_>,
+    level: f64,
+    points: [&HbmPoint; 3],
+    at: f64,
+) -> Option<HbmPoint> {
+    let n = system.unknowns();
+    let (zs, ws, s) = point_arclengths(points);
+    let y: Vec<DVector<f64>> = points
+        .iter()
+        .map(|p| {
+            let mut v = DVector::zeros(n + 1);
+            v.rows_mut(0, n).copy_from(&(&p.z / zs));
+            v[n] = p.omega / ws;
+            v
+        })
+        .collect();
+    // Lagrange basis of the parabola through (s_k, y_k) and its derivative at `at`.
+    let mut yp = DVector::zeros(n + 1);
+    let mut t = DVector::zeros(n + 1);
+    for k in 0..3 {
+        let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+        let den = (s[k] - s[a]) * (s[k] - s[b]);
+        let l = (at - s[a]) * (at - s[b]) / den;
+        let dl = (2.0 * at - s[a] - s[b]) / den;
+        yp.axpy(l, &y[k], 1.0);
+        t.axpy(dl, &y[k], 1.0);
+    }
+    let norm = t.norm();
+    if !(norm > 0.0) {
+        return None;
+    }
+    t /= norm;
+    let settings = ContinuationSettings::new(1.0, 2.0);
+    let c = correct(
+        system,
+        level,
+        &yp,
+        &t,
+        zs,
+        ws,
+        &settings,
+        system.newton.tolerance,
+        None,
+        &[],
+    )
+    .ok()?;
+    Some(HbmPoint {
+        omega: c.omega,
+        level,
+        z: c.z,
+        iterations: c.iterations,
+        residual: c.residual,
+        converged: true,
+        periodicity_error: c.periodicity,
+        wall_time_s: 0.0,
+    })
+}
+
+/// Scales and arclengths of three consecutive branch points: the unknowns' scale (their largest
+/// magnitude), the frequency scale (the three points' frequency range, or the middle frequency
+/// if they share it) and the signed distances of the points from the middle one in the scaled
+/// variables.
+pub fn point_arclengths(points: [&HbmPoint; 3]) -> (f64, f64, [f64; 3]) {
+    let zs = points
+        .iter()
+        .map(|p| p.z.amax())
+        .fold(f64::MIN_POSITIVE, f64::max);
+    let (lo, hi) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.omega), hi.max(p.omega))
+        });
+    let ws = if hi > lo {
+        hi - lo
+    } else {
+        points[1].omega.abs().max(1.0)
+    };
+    let d = |a: &HbmPoint, b: &HbmPoint| {
+        (((&a.z - &b.z) / zs).norm_squared() + ((a.omega - b.omega) / ws).powi(2)).sqrt()
+    };
+    (
+        zs,
+        ws,
+        [-d(points[0], points[1]), 0.0, d(points[1], points[2])],
+    )
 }
 
 /// Bordered corrector from the predicted point `yp` on the hyperplane `tᵀ·(ŷ − ŷ_p) = 0`:
@@ -540,8 +754,10 @@ mod tests {
                 .collect(),
             rejected_steps: 0,
             turning_points: 0,
+            kinks: 0,
             jacobians: 0,
             wall_time_s: 0.0,
+            stopped: None,
         };
         assert_eq!(branch.non_periodic_points(1e-12), 3);
         assert_eq!(branch.non_periodic_points(1.0), 1);

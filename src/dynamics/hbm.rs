@@ -596,9 +596,15 @@ impl<'a> HbmSystem<'a> {
                 break;
             }
             let step = solve_linear(&ev.jacobian, &(-&ev.residual), omega)?;
+            // Warm start the elements' periodic states from the last iterate, except on the
+            // first step from rest: a state at rest is no start for a cycle of finite amplitude,
+            // and where a slider's cycle sticks throughout, a start that slips in its first
+            // period can end on the cycle that just touches the slip limit instead of the
+            // virgin start's (another, spurious, static offset).
             let warm = std::mem::take(&mut ev.element_states);
+            let warm = (it > 0 || guess.is_some()).then_some(warm.as_slice());
             let (znew, evnew) = self.line_search(&z, &step, &ev, |zz, jac| {
-                self.evaluate_from(zz, omega, level, jac, Some(&warm))
+                self.evaluate_from(zz, omega, level, jac, warm)
             });
             z = znew;
             ev = evnew;

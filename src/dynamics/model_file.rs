@@ -34,6 +34,7 @@
 //! odd_only = false
 //! time_samples = 128            # optional (default: power of two ≥ 16·harmonics)
 //! formulation = "auto"          # auto | coordinates | receptance
+//! # max_points = 20000          # optional cap on one level's points (default max(20000, 20·points))
 //! ```
 //!
 //! Paths are relative to the model file. Every error names the file, line and key or column.
@@ -103,6 +104,8 @@ pub struct SweepSection {
     pub time_samples: Option<usize>,
     #[serde(default = "default_formulation")]
     pub formulation: FormulationChoice,
+    /// Cap on the points of one level's branch (default: the larger of 20 000 and 20 × points).
+    pub max_points: Option<usize>,
 }
 
 fn default_points() -> usize {
@@ -289,6 +292,12 @@ impl ModelFile {
                     "{n} is more than the limit of {}",
                     crate::core::limits::MAX_TIME_SAMPLES
                 ),
+            ));
+        }
+        if s.max_points.is_some_and(|m| m < s.points) {
+            return Err(Error::param(
+                "sweep.max_points",
+                "must be at least sweep.points",
             ));
         }
         if s.points < 2 {
