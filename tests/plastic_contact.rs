@@ -487,7 +487,7 @@ fn cli_hardness_columns_and_residual_surfaces() {
         .collect();
     assert_eq!(rows.len(), 3);
     let v = |r: &Vec<String>, name: &str| -> f64 { r[col(name)].parse().unwrap() };
-    let s = asperity::surface::io::read_equivalent_surface(&[surf.clone()], None)
+    let s = asperity::surface::io::read_equivalent_surface(std::slice::from_ref(&surf), None)
         .unwrap()
         .0;
     for r in &rows {

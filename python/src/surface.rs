@@ -3,7 +3,8 @@
 
 use crate::arrays::{borrow_f64, view};
 use crate::errors::{to_python, IntoPy};
-use asperity::surface::combine::{self, Material};
+use asperity::core::material::{self, Material};
+use asperity::surface::combine;
 use asperity::surface::generate::GaussianSurfaceSpec;
 use asperity::surface::stats::{self, Detrend};
 use asperity::surface::{Profile as RsProfile, Topography};
@@ -333,7 +334,7 @@ pub fn composite_modulus(
         youngs_modulus_pa: youngs_modulus_2_pa.unwrap_or(youngs_modulus_pa),
         poisson_ratio: poisson_ratio_2.unwrap_or(poisson_ratio),
     };
-    combine::composite_modulus(b1, b2).py()
+    material::composite_modulus(b1, b2).py()
 }
 
 /// Equivalent rough surface `h1 − h2` of two bodies on a common grid (for a rigid-elastic

@@ -152,12 +152,12 @@ pub fn interrupt_report(new_set_in_place: bool) -> (&'static str, i32) {
 pub fn install_interrupt_handler() {
     let r = ctrlc::set_handler(|| {
         INTERRUPTED.store(true, Ordering::SeqCst);
-        // Held until the exit: no commit starts after this point.
-        let commit = lock(&COMMIT);
+        // Held until the exit (`process::exit` runs no destructors): no commit starts after
+        // this point.
+        let _commit = lock(&COMMIT);
         remove_registered();
         let (message, code) = interrupt_report(COMMITTED.load(Ordering::SeqCst));
         eprintln!("{message}");
-        std::mem::forget(commit);
         std::process::exit(code);
     });
     if let Err(e) = r {

@@ -785,11 +785,11 @@ fn stationarity(prep: &Prepared, baseline: &Baseline, max_iter: u64) -> Stationa
         baseline_specs: vec![
             ParamSpec {
                 start: v.e0.clamp(specs[0].lo, specs[0].hi),
-                ..specs[0].clone()
+                ..specs[0]
             },
             ParamSpec {
                 start: baseline.slip_force_n().clamp(specs[1].lo, specs[1].hi),
-                ..specs[1].clone()
+                ..specs[1]
             },
         ],
     };

@@ -488,7 +488,9 @@ fn find_reversals<'a>(
     let mut count = 0;
     let (phi, d1, d2) = (zeros(arena, len), zeros(arena, len), zeros(arena, len));
     for c in 0..d {
-        if !(vmax(c) > REVERSAL_VELOCITY_FLOOR * all) {
+        if vmax(c).partial_cmp(&(REVERSAL_VELOCITY_FLOOR * all))
+            != Some(std::cmp::Ordering::Greater)
+        {
             continue;
         }
         let x = &u_coeffs[c * len..(c + 1) * len];

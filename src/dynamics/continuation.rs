@@ -551,7 +551,7 @@ pub fn point_between(
         t.axpy(dl, &y[k], 1.0);
     }
     let norm = t.norm();
-    if !(norm > 0.0) {
+    if norm.is_nan() || norm <= 0.0 {
         return None;
     }
     t /= norm;

@@ -78,7 +78,7 @@ pub fn refined_peak(
         let d01 = (a1 - a0) / (x1 - x0);
         let d12 = (a2 - a1) / (x2 - x1);
         let c = (d12 - d01) / (x2 - x0);
-        if !(c < 0.0) {
+        if c.is_nan() || c >= 0.0 {
             break;
         }
         let vertex = (0.5 * (x0 + x1) - d01 / (2.0 * c)).clamp(lo, hi);
@@ -169,7 +169,7 @@ pub fn interpolated_peak(amplitudes: &[f64], frequencies: &[f64]) -> Peak {
     let d01 = (a[1] - a[0]) / (s[1] - s[0]);
     let d12 = (a[2] - a[1]) / (s[2] - s[1]);
     let curvature = (d12 - d01) / (s[2] - s[0]);
-    if !(curvature < 0.0) {
+    if curvature.is_nan() || curvature >= 0.0 {
         return Peak {
             at_sweep_end: false,
             ..largest

@@ -1058,7 +1058,7 @@ pub fn parameter_table(m: &Model) -> Vec<serde_json::Value> {
         .zip(&m.values)
         .map(|(p, v)| {
             serde_json::json!({"name": p.name, "unit": p.unit, "value": v, "lower_bound": p.lo,
-                "upper_bound": p.hi, "at_bound": super::model::at_bound(&p, *v)})
+                "upper_bound": p.hi, "at_bound": super::model::at_bound(p, *v)})
         })
         .collect()
 }
@@ -1074,7 +1074,7 @@ fn params_text(m: &Model) -> String {
             p.unit,
             p.lo,
             p.hi,
-            if super::model::at_bound(&p, *v) {
+            if super::model::at_bound(p, *v) {
                 "  (at a bound)"
             } else {
                 ""

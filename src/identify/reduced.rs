@@ -1180,7 +1180,7 @@ impl ReducedIdentification {
                 p.unit,
                 p.lo,
                 p.hi,
-                if super::model::at_bound(&p, *v) {
+                if super::model::at_bound(p, *v) {
                     "  AT BOUND"
                 } else {
                     ""
