@@ -185,12 +185,66 @@ fn reference_chain_on_a_coarse_grid_writes_table_plots_and_sidecar() {
             .skip(1)
             .map(|l| l.split(',').collect::<Vec<_>>())
             .filter(|f| f[0].parse::<f64>().unwrap() == p * 1e6)
-            .map(|f| f[7].parse::<f64>().unwrap().abs())
+            // Empty where the BEM energy is within its numerical floor (no error given).
+            .filter_map(|f| f[7].parse::<f64>().ok().map(f64::abs))
             .fold(0.0, f64::max);
         let warned = warnings
             .iter()
             .any(|w| w.starts_with(&format!("{p} MPa: the fitted element's energy")));
         assert_eq!(warned, worst > 0.2, "{p} MPa: worst energy error {worst}");
+    }
+}
+
+/// Near-stuck loops on a coarse grid: the BEM loop area at 0.2 × the gross-slip displacement can
+/// be smaller than the solve resolves (at 128², 0.2 MPa, one such mean came out −4e-8 J/m², and
+/// its "energy error" was printed as −114435 %). Every energy is compared with its numerical
+/// floor (`4a·ε·μp_max·n_c/N`): below it no relative error is given (an empty
+/// `mean_rel_error`) and a warning says so; above it the error is given. No warning states an
+/// error of a thousand per cent or more.
+#[test]
+fn unresolved_small_energies_get_no_relative_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("calib");
+    let o = asperity(&[
+        "calibrate",
+        "--grid",
+        "128",
+        "--realisations",
+        "2",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "{stderr}");
+    let energy = std::fs::read_to_string(out.join("energy_vs_amplitude.csv")).unwrap();
+    let header: Vec<&str> = energy.lines().next().unwrap().split(',').collect();
+    assert_eq!(header[7], "mean_rel_error");
+    assert_eq!(header[8], "energy_floor_J_per_m2");
+    let mut below = 0;
+    for line in energy.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (bem, floor): (f64, f64) = (f[3].parse().unwrap(), f[8].parse().unwrap());
+        assert!(floor > 0.0 && floor.is_finite(), "{line}");
+        if f[7].is_empty() {
+            below += 1;
+            assert!(bem <= floor, "no error given above the floor: {line}");
+        } else {
+            assert!(bem > floor, "an error given within the floor: {line}");
+            f[7].parse::<f64>().unwrap();
+        }
+    }
+    for w in stderr.lines().filter(|l| l.contains("energy per cycle")) {
+        if let Some(pct) = w.split(" by ").nth(1).and_then(|r| r.split(' ').next()) {
+            let v: f64 = pct.trim_start_matches('+').parse().unwrap();
+            assert!(v.abs() < 1000.0, "{w}");
+        }
+    }
+    if below > 0 {
+        assert!(stderr.contains("within its numerical floor"), "{stderr}");
     }
 }
 

@@ -62,6 +62,9 @@ pub struct AmplitudeLoop {
     pub computed_descending: bool,
     /// Loop area `∮τ dδ` by the trapezoidal rule on the samples (J/m²).
     pub loop_area_j_per_m2: f64,
+    /// The loop area's numerical floor (J/m², [`energy_floor`]): a loop area of smaller
+    /// magnitude is not resolved by the solve, and a negative one beyond it is an artefact.
+    pub energy_floor_j_per_m2: f64,
     /// Frictional dissipation of the computed half cycle, doubled (J/m²).
     pub dissipation_j_per_m2: f64,
     /// `max_i |q_i(end) + q_i(start)| / max_i μ p_i` over the computed half cycle (-): zero for
@@ -178,6 +181,24 @@ fn continuation_angles(ratio: f64, n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Numerical floor of a loop area `∮τ̄ dδ` (J/m²) at amplitude `a` (m).
+///
+/// A converged step's traction is within `ε·μp_max` of the exact one at every point (the
+/// solver's relative natural residual `ε`, [`TangentialSolver::tolerance`]; a loop that does
+/// not close adds its closure error, relative to the same bound), so the mean shear over the
+/// nominal area is within `ε_τ = ε·μp_max·n_c/N` (`n_c` of the `N` grid points in contact, the
+/// others carrying none). Along the loop's path of length `4a` the area is then uncertain by
+/// `4a·ε_τ`: this floor. Smaller areas (near-stuck loops on coarse grids and loose tolerances)
+/// are not results, and negative ones are numerical artefacts.
+pub fn energy_floor(
+    amplitude_m: f64,
+    relative_error: f64,
+    traction_bound_pa: f64,
+    contact_fraction: f64,
+) -> f64 {
+    4.0 * amplitude_m * relative_error * traction_bound_pa * contact_fraction
+}
+
 /// A shear traction field `(q_x, q_y)` on the grid (Pa).
 type Traction = (Array2<f64>, Array2<f64>);
 
@@ -212,6 +233,11 @@ pub fn run(
     let gross_slip = solver.gross_slip_displacement([1.0, 0.0])?;
     let area = solver.metadata().nominal_area_m2;
     let bound = solver.traction_bound_pa();
+    let tolerance = solver.tolerance();
+    let contact_fraction = {
+        let m = solver.metadata();
+        m.contact_points as f64 / (m.grid.0 * m.grid.1) as f64
+    };
     let amplitudes: Vec<f64> = factors.iter().map(|f| f * gross_slip).collect();
     let (mut steps, mut max_it, mut max_res) = (0usize, 0usize, 0.0f64);
     let mut virgin = (vec![0.0], vec![0.0]);
@@ -270,6 +296,12 @@ pub fn run(
             amplitude_factor: factors[j],
             amplitude_m: a,
             loop_area_j_per_m2: dissipated_energy(&displacement, &shear),
+            energy_floor_j_per_m2: energy_floor(
+                a,
+                tolerance.max(closure_error),
+                bound,
+                contact_fraction,
+            ),
             dissipation_j_per_m2: 2.0 * work / area,
             displacement_m: displacement,
             shear_stress_pa: shear,

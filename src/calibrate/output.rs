@@ -299,19 +299,23 @@ fn fits_csv(run: &CalibrationRun) -> String {
 /// `energy_vs_amplitude.csv`.
 fn energy_csv(run: &CalibrationRun) -> String {
     let mut s = String::from(
-        "pressure_Pa,amplitude_factor,realisations,energy_bem_J_per_m2,energy_bem_ci95_J_per_m2,energy_element_J_per_m2,energy_element_ci95_J_per_m2,mean_rel_error\n",
+        "pressure_Pa,amplitude_factor,realisations,energy_bem_J_per_m2,energy_bem_ci95_J_per_m2,energy_element_J_per_m2,energy_element_ci95_J_per_m2,mean_rel_error,energy_floor_J_per_m2\n",
     );
     for (i, &p) in run.config.loading.pressures_pa.iter().enumerate() {
-        for (f, bem, el) in super::pipeline::energy_summaries(&run.config, &run.realisations, i) {
+        for e in super::pipeline::energy_summaries(&run.config, &run.realisations, i) {
+            let (f, bem, el) = (e.factor, &e.bem, &e.element);
             let _ = writeln!(
                 s,
-                "{p},{f},{},{:e},{:e},{:e},{:e},{:e}",
+                "{p},{f},{},{:e},{:e},{:e},{:e},{},{:e}",
                 bem.n,
                 bem.mean,
                 bem.ci95,
                 el.mean,
                 el.ci95,
-                el.mean / bem.mean - 1.0
+                // Empty where the BEM energy is within its numerical floor.
+                e.relative_error()
+                    .map_or(String::new(), |r| format!("{r:e}")),
+                e.floor
             );
         }
     }

@@ -950,13 +950,37 @@ fn convergence_at(
 /// friction damper's damping, is then off by more than a fifth at that amplitude.
 pub const ENERGY_WARNING_REL: f64 = 0.2;
 
-/// Per amplitude at pressure `i`: (amplitude factor, BEM energy per cycle summary, element
-/// energy per cycle summary) over the realisations (J/m²; `energy_vs_amplitude.csv`).
+/// Energy per cycle at one amplitude over the realisations (J/m²; a row of
+/// `energy_vs_amplitude.csv`).
+pub(crate) struct EnergyAtAmplitude {
+    /// Amplitude over the gross-slip displacement (-).
+    pub factor: f64,
+    /// The BEM loops' areas.
+    pub bem: Summary,
+    /// The fitted element's loops' areas.
+    pub element: Summary,
+    /// Largest numerical floor of the BEM loop areas over the realisations
+    /// ([`crate::calibrate::amplitudes::energy_floor`]).
+    pub floor: f64,
+    /// Realisations whose BEM loop area is negative beyond its floor (numerical artefacts).
+    pub negative_beyond_floor: usize,
+}
+
+impl EnergyAtAmplitude {
+    /// `mean element energy / mean BEM energy − 1`, `None` where the mean BEM energy is within
+    /// the numerical floor (a relative error of an unresolved energy is not a result).
+    pub fn relative_error(&self) -> Option<f64> {
+        (self.bem.mean > self.floor).then(|| self.element.mean / self.bem.mean - 1.0)
+    }
+}
+
+/// Per amplitude at pressure `i`: the BEM's and the element's energy per cycle over the
+/// realisations and the BEM loops' numerical floor (`energy_vs_amplitude.csv`).
 pub(crate) fn energy_summaries(
     config: &CalibrationConfig,
     realisations: &[Realisation],
     i: usize,
-) -> Vec<(f64, Summary, Summary)> {
+) -> Vec<EnergyAtAmplitude> {
     let factors = &config.loading.amplitude_factors;
     (0..factors.len())
         .map(|j| {
@@ -964,19 +988,34 @@ pub(crate) fn energy_summaries(
                 pc.amplitudes.loops[j].loop_area_j_per_m2
             });
             let el = values(realisations, i, |pc| pc.fit.loops[j].energy_model);
-            (factors[j], summarise(&bem), summarise(&el))
+            let loops = realisations
+                .iter()
+                .map(|r| &r.pressures[i].amplitudes.loops[j]);
+            EnergyAtAmplitude {
+                factor: factors[j],
+                bem: summarise(&bem),
+                element: summarise(&el),
+                floor: loops
+                    .clone()
+                    .map(|l| l.energy_floor_j_per_m2)
+                    .fold(0.0, f64::max),
+                negative_beyond_floor: loops
+                    .filter(|l| l.loop_area_j_per_m2 < -l.energy_floor_j_per_m2)
+                    .count(),
+            }
         })
         .collect()
 }
 
-/// Largest `|mean element energy / mean BEM energy − 1|` over the amplitudes at pressure `i`,
-/// with its amplitude factor (the `mean_rel_error` of `energy_vs_amplitude.csv`).
+/// Largest `|mean element energy / mean BEM energy − 1|` over the amplitudes at pressure `i`
+/// whose BEM energy is above its numerical floor, with its amplitude factor (the
+/// `mean_rel_error` of `energy_vs_amplitude.csv`); `(0, NaN)` when none is.
 fn worst_energy_error(config: &CalibrationConfig, main: &[Realisation], i: usize) -> (f64, f64) {
     energy_summaries(config, main, i)
         .into_iter()
-        .map(|(f, bem, el)| (el.mean / bem.mean - 1.0, f))
+        .filter_map(|e| e.relative_error().map(|r| (r, e.factor)))
         .fold((0.0, f64::NAN), |worst, e| {
-            if e.0.abs() > worst.0.abs() {
+            if e.0.abs() > worst.0.abs() || e.0.is_nan() {
                 e
             } else {
                 worst
@@ -1019,6 +1058,24 @@ fn warnings_of(
             w.push(format!(
                 "{p}: {:.1} contact spots on the patch on average: the row describes a few asperities, not a rough surface; enlarge the patch",
                 pc.contact_spots.mean
+            ));
+        }
+        let energies = energy_summaries(config, main, i);
+        let unresolved: Vec<String> = energies
+            .iter()
+            .filter(|e| e.relative_error().is_none())
+            .map(|e| e.factor.to_string())
+            .collect();
+        if !unresolved.is_empty() {
+            w.push(format!(
+                "{p}: the BEM energy per cycle at {} × the gross-slip displacement is within its numerical floor (solver tolerance × traction bound × contact fraction × 4a; energy_floor_J_per_m2 of energy_vs_amplitude.csv): no energy error is given there; a finer grid or a tighter tangential_tolerance resolves it",
+                unresolved.join(", ")
+            ));
+        }
+        for e in energies.iter().filter(|e| e.negative_beyond_floor > 0) {
+            w.push(format!(
+                "{p}: negative BEM loop area beyond its numerical floor in {} of {n} realisation(s) at {} × the gross-slip displacement: a numerical artefact (the loop is not resolved), not a dissipation",
+                e.negative_beyond_floor, e.factor
             ));
         }
         let (energy_error, factor) = worst_energy_error(config, main, i);

@@ -364,6 +364,12 @@ impl TangentialSolver {
         self.max_limit
     }
 
+    /// Tolerance on the relative natural residual each step is solved to (the traction error
+    /// of a converged step is at most this times [`Self::traction_bound_pa`] per point).
+    pub fn tolerance(&self) -> f64 {
+        self.options.tolerance
+    }
+
     /// Forget the history: back to the virgin state (q = 0, no slip, no shift).
     pub fn reset(&mut self) {
         self.q.iter_mut().for_each(|v| *v = [0.0; 2]);
