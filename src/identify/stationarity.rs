@@ -141,9 +141,11 @@ pub fn criterion_json() -> serde_json::Value {
 /// The comparison of one level's two sides.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SideComparison {
+    /// File name of the level's sweep.
     pub file: String,
-    /// Points on the earlier and later side (the resonance row itself on neither).
+    /// Points on the earlier side (the resonance row itself on neither side).
     pub points_earlier: usize,
+    /// Points on the later side.
     pub points_later: usize,
     /// Later-side points compared (inside the earlier side's amplitude span).
     pub compared: usize,
@@ -190,6 +192,8 @@ pub struct SideComparison {
 }
 
 impl SideComparison {
+    /// Report lines: the compared amplitudes, the damping and natural-frequency differences against
+    /// their noise and tolerance, and whether the level is stationary.
     pub fn describe(&self) -> String {
         let (a0, a1) = self.amplitude_range_m;
         let (d0, d1) = self.damping_difference;
@@ -400,6 +404,7 @@ fn reference_level(backbones: &[LevelBackbone], pairs: &[Option<SidePairs>]) -> 
 pub struct ReferenceShift {
     /// Median `(f_n,l² − f_n,e²)/(f_l² − f_e²)` of the level's pairs.
     pub shift: f64,
+    /// Number of earlier–later pairs the median is over.
     pub pairs: usize,
 }
 
