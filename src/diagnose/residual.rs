@@ -37,7 +37,9 @@ use serde::Serialize;
 /// Residual statistics of one phase.
 #[derive(Debug, Clone, Serialize)]
 pub struct PhaseStats {
+    /// The phase the statistics are over.
     pub phase: Phase,
+    /// Held-out samples in the phase.
     pub samples: usize,
     /// Mean residual signed with the direction of motion (N); `None` without samples.
     pub mean_residual_n: Option<f64>,
@@ -58,8 +60,9 @@ pub const CLEARANCE_DWELL: f64 = 0.5;
 pub struct ClearanceRegion {
     /// Half-cycle index.
     pub half_cycle: usize,
-    /// Samples of the plateau `start..=end`.
+    /// First sample of the plateau (samples `start..=end`).
     pub start: usize,
+    /// Last sample of the plateau.
     pub end: usize,
     /// Last sample of the closing (5 % of the stroke after the plateau).
     pub closing_end: usize,
