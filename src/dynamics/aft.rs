@@ -331,9 +331,11 @@ pub fn worst_periodicity_error(errors: impl IntoIterator<Item = f64>) -> f64 {
 pub struct ElementCycle {
     /// Energy dissipated per cycle `∮ f·du` (J), trapezoidal rule over the samples.
     pub dissipated_energy_j: f64,
-    /// Fractions of the period in stick, slip and separation.
+    /// Fraction of the period in stick.
     pub stick_fraction: f64,
+    /// Fraction of the period in slip.
     pub slip_fraction: f64,
+    /// Fraction of the period in separation (normal gap open).
     pub separation_fraction: f64,
 }
 

@@ -89,8 +89,9 @@ const CHORD_STEPS_BEFORE_REFRESH: f64 = 6.0;
 /// Settings of a frequency sweep.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ContinuationSettings {
-    /// Start and end of the sweep (Hz); the sweep runs downwards when end < start.
+    /// Start of the sweep (Hz); the sweep runs downwards when the end is below it.
     pub frequency_start_hz: f64,
+    /// End of the sweep (Hz).
     pub frequency_end_hz: f64,
     /// Number of points along the frequency span where the response is smooth (sets the
     /// largest frequency step); resonance peaks and folds get more.
@@ -141,7 +142,9 @@ impl ContinuationSettings {
 /// A computed branch of the frequency response at one excitation level.
 #[derive(Debug, Clone)]
 pub struct Branch {
+    /// Excitation level (multiplies [`Excitation::force`](crate::dynamics::hbm::Excitation::force)).
     pub level: f64,
+    /// The accepted points, in path order.
     pub points: Vec<HbmPoint>,
     /// Steps rejected (corrector failure or turning angle) and retried with half the step.
     pub rejected_steps: usize,
@@ -152,6 +155,7 @@ pub struct Branch {
     pub kinks: usize,
     /// Jacobian evaluations (each with one AFT Jacobian per element).
     pub jacobians: usize,
+    /// Wall-clock time of the sweep (s).
     pub wall_time_s: f64,
     /// Why the sweep stopped before the end of its span, with what to change (`None`: it
     /// reached the end). The points computed up to there are kept.

@@ -15,7 +15,9 @@ const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// Everything written for one excitation level.
 #[derive(Debug, Clone)]
 pub struct LevelResult {
+    /// Excitation force amplitude of the level (N).
     pub level_n: f64,
+    /// The computed frequency-response branch.
     pub branch: Branch,
     /// Per point: total dissipated energy (J) and element-averaged stick/slip/separation.
     pub totals: Vec<[f64; 4]>,
@@ -30,7 +32,9 @@ pub struct LevelResult {
 /// The resonance peak of a branch: amplitude (at the excitation's harmonic) and frequency.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Peak {
+    /// Peak displacement amplitude at the excitation's harmonic (m).
     pub amplitude_m: f64,
+    /// Frequency of the peak (Hz).
     pub frequency_hz: f64,
     /// The largest amplitude is at the first or the last point of the branch: the peak may lie
     /// outside the span (or the branch stopped before it); not interpolated.
