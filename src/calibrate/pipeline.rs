@@ -128,14 +128,23 @@ pub struct PressureCalibration {
 /// with the run's wall time in `total_s`.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct StageTimes {
+    /// Wall time generating (or hashing) the surface (s).
     pub surface_s: f64,
+    /// Wall time of the normal-contact sweep (s).
     pub normal_s: f64,
+    /// Wall time of the tangential loops (s).
     pub tangential_s: f64,
+    /// Wall time of the Valanis fits (s).
     pub fit_s: f64,
+    /// CPU time of the surface stage (s).
     pub surface_cpu_s: f64,
+    /// CPU time of the normal sweep (s).
     pub normal_cpu_s: f64,
+    /// CPU time of the tangential loops (s).
     pub tangential_cpu_s: f64,
+    /// CPU time of the fits (s).
     pub fit_cpu_s: f64,
+    /// Wall time of the whole chain (realisation) or of the whole run (s).
     pub total_s: f64,
 }
 
@@ -255,6 +264,7 @@ pub struct ConvergenceStudy {
 /// Result of [`run`].
 #[derive(Debug, Clone)]
 pub struct CalibrationRun {
+    /// The configuration the run used.
     pub config: CalibrationConfig,
     /// What the surfaces were.
     pub surface_description: String,
