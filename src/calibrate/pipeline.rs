@@ -7,7 +7,7 @@
 //! For each **realisation** (a Gaussian surface of the configured statistics with seed
 //! `surface.seed + r`, or one given measured surface):
 //!
-//! 1. **Surface** ([`crate::surface::generate`]).
+//! 1. **Surface** ([`crate::surface::generate`](mod@crate::surface::generate)).
 //! 2. **Normal sweep** ([`crate::contact::sweep`]): the normal contact solver at each nominal
 //!    pressure, warm-started, with `kn = dp̄/dδ` from the tangent problem on the contact set.
 //! 3. **Tangential loops** ([`crate::calibrate::amplitudes`]): on each pressure field, one
@@ -444,7 +444,7 @@ pub fn loop_data(
 }
 
 /// Run one surface through the chain (single pass, on the current rayon pool). `bar` receives
-/// [`chain_units`] increments.
+/// `chain_units` increments.
 pub fn calibrate_surface(
     config: &CalibrationConfig,
     surface: &Grid2,

@@ -774,16 +774,16 @@ pub fn local_search<O: Objective + ?Sized>(
 /// `identify` (rows of frequency sweeps) share.
 ///
 /// 1. The data's units (cycles, rows) are split alternately into training (even positions)
-///    and held-out (odd) units ([`alternate`]); every candidate is fitted on the training
-///    units and judged on the held-out ones, whose noise is independent of its fit.
+///    and held-out (odd) units ([`held_out::alternate`]); every candidate is fitted on the
+///    training units and judged on the held-out ones, whose noise is independent of its fit.
 /// 2. Residuals of neighbouring units are correlated: `n` residual components with lag-1
 ///    autocorrelation `ρ` carry the evidence of `n_eff = n·(1 − ρ)/(1 + ρ)` independent ones
-///    (AR(1); [`effective_samples`], [`variance_inflation`]).
+///    (AR(1); [`held_out::effective_samples`], [`held_out::variance_inflation`]).
 /// 3. A candidate's held-out evidence against the current model as the Schwarz (1978)
-///    criterion `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` ([`delta_bic`]); "very strong"
-///    below −10 (Kass & Raftery 1995).
-/// 4. [`rounds`]: greedy forward selection — every admissible candidate fitted and judged,
-///    the best eligible one accepted, again from the extended model, up to a number of
+///    criterion `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` ([`held_out::delta_bic`]);
+///    "very strong" below −10 (Kass & Raftery 1995).
+/// 4. [`held_out::rounds`]: greedy forward selection — every admissible candidate fitted and
+///    judged, the best eligible one accepted, again from the extended model, up to a number of
 ///    effects.
 pub mod held_out {
     /// Training (even positions) and held-out (odd) flags of `n` units.

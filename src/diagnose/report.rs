@@ -660,7 +660,7 @@ fn trend_table(st: &Stationarity) -> String {
     row(&st.slip_force) + &row(&st.stiffness) + &row(&st.loop_area)
 }
 
-/// Paths of the files written by [`write`].
+/// Paths of the files written by [`write`](fn@write).
 #[derive(Debug, Clone)]
 pub struct Outputs {
     /// The text report.

@@ -25,7 +25,7 @@
 //! its peaks (up to 0.4 of the drive period: a ringing restarted at every reversal makes the
 //! autocorrelation rise again towards half the period). The damping ratio comes from the free
 //! decays in time, the logarithmic decrement of successive peak amplitudes
-//! ([`free_decay_damping`]): an autocorrelation envelope mixes the decay with the interference
+//! (`free_decay_damping`): an autocorrelation envelope mixes the decay with the interference
 //! of successive restarts and was 10× off on a synthetic record. (3) A ringing is reported
 //! when the first autocorrelation peak is
 //! ≥ 0.3 and the high-passed residual's RMS is ≥ 1.5σ_hp (the high-pass noise estimate).

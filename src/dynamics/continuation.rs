@@ -34,16 +34,16 @@
 //! end on either — a spurious fold that walks the sweep back. The step control here handles
 //! both:
 //!
-//! * **Distance test**: a corrected point farther than [`MAX_CORRECTION`] steps from its
+//! * **Distance test**: a corrected point farther than `MAX_CORRECTION` steps from its
 //!   predictor is on another branch (on a smooth path the distance is about the step times the
 //!   turning angle); the step is halved and the next corrector starts from a fresh Jacobian at
 //!   its predictor, so that Newton's method converges to the nearby branch.
 //! * **Kink test**: when halving the step leaves the turning angle above the limit and no
-//!   smaller than [`KINK_ANGLE_RATIO`] of its value (on a smooth path it shrinks with the step),
-//!   the point is past a kink and is accepted, provided the turn is below [`MAX_KINK_ANGLE`] and
+//!   smaller than `KINK_ANGLE_RATIO` of its value (on a smooth path it shrinks with the step),
+//!   the point is past a kink and is accepted, provided the turn is below `MAX_KINK_ANGLE` and
 //!   the point lies within the reach of the new branch from the predictor (`1 + 1.2·tan(angle)`
 //!   steps, the geometry of a hyperplane crossing a branch at that angle) and within
-//!   [`KINK_JUMP`] of it; the secant through it then points along the new branch.
+//!   `KINK_JUMP` of it; the secant through it then points along the new branch.
 //!
 //! Kinks passed are counted in [`Branch::kinks`]; turning points (sign changes of `dω/ds`) are
 //! counted separately and are real folds. When the step still falls below its minimum, or the

@@ -49,7 +49,7 @@ const PEAK_SOLVES: usize = 12;
 /// §10.3) of the amplitude `a(s)` of `row·x` at the excitation's harmonic along the branch's
 /// arclength `s`, starting from the largest point and its neighbours, each new abscissa solved
 /// on the branch ([`crate::dynamics::continuation::point_between`]) and replacing the worst of
-/// the three, until the vertex moves by less than 1e-6 of the bracket (at most [`PEAK_SOLVES`]
+/// the three, until the vertex moves by less than 1e-6 of the bracket (at most `PEAK_SOLVES`
 /// solves). Its accuracy is that of the harmonic balance, not of the point spacing: a parabola
 /// through three points of a skewed friction peak errs by up to 0.1 % in amplitude and frequency
 /// at the default spacing. `None` when a solve fails (the caller keeps [`interpolated_peak`]).

@@ -96,7 +96,7 @@ pub enum DampingLaw {
         zeta0: f64,
         /// Amplitude-dependent damping ratio at `a = a_ref` (dimensionless).
         c: f64,
-        /// Exponent, in [`EXPONENT_RANGE`].
+        /// Exponent, in `EXPONENT_RANGE`.
         p: f64,
         /// Amplitude scale (m).
         a_ref_m: f64,

@@ -759,7 +759,7 @@ fn search_evaluations(candidates: usize, max_effects: usize) -> u64 {
 }
 
 /// The search's candidates: the explicit ones, or by default all of [`REDUCED_EFFECTS`] when the
-/// search's refits ([`search_fits`]: the baseline, every candidate in each of up to
+/// search's refits (`search_fits`: the baseline, every candidate in each of up to
 /// `max_effects` rounds and the final refit, at
 /// [`SEARCH_EVALUATIONS_PER_FIT`] evaluations each) are expected to take at most
 /// [`BAND_BUDGET_S`] at `per_evaluation_s()` per evaluation of the fit levels (timed only for

@@ -110,7 +110,7 @@ pub const NOISE_SIGMAS: f64 = 4.0;
 /// Points that must differ for a level to be not stationary (one may be a glitch of one row).
 pub const MIN_DIFFERING_POINTS: usize = 2;
 /// Levels with compared pairs from which the natural frequency's reference is the median
-/// level rather than the lowest one ([`reference_level`]).
+/// level rather than the lowest one (`reference_level`).
 pub const MEDIAN_REFERENCE_LEVELS: usize = 3;
 
 /// The check's constants for machine-readable reports (JSON): the tolerance, the noise bound,
@@ -342,7 +342,7 @@ struct PointSd {
 
 /// Every level's two sides, each level with its measured scatter ([`Scatter::of`]) and the
 /// natural frequency's shift measured from the median shift of the reference level
-/// ([`reference_level`], module documentation).
+/// (`reference_level`, module documentation).
 pub fn compare_levels(
     backbones: &[LevelBackbone],
     levels: &[super::fit::LevelData],
@@ -364,7 +364,7 @@ pub fn compare_levels(
 }
 
 /// The median natural-frequency shift of the reference level of `backbones`
-/// ([`reference_level`]) and its pair count; `None` without such a level. The shift does
+/// (`reference_level`) and its pair count; `None` without such a level. The shift does
 /// not depend on the noise, so none is assumed.
 pub fn reference_shift(backbones: &[LevelBackbone]) -> Option<ReferenceShift> {
     let pairs: Vec<Option<SidePairs>> = backbones
