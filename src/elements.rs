@@ -39,13 +39,20 @@ use std::path::Path;
 /// One contact element.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ElementRow {
+    /// Node id of the preload map (the element's id in the dynamic model).
     pub id: u64,
+    /// Node position x in the film's frame (m).
     pub x_m: f64,
+    /// Node position y in the film's frame (m).
     pub y_m: f64,
+    /// Tributary (nominal) area `A` of the node (m²).
     pub area_m2: f64,
+    /// Local contact pressure `p` at the node (Pa).
     pub pressure_pa: f64,
+    /// Normal preload `N0 = p·A` (N).
     pub n0_n: f64,
-    /// kn, E0, k, μ, Et of the element (N/m).
+    /// The element's record: `kn`, `E0`, `Et` (N/m), `k` and `μ` (dimensionless), the table at
+    /// `p` times `A`.
     #[serde(flatten)]
     pub element: ContactParams,
     /// −1 below the table's range, 0 within, +1 above.
@@ -58,28 +65,38 @@ pub const MAX_ABOVE_TABLE_FACTOR: f64 = 10.0;
 /// Counts and totals of a join.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ElementSummary {
+    /// Elements written (nodes of non-zero pressure).
     pub n_elements: usize,
     /// Nodes of zero pressure (open contact), left out of the table.
     pub n_open: usize,
+    /// Ids of the open nodes.
     pub open_ids: Vec<u64>,
+    /// Total tributary area of the open nodes (m²).
     pub open_area_m2: f64,
+    /// Elements whose pressure lies below the table's first row.
     pub n_below_range: usize,
+    /// Elements whose pressure lies above the table's last row (at most 10× it).
     pub n_above_range: usize,
-    /// Ids of the out-of-range elements (below, then above).
+    /// Ids of the elements below the table's range.
     pub below_range_ids: Vec<u64>,
+    /// Ids of the elements above the table's range.
     pub above_range_ids: Vec<u64>,
     /// Elements whose values come from table rows the calibration judged not converged in grid
-    /// or patch size, and from rows it could not judge (undetermined); empty for a table
-    /// without verdicts ([`CalibrationTable::convergence_at`]).
+    /// or patch size; empty for a table without verdicts ([`CalibrationTable::convergence_at`]).
     pub not_converged_row_ids: Vec<u64>,
+    /// Elements whose values come from rows whose convergence could not be judged.
     pub undetermined_row_ids: Vec<u64>,
+    /// Total tributary area of the elements (m²).
     pub total_area_m2: f64,
+    /// Total normal preload `Σ N0` of the elements (N).
     pub total_load_n: f64,
-    /// Pressure range of the calibration table (Pa).
+    /// Smallest pressure of the calibration table (Pa).
     pub table_pressure_min_pa: f64,
+    /// Largest pressure of the calibration table (Pa).
     pub table_pressure_max_pa: f64,
-    /// Pressure range of the elements (Pa).
+    /// Smallest element pressure (Pa).
     pub element_pressure_min_pa: f64,
+    /// Largest element pressure (Pa).
     pub element_pressure_max_pa: f64,
 }
 
@@ -228,8 +245,11 @@ pub fn write_csv(path: &Path, rows: &[ElementRow]) -> Result<()> {
 /// One input file in a provenance record.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct InputFile {
+    /// What the file is to the command (e.g. "preload", "calibration_table", "image").
     pub role: String,
+    /// Path as given.
     pub path: String,
+    /// SHA-256 of the file's content (hex).
     pub sha256: String,
 }
 

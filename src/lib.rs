@@ -22,6 +22,11 @@
 //! Units: SI throughout (m, Pa, N). File headers, CSV columns and CLI flags name their units.
 //! Grids follow the [`Grid2`] convention: shape `(nx, ny)`, `[[i, j]]` at `(i·dx, j·dy)`.
 
+// Every public item carries a doc comment (CI: clippy -D warnings and `cargo doc` with
+// RUSTDOCFLAGS=-D warnings). Set here rather than in the workspace [lints] table, which would
+// also ask for docs in the binary, the tests, the benches and the Python crate.
+#![warn(missing_docs)]
+
 pub mod calibrate;
 pub mod contact;
 pub mod core;

@@ -115,12 +115,19 @@ pub struct FitConfig {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationConfig {
+    /// `[surface]`: statistics, patch size, grid and first seed of the Gaussian surfaces.
     pub surface: GaussianSurfaceSpec,
+    /// `[realisations]`: how many surfaces.
     pub realisations: RealisationsConfig,
+    /// `[material]`: elastic constants of the bodies.
     pub material: MaterialConfig,
+    /// `[contact]`: friction coefficient and solver tolerances.
     pub contact: ContactConfig,
+    /// `[loading]`: pressures, amplitudes and load steps.
     pub loading: LoadingConfig,
+    /// `[fit]`: the Valanis fit's settings.
     pub fit: FitConfig,
+    /// `[convergence]`: tolerances of the grid and patch-size verdicts.
     pub convergence: ConvergenceConfig,
 }
 

@@ -4,7 +4,7 @@
 //! kn and E0, absolute for k ([`crate::calibrate::config::ConvergenceConfig`]).
 //!
 //! - **Grid**: the same surfaces on the grid with half as many points per side (the generator
-//!   gives the same surface low-passed, [`crate::surface::generate`]), so the paired difference
+//!   gives the same surface low-passed, [`crate::surface::generate`](mod@crate::surface::generate)), so the paired difference
 //!   of each realisation's value is the effect of resolution alone. If refining from `n/2` to
 //!   `n` changes the value by less than the tolerance, the `n` result (whose error is smaller
 //!   still for a converging discretisation) is called converged.

@@ -35,7 +35,12 @@ pub enum ConfigSource {
     /// The built-in reference case.
     BuiltIn,
     /// A TOML file as given on the command line, and the SHA-256 of its bytes.
-    File { path: PathBuf, sha256: String },
+    File {
+        /// Path as given on the command line.
+        path: PathBuf,
+        /// SHA-256 of the file's bytes (hex).
+        sha256: String,
+    },
 }
 
 impl ConfigSource {
@@ -50,19 +55,44 @@ impl ConfigSource {
 
 /// File names written by [`write_outputs`] into the output directory.
 pub mod files {
+    /// Per pressure: means over the realisations of the contact area ratio, `kn`, `E0`, `k`, `μ`,
+    /// `Et` (N/m³), fit R², energy per cycle (J/m²), their 95 % half-widths and the convergence
+    /// verdict.
     pub const TABLE: &str = "calibration_table.csv";
+    /// Every realisation's values at every pressure (long format), with its contact spots and
+    /// solver facts.
     pub const REALISATIONS: &str = "calibration_realisations.csv";
+    /// Per realisation, pressure and amplitude: BEM and element energy per cycle (J/m²), their
+    /// relative error, the loop fit's R² and the per-amplitude element.
     pub const FITS: &str = "calibration_fits.csv";
+    /// Per pressure and amplitude: mean BEM and element energy per cycle (J/m²) with 95 %
+    /// half-widths, and their mean relative error.
     pub const ENERGY: &str = "energy_vs_amplitude.csv";
+    /// Per pressure: contact spots and the grid and patch-size changes of `kn`, `E0` and `k` with
+    /// their intervals, tolerances and verdicts.
     pub const CONVERGENCE: &str = "calibration_convergence.csv";
+    /// Every steady loop sample (long format): displacement (m), BEM and fitted element shear
+    /// stress (Pa).
     pub const LOOPS: &str = "calibration_loops.csv";
+    /// Wall and CPU times per chain, stage and pressure (s); the only file that is not reproducible
+    /// byte for byte.
     pub const TIMINGS: &str = "calibration_timings.csv";
+    /// JSON sidecar: configuration, crate version, input hashes, verdicts, warnings.
     pub const SIDECAR: &str = "calibration.json";
+    /// Plot of `kn` (N/m³) against pressure: means with 95 % bands, each realisation, the table's
+    /// interpolant.
     pub const KN_PLOT: &str = "kn_vs_pressure.png";
+    /// Plot of `E0` (N/m³) against pressure, likewise.
     pub const E0_PLOT: &str = "e0_vs_pressure.png";
+    /// Plot of the Valanis shape `k` against pressure, likewise.
     pub const K_PLOT: &str = "k_vs_pressure.png";
+    /// Plot of the energy per cycle (J/m²) against amplitude: BEM (mean ± interval) and fitted
+    /// element.
     pub const ENERGY_PLOT: &str = "energy_vs_amplitude.png";
+    /// Plot of `k` of the element fitted to each amplitude alone, per pressure (the spread).
     pub const K_AMPLITUDE_PLOT: &str = "k_vs_amplitude.png";
+    /// Plot of the first realisation's loop at the largest amplitude, normalised: loop shape
+    /// versus pressure.
     pub const LOOPS_PLOT: &str = "loops_normalised.png";
 
     /// Every fixed name above.

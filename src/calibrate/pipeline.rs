@@ -7,7 +7,7 @@
 //! For each **realisation** (a Gaussian surface of the configured statistics with seed
 //! `surface.seed + r`, or one given measured surface):
 //!
-//! 1. **Surface** ([`crate::surface::generate`]).
+//! 1. **Surface** ([`crate::surface::generate`](mod@crate::surface::generate)).
 //! 2. **Normal sweep** ([`crate::contact::sweep`]): the normal contact solver at each nominal
 //!    pressure, warm-started, with `kn = dp̄/dδ` from the tangent problem on the contact set.
 //! 3. **Tangential loops** ([`crate::calibrate::amplitudes`]): on each pressure field, one
@@ -128,14 +128,23 @@ pub struct PressureCalibration {
 /// with the run's wall time in `total_s`.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct StageTimes {
+    /// Wall time generating (or hashing) the surface (s).
     pub surface_s: f64,
+    /// Wall time of the normal-contact sweep (s).
     pub normal_s: f64,
+    /// Wall time of the tangential loops (s).
     pub tangential_s: f64,
+    /// Wall time of the Valanis fits (s).
     pub fit_s: f64,
+    /// CPU time of the surface stage (s).
     pub surface_cpu_s: f64,
+    /// CPU time of the normal sweep (s).
     pub normal_cpu_s: f64,
+    /// CPU time of the tangential loops (s).
     pub tangential_cpu_s: f64,
+    /// CPU time of the fits (s).
     pub fit_cpu_s: f64,
+    /// Wall time of the whole chain (realisation) or of the whole run (s).
     pub total_s: f64,
 }
 
@@ -255,6 +264,7 @@ pub struct ConvergenceStudy {
 /// Result of [`run`].
 #[derive(Debug, Clone)]
 pub struct CalibrationRun {
+    /// The configuration the run used.
     pub config: CalibrationConfig,
     /// What the surfaces were.
     pub surface_description: String,
@@ -434,7 +444,7 @@ pub fn loop_data(
 }
 
 /// Run one surface through the chain (single pass, on the current rayon pool). `bar` receives
-/// [`chain_units`] increments.
+/// `chain_units` increments.
 pub fn calibrate_surface(
     config: &CalibrationConfig,
     surface: &Grid2,

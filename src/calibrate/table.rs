@@ -91,11 +91,17 @@ pub const CONVERGENCE_COLUMN: &str = "convergence";
 pub struct RowInterval {
     /// Realisations the means are taken over (≥ 2).
     pub realisations: usize,
+    /// Half-width of the contact area ratio's interval (dimensionless).
     pub contact_area_ratio: f64,
+    /// Half-width of `kn`'s interval (N/m³).
     pub kn_n_per_m3: f64,
+    /// Half-width of `E0`'s interval (N/m³).
     pub e0_n_per_m3: f64,
+    /// Half-width of `k`'s interval (dimensionless).
     pub k: f64,
+    /// Half-width of `Et`'s interval (N/m³).
     pub et_n_per_m3: f64,
+    /// Half-width of the energy per cycle's interval (J/m²).
     pub energy_per_cycle_j_per_m2: f64,
 }
 

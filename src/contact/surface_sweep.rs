@@ -25,13 +25,19 @@ use std::path::Path;
 #[serde(tag = "source", rename_all = "kebab-case")]
 pub enum SurfaceSource {
     /// A generated Gaussian patch (its seed names it).
-    Generated { spec: GaussianSurfaceSpec },
+    Generated {
+        /// RMS height, correlation lengths, patch size, grid and seed of the patch.
+        spec: GaussianSurfaceSpec,
+    },
     /// A topography file (any format [`crate::surface::io::read`] reads), with the SHA-256 of
     /// its content so that every shard provably read the same file, and how its missing points
     /// are filled (none: a file with missing points is refused).
     File {
+        /// Path of the file as given.
         path: String,
+        /// SHA-256 of the file's content (hex).
         sha256: String,
+        /// How missing points are filled (`None`: a file with missing points is refused).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         fill: Option<crate::surface::missing::Fill>,
     },
@@ -121,12 +127,15 @@ pub struct SurfaceSweep {
 /// Grid of one surface of the sweep.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GridInfo {
+    /// Points along x.
     pub nx: usize,
+    /// Points along y.
     pub ny: usize,
     /// Spacing along x (m).
     pub dx_m: f64,
     /// Spacing along y (m).
     pub dy_m: f64,
+    /// The surface is periodic (FFT kernels) rather than zero-padded.
     pub periodic: bool,
 }
 
@@ -138,7 +147,9 @@ pub struct SurfaceResult {
     /// sharded sweep's merge checks it against the configuration's surface of the unit, so a
     /// result moved to another unit is refused (the grids of a sweep are usually all alike).
     pub surface: SurfaceSource,
+    /// The surface's grid.
     pub grid: GridInfo,
+    /// One point per sweep pressure, in increasing pressure.
     pub points: Vec<SweepPoint>,
 }
 
@@ -358,6 +369,7 @@ impl SurfaceSweep {
 /// Mean and sample standard deviation of a quantity over the surfaces.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct MeanStd {
+    /// Mean over the surfaces (unit of the quantity).
     pub mean: f64,
     /// Sample standard deviation (n − 1 in the denominator); NaN for one surface.
     pub std: f64,
@@ -379,11 +391,17 @@ impl MeanStd {
 /// Statistics over the surfaces at one pressure.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PressureStatistics {
+    /// Nominal pressure `p̄` (Pa).
     pub pressure_pa: f64,
+    /// Number of surfaces the statistics are over.
     pub surfaces: usize,
+    /// Real over nominal contact area (dimensionless, 0–1).
     pub contact_area_ratio: MeanStd,
+    /// Mean gap between the surfaces over the nominal area (m).
     pub mean_gap_m: MeanStd,
+    /// Normal contact stiffness per unit area `dp̄/dδ` (N/m³).
     pub kn_n_per_m3: MeanStd,
+    /// Rigid approach `δ` from first contact (m).
     pub approach_m: MeanStd,
 }
 

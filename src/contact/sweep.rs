@@ -181,6 +181,7 @@ impl SweepPoint {
 /// Result of a sweep, points in increasing pressure.
 #[derive(Debug, Clone)]
 pub struct Sweep {
+    /// One point per pressure, in increasing pressure.
     pub points: Vec<SweepPoint>,
     /// Solutions at the sweep pressures (only with [`SweepOptions::keep_solutions`]).
     pub solutions: Vec<NormalSolution>,

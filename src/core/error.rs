@@ -12,26 +12,40 @@ pub enum Error {
     /// The operating system refused to read or write a file.
     #[error("{path}: {source}")]
     Io {
+        /// The file that could not be read or written.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
     /// A file was read but its content is malformed. `line` is 1-based; 0 means "whole file".
     #[error("{path}{}: {message}", if *.line > 0 { format!(":{}", .line) } else { String::new() })]
     Parse {
+        /// The file.
         path: PathBuf,
+        /// 1-based line of the problem; 0 for the whole file.
         line: usize,
+        /// What is wrong and, where it helps, what was expected.
         message: String,
     },
     /// A parameter (CLI flag, config key, function argument) has an impossible value.
     #[error("invalid parameter `{name}`: {message}")]
-    InvalidParameter { name: String, message: String },
+    InvalidParameter {
+        /// The parameter as the user names it (flag, config key or argument).
+        name: String,
+        /// Why the value is impossible, with the range expected.
+        message: String,
+    },
     /// An iterative solver hit its iteration cap before meeting its tolerance.
     #[error("{solver} did not converge: {iterations} iterations, residual {residual:.3e} > tolerance {tolerance:.3e}")]
     NonConvergence {
+        /// The solver and its problem (e.g. "normal contact, displacement control (secant)").
         solver: String,
+        /// Iterations run.
         iterations: usize,
+        /// Residual at the last iteration, in the solver's own (usually relative) measure.
         residual: f64,
+        /// Tolerance the residual had to meet, same measure.
         tolerance: f64,
     },
     /// Input data that is well formed but cannot be used (no contact, no complete cycle, ...).
@@ -40,7 +54,12 @@ pub enum Error {
     /// A request that would exceed a documented resource limit (grid size, memory, file size,
     /// number of steps), refused before any allocation (see [`crate::core::limits`]).
     #[error("resource limit `{name}`: {message}")]
-    Limit { name: String, message: String },
+    Limit {
+        /// The limited quantity or the flag that sets it (e.g. "--grid").
+        name: String,
+        /// The request, the limit and how to stay within it.
+        message: String,
+    },
 }
 
 /// Result alias used across the crate.

@@ -313,7 +313,7 @@ impl FftPlan<f64> {
 /// Reusable work arrays for allocation-free convolutions with one [`FftPlan`]
 /// ([`FftPlan::convolve_into`]); iterative solvers create one and keep it for all iterations.
 ///
-/// The rows are padded ([`padded_row_length`]): the x-transforms read and write them down
+/// The rows are padded (`padded_row_length`): the x-transforms read and write them down
 /// columns, and with the power-of-two strides of the transform sizes every element of a column
 /// would fall into the same few cache sets.
 #[derive(Debug, Clone)]
@@ -392,7 +392,7 @@ impl<T: FftReal> FftPlan<T> {
     /// 2. `mid(&sums)` sees the sums of step 1 (added in row order, so they do not depend on the
     ///    thread count) and returns the context `M` of step 4, or `None` to stop here: the caller
     ///    found that the convolution is not needed after all (e.g. converged);
-    /// 3. per block of [`COLUMNS`] y-frequencies (in parallel): their columns gathered into a
+    /// 3. per block of `COLUMNS` y-frequencies (in parallel): their columns gathered into a
     ///    buffer that stays in cache, x-transform, kernel product, inverse x-transform, the `nx`
     ///    rows that are kept scattered back (no transposed copy of the spectrum is made); then
     ///    the inverse real transforms of those rows. Step 3 also sums the energy
@@ -586,7 +586,7 @@ struct PairScratch {
     c2r: Vec<Complex64>,
     /// x-transforms (forward and inverse).
     fft: Vec<Complex64>,
-    /// [`COLUMNS`] y-frequencies of each field, row stride `padded_row_length(nfx)`.
+    /// `COLUMNS` y-frequencies of each field, row stride `padded_row_length(nfx)`.
     block: [Vec<Complex64>; 2],
 }
 
@@ -626,7 +626,7 @@ impl FftPlan<f64> {
     /// 1. for every grid row `i` (in parallel): `load(i, f_x row, f_y row)` writes row `i` of the
     ///    two fields (length `ny`, zero on entry); the rows are transformed at once
     ///    (real-to-complex along y);
-    /// 2. per block of [`COLUMNS`] y-frequencies: x-transforms,
+    /// 2. per block of `COLUMNS` y-frequencies: x-transforms,
     ///    `û_x = K̂_xx f̂_x + K̂_xy f̂_y`, `û_y = K̂_yy f̂_y + K̂_xy f̂_x`, inverse x-transforms, the
     ///    `nx` rows that are kept scattered back;
     /// 3. for every grid row `i`: inverse real transforms, scaled, passed to

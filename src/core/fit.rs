@@ -82,7 +82,9 @@ pub enum Coordinate {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Bound {
+    /// The lower bound `lo`.
     Lower,
+    /// The upper bound `hi`.
     Upper,
 }
 
@@ -109,13 +111,17 @@ fn logistic(t: f64) -> f64 {
 /// transform of the optimiser's coordinate, and a starting value.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ParamSpec {
+    /// Parameter name, as in reports and error messages.
     pub name: &'static str,
+    /// Unit of `lo`, `hi` and `start` (SI, e.g. "N/m"; "-" for a ratio).
     pub unit: &'static str,
     /// Lower bound (physical units).
     pub lo: f64,
     /// Upper bound (physical units).
     pub hi: f64,
+    /// How the optimiser's coordinate maps onto the value.
     pub transform: Transform,
+    /// How an interval transform's fraction follows from the coordinate (box or sine).
     pub coordinate: Coordinate,
     /// Starting value (physical units, inside the bounds): for a model extension the value at
     /// which it is absent, otherwise a central start.
@@ -363,6 +369,8 @@ pub fn check_values(params: &[ParamSpec], values: &[f64]) -> Result<()> {
 /// A fitting problem: the cost of a set of physical parameter values (one per [`ParamSpec`]).
 /// Values the model cannot follow are a large finite cost, not an error.
 pub trait Objective: Sync {
+    /// Cost of `values` (physical units, one per parameter); a large finite value where the model
+    /// cannot follow them.
     fn cost(&self, values: &[f64]) -> f64;
 }
 
@@ -375,7 +383,9 @@ impl<F: Fn(&[f64]) -> f64 + Sync> Objective for F {
 /// The `argmin` cost function of an [`Objective`] over the optimiser's coordinates: maps them to
 /// physical values, adds the box penalty, counts the evaluations and advances the progress bar.
 pub struct Bounded<'a, O: ?Sized> {
+    /// The parameters the coordinates map onto.
     pub params: &'a [ParamSpec],
+    /// The cost of physical values.
     pub objective: &'a O,
     evaluations: &'a AtomicU64,
     progress: Option<&'a indicatif::ProgressBar>,
@@ -455,12 +465,14 @@ impl Restarts {
 pub struct LocalSearch {
     /// Iteration cap of each run.
     pub max_iters: u64,
+    /// When a run has converged: the standard deviation of the simplex's costs below it.
     pub tolerance: Tolerance,
     /// Edge of the first run's initial simplex along each coordinate, as a fraction of the
     /// parameter's [`ParamSpec::step`].
     pub first_step: f64,
     /// Edge of each restart's initial simplex, likewise.
     pub restart_step: f64,
+    /// How many restarts, and whether to stop at the first converged one.
     pub restarts: Restarts,
 }
 
@@ -489,9 +501,11 @@ impl Termination {
 /// One Nelder–Mead run of a search.
 #[derive(Debug, Clone, Serialize)]
 pub struct Run {
+    /// Nelder–Mead iterations of the run.
     pub iterations: u64,
     /// Best cost of the run.
     pub cost: f64,
+    /// Why the run stopped.
     pub termination: Termination,
 }
 
@@ -502,11 +516,13 @@ pub struct Minimum {
     pub z: Vec<f64>,
     /// Its physical values.
     pub values: Vec<f64>,
+    /// Cost at the best point.
     pub cost: f64,
     /// Iterations of all runs.
     pub iterations: u64,
     /// Cost evaluations of this search.
     pub evaluations: u64,
+    /// Every Nelder–Mead run, the first then the restarts.
     pub runs: Vec<Run>,
     /// The last run stopped on its tolerance (with restarts: a restart did).
     pub converged: bool,
@@ -588,8 +604,11 @@ pub fn minimise<O: Objective + ?Sized>(
 /// Settings of the particle swarm of a global search.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct SwarmSettings {
+    /// Particles of the swarm.
     pub particles: usize,
+    /// Swarm iterations (each moves every particle once).
     pub iterations: u64,
+    /// Seed of the swarm's xoshiro256++ generator (the search is reproducible).
     pub seed: u64,
 }
 
@@ -603,8 +622,11 @@ impl SwarmSettings {
 /// Best point of a swarm: coordinates and cost.
 #[derive(Debug, Clone, Serialize)]
 pub struct SwarmBest {
+    /// Optimiser coordinates of the best particle.
     pub z: Vec<f64>,
+    /// Its cost.
     pub cost: f64,
+    /// Cost evaluations the swarm spent.
     pub evaluations: u64,
 }
 
@@ -656,15 +678,18 @@ pub struct StartOutcome {
     pub seed: Option<u64>,
     /// Cost after the swarm (`None` for a local start).
     pub swarm_cost: Option<f64>,
+    /// Best cost after the Nelder–Mead polish.
     pub final_cost: f64,
     /// Nelder–Mead iterations of the start.
     pub local_iterations: u64,
+    /// The Nelder–Mead polish stopped on its tolerance.
     pub converged: bool,
 }
 
 /// Result of a [`search`]: the best start's minimum and every start's outcome.
 #[derive(Debug, Clone, Serialize)]
 pub struct Search {
+    /// The best start's minimum.
     pub best: Minimum,
     /// Local starts first (in the order given), then the swarm starts.
     pub starts: Vec<StartOutcome>,
@@ -749,16 +774,16 @@ pub fn local_search<O: Objective + ?Sized>(
 /// `identify` (rows of frequency sweeps) share.
 ///
 /// 1. The data's units (cycles, rows) are split alternately into training (even positions)
-///    and held-out (odd) units ([`alternate`]); every candidate is fitted on the training
-///    units and judged on the held-out ones, whose noise is independent of its fit.
+///    and held-out (odd) units ([`held_out::alternate`]); every candidate is fitted on the
+///    training units and judged on the held-out ones, whose noise is independent of its fit.
 /// 2. Residuals of neighbouring units are correlated: `n` residual components with lag-1
 ///    autocorrelation `ρ` carry the evidence of `n_eff = n·(1 − ρ)/(1 + ρ)` independent ones
-///    (AR(1); [`effective_samples`], [`variance_inflation`]).
+///    (AR(1); [`held_out::effective_samples`], [`held_out::variance_inflation`]).
 /// 3. A candidate's held-out evidence against the current model as the Schwarz (1978)
-///    criterion `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` ([`delta_bic`]); "very strong"
-///    below −10 (Kass & Raftery 1995).
-/// 4. [`rounds`]: greedy forward selection — every admissible candidate fitted and judged,
-///    the best eligible one accepted, again from the extended model, up to a number of
+///    criterion `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` ([`held_out::delta_bic`]);
+///    "very strong" below −10 (Kass & Raftery 1995).
+/// 4. [`held_out::rounds`]: greedy forward selection — every admissible candidate fitted and
+///    judged, the best eligible one accepted, again from the extended model, up to a number of
 ///    effects.
 pub mod held_out {
     /// Training (even positions) and held-out (odd) flags of `n` units.
@@ -791,8 +816,11 @@ pub mod held_out {
     /// judged, and the one accepted (index).
     #[derive(Debug, Clone)]
     pub struct Round<C, M = ()> {
+        /// What the round started from (the caller's record, e.g. the current model's held-out score).
         pub meta: M,
+        /// Every candidate judged in the round.
         pub candidates: Vec<C>,
+        /// Index into `candidates` of the accepted one; `None` ends the search.
         pub accepted: Option<usize>,
     }
 

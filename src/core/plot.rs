@@ -68,18 +68,24 @@ impl Series {
 /// Axis scale.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scale {
+    /// Linear axis.
     Linear,
+    /// Logarithmic (base 10) axis; values must be positive.
     Log,
 }
 
 /// Layout of a line plot.
 #[derive(Debug, Clone)]
 pub struct LinePlot<'a> {
+    /// Title above the plot.
     pub title: &'a str,
     /// Axis labels, with units, e.g. `"pressure (MPa)"`.
     pub x_label: &'a str,
+    /// Y-axis label, with unit.
     pub y_label: &'a str,
+    /// Scale of the x axis.
     pub x_scale: Scale,
+    /// Scale of the y axis.
     pub y_scale: Scale,
 }
 
@@ -340,6 +346,7 @@ mod tests {
 /// Layout of a heat map (a field on a grid, e.g. heights or pressures).
 #[derive(Debug, Clone)]
 pub struct HeatMap<'a> {
+    /// Title above the map.
     pub title: &'a str,
     /// Label of the colour bar with unit, e.g. `"height (µm)"`.
     pub value_label: &'a str,
@@ -347,6 +354,7 @@ pub struct HeatMap<'a> {
     pub value_scale: f64,
     /// Factor applied to lengths for the axes (e.g. 1e6 for m → µm) and its unit label.
     pub length_scale: f64,
+    /// Unit label of the axes after `length_scale` (e.g. "µm").
     pub length_unit: &'a str,
 }
 

@@ -319,11 +319,15 @@ type StoredShard<S> = ShardFile<S, UnitRecord<<S as ShardedSweep>::Unit>>;
 /// The merged sweep: its configuration and every unit's result in unit order.
 #[derive(Debug, Clone)]
 pub struct Merged<S: ShardedSweep> {
+    /// The sweep's configuration (the same in every shard).
     pub config: S,
+    /// SHA-256 of the canonical configuration (hex), checked to agree across shards.
     pub config_sha256: String,
     /// The build that computed every shard (they agree).
     pub build: BuildId,
+    /// Number of shard files merged.
     pub shards: usize,
+    /// Every unit's result, in unit order.
     pub units: Vec<UnitRecord<S::Unit>>,
 }
 

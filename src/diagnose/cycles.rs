@@ -24,8 +24,11 @@ pub const MIN_HALF_CYCLE_SAMPLES: usize = 8;
 /// A half-cycle: samples `start..=end` between two reversals, moving in `direction` (±1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct HalfCycle {
+    /// First sample (a reversal).
     pub start: usize,
+    /// Last sample (the next reversal).
     pub end: usize,
+    /// Direction of motion: +1 for increasing displacement, −1 for decreasing.
     pub direction: i8,
 }
 
@@ -190,15 +193,22 @@ pub fn energy_per_cycle(x: &[f64], f: &[f64], cycles: &Cycles) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Phase {
+    /// The first [`REVERSAL_FRACTION`] of the stroke after a reversal.
     Reversal,
+    /// Tangent stiffness above 80 % of the half-cycle's initial stiffness.
     Stick,
+    /// Tangent stiffness between 10 % and 80 % of the initial stiffness.
     Microslip,
+    /// Tangent stiffness below 10 % of the initial stiffness.
     Macroslip,
+    /// The measured force stays near zero while the drive crosses a free play.
     Clearance,
+    /// The first 5 % of the stroke after a free play is taken up.
     Closing,
 }
 
 impl Phase {
+    /// Every phase, in report order.
     pub const ALL: [Phase; 6] = [
         Phase::Reversal,
         Phase::Stick,
@@ -208,6 +218,7 @@ impl Phase {
         Phase::Closing,
     ];
 
+    /// Identifier of the phase in reports and JSON ("reversal", "stick", …).
     pub fn name(self) -> &'static str {
         match self {
             Phase::Reversal => "reversal",

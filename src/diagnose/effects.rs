@@ -73,13 +73,22 @@ pub const RIGID_LINK_FACTOR: f64 = 1e3;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
+    /// Valanis residual stiffness `Et` (N/m): a slope of macroslip (hardening or wear).
     MacroslipSlope,
+    /// Capacity factor `1 + a·exp(−|ẋ|/v_s)` (Armstrong-Hélouvry 1994); parameters `a`, `v_s` (m/s).
     VelocityDependentFriction,
+    /// Viscous force `c·ẋ` added; parameter `c` (N·s/m).
     ViscousDamping,
+    /// Rigid link with a clearance `g` (m) at reversal.
     Backlash,
+    /// Series spring `k_s` (N/m) between drive and element (rig flexibility).
     SeriesCompliance,
+    /// Normal load varying over the cycle: measured `N(t)/N̄`, or `1 + a₁cos θ + b₁ sin θ`.
     NormalLoadVariation,
+    /// Capacity factor `1 + d·sign(ẋ)`; parameter `d`.
     DirectionalFriction,
+    /// Capacity factor `1 + a·exp(−s/s₀)` over the travel `s` since the last reversal (Dieterich
+    /// 1979); parameters `a`, `s₀` (m).
     StaticFrictionPeak,
 }
 
@@ -228,6 +237,7 @@ pub fn at_bound(p: &ParamSpec, value: f64) -> Option<Bound> {
 /// The inputs of a simulation, derived once from a record.
 #[derive(Debug, Clone)]
 pub struct Drive {
+    /// Sample times (s).
     pub time_s: Vec<f64>,
     /// Drive displacement relative to the centre of its range (m).
     pub q_m: Vec<f64>,
@@ -239,10 +249,12 @@ pub struct Drive {
     pub phase_rad: Vec<f64>,
     /// Measured force at the first sample (N): the element's initial state.
     pub initial_force_n: f64,
-    /// Scales used to make parameters dimensionless: force amplitude (N), displacement
-    /// amplitude (m), velocity (m/s).
+    /// Force amplitude `F̂` (N), half the 0.5–99.5 % range of the measured force: with
+    /// `amplitude_m` and `velocity_scale`, the scales that make parameters dimensionless.
     pub force_scale_n: f64,
+    /// Displacement amplitude `Â` (m).
     pub amplitude_m: f64,
+    /// Drive speed scale `v̂`, the 99th percentile of `|ẋ|` (m/s).
     pub velocity_scale: f64,
 }
 
@@ -265,7 +277,10 @@ impl Baseline {
 /// A baseline plus a set of effects with their physical parameter values.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Model {
+    /// The baseline Valanis element.
     pub baseline: Baseline,
+    /// Effects added, each with its parameter values in physical units (order and units of
+    /// [`Effect::params`]).
     pub effects: Vec<(Effect, Vec<f64>)>,
 }
 

@@ -23,7 +23,9 @@ use std::path::{Path, PathBuf};
 /// Description of the input, carried into every output.
 #[derive(Debug, Clone, Serialize)]
 pub struct InputInfo {
+    /// Path of the measured record as given.
     pub file: String,
+    /// Names of the record's columns used (time, displacement, force, and normal force if any).
     pub columns: Vec<String>,
     /// Baseline description, e.g. "fitted to the training cycles" or the table and pressure.
     pub baseline_source: String,
@@ -33,11 +35,18 @@ pub struct InputInfo {
 /// friction coefficient only when the normal load is known.
 #[derive(Debug, Clone, Serialize)]
 pub struct BaselineReport {
+    /// Initial-loading tangential stiffness `E0` of the baseline Valanis element (N/m).
     pub e0_n_per_m: f64,
+    /// Valanis shape parameter `k`, `0 ≤ k < 1` (dimensionless): the reload slope after a reversal
+    /// is `2E0/(1+k)`.
     pub k: f64,
+    /// Residual (post-slip) tangential stiffness `Et` (N/m), `0 ≤ Et < E0`.
     pub et_n_per_m: f64,
+    /// Slip force `μ·N` of the baseline (N).
     pub slip_force_n: f64,
+    /// Normal load `N` (N), when it is known (a measured normal-force column or a table's `p·A`).
     pub normal_load_n: Option<f64>,
+    /// Friction coefficient `μ` (dimensionless), when the normal load is known.
     pub friction_coefficient: Option<f64>,
     /// Fitted parameters on a bound.
     pub at_bound: Vec<(String, Bound)>,
@@ -46,7 +55,9 @@ pub struct BaselineReport {
 /// Zero-force plateaus found in the measured force.
 #[derive(Debug, Clone, Serialize)]
 pub struct ClearanceSummary {
+    /// Half-cycles in which a zero-force plateau was found.
     pub half_cycles_with_plateau: usize,
+    /// Half-cycles of the record in all.
     pub half_cycles: usize,
     /// Mean displacement span of the plateaus: the free play (m).
     pub mean_free_play_m: f64,
@@ -55,32 +66,56 @@ pub struct ClearanceSummary {
 /// The JSON report.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
+    /// The measured record and the baseline's source.
     pub input: InputInfo,
+    /// Samples of the (block-averaged) record analysed.
     pub samples_analysed: usize,
+    /// Block-averaging factor applied to the input record (1: none).
     pub block_average_factor: usize,
+    /// Complete displacement cycles found.
     pub complete_cycles: usize,
+    /// 0-based cycles the models were fitted on (even ones).
     pub training_cycles: Vec<usize>,
+    /// 0-based cycles the models were scored on (odd ones).
     pub held_out_cycles: Vec<usize>,
+    /// Mean cycle period (s).
     pub period_s: f64,
+    /// Mean displacement amplitude, half the mean peak-to-peak stroke (m).
     pub amplitude_m: f64,
+    /// Force amplitude used to make residuals and parameters dimensionless (N): half the 0.5–99.5 %
+    /// range of the measured force.
     pub force_scale_n: f64,
+    /// Noise floor of the measured force.
     pub noise: NoiseFloor,
+    /// The baseline Valanis element.
     pub baseline: BaselineReport,
+    /// Convergence of the baseline's fit.
     pub baseline_fit: FitInfo,
+    /// What characterises the baseline's residual.
     pub residual_before: Character,
+    /// What characterises the final model's residual.
     pub residual_after: Character,
+    /// Zero-force plateaus (free play) found in the measured force, if any.
     pub clearance: Option<ClearanceSummary>,
+    /// Trends of slip force, stiffness and loop area over the cycles.
     pub stationarity: Stationarity,
+    /// The effect search's rounds, in order.
     pub rounds: Vec<Round>,
     /// Effects added, in order.
     pub effects_added: Vec<Effect>,
+    /// What the search concluded.
     pub verdict: Verdict,
+    /// The conclusion in words, as printed at the end of the text report.
     pub conclusion: String,
     /// Fitted parameters of the effects added, with units: `(effect, name (unit), value)`.
     pub final_effect_parameters: Vec<(Effect, String, f64)>,
+    /// Fitted parameters of the baseline.
     pub parameters_before: usize,
+    /// Fitted parameters of the final model.
     pub parameters_after: usize,
+    /// Error measures of the baseline.
     pub errors_before: Errors,
+    /// Error measures of the final model.
     pub errors_after: Errors,
     /// Baseline and final model refitted on the held-out cycles, scored on the training cycles
     /// (which chose nothing); `None` when no effect was added.
@@ -112,6 +147,7 @@ fn explained_words(fraction: Option<f64>) -> String {
 }
 
 impl Report {
+    /// The report of a diagnosis of the record described by `input`.
     pub fn new(d: &Diagnosis, input: InputInfo) -> Self {
         let p = &d.prepared;
         let nc = p.cycles.cycles.len();
@@ -624,13 +660,18 @@ fn trend_table(st: &Stationarity) -> String {
     row(&st.slip_force) + &row(&st.stiffness) + &row(&st.loop_area)
 }
 
-/// Paths of the files written by [`write`].
+/// Paths of the files written by [`write`](fn@write).
 #[derive(Debug, Clone)]
 pub struct Outputs {
+    /// The text report.
     pub text: PathBuf,
+    /// The JSON report ([`Report`]).
     pub json: PathBuf,
+    /// The time series: displacement, measured, baseline and final forces, residuals and phase.
     pub csv: PathBuf,
+    /// Figure of the measured, baseline and final loops.
     pub loops_png: PathBuf,
+    /// Figure of the residuals against the noise floor.
     pub residual_png: PathBuf,
 }
 

@@ -25,7 +25,7 @@
 //! its peaks (up to 0.4 of the drive period: a ringing restarted at every reversal makes the
 //! autocorrelation rise again towards half the period). The damping ratio comes from the free
 //! decays in time, the logarithmic decrement of successive peak amplitudes
-//! ([`free_decay_damping`]): an autocorrelation envelope mixes the decay with the interference
+//! (`free_decay_damping`): an autocorrelation envelope mixes the decay with the interference
 //! of successive restarts and was 10× off on a synthetic record. (3) A ringing is reported
 //! when the first autocorrelation peak is
 //! ≥ 0.3 and the high-passed residual's RMS is ≥ 1.5σ_hp (the high-pass noise estimate).
@@ -37,7 +37,9 @@ use serde::Serialize;
 /// Residual statistics of one phase.
 #[derive(Debug, Clone, Serialize)]
 pub struct PhaseStats {
+    /// The phase the statistics are over.
     pub phase: Phase,
+    /// Held-out samples in the phase.
     pub samples: usize,
     /// Mean residual signed with the direction of motion (N); `None` without samples.
     pub mean_residual_n: Option<f64>,
@@ -58,8 +60,9 @@ pub const CLEARANCE_DWELL: f64 = 0.5;
 pub struct ClearanceRegion {
     /// Half-cycle index.
     pub half_cycle: usize,
-    /// Samples of the plateau `start..=end`.
+    /// First sample of the plateau (samples `start..=end`).
     pub start: usize,
+    /// Last sample of the plateau.
     pub end: usize,
     /// Last sample of the closing (5 % of the stroke after the plateau).
     pub closing_end: usize,

@@ -91,6 +91,7 @@ pub enum BaselineSource {
 /// Options of the analysis.
 #[derive(Debug, Clone)]
 pub struct Options {
+    /// Where the baseline element comes from: fitted to the training cycles, or given.
     pub baseline: BaselineSource,
     /// Candidate effects to test.
     pub candidates: Vec<Effect>,
@@ -119,7 +120,9 @@ pub struct Prepared {
     pub record: Record,
     /// Block-averaging factor applied to the input record.
     pub decimation: usize,
+    /// The record's complete cycles, their mean period and amplitude.
     pub cycles: Cycles,
+    /// The simulation inputs derived from the record (drive displacement, velocity, phase, scales).
     pub drive: Drive,
     /// Samples of training cycles.
     pub train: Vec<bool>,
@@ -366,10 +369,13 @@ fn masked_mse(f: &[f64], y: &[f64], mask: &[bool]) -> f64 {
 /// Result of one least-squares fit.
 #[derive(Debug, Clone, Serialize)]
 pub struct FitInfo {
+    /// Nelder–Mead iterations run (all restarts).
     pub iterations: u64,
     /// Final cost (mean squared residual / force scale²).
     pub final_cost: f64,
+    /// The simplex met its tolerance before the iteration cap.
     pub converged: bool,
+    /// Wall-clock time of the fit (s).
     pub wall_time_s: f64,
 }
 
@@ -499,13 +505,17 @@ fn swapped_score(structure: &Structure, z0: &[f64], prep: &Prepared, max_iter: u
 /// Evidence for one candidate effect in one round.
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate {
+    /// The effect added to the round's current model.
     pub effect: Effect,
     /// Parameter names with units and fitted values.
     pub parameters: Vec<(String, f64)>,
     /// Parameters on a bound: `(name (unit), bound)`.
     pub at_bound: Vec<(String, Bound)>,
+    /// Parameters the effect adds.
     pub extra_parameters: usize,
+    /// RMS force residual on the training cycles / force scale (dimensionless).
     pub train_nrms: f64,
+    /// RMS force residual on the held-out cycles / force scale (dimensionless).
     pub held_out_nrms: f64,
     /// Held-out RMS residual / noise floor.
     pub held_out_rms_over_noise: f64,
@@ -522,6 +532,7 @@ pub struct Candidate {
     pub eligible: bool,
     /// The first rule it fails, or "eligible".
     pub decision: String,
+    /// Convergence of the candidate's fit.
     pub fit: FitInfo,
     #[serde(skip)]
     model: Model,
@@ -532,6 +543,7 @@ pub struct Candidate {
 /// One round of the search: all candidates and the decision.
 #[derive(Debug, Clone, Serialize)]
 pub struct Round {
+    /// Every candidate fitted in the round.
     pub candidates: Vec<Candidate>,
     /// The accepted effect, or `None` (no candidate passes).
     pub accepted: Option<Effect>,
@@ -554,6 +566,7 @@ pub enum Verdict {
 }
 
 impl Verdict {
+    /// The verdict in words, as in the report.
     pub fn name(self) -> &'static str {
         match self {
             Verdict::EffectsFound => "effect(s) found",
@@ -586,30 +599,45 @@ pub struct Character {
 /// The result of the whole analysis.
 #[derive(Debug, Clone)]
 pub struct Diagnosis {
+    /// The record as analysed: block-averaged, segmented into cycles, split and its noise floor.
     pub prepared: Prepared,
+    /// The baseline model (Valanis element, no effect).
     pub baseline: Model,
     /// Whether the normal load is known (measured, or from a calibration table): only then is
     /// a friction coefficient meaningful.
     pub normal_load_known: bool,
+    /// Convergence of the baseline's fit (iterations 0 for a given baseline).
     pub baseline_fit: FitInfo,
     /// Baseline parameters on a bound: `(name (unit), bound)`.
     pub baseline_at_bound: Vec<(String, Bound)>,
+    /// The baseline's simulated force at every analysed sample (N).
     pub baseline_force: Vec<f64>,
+    /// The baseline with every accepted effect, refitted.
     pub final_model: Model,
+    /// The final model's simulated force at every analysed sample (N).
     pub final_force: Vec<f64>,
+    /// The search's rounds, in order.
     pub rounds: Vec<Round>,
+    /// Error measures of the baseline.
     pub errors_before: Errors,
+    /// Error measures of the final model.
     pub errors_after: Errors,
     /// The final model against the baseline on the cycles that did not choose it; `None` when
     /// no effect was added.
     pub swapped_split: Option<SwappedSplit>,
+    /// What characterises the baseline's residual.
     pub before: Character,
+    /// What characterises the final model's residual.
     pub after: Character,
     /// Zero-force plateaus of the measured force (clearances), per half-cycle.
     pub clearances: Vec<ClearanceRegion>,
+    /// Trends of slip force, stiffness and loop area over the cycles.
     pub stationarity: Stationarity,
+    /// What the search concluded.
     pub verdict: Verdict,
+    /// Fitted parameters of the baseline (0 for a given baseline).
     pub n_parameters_before: usize,
+    /// Fitted parameters of the final model.
     pub n_parameters_after: usize,
 }
 

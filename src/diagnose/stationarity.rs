@@ -119,8 +119,11 @@ pub struct Stationarity {
     /// Complete cycles tested: those at the steady amplitude (peak-to-peak stroke within 3 %
     /// of the largest).
     pub cycles: Vec<usize>,
+    /// Trend of the per-cycle fitted slip force (N).
     pub slip_force: Trend,
+    /// Trend of the per-cycle reload stiffness `2E0/(1+k)` (N/m).
     pub stiffness: Trend,
+    /// Trend of the per-cycle loop area `∮F dx`, the energy dissipated per cycle (J).
     pub loop_area: Trend,
     /// One sentence per drifting descriptor (empty: stationary, or not testable).
     pub findings: Vec<String>,

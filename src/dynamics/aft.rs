@@ -40,7 +40,7 @@
 //! polynomial `u_c(θ) = Σ_k φ_k(θ)·X_{c,k}`, so the reversals are located exactly: wherever the
 //! sampled velocity `u_c'(θ_i)` changes sign between two samples, the zero `θ*` of `u_c'` is
 //! found by Newton's method on `u_c''` safeguarded by bisection, and the element is stepped to
-//! `u(θ*)` and on from there ([`Reversal`]). Every sub-step is then monotone in the reversing
+//! `u(θ*)` and on from there (`Reversal`). Every sub-step is then monotone in the reversing
 //! component, and the state at every sample exact (Jenkins: exactly; Valanis: to the rounding
 //! of its closed-form branch). Elements without state (springs, the difference-quotient damper
 //! of an identification) are stepped from sample to sample as before.
@@ -331,9 +331,11 @@ pub fn worst_periodicity_error(errors: impl IntoIterator<Item = f64>) -> f64 {
 pub struct ElementCycle {
     /// Energy dissipated per cycle `∮ f·du` (J), trapezoidal rule over the samples.
     pub dissipated_energy_j: f64,
-    /// Fractions of the period in stick, slip and separation.
+    /// Fraction of the period in stick.
     pub stick_fraction: f64,
+    /// Fraction of the period in slip.
     pub slip_fraction: f64,
+    /// Fraction of the period in separation (normal gap open).
     pub separation_fraction: f64,
 }
 
@@ -676,7 +678,7 @@ fn run_sensitive<'a>(
 
 /// [`run_sensitive`] for any element: all columns advanced through each step's partials as the
 /// step is taken, with the sizes known only at run time. A step through a reversal
-/// ([`Reversal`]) is two or more sub-steps; the displacement at a reversal depends on the
+/// (`Reversal`) is two or more sub-steps; the displacement at a reversal depends on the
 /// harmonics through `φ(θ*)` and, for the components that do not reverse there, through the
 /// reversal's phase ([`reversal_rows`]).
 fn run_sensitive_general<'a>(

@@ -27,6 +27,7 @@ pub enum ContactLaw {
 /// One row of an element table with the line it came from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TableElement {
+    /// Element id (the table's `element_id`).
     pub id: u64,
     /// 1-based line in the file.
     pub line: usize,

@@ -34,16 +34,16 @@
 //! end on either — a spurious fold that walks the sweep back. The step control here handles
 //! both:
 //!
-//! * **Distance test**: a corrected point farther than [`MAX_CORRECTION`] steps from its
+//! * **Distance test**: a corrected point farther than `MAX_CORRECTION` steps from its
 //!   predictor is on another branch (on a smooth path the distance is about the step times the
 //!   turning angle); the step is halved and the next corrector starts from a fresh Jacobian at
 //!   its predictor, so that Newton's method converges to the nearby branch.
 //! * **Kink test**: when halving the step leaves the turning angle above the limit and no
-//!   smaller than [`KINK_ANGLE_RATIO`] of its value (on a smooth path it shrinks with the step),
-//!   the point is past a kink and is accepted, provided the turn is below [`MAX_KINK_ANGLE`] and
+//!   smaller than `KINK_ANGLE_RATIO` of its value (on a smooth path it shrinks with the step),
+//!   the point is past a kink and is accepted, provided the turn is below `MAX_KINK_ANGLE` and
 //!   the point lies within the reach of the new branch from the predictor (`1 + 1.2·tan(angle)`
 //!   steps, the geometry of a hyperplane crossing a branch at that angle) and within
-//!   [`KINK_JUMP`] of it; the secant through it then points along the new branch.
+//!   `KINK_JUMP` of it; the secant through it then points along the new branch.
 //!
 //! Kinks passed are counted in [`Branch::kinks`]; turning points (sign changes of `dω/ds`) are
 //! counted separately and are real folds. When the step still falls below its minimum, or the
@@ -89,8 +89,9 @@ const CHORD_STEPS_BEFORE_REFRESH: f64 = 6.0;
 /// Settings of a frequency sweep.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ContinuationSettings {
-    /// Start and end of the sweep (Hz); the sweep runs downwards when end < start.
+    /// Start of the sweep (Hz); the sweep runs downwards when the end is below it.
     pub frequency_start_hz: f64,
+    /// End of the sweep (Hz).
     pub frequency_end_hz: f64,
     /// Number of points along the frequency span where the response is smooth (sets the
     /// largest frequency step); resonance peaks and folds get more.
@@ -141,7 +142,9 @@ impl ContinuationSettings {
 /// A computed branch of the frequency response at one excitation level.
 #[derive(Debug, Clone)]
 pub struct Branch {
+    /// Excitation level (multiplies [`Excitation::force`](crate::dynamics::hbm::Excitation::force)).
     pub level: f64,
+    /// The accepted points, in path order.
     pub points: Vec<HbmPoint>,
     /// Steps rejected (corrector failure or turning angle) and retried with half the step.
     pub rejected_steps: usize,
@@ -152,6 +155,7 @@ pub struct Branch {
     pub kinks: usize,
     /// Jacobian evaluations (each with one AFT Jacobian per element).
     pub jacobians: usize,
+    /// Wall-clock time of the sweep (s).
     pub wall_time_s: f64,
     /// Why the sweep stopped before the end of its span, with what to change (`None`: it
     /// reached the end). The points computed up to there are kept.

@@ -46,6 +46,7 @@ const PARALLEL_MIN_ELEMENTS: usize = 4;
 /// unit level for physical DOFs; `Φᵀ·f` for modal coordinates).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Excitation {
+    /// Force on each coordinate per unit level (N for physical DOFs; `Φᵀ·f` for modal coordinates).
     pub force: DVector<f64>,
     /// Harmonic order of the excitation (usually 1).
     pub harmonic: usize,
@@ -57,7 +58,9 @@ pub struct Excitation {
 pub enum FormulationChoice {
     /// The formulation with fewer unknowns.
     Auto,
+    /// Unknowns: harmonics of the structure's coordinates ([`Formulation::Coordinates`]).
     Coordinates,
+    /// Unknowns: harmonics of the element displacements ([`Formulation::Receptance`]).
     Receptance,
 }
 
@@ -92,6 +95,8 @@ impl Default for NewtonSettings {
 /// Residual and (optionally) its derivatives at one point.
 #[derive(Debug, Clone)]
 pub struct Evaluation {
+    /// Harmonic-balance residual `R(z, ω, level)`: dynamic stiffness times the unknowns plus the
+    /// elements' force harmonics minus the excitation (N).
     pub residual: DVector<f64>,
     /// `∂R/∂z` (empty `0 × 0` when not requested).
     pub jacobian: DMatrix<f64>,
@@ -126,20 +131,29 @@ pub struct HbmPoint {
     pub level: f64,
     /// Unknowns of the formulation in use.
     pub z: DVector<f64>,
+    /// Newton (corrector) iterations spent.
     pub iterations: usize,
     /// Relative residual at the end.
     pub residual: f64,
+    /// The relative residual met the tolerance.
     pub converged: bool,
+    /// Largest AFT periodicity error over the elements (relative to the state scale).
     pub periodicity_error: f64,
+    /// Wall-clock time of the solve (s).
     pub wall_time_s: f64,
 }
 
 /// A structure with its harmonic basis and excitation, ready to be solved.
 pub struct HbmSystem<'a> {
+    /// The structure with its elements attached.
     pub structure: &'a Structure,
+    /// The harmonic basis (highest harmonic, odd only or all, time samples).
     pub harmonics: Harmonics,
+    /// The harmonic force.
     pub excitation: Excitation,
+    /// Settings of the alternating frequency–time evaluation of the elements.
     pub aft: AftSettings,
+    /// Settings of the Newton solve.
     pub newton: NewtonSettings,
     formulation: Formulation,
     /// All element maps stacked (`n_c × n`).

@@ -29,6 +29,7 @@ pub enum CoordinateKind {
 pub struct AttachedElement {
     /// Name used in outputs (e.g. the element table id).
     pub label: String,
+    /// The element law with its parameters.
     pub element: Arc<dyn HystereticElement>,
     /// `P_e`, `d × n`: `u_e = P_e·q`.
     pub map: DMatrix<f64>,
@@ -37,12 +38,17 @@ pub struct AttachedElement {
 /// Linear structure in generalised coordinates with nonlinear elements attached.
 #[derive(Debug, Clone)]
 pub struct Structure {
+    /// Physical DOFs of a lumped model or modal coordinates.
     pub kind: CoordinateKind,
     /// One label per coordinate (`node.x` for lumped DOFs, `mode 3` for modal coordinates).
     pub labels: Vec<String>,
+    /// Mass matrix `M` (kg; identity for mass-normalised modal coordinates).
     pub mass: DMatrix<f64>,
+    /// Viscous damping matrix `C` (N·s/m; `2ζ_r·ω_r` on the diagonal for modal coordinates).
     pub damping: DMatrix<f64>,
+    /// Stiffness matrix `K` (N/m; `ω_r²` on the diagonal for modal coordinates).
     pub stiffness: DMatrix<f64>,
+    /// The nonlinear elements with their maps.
     pub elements: Vec<AttachedElement>,
 }
 

@@ -48,36 +48,57 @@ use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+/// `[linear]`: the linear structure, either lumped matrices (`mass`, `damping`, `stiffness`) or a
+/// reduced modal model (`modes`, `shapes`). Paths relative to the model file.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinearSection {
+    /// Mass matrix CSV (`# unit: kg`, header of DOF labels `node.x|y|z`).
     pub mass: Option<PathBuf>,
+    /// Viscous damping matrix CSV (`# unit: N*s/m`), same DOFs as `mass`.
     pub damping: Option<PathBuf>,
+    /// Stiffness matrix CSV (`# unit: N/m`), same DOFs as `mass`.
     pub stiffness: Option<PathBuf>,
+    /// Modal model CSV: `mode,frequency_Hz,damping_ratio` (instead of the matrices).
     pub modes: Option<PathBuf>,
+    /// Mass-normalised mode shapes CSV: `node,direction,mode_1_per_sqrt_kg,…` (with `modes`).
     pub shapes: Option<PathBuf>,
 }
 
+/// `[[contact]]`: one element table and how its elements attach to the structure.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSection {
+    /// Element table written by `asperity elements`.
     pub elements: PathBuf,
+    /// Element law: `valanis` (3-D microslip) or `jenkins` (2-D circular slider with normal contact).
     pub law: ContactLaw,
+    /// Node on the first side of every element (`ground` for a fixed side); with `node_b`, instead
+    /// of `pairs`.
     pub node_a: Option<String>,
+    /// Node on the second side of every element (`ground` for a fixed side).
     pub node_b: Option<String>,
+    /// CSV `element_id,node_a,node_b`: a node pair per element (instead of `node_a`/`node_b`).
     pub pairs: Option<PathBuf>,
+    /// Contact normal in the structure's axes, from `node_a` towards `node_b` (normalised on load).
     pub normal: [f64; 3],
+    /// First tangential direction in the structure's axes (orthogonalised against `normal`).
     pub tangent: [f64; 3],
 }
 
+/// `[excitation]`: the harmonic force `F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExcitationSection {
     /// DOFs loaded by the force, each with a weight (default 1): `F = level·Σ w_i·e_i`.
     pub dofs: Vec<String>,
+    /// Weight `w_i` of each DOF (dimensionless; default 1 each, e.g. `[1, -1]` for out-of-phase
+    /// forcing).
     pub weights: Option<Vec<f64>>,
+    /// Harmonic of the sweep frequency the force acts at (default 1).
     #[serde(default = "one")]
     pub harmonic: usize,
+    /// Force amplitudes `level` (N), one frequency sweep each.
     pub levels_n: Vec<f64>,
 }
 
@@ -85,23 +106,34 @@ fn one() -> usize {
     1
 }
 
+/// `[response]`: the DOFs whose response is reported.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResponseSection {
+    /// DOF labels `node.x|y|z`.
     pub dofs: Vec<String>,
 }
 
+/// `[sweep]`: the frequency band and the harmonic-balance settings.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSection {
+    /// First frequency of the sweep (Hz).
     pub frequency_start_hz: f64,
+    /// Last frequency of the sweep (Hz).
     pub frequency_end_hz: f64,
+    /// Points over the span where the response is smooth; continuation adds more at peaks
+    /// (default 200).
     #[serde(default = "default_points")]
     pub points: usize,
+    /// Highest harmonic of the balance.
     pub harmonics: usize,
+    /// Odd harmonics only (no static term or even harmonics; default `false`).
     #[serde(default)]
     pub odd_only: bool,
+    /// Time samples per period of the AFT (default: the power of two ≥ 16·harmonics).
     pub time_samples: Option<usize>,
+    /// Unknowns of the balance: `auto` (the fewer), `coordinates` or `receptance`.
     #[serde(default = "default_formulation")]
     pub formulation: FormulationChoice,
     /// Cap on the points of one level's branch (default: the larger of 20 000 and 20 × points).
@@ -120,11 +152,16 @@ fn default_formulation() -> FormulationChoice {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
+    /// The linear structure.
     pub linear: LinearSection,
+    /// The element tables (none: a linear response).
     #[serde(default)]
     pub contact: Vec<ContactSection>,
+    /// The forcing.
     pub excitation: ExcitationSection,
+    /// The reported DOFs.
     pub response: ResponseSection,
+    /// The frequency band and solver settings.
     pub sweep: SweepSection,
 }
 
@@ -132,8 +169,11 @@ pub struct ModelFile {
 /// file that was read (for the provenance record).
 #[derive(Debug)]
 pub struct LoadedModel {
+    /// The model file as parsed.
     pub file: ModelFile,
+    /// Path of the model file.
     pub path: PathBuf,
+    /// The structure with its elements attached.
     pub structure: Structure,
     /// Force on the coordinates per newton of excitation.
     pub force: DVector<f64>,

@@ -15,7 +15,9 @@ const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// Everything written for one excitation level.
 #[derive(Debug, Clone)]
 pub struct LevelResult {
+    /// Excitation force amplitude of the level (N).
     pub level_n: f64,
+    /// The computed frequency-response branch.
     pub branch: Branch,
     /// Per point: total dissipated energy (J) and element-averaged stick/slip/separation.
     pub totals: Vec<[f64; 4]>,
@@ -30,7 +32,9 @@ pub struct LevelResult {
 /// The resonance peak of a branch: amplitude (at the excitation's harmonic) and frequency.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Peak {
+    /// Peak displacement amplitude at the excitation's harmonic (m).
     pub amplitude_m: f64,
+    /// Frequency of the peak (Hz).
     pub frequency_hz: f64,
     /// The largest amplitude is at the first or the last point of the branch: the peak may lie
     /// outside the span (or the branch stopped before it); not interpolated.
@@ -45,7 +49,7 @@ const PEAK_SOLVES: usize = 12;
 /// §10.3) of the amplitude `a(s)` of `row·x` at the excitation's harmonic along the branch's
 /// arclength `s`, starting from the largest point and its neighbours, each new abscissa solved
 /// on the branch ([`crate::dynamics::continuation::point_between`]) and replacing the worst of
-/// the three, until the vertex moves by less than 1e-6 of the bracket (at most [`PEAK_SOLVES`]
+/// the three, until the vertex moves by less than 1e-6 of the bracket (at most `PEAK_SOLVES`
 /// solves). Its accuracy is that of the harmonic balance, not of the point spacing: a parabola
 /// through three points of a skewed friction peak errs by up to 0.1 % in amplitude and frequency
 /// at the default spacing. `None` when a solve fails (the caller keeps [`interpolated_peak`]).

@@ -47,10 +47,13 @@ pub struct SteadyState {
     /// Harmonics of the coordinates over the last period (`n × len`, coordinate-major, in the
     /// convention of [`Harmonics`]).
     pub harmonics: DVector<f64>,
+    /// Periods integrated.
     pub periods: usize,
     /// Relative change of the harmonics over the last period.
     pub change: f64,
+    /// The change met the tolerance within the period cap.
     pub converged: bool,
+    /// Wall-clock time of the run (s).
     pub wall_time_s: f64,
 }
 

@@ -99,7 +99,9 @@ impl BoucWenParams {
 /// State: displacement `u` and hysteretic variable `z` (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoucWenState {
+    /// Displacement `u` (m).
     pub u: f64,
+    /// Hysteretic displacement `z` (m).
     pub z: f64,
 }
 
@@ -174,6 +176,7 @@ pub fn step_partials(p: &BoucWenParams, state: &BoucWenState, u1: f64) -> (BoucW
 /// hysteretic force is within 1 % of its ultimate value (`|z| ≥ 0.99·z_u`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoucWen {
+    /// The Bouc–Wen parameters.
     pub params: BoucWenParams,
 }
 

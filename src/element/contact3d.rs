@@ -47,7 +47,9 @@ fn normal_force(
 /// is the remaining error).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MicroslipContact {
+    /// Valanis parameters of each tangential direction (per element: `E0`, `Et` in N/m).
     pub valanis: ValanisParams,
+    /// The unilateral normal spring (`kn`, `N0`).
     pub normal: UnilateralNormal,
 }
 
@@ -145,7 +147,9 @@ impl HystereticElement for MicroslipContact {
 /// normal spring of [`MicroslipContact`] (module documentation). State `(F_t1, F_t2)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JenkinsContact {
+    /// Tangential stiffness `kt` (N/m) and friction coefficient `μ`.
     pub params: JenkinsParams,
+    /// The unilateral normal spring (`kn`, `N0`).
     pub normal: UnilateralNormal,
 }
 

@@ -60,6 +60,7 @@ pub fn integrate(p: &GaulLenzParams, q: &[f64], method: Integrator) -> Result<Ve
 pub struct GaulLenz {
     /// Valanis parameters with `μ = 1`, driven at the normal load `σ0`.
     pub valanis: ValanisParams,
+    /// Slip force `σ0` (N), the normal load the Valanis law is driven at.
     pub sigma0: f64,
 }
 

@@ -60,13 +60,21 @@ impl ContactStatus {
 /// `df_du0` and `df_du1` are `d × d`). Entries an element leaves untouched are zero.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepPartials {
+    /// Number of state variables of the element.
     pub m: usize,
+    /// Number of displacement (and force) components.
     pub d: usize,
+    /// `∂s1/∂s0` (`m × m`).
     pub ds_ds0: Vec<f64>,
+    /// `∂s1/∂u0` (`m × d`).
     pub ds_du0: Vec<f64>,
+    /// `∂s1/∂u1` (`m × d`).
     pub ds_du1: Vec<f64>,
+    /// `∂f1/∂s0` (`d × m`).
     pub df_ds0: Vec<f64>,
+    /// `∂f1/∂u0` (`d × d`).
     pub df_du0: Vec<f64>,
+    /// `∂f1/∂u1` (`d × d`): the element's tangent stiffness over the increment.
     pub df_du1: Vec<f64>,
 }
 

@@ -136,7 +136,9 @@ impl IwanParams {
 /// One Jenkins element of the discretisation: stiffness (N/m) and slip displacement (m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Slider {
+    /// Spring stiffness of the slider (N/m).
     pub stiffness: f64,
+    /// Spring stretch at which the slider slips, `φ̄` (m); its slip force is `stiffness·φ̄`.
     pub slip_displacement: f64,
 }
 
@@ -167,7 +169,9 @@ pub struct IwanState {
 /// A discretised Iwan element (module documentation).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IwanElement {
+    /// The four Iwan parameters.
     pub params: IwanParams,
+    /// The Jenkins sliders of the discretisation; the delta's (when `β > 0`) last.
     pub sliders: Vec<Slider>,
 }
 

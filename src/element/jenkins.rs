@@ -102,6 +102,7 @@ pub fn step_2d_partials(
 /// [`HystereticElement`]. State: the force. Update: [`step`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Jenkins {
+    /// Stiffness `kt` (N/m) and friction coefficient `μ`.
     pub params: JenkinsParams,
     /// Constant normal load `N` (N).
     pub normal_load: f64,

@@ -242,12 +242,18 @@ pub fn implicit_euler_step(
     }
 }
 
-/// Index of each input `(F0, q_ref0, q0, Fz0, q1, Fz1)` in the arrays of [`ValanisPartials`].
+/// Index of the start force `F0` in the arrays of [`ValanisPartials`] (inputs
+/// `(F0, q_ref0, q0, Fz0, q1, Fz1)`).
 pub const F0: usize = 0;
+/// Index of the start reference displacement `q_ref0`.
 pub const QR0: usize = 1;
+/// Index of the start displacement `q0`.
 pub const Q0: usize = 2;
+/// Index of the start normal load `Fz0`.
 pub const FZ0: usize = 3;
+/// Index of the end displacement `q1`.
 pub const Q1: usize = 4;
+/// Index of the end normal load `Fz1`.
 pub const FZ1: usize = 5;
 
 /// The start `(F, q, q_ref)` of the smooth update of an increment that ends in contact
@@ -896,8 +902,9 @@ pub const GROSS_SLIP_FRACTION: f64 = 0.99;
 /// [`HystereticElement`]: crate::element::HystereticElement
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Direction {
-    /// Index of the force and of `q_ref` in the state vector.
+    /// Index of the force in the state vector.
     pub force: usize,
+    /// Index of `q_ref` (the displacement at the last reversal) in the state vector.
     pub q_ref: usize,
     /// Index of the tangential displacement in `u` (and of the force in `f`).
     pub u: usize,

@@ -134,6 +134,7 @@ impl PixelClass {
 /// The reading of one pixel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PixelReading {
+    /// What the colour says about the pressure.
     pub class: PixelClass,
     /// Pressure in Pa; `NaN` unless `class == InRange`.
     pub pressure_pa: f64,
@@ -151,6 +152,7 @@ impl PixelReading {
 /// One row of a colour table.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ColourRow {
+    /// Pressure of the row (Pa).
     pub pressure_pa: f64,
     /// R, G, B in 0–255.
     pub rgb: [f64; 3],
@@ -675,7 +677,9 @@ impl DensityCalibration {
 /// How colour becomes pressure.
 #[derive(Debug, Clone)]
 pub enum ColourToPressure {
+    /// A colour table: nearest point on the graded colour curve, markers for the classes.
     Table(ColourTable),
+    /// An optical-density calibration in one channel.
     Density(DensityCalibration),
 }
 

@@ -80,6 +80,8 @@ pub struct FittedRegion<'a> {
 }
 
 impl<'a> FittedRegion<'a> {
+    /// The fitted field of `region` of `map` read only on its stained pixels and the holes they
+    /// enclose.
     pub fn new(
         map: &'a regions::FilmMap,
         region: &'a regions::Region,

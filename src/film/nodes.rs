@@ -15,8 +15,11 @@ use std::path::Path;
 /// A contact node in the mesh frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Node {
+    /// Node id from the mesh.
     pub id: u64,
+    /// Position x in the mesh frame (m).
     pub x_m: f64,
+    /// Position y in the mesh frame (m).
     pub y_m: f64,
     /// Tributary area (m²), if the mesh provides it.
     pub area_m2: Option<f64>,
@@ -38,7 +41,9 @@ impl Node {
 /// Mesh frame → film frame: `p_film = offset + scale · R(rotation) · p_mesh`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Placement {
+    /// Translation x of the mesh origin in the film frame (m).
     pub offset_x_m: f64,
+    /// Translation y of the mesh origin in the film frame (m).
     pub offset_y_m: f64,
     /// Counter-clockwise rotation (rad).
     pub rotation_rad: f64,
@@ -284,10 +289,13 @@ fn node_areas(nodes: &[Node], film: &[(f64, f64)]) -> Result<Triangulated> {
 /// A node with its preload.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Preload {
+    /// Node id from the mesh.
     pub id: u64,
-    /// Film-frame position (m).
+    /// Film-frame position x (m).
     pub x_m: f64,
+    /// Film-frame position y (m).
     pub y_m: f64,
+    /// Tributary area `A` (m²).
     pub area_m2: f64,
     /// Local contact pressure (Pa) = N0 / area.
     #[serde(rename = "pressure_Pa")]
@@ -300,7 +308,9 @@ pub struct Preload {
 /// What happened while computing preloads.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct PreloadSummary {
+    /// Nodes with a preload.
     pub n_nodes: usize,
+    /// Total tributary area (m²).
     pub total_area_m2: f64,
     /// Σ N0 before any rescaling (N).
     pub raw_total_load_n: f64,

@@ -16,9 +16,13 @@ use crate::core::error::{Error, Result};
 /// The affine map from film coordinates (m) to the scaled fit coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct FitFrame {
+    /// Centre x of the fitted points' bounding box, film frame (m).
     pub x_centre_m: f64,
+    /// Centre y of the bounding box (m).
     pub y_centre_m: f64,
+    /// Half width of the bounding box in x (m): scaled `x' = (x − x_centre)/x_half_width`.
     pub x_half_width_m: f64,
+    /// Half width of the bounding box in y (m).
     pub y_half_width_m: f64,
 }
 
@@ -69,7 +73,9 @@ pub fn exponents(order: usize) -> Vec<(usize, usize)> {
 /// A fitted polynomial pressure field.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct PolyFit2 {
+    /// Total degree of the polynomial (`a + b ≤ order`).
     pub order: usize,
+    /// The map from film coordinates to the scaled basis `[−1, 1]²`.
     pub frame: FitFrame,
     /// Exponents `(a, b)` of each coefficient (see [`exponents`]).
     pub exponents: Vec<(usize, usize)>,

@@ -137,10 +137,15 @@ impl FilmMap {
 /// Number of pixels of each class.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ClassCounts {
+    /// Pixels inside the calibrated pressure range.
     pub in_range: usize,
+    /// Unstained (white) pixels.
     pub unstained: usize,
+    /// Stained pixels below the film's measuring range.
     pub below_range: usize,
+    /// Pixels at or above the upper end of the range (saturated).
     pub above_range: usize,
+    /// Pixels whose colour is far from the colour curve and every marker (rejected).
     pub off_curve: usize,
 }
 
@@ -165,7 +170,16 @@ impl ClassCounts {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Roi {
     /// Axis-aligned rectangle `[x0, x1] × [y0, y1]`.
-    Rectangle { x0: f64, y0: f64, x1: f64, y1: f64 },
+    Rectangle {
+        /// Left edge (m).
+        x0: f64,
+        /// Bottom edge (m).
+        y0: f64,
+        /// Right edge (m).
+        x1: f64,
+        /// Top edge (m).
+        y1: f64,
+    },
     /// Closed polygon (vertices in order, at least 3); pixel centres inside are taken
     /// (even-odd rule).
     Polygon(Vec<(f64, f64)>),
@@ -174,6 +188,7 @@ pub enum Roi {
 /// A set of pixels of the map, with an id.
 #[derive(Debug, Clone)]
 pub struct Region {
+    /// Region id (1-based, in the order found or given).
     pub id: usize,
     /// Pixel indices `(i, j)`.
     pub pixels: Vec<(usize, usize)>,
@@ -628,9 +643,11 @@ fn fill_holes(pix: &[(usize, usize)], label: &Array2<usize>, id: usize) -> Vec<(
 /// Summary of one region.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct RegionSummary {
+    /// Region id, as in [`Region::id`].
     pub id: usize,
-    /// Centroid of the region's pixels, film frame (m).
+    /// Centroid x of the region's pixels, film frame (m).
     pub centre_x_m: f64,
+    /// Centroid y, film frame (m).
     pub centre_y_m: f64,
     /// Pixel count × pixel area (m²).
     pub area_m2: f64,
@@ -643,6 +660,7 @@ pub struct RegionSummary {
     /// Σ pressure × pixel area over in-range pixels (N): a lower bound of the load, since
     /// below- and above-range pixels carry unknown pressure.
     pub in_range_load_n: f64,
+    /// Pixels of each class in the region.
     pub counts: ClassCounts,
     /// Above-range (saturated) pixels over the pressure-bearing ones (in range + above range):
     /// the share of the contact whose pressure the fit, made from in-range pixels only, does

@@ -33,8 +33,11 @@ use std::path::Path;
 /// values 0–255 (fractional for 16-bit images).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RgbImage {
+    /// Red channel, 0–255.
     pub r: Array2<f64>,
+    /// Green channel, 0–255.
     pub g: Array2<f64>,
+    /// Blue channel, 0–255.
     pub b: Array2<f64>,
 }
 
@@ -339,8 +342,11 @@ pub enum Channel {
     /// Rec. 709 luma `0.2126 R + 0.7152 G + 0.0722 B`.
     #[default]
     Luma,
+    /// The red channel.
     Red,
+    /// The green channel.
     Green,
+    /// The blue channel.
     Blue,
 }
 

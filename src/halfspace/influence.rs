@@ -225,8 +225,11 @@ pub fn cerruti_uyy(x: f64, y: f64, a: f64, b: f64, k: CerrutiConstants) -> f64 {
 /// `ũ_x = K_xx q̃_x + K_xy q̃_y`, `ũ_y = K_xy q̃_x + K_yy q̃_y`.
 #[derive(Debug, Clone)]
 pub struct CerrutiSpectra {
+    /// `K_xx`: `u_x` per unit `q_x` (m/Pa).
     pub xx: KernelSpectrum,
+    /// `K_xy`: `u_x` per unit `q_y`, equal to `u_y` per unit `q_x` (m/Pa).
     pub xy: KernelSpectrum,
+    /// `K_yy`: `u_y` per unit `q_y` (m/Pa).
     pub yy: KernelSpectrum,
 }
 

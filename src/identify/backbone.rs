@@ -45,7 +45,9 @@ use std::f64::consts::TAU;
 /// An equivalent linear mode.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LinearMode {
+    /// Natural frequency `f_n` (Hz).
     pub frequency_hz: f64,
+    /// Viscous damping ratio `ζ` (dimensionless).
     pub damping_ratio: f64,
     /// `1/R` (kg).
     pub modal_mass_kg: f64,
@@ -141,7 +143,9 @@ pub fn fit_linear_mode(omegas: &[f64], x: &[Complex64]) -> Result<LinearMode> {
 pub struct BackbonePoint {
     /// Drive-point displacement amplitude (m).
     pub amplitude_m: f64,
+    /// Natural frequency `f_n` at this amplitude (Hz).
     pub frequency_hz: f64,
+    /// Equivalent viscous damping ratio `ζ` at this amplitude (dimensionless).
     pub damping_ratio: f64,
 }
 
@@ -153,6 +157,7 @@ pub struct SidePoint {
     pub row: usize,
     /// The row's excitation frequency (Hz).
     pub drive_hz: f64,
+    /// The estimate: amplitude, natural frequency and damping ratio.
     pub point: BackbonePoint,
     /// `|R/X| / Im(R/X)`: a relative error `ε = δX/X` of the response gives the damping ratio a
     /// relative error of this times `|ε|` (the error of `R/X` is `−(R/X)·ε`, and `ζ ∝ Im(R/X)`).
@@ -183,7 +188,9 @@ impl SidePoint {
 /// The backbone estimated from one sweep.
 #[derive(Debug, Clone, Serialize)]
 pub struct LevelBackbone {
+    /// File name of the sweep.
     pub file: String,
+    /// Mean measured drive force amplitude of the sweep (N).
     pub mean_force_n: f64,
     /// Equivalent linear mode of the whole sweep.
     pub linear: LinearMode,

@@ -29,15 +29,27 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
+    /// The joint is a Valanis element (Gaul–Lenz form) instead of a Jenkins slider; parameter: shape `k`.
     ValanisJoint,
+    /// The joint is a four-parameter Iwan element (Segalman 2005); parameters: exponent `χ`,
+    /// strength ratio `β`.
     IwanJoint,
+    /// Cubic spring `k3·u³` at the drive point; parameter: relative change `ε` of `ω²` at `A_ref`.
     AmplitudeStiffness,
+    /// Quadratic spring `k2·|u|·u` at the drive point; parameter: relative change `ε1` of `ω²` at
+    /// `A_ref`.
     QuadraticStiffness,
+    /// Quadratic damper `c2·|u̇|·u̇`; parameter: damping ratio `ζ_q` added at `A_ref`.
     QuadraticDamping,
+    /// Power-law damper `c_p·|u̇|^p·u̇`; parameters: `ζ_p` at `A_ref` and exponent `p`.
     PowerLawDamping,
+    /// Joint slip force and stiffness scaled by `1 − λ·F̄/F_ref`; parameter: `λ`.
     PreloadLoss,
+    /// Harmonics 1, 3, …, 9 in the balance instead of 1, 3; no parameter.
     HigherHarmonics,
+    /// Constant residual receptance `ρ/k_s` (m/N) at the drive point; parameter: `ρ`.
     OutOfBandModes,
+    /// Delay between measured force and force into the structure, `Y → Y·e^{−iωτ}`; parameter: `τ` (s).
     ShakerInteraction,
 }
 

@@ -46,6 +46,7 @@ pub use crate::core::fit::StartOutcome;
 pub struct LevelData {
     /// File name.
     pub name: String,
+    /// Response quantity of the level's file.
     pub quantity: Quantity,
     /// Frequency and measured force of every row, in sweep order.
     pub drives: Vec<Drive>,
@@ -53,6 +54,7 @@ pub struct LevelData {
     pub measured: Vec<Complex64>,
     /// 1-based lines of the rows in the file.
     pub lines: Vec<usize>,
+    /// Mean measured drive force amplitude of the level (N).
     pub mean_force_n: f64,
     /// Largest `|Y_meas|` of the level.
     pub peak: f64,
@@ -256,10 +258,13 @@ pub const THOROUGH_TOLERANCE: f64 = 1e-7;
 /// Result of a fit.
 #[derive(Debug, Clone, Serialize)]
 pub struct FitResult<M = Model> {
+    /// The model at the optimum (physical parameter values).
     pub model: M,
     /// Objective `J` at the optimum.
     pub cost: f64,
+    /// The best run stopped on its tolerance rather than on its iteration cap.
     pub converged: bool,
+    /// Outcome of every start (swarm and Nelder–Mead), in the order run.
     pub starts: Vec<StartOutcome>,
     /// Model evaluations (all levels at all rows) spent.
     pub evaluations: u64,
@@ -267,6 +272,7 @@ pub struct FitResult<M = Model> {
     pub failed_rows: usize,
     /// Parameters within 0.5 % of the box width of a bound.
     pub at_bounds: Vec<String>,
+    /// Wall-clock time of the fit (s).
     pub wall_time_s: f64,
 }
 
@@ -280,6 +286,7 @@ pub struct Objective<'a, S: Parametrised = ModelSpec> {
 }
 
 impl<'a, S: Parametrised> Objective<'a, S> {
+    /// The objective of `spec`'s models on the rows of `levels` where `masks` is `true`.
     pub fn new(spec: S, levels: &'a [LevelData], masks: &'a [Vec<bool>]) -> Self {
         let params = spec.params();
         Self {

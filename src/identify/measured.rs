@@ -47,8 +47,11 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Quantity {
+    /// Displacement amplitude (m); its FRF is the receptance (m/N).
     Displacement,
+    /// Velocity amplitude (m/s); its FRF is the mobility (m/(s·N)).
     Velocity,
+    /// Acceleration amplitude (m/s²); its FRF is the accelerance (m/(s²·N)).
     Acceleration,
 }
 
@@ -110,6 +113,7 @@ impl Quantity {
 pub struct Row {
     /// 1-based line in the file.
     pub line: usize,
+    /// Excitation frequency (Hz).
     pub frequency_hz: f64,
     /// Fundamental-harmonic force amplitude (N).
     pub force_n: f64,
@@ -129,9 +133,11 @@ impl Row {
 /// One measured sweep (one excitation level).
 #[derive(Debug, Clone, Serialize)]
 pub struct Sweep {
+    /// Path of the file as given.
     pub path: PathBuf,
     /// SHA-256 of the file's bytes.
     pub sha256: String,
+    /// Response quantity the file measures (from its header).
     pub quantity: Quantity,
     /// Rows in file order (the sweep direction).
     pub rows: Vec<Row>,
@@ -487,6 +493,7 @@ fn peak_phase_offset(s: &Sweep, time_sign: f64) -> f64 {
 /// The phase convention one file shows on its own ([`PhaseConvention::detect_file`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum FileConvention {
+    /// The file's resonance phase shows this convention.
     Detected(PhaseConvention),
     /// The file's amplitude peaks on its first or last row: the reason, naming the file.
     NoResonance(String),

@@ -81,8 +81,9 @@ pub struct Scales {
     pub frequency_hz: f64,
     /// Reference modal mass (kg): the equivalent linear fit of the lowest fit level.
     pub modal_mass_kg: f64,
-    /// Largest and smallest peak drive-point displacement amplitude of the fit levels (m).
+    /// Largest peak drive-point displacement amplitude of the fit levels (m).
     pub amplitude_max_m: f64,
+    /// Smallest peak drive-point displacement amplitude of the fit levels (m).
     pub amplitude_min_m: f64,
     /// Largest mean force of the fit levels (N).
     pub force_n: f64,
@@ -151,7 +152,9 @@ pub fn at_bound(p: &ParamSpec, v: f64) -> bool {
 pub struct ModelSpec {
     /// Family of the baseline joint (a family effect replaces it).
     pub family: Family,
+    /// Effects added to the baseline, in the order they were accepted.
     pub effects: Vec<Effect>,
+    /// Reference scales of the dimensionless parameters (from the fit levels' data).
     pub scales: Scales,
 }
 
@@ -365,7 +368,9 @@ pub fn quadratic_stiffness_law(eps: f64, k: f64, a_ref: f64) -> f64 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Model {
+    /// Structure of the model: family, effects and scales.
     pub spec: ModelSpec,
+    /// Parameter values in physical units, in the order and units of [`ModelSpec::params`].
     pub values: Vec<f64>,
 }
 
@@ -380,20 +385,24 @@ pub struct Physical {
     pub k_linear: f64,
     /// Viscous coefficient c = 2ζ0·m·ω_s (N·s/m).
     pub c_linear: f64,
-    /// Joint stick stiffness k_t (N/m) and slip force F_s (N).
+    /// Joint stick stiffness `k_t` (N/m).
     pub k_joint: f64,
+    /// Joint slip force `F_s` (N).
     pub slip_force_n: f64,
 }
 
 /// Range of the power-law damping exponent `p` (`p = 0` would be the linear `ζ0`, `p = 1` the
 /// quadratic damper; above 3 the damping would grow faster than any measured joint law).
 pub const POWER_LAW_EXPONENT_MIN: f64 = 0.25;
+/// Largest power-law damping exponent `p`.
 pub const POWER_LAW_EXPONENT_MAX: f64 = 3.0;
 
 /// One point to evaluate: angular frequency and force amplitude.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Drive {
+    /// Excitation angular frequency (rad/s).
     pub omega: f64,
+    /// Drive force amplitude (N).
     pub force_n: f64,
 }
 
@@ -402,6 +411,7 @@ pub struct Drive {
 pub struct RowFailure {
     /// Index of the row in the list evaluated.
     pub index: usize,
+    /// The solver's error message.
     pub error: String,
 }
 

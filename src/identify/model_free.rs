@@ -45,12 +45,14 @@ const EXPONENT_RANGE: (f64, f64) = (0.25, 4.0);
 /// A polynomial in `a/a_ref`: `Σ c_k·(a/a_ref)^k`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Polynomial {
+    /// Coefficients `c_k`, constant term first (unit of the interpolated value).
     pub coefficients: Vec<f64>,
     /// Amplitude scale (m).
     pub a_ref_m: f64,
 }
 
 impl Polynomial {
+    /// Value at drive-point amplitude `a` (m), by Horner's scheme.
     pub fn at(&self, a: f64) -> f64 {
         let s = a / self.a_ref_m;
         self.coefficients
@@ -86,17 +88,23 @@ impl Polynomial {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "law", rename_all = "snake_case")]
 pub enum DampingLaw {
+    /// `Σ c_k·(a/a_ref)^k` (linear or quadratic).
     Polynomial(Polynomial),
     /// `ζ0 + c·(a/a_ref)^p`.
     PowerLaw {
+        /// Damping ratio at zero amplitude (dimensionless).
         zeta0: f64,
+        /// Amplitude-dependent damping ratio at `a = a_ref` (dimensionless).
         c: f64,
+        /// Exponent, in `EXPONENT_RANGE`.
         p: f64,
+        /// Amplitude scale (m).
         a_ref_m: f64,
     },
 }
 
 impl DampingLaw {
+    /// Damping ratio at drive-point amplitude `a` (m).
     pub fn at(&self, a: f64) -> f64 {
         match self {
             DampingLaw::Polynomial(p) => p.at(a),
@@ -173,6 +181,7 @@ pub struct BackboneLaw {
     pub id: String,
     /// Natural frequency (Hz) against the amplitude.
     pub frequency_hz: Polynomial,
+    /// Damping ratio against the amplitude.
     pub damping: DampingLaw,
     /// Amplitudes the points span (m): outside them the law is held at its value at the nearer
     /// end (the data say nothing there, and a polynomial's extrapolation to the small
@@ -310,6 +319,7 @@ fn refine_root(g: &dyn Fn(f64) -> Option<f64>, lo: f64, hi: f64) -> Option<f64> 
 /// One law's errors on every level.
 #[derive(Debug, Clone, Serialize)]
 pub struct LawPrediction {
+    /// The interpolation law.
     pub law: BackboneLaw,
     /// Per level (all levels, by increasing mean force).
     pub errors: Vec<LevelErrors>,
@@ -318,7 +328,9 @@ pub struct LawPrediction {
 /// The spread of the laws' errors on one level.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Spread {
+    /// Smallest value over the laws (NaN when no law gave a finite value).
     pub min: f64,
+    /// Largest value over the laws.
     pub max: f64,
     /// Smallest magnitude over the laws.
     pub best_abs: f64,
@@ -338,11 +350,17 @@ impl Spread {
 /// Per level: the laws' spread of the goal errors.
 #[derive(Debug, Clone, Serialize)]
 pub struct LevelSpread {
+    /// File name of the level's sweep.
     pub file: String,
+    /// "fit" or "predicted".
     pub role: String,
+    /// Relative peak error `peak_law/peak_measured − 1` (fraction).
     pub peak_error: Spread,
+    /// Resonance-frequency error, law minus measured (Hz).
     pub resonance_error_hz: Spread,
+    /// Phase-resonance error, law minus measured (Hz).
     pub phase_resonance_error_hz: Spread,
+    /// RMS complex error over all rows (fraction of the level's peak).
     pub rms_complex: Spread,
     /// RMS complex error of the rows in the half-power band, where the pointwise backbone
     /// comes from and the single-mode synthesis holds (far from resonance out-of-band modes and
@@ -360,7 +378,9 @@ pub struct ModelFreeCheck {
     /// Fit levels whose earlier side was left out as not stationary (the settled variant,
     /// [`Rows::Settled`]); empty when every point was used.
     pub earlier_side_left_out: Vec<String>,
+    /// Every law that could be fitted, with its errors on every level.
     pub laws: Vec<LawPrediction>,
+    /// Per level (by increasing mean force): the spread of the laws' errors.
     pub levels: Vec<LevelSpread>,
     /// The comparison with the model on every level not used.
     pub comparisons: Vec<LevelComparison>,
@@ -371,7 +391,9 @@ pub struct ModelFreeCheck {
 pub struct LevelComparison {
     /// 1-based level (by increasing mean force).
     pub level: usize,
+    /// File name of the level's sweep.
     pub file: String,
+    /// The verdict on the level.
     pub comparison: Comparison,
 }
 
@@ -626,28 +648,42 @@ pub enum Comparison {
     /// No law reproduces the fit levels within [`REPRODUCTION_FACTOR`] of the model: the
     /// synthesis does not represent these data well enough to judge (not one isolated mode with
     /// a smooth backbone in the band, or pointwise estimates too noisy).
-    Inconclusive { best_fit_ratio: f64 },
+    Inconclusive {
+        /// The smallest, over the laws, of the worst ratio over the fit levels of the law's
+        /// RMS complex error in the half-power band to the model's.
+        best_fit_ratio: f64,
+    },
     /// A law that reproduces the fit levels predicts this level clearly better than the model:
     /// the fit levels carry an amplitude dependence the model lacks.
     InterpolationBetter {
+        /// Name of the law with the smallest error on this level.
         law: String,
+        /// Its RMS complex error in the half-power band (fraction of the peak).
         law_error: f64,
+        /// The model's RMS complex error in the half-power band (fraction of the peak).
         model_error: f64,
     },
     /// The laws that reproduce the fit levels do no better than the model here (the best of
     /// them picked on this level itself, which favours the laws): the fit levels show no
     /// amplitude trend the model misses on this level.
     NoBetter {
+        /// Laws that reproduce the fit levels.
         laws: usize,
+        /// Smallest RMS complex error in the half-power band among them (fraction of the peak).
         best_law_error: f64,
+        /// The model's RMS complex error in the half-power band (fraction of the peak).
         model_error: f64,
+        /// Smallest relative peak error among those laws (fraction).
         peak_error_min: f64,
+        /// Largest relative peak error among those laws (fraction).
         peak_error_max: f64,
+        /// The model's relative peak error (fraction).
         model_peak_error: f64,
     },
 }
 
 impl Comparison {
+    /// One sentence for the report: the verdict, its numbers and what it means.
     pub fn describe(&self) -> String {
         match self {
             Comparison::Inconclusive { best_fit_ratio } => format!(

@@ -27,9 +27,11 @@ use std::path::{Path, PathBuf};
 /// Options of an identification.
 #[derive(Debug, Clone, Serialize)]
 pub struct Options {
+    /// Constitutive law of the joint element the baseline is built on (Jenkins, Valanis, Iwan).
     pub family: Family,
     /// 1-based level numbers (by increasing mean force) to fit on; `None`: lowest and highest.
     pub fit_levels: Option<Vec<usize>>,
+    /// Candidate effects and fit settings of the held-out effect search ([`select::select`]).
     pub select: SelectOptions,
     /// Nelder–Mead settings of the final refits on all rows of the fit levels.
     pub final_fit: FitOptions,
@@ -179,8 +181,11 @@ impl Options {
 /// A stage of an identification after which the progress bar is re-planned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
+    /// Reading and the baseline fit are done; the effect search comes next.
     Baseline,
+    /// The effect search is done; the refits on all rows of the fit levels come next.
     Search,
+    /// The refits are done; only the Metropolis chains of the prediction bands remain.
     Refits,
 }
 
@@ -204,7 +209,9 @@ fn replan(progress: Option<&indicatif::ProgressBar>, remaining: u64, stage: &'st
 /// Wall time of one stage of a run.
 #[derive(Debug, Clone, Serialize)]
 pub struct StageTime {
+    /// What the stage did, as printed in the report (e.g. "baseline fit and effect search").
     pub stage: &'static str,
+    /// Wall-clock time the stage took (s).
     pub wall_time_s: f64,
 }
 
@@ -248,15 +255,23 @@ time per stage (wall):
 /// The response-controlled FRF of the identified model at one response amplitude.
 #[derive(Debug, Clone, Serialize)]
 pub struct ResponseControlled {
+    /// Response amplitude held constant along the sweep, in the unit of `quantity` (m, m/s or
+    /// m/s²).
     pub amplitude: f64,
+    /// Which response `amplitude` and the FRF refer to (displacement, velocity or acceleration).
     pub quantity: Quantity,
+    /// Excitation frequencies (Hz), 81 equally spaced over the measured band.
     pub frequency_hz: Vec<f64>,
+    /// Drive force amplitude (N) that holds the response amplitude at each frequency.
     pub force_n: Vec<f64>,
     /// Response per unit force (the quantity's FRF, e.g. accelerance).
     #[serde(skip)]
     pub frf: Vec<Complex64>,
+    /// `|frf|` at each frequency: response amplitude per newton (m/N, m/(s·N) or m/(s²·N)).
     pub frf_amplitude: Vec<f64>,
+    /// Frequency of the FRF's peak (Hz), interpolated between the sampled frequencies.
     pub peak_frequency_hz: f64,
+    /// FRF amplitude at the peak, in the unit of `frf_amplitude`.
     pub peak_frf: f64,
 }
 
@@ -265,17 +280,24 @@ pub struct ResponseControlled {
 pub struct Identification {
     /// Sweeps by increasing mean force.
     pub sweeps: Vec<Sweep>,
+    /// Phase convention of the measured files (detected, or as given).
     pub convention: PhaseConvention,
     /// 0-based indices into `sweeps`.
     pub fit_levels: Vec<usize>,
+    /// Reference frequency, modal mass, amplitudes and force that make the model's parameters
+    /// dimensionless.
     pub scales: Scales,
+    /// Per level (in `sweeps` order): the backbone estimated from the measured sweep alone.
     pub data_backbone: Vec<LevelBackbone>,
+    /// The held-out effect search: baseline, rounds, final spec and verdict.
     pub selection: Selection,
     /// Baseline and final models refitted on all rows of the fit levels.
     pub before: FitResult,
+    /// Final model (baseline plus the accepted effects) refitted on all rows of the fit levels.
     pub after: FitResult,
     /// Per level (all levels): errors of the baseline and of the final model.
     pub errors_before: Vec<LevelErrors>,
+    /// Per level: errors of the final model.
     pub errors_after: Vec<LevelErrors>,
     /// Parameter intervals and 95 % bands of the final model's predictions.
     pub uncertainty: Uncertainty,
@@ -295,12 +317,18 @@ pub struct Identification {
     /// Per fit level (in `fit_levels` order): the first row (0-based, file order) fitted when
     /// only its settled rows are ([`FitRows::Settled`] on a level that is not stationary).
     pub settled_from: Vec<Option<usize>>,
+    /// Backbone (natural frequency and damping versus displacement amplitude) of the baseline model
+    /// over the measured amplitude range ([`model_backbone`]).
     pub backbone_before: Vec<BackbonePoint>,
+    /// Backbone of the final model over the same amplitudes ([`model_backbone`]).
     pub backbone_after: Vec<BackbonePoint>,
+    /// Response-controlled FRFs of the final model, one per requested response amplitude.
     pub response_controlled: Vec<ResponseControlled>,
+    /// The options the identification ran with.
     pub options: Options,
     /// Wall time of each stage.
     pub stage_times: Vec<StageTime>,
+    /// Wall-clock time of the whole identification (s).
     pub wall_time_s: f64,
 }
 
@@ -759,11 +787,14 @@ fn level_errors(model: &Model, levels: &[LevelData], fit: &[usize]) -> Result<Ve
 /// A model the held-out evidence does not exclude.
 #[derive(Debug, Clone, Serialize)]
 pub struct Alternative {
+    /// Effects the alternative adds to the baseline.
     pub effects: Vec<super::effects::Effect>,
     /// Held-out ΔBIC against the final model (negative: the evidence leans to it, but not past
     /// the threshold).
     pub delta_bic: f64,
+    /// Its refit on all rows of the fit levels.
     pub fit: FitResult,
+    /// Per level: its errors (fit levels and predicted levels).
     pub errors: Vec<LevelErrors>,
 }
 
@@ -973,14 +1004,18 @@ pub(crate) fn settled_first_rows(
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SavedModel {
+    /// Format tag, always [`MODEL_FORMAT`].
     pub format: String,
+    /// Version of the file layout (1).
     pub version: u32,
+    /// The identified model: its spec and parameter values (physical units, see `parameters`).
     pub model: Model,
     /// Phase convention of the measurements it was identified from (used by `predict` when a
     /// file's own convention cannot be detected).
     pub phase_convention: PhaseConvention,
     /// Parameters with names, units and bounds (for reading; `model` is authoritative).
     pub parameters: Vec<serde_json::Value>,
+    /// The measured files of the fit levels, each as `{"path", "sha256"}`.
     pub identified_from: Vec<serde_json::Value>,
     /// Models of the same form that fit the fit levels about as well, with weights (for the
     /// 95 % bands of `asperity predict`, `uncertainty.rs`); absent where they could not be
@@ -993,6 +1028,8 @@ pub struct SavedModel {
 pub const MODEL_FORMAT: &str = "asperity-identified-model";
 
 impl SavedModel {
+    /// The model file of an identification: its final model, phase convention, parameter table,
+    /// fit-level files and ensemble.
     pub fn new(id: &Identification) -> Self {
         let m = &id.after.model;
         Self {

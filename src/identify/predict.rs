@@ -170,10 +170,13 @@ impl Predictor {
 /// Prediction of one file.
 #[derive(Debug, Clone, Serialize)]
 pub struct FilePrediction {
+    /// The measured file.
     pub input: InputFile,
+    /// The model's errors against it.
     pub errors: LevelErrors,
     /// Response control: RMS of `F_model/F_meas − 1` over the rows.
     pub force_rms_error: Option<f64>,
+    /// The model's response per unit force at the file's rows (the file's quantity per newton).
     #[serde(skip)]
     pub model_frf: Vec<Complex64>,
     /// Response control: the model's force per row (N).
@@ -214,15 +217,22 @@ pub fn extrapolation_note(peak: f64, (lo, hi): (f64, f64)) -> Option<String> {
 /// A prediction.
 #[derive(Debug, Clone, Serialize)]
 pub struct Prediction {
+    /// The model file (`model.json`) that predicted.
     pub model_file: PathBuf,
+    /// How the measured tests were controlled (force or response amplitude held).
     pub control: Control,
     /// Where the control comes from ([`choose_control`]).
     pub control_source: String,
+    /// Phase convention of the measured files.
     pub convention: PhaseConvention,
+    /// Where the convention comes from (detected from the files, or the model file's).
     pub convention_source: String,
+    /// One prediction per measured file, in the order given.
     pub files: Vec<FilePrediction>,
+    /// The measured sweeps as read, kept for the files.
     #[serde(skip)]
     pub sweeps: Vec<Sweep>,
+    /// The model that predicted.
     #[serde(skip)]
     pub model: Predictor,
     /// 95 % bands of each file's peak and resonances over the ensemble saved with the model

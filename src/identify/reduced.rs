@@ -129,6 +129,7 @@ pub const REDUCED_EFFECTS: [Effect; 6] = [
 /// search added.
 #[derive(Debug, Clone, Serialize)]
 pub struct ReducedSpec {
+    /// The response-model file as read: structure, excitation, observation and its input files.
     #[serde(skip)]
     pub loaded: Arc<LoadedModel>,
     /// Effects added to the file's model (in [`REDUCED_EFFECTS`]), in order; their parameters
@@ -178,6 +179,7 @@ impl Extensible for ReducedSpec {
 /// A reduced model with values of its updating factors.
 #[derive(Debug, Clone, Serialize)]
 pub struct ReducedModel {
+    /// The model the values belong to.
     #[serde(skip)]
     pub spec: ReducedSpec,
     /// `frequency_factor, damping_factor, contact_stiffness_factor, friction_factor`.
@@ -543,12 +545,17 @@ fn merge_fits(a: FitResult<ReducedModel>, b: FitResult<ReducedModel>) -> FitResu
 /// Result of updating a reduced model.
 #[derive(Debug, Clone, Serialize)]
 pub struct ReducedIdentification {
+    /// The response-model file that was updated.
     pub model_file: PathBuf,
+    /// SHA-256 of the response-model file (hex).
     pub model_sha256: String,
+    /// The measured sweeps, by increasing mean force.
     pub inputs: Vec<InputFile>,
+    /// The measurements' phase convention, as described in the report.
     pub phase_convention: String,
     /// 0-based fit levels (by increasing mean force).
     pub fit_levels: Vec<usize>,
+    /// Name, unit and bounds of every parameter (the four factors, then the effects').
     #[serde(serialize_with = "super::model::serialize_params")]
     pub parameters: Vec<ParamSpec>,
     /// The final update on all rows of the fit levels: the four factors and the effects the
@@ -562,6 +569,7 @@ pub struct ReducedIdentification {
     pub factors_only: Option<(FitResult<ReducedModel>, Vec<LevelErrors>)>,
     /// Errors of the model as given (every factor 1) and of the final updated model, per level.
     pub errors_before: Vec<LevelErrors>,
+    /// Per level: errors of the final updated model.
     pub errors_after: Vec<LevelErrors>,
     /// Measurement scatter per component of each fit level (third differences, fraction of
     /// its peak).
@@ -592,25 +600,34 @@ pub struct ReducedIdentification {
     /// Per level: the equivalent linear mode of the model's response at the level's rows, as
     /// given and updated (`None`: no resonance inside the measured band).
     pub backbone_before: Vec<Option<BackbonePoint>>,
+    /// Per level: the same for the updated model.
     pub backbone_after: Vec<Option<BackbonePoint>>,
     /// The updated model under response control at the measured peak responses (or the given
     /// amplitudes), and the amplitudes where that solve failed, with the reason.
     pub response_controlled: Vec<ResponseControlled>,
+    /// Response amplitudes (unit of the lowest level's quantity) whose response-controlled solve
+    /// failed, with the reason.
     pub response_control_failures: Vec<(f64, String)>,
     /// Parameter intervals and 95 % bands of the updated model's predictions.
     pub uncertainty: Uncertainty,
+    /// The settings the update ran with.
     pub options: ReducedOptions,
+    /// Wall-clock time of the whole update (s).
     pub wall_time_s: f64,
+    /// The measured levels (by increasing mean force), kept for the files.
     #[serde(skip)]
     pub levels: Vec<LevelData>,
     /// Responses per unit force of the model as given and updated at every level's rows (the
     /// level's quantity), kept for the files.
     #[serde(skip)]
     pub responses_before: Vec<Vec<Complex64>>,
+    /// Responses per unit force of the updated model at every level's rows.
     #[serde(skip)]
     pub responses_after: Vec<Vec<Complex64>>,
+    /// Phase convention of the measurements, for writing the files in it.
     #[serde(skip)]
     pub convention: PhaseConvention,
+    /// The model as given (every factor 1).
     #[serde(skip)]
     pub before: ReducedModel,
 }
@@ -649,6 +666,7 @@ fn model_modes(levels: &[LevelData], responses: &[Vec<Complex64>]) -> Vec<Option
 /// Settings of a reduced-model update.
 #[derive(Debug, Clone, Serialize)]
 pub struct ReducedOptions {
+    /// Settings of the updates' fits (swarm starts, Nelder–Mead tolerance and iterations).
     pub fit: FitOptions,
     /// Response amplitudes (unit of the lowest level's quantity) of the response-controlled
     /// FRFs; `None`: the measured peak responses.
@@ -712,7 +730,10 @@ pub enum EffectSearch {
     /// nothing is left for an effect to explain.
     NotNeeded,
     /// Not run, and why (no candidates, or no reference scales from the data).
-    NotRun { reason: String },
+    NotRun {
+        /// Why the search was not run.
+        reason: String,
+    },
     /// Run on the fit levels' training and held-out rows ([`super::select`]).
     Run(Box<Selection<ReducedSpec>>),
 }
@@ -738,7 +759,7 @@ fn search_evaluations(candidates: usize, max_effects: usize) -> u64 {
 }
 
 /// The search's candidates: the explicit ones, or by default all of [`REDUCED_EFFECTS`] when the
-/// search's refits ([`search_fits`]: the baseline, every candidate in each of up to
+/// search's refits (`search_fits`: the baseline, every candidate in each of up to
 /// `max_effects` rounds and the final refit, at
 /// [`SEARCH_EVALUATIONS_PER_FIT`] evaluations each) are expected to take at most
 /// [`BAND_BUDGET_S`] at `per_evaluation_s()` per evaluation of the fit levels (timed only for
@@ -1029,8 +1050,11 @@ pub const REDUCED_KIND: &str = "reduced";
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SavedReducedModel {
+    /// Kind tag, always [`REDUCED_KIND`].
     pub kind: String,
+    /// Absolute path of the response-model file.
     pub model_file: PathBuf,
+    /// SHA-256 of the response-model file (hex); a file changed since is refused.
     pub model_sha256: String,
     /// `(name, value)` of every parameter: the four updating factors, then the effects'.
     pub factors: Vec<(String, f64)>,

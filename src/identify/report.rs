@@ -50,8 +50,12 @@ pub fn level_roles(n: usize, fit_levels: &[usize]) -> Vec<&'static str> {
 /// Errors of one region of a sweep.
 #[derive(Debug, Clone, Serialize)]
 pub struct RegionErrors {
+    /// "below resonance", "at resonance" (the half-power band) or "above resonance".
     pub region: &'static str,
+    /// Measured rows in the region.
     pub rows: usize,
+    /// RMS of the complex residual `(Y_model − Y_meas)/peak` over the region's rows (fraction of
+    /// the level's peak response).
     pub rms_complex: f64,
     /// Mean of `|Y_model|/|Y_meas| − 1`.
     pub mean_amplitude_error: f64,
@@ -92,11 +96,15 @@ pub const NO_RESONANCE_IN_BAND: &str = "no resonance inside the band";
 /// Errors of a model against one level.
 #[derive(Debug, Clone, Serialize)]
 pub struct LevelErrors {
+    /// File name of the level's sweep.
     pub file: String,
     /// "fit" (used in the fit) or "predicted".
     pub role: String,
+    /// Mean measured drive force amplitude of the level (N).
     pub mean_force_n: f64,
+    /// Frequency of the measured amplitude peak (Hz), interpolated between rows.
     pub resonance_measured_hz: f64,
+    /// Frequency of the modelled amplitude peak (Hz); NaN when every row failed.
     pub resonance_model_hz: f64,
     /// Model minus measured resonance frequency (Hz); NaN where not available (see
     /// [`Self::resonance_error`]).
@@ -112,14 +120,22 @@ pub struct LevelErrors {
     /// `{"not_available": …}` in JSON) and their difference.
     #[serde(serialize_with = "phase_resonance_or_reason")]
     pub phase_resonance_measured_hz: f64,
+    /// Phase resonance of the modelled response (Hz; NaN where not available).
     #[serde(serialize_with = "phase_resonance_or_reason")]
     pub phase_resonance_model_hz: f64,
+    /// Model minus measured phase resonance (Hz; NaN where either is not available).
     #[serde(serialize_with = "phase_resonance_or_reason")]
     pub phase_resonance_error_hz: f64,
+    /// Peak measured response per unit force, `max |Y_meas|` interpolated at the resonance (unit of
+    /// the level's quantity per newton).
     pub peak_measured: f64,
+    /// Peak modelled response per unit force (same unit).
     pub peak_model: f64,
+    /// Relative peak error `peak_model/peak_measured − 1` (fraction).
     pub peak_error: f64,
+    /// RMS of the complex residual over all rows (fraction of the level's peak response).
     pub rms_complex: f64,
+    /// The same residual by region: below, at and above resonance.
     pub regions: Vec<RegionErrors>,
     /// Rows where the harmonic balance failed.
     pub failed_rows: usize,
@@ -466,11 +482,18 @@ pub fn plot_backbone(
 /// Rows of the per-row CSV: one per measured row and model.
 #[derive(Debug, Clone)]
 pub struct CurveRow {
+    /// File name of the level's sweep.
     pub file: String,
+    /// "fit" or "predicted" ([`level_role`]).
     pub role: String,
+    /// 1-based line of the row in its file.
     pub line: usize,
+    /// Excitation frequency (Hz).
     pub frequency_hz: f64,
+    /// Measured drive force amplitude (N).
     pub force_n: f64,
+    /// Measured response per unit force (the level's quantity per newton, the crate's phase
+    /// convention).
     pub measured: Complex64,
     /// Named model responses at this row.
     pub models: Vec<Complex64>,
@@ -559,10 +582,15 @@ pub fn optional_available_or_reason<T: Serialize, S: serde::Serializer>(
 /// Input file description for JSON sidecars.
 #[derive(Debug, Clone, Serialize)]
 pub struct InputFile {
+    /// Path as given on the command line.
     pub path: PathBuf,
+    /// SHA-256 of the file's bytes (hex).
     pub sha256: String,
+    /// Response quantity the file measures.
     pub quantity: super::measured::Quantity,
+    /// Data rows read.
     pub rows: usize,
+    /// Mean drive force amplitude of the rows (N).
     pub mean_force_n: f64,
 }
 

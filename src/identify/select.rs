@@ -185,8 +185,13 @@ pub fn split(levels: &[LevelData]) -> (Vec<Vec<bool>>, Vec<Vec<bool>>) {
 /// residuals of the held-out rows (per level, in sweep order).
 #[derive(Debug, Clone, Serialize)]
 pub struct HeldOut {
+    /// Pooled objective: mean over levels of `per_level` (dimensionless, residuals relative to
+    /// each level's peak response).
     pub cost: f64,
+    /// Per level: mean of `|r_i|²` over its masked rows, `r_i` the residual relative to the level's
+    /// peak response ([`LevelData::residuals`]).
     pub per_level: Vec<f64>,
+    /// Per level: the relative residuals `r_i` of the masked rows, in sweep order.
     #[serde(skip)]
     pub residuals: Vec<Vec<Complex64>>,
 }
@@ -241,6 +246,7 @@ pub fn lag1_autocorrelation(residuals: &[Vec<Complex64>]) -> f64 {
 /// One candidate of a round.
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate<M = Model> {
+    /// The effect added to the round's current spec.
     pub effect: Effect,
     /// The accepted effect this candidate generalises (replaces by the nesting law, with
     /// the extra parameters only), if any.
@@ -248,13 +254,20 @@ pub struct Candidate<M = Model> {
     /// The second effect of a pair tested jointly ([`select`]'s step for interacting effects),
     /// if any: the candidate is `effect` and this one added together.
     pub jointly_with: Option<Effect>,
+    /// One-line description of what the effect models.
     pub meaning: &'static str,
+    /// Parameters the candidate adds (`Δp` of the `ΔBIC`).
     pub added_parameters: usize,
+    /// Objective of its fit on the training rows (dimensionless).
     pub train_cost: f64,
+    /// Its score on the held-out rows.
     pub held_out: HeldOut,
+    /// Held-out `ΔBIC = n_eff·ln(J_new/J_old) + Δp·ln(n_eff)` against the round's current spec
+    /// (Schwarz 1978); accepted below −10.
     pub delta_bic: f64,
     /// Every fit level's held-out residual fell.
     pub improves_every_level: bool,
+    /// The candidate's Nelder–Mead fit met its tolerance (rather than its iteration cap).
     pub converged: bool,
     /// Model evaluations of the candidate's fit (screening and refinement).
     pub evaluations: u64,
@@ -262,6 +275,7 @@ pub struct Candidate<M = Model> {
     pub wall_time_s: f64,
     /// Refitted from its screening optimum ([`SelectOptions::refine`]).
     pub refined: bool,
+    /// The candidate's training fit.
     #[serde(skip)]
     pub fit: FitResult<M>,
 }
@@ -271,10 +285,17 @@ pub struct Candidate<M = Model> {
 pub struct Round<M = Model> {
     /// Spec the candidates were added to.
     pub base_effects: Vec<Effect>,
+    /// Held-out score of the spec the candidates were added to.
     pub base_held_out: HeldOut,
+    /// Lag-1 autocorrelation `ρ` of the base spec's held-out residuals along each sweep, in
+    /// `[0, 0.95]` ([`lag1_autocorrelation`]).
     pub lag1_autocorrelation: f64,
+    /// Effective number of held-out samples `n_eff = n·(1 − ρ)/(1 + ρ)`, `n` twice the held-out
+    /// rows (real and imaginary parts).
     pub effective_samples: f64,
+    /// Every candidate fitted in this round.
     pub candidates: Vec<Candidate<M>>,
+    /// The effect accepted in this round, if any (`None` ends the search).
     pub accepted: Option<Effect>,
     /// The second effect when the accepted candidate is a pair.
     pub accepted_with: Option<Effect>,
@@ -286,14 +307,18 @@ pub enum Verdict {
     /// Effects accepted on held-out evidence; `at_scatter`: the final residual is within the
     /// scatter.
     EffectsFound {
+        /// Accepted effects in the order they were accepted.
         effects: Vec<Effect>,
+        /// The final model's held-out objective is within the scatter (`J ≤ 4·J_noise`).
         at_scatter: bool,
     },
     /// The baseline's residual is already at the scatter.
     NoEffectNeeded,
     /// The residual stays above the scatter and no candidate explains it.
     Unexplained {
+        /// Held-out objective of the final model (dimensionless).
         held_out_cost: f64,
+        /// The scatter floor `J_noise` it is compared with (dimensionless).
         scatter_floor: f64,
     },
 }
@@ -302,21 +327,31 @@ pub enum Verdict {
 #[derive(Debug, Clone, Serialize)]
 #[serde(bound(serialize = "S: Serialize"))]
 pub struct Selection<S: Extensible = ModelSpec> {
+    /// Training fit of the baseline spec.
     pub baseline_train_fit: FitResult<S::Model>,
+    /// The search's rounds in order, one effect accepted per round.
     pub rounds: Vec<Round<S::Model>>,
+    /// The baseline with every accepted effect.
     pub final_spec: S,
     /// Training fit of the final spec.
     #[serde(skip)]
     pub final_train_fit: FitResult<S::Model>,
+    /// Scatter floor of the objective, `J_noise` = mean over levels of `2·(s_l/peak_l)²`
+    /// (dimensionless, [`scatter_floor`]).
     pub scatter_floor: f64,
+    /// Per level: measurement scatter per component relative to the peak response, `s_l/peak_l`
+    /// ([`relative_scatter`]).
     pub relative_scatter_per_level: Vec<f64>,
+    /// What the search concluded.
     pub verdict: Verdict,
 }
 
 /// Options of the search.
 #[derive(Debug, Clone, Serialize)]
 pub struct SelectOptions {
+    /// Effects offered as candidates (those the spec admits are tried).
     pub candidates: Vec<Effect>,
+    /// Most effects added (one per round).
     pub max_effects: usize,
     /// Fit of the baseline (several starts).
     pub baseline_fit: FitOptions,

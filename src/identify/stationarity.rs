@@ -110,7 +110,7 @@ pub const NOISE_SIGMAS: f64 = 4.0;
 /// Points that must differ for a level to be not stationary (one may be a glitch of one row).
 pub const MIN_DIFFERING_POINTS: usize = 2;
 /// Levels with compared pairs from which the natural frequency's reference is the median
-/// level rather than the lowest one ([`reference_level`]).
+/// level rather than the lowest one (`reference_level`).
 pub const MEDIAN_REFERENCE_LEVELS: usize = 3;
 
 /// The check's constants for machine-readable reports (JSON): the tolerance, the noise bound,
@@ -141,9 +141,11 @@ pub fn criterion_json() -> serde_json::Value {
 /// The comparison of one level's two sides.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SideComparison {
+    /// File name of the level's sweep.
     pub file: String,
-    /// Points on the earlier and later side (the resonance row itself on neither).
+    /// Points on the earlier side (the resonance row itself on neither side).
     pub points_earlier: usize,
+    /// Points on the later side.
     pub points_later: usize,
     /// Later-side points compared (inside the earlier side's amplitude span).
     pub compared: usize,
@@ -190,6 +192,8 @@ pub struct SideComparison {
 }
 
 impl SideComparison {
+    /// Report lines: the compared amplitudes, the damping and natural-frequency differences against
+    /// their noise and tolerance, and whether the level is stationary.
     pub fn describe(&self) -> String {
         let (a0, a1) = self.amplitude_range_m;
         let (d0, d1) = self.damping_difference;
@@ -338,7 +342,7 @@ struct PointSd {
 
 /// Every level's two sides, each level with its measured scatter ([`Scatter::of`]) and the
 /// natural frequency's shift measured from the median shift of the reference level
-/// ([`reference_level`], module documentation).
+/// (`reference_level`, module documentation).
 pub fn compare_levels(
     backbones: &[LevelBackbone],
     levels: &[super::fit::LevelData],
@@ -360,7 +364,7 @@ pub fn compare_levels(
 }
 
 /// The median natural-frequency shift of the reference level of `backbones`
-/// ([`reference_level`]) and its pair count; `None` without such a level. The shift does
+/// (`reference_level`) and its pair count; `None` without such a level. The shift does
 /// not depend on the noise, so none is assumed.
 pub fn reference_shift(backbones: &[LevelBackbone]) -> Option<ReferenceShift> {
     let pairs: Vec<Option<SidePairs>> = backbones
@@ -400,6 +404,7 @@ fn reference_level(backbones: &[LevelBackbone], pairs: &[Option<SidePairs>]) -> 
 pub struct ReferenceShift {
     /// Median `(f_n,l² − f_n,e²)/(f_l² − f_e²)` of the level's pairs.
     pub shift: f64,
+    /// Number of earlier–later pairs the median is over.
     pub pairs: usize,
 }
 

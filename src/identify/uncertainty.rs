@@ -105,10 +105,13 @@ pub fn sandwich_covariance(
 pub struct ParameterCovariance {
     /// Indices (into the model's parameters) of the free parameters.
     pub free: Vec<usize>,
+    /// `Σ_z` (`p × p`, unit-box coordinates of the free parameters): the sandwich of the module
+    /// documentation with the autocorrelation factor.
     #[serde(skip)]
     pub covariance_z: DMatrix<f64>,
     /// Residual standard deviation per component, relative to the level peaks.
     pub residual_sd: f64,
+    /// Lag-1 autocorrelation `ρ` of the residuals along each sweep, in `[0, 0.95]`.
     pub lag1_autocorrelation: f64,
     /// `(1+ρ)/(1−ρ)`.
     pub variance_inflation: f64,
@@ -452,20 +455,28 @@ impl Ensemble {
 /// 95 % interval of one parameter.
 #[derive(Debug, Clone, Serialize)]
 pub struct ParameterInterval {
+    /// Parameter name, as in the model's parameter table.
     pub name: String,
+    /// Unit of `value` and the interval (SI, e.g. "Hz", "N", "m"; "-" for a ratio).
     pub unit: String,
+    /// The identified value (`unit`).
     pub value: f64,
     /// `None` for a parameter held on its bound.
     pub lo_95: Option<f64>,
+    /// 97.5 % quantile over the ensemble (`unit`); `None` for a parameter held on its bound.
     pub hi_95: Option<f64>,
+    /// The parameter is held on a bound of its box (not free in the fit).
     pub at_bound: bool,
 }
 
 /// A 95 % band `[lo, hi]` with the model's own value.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Band {
+    /// The identified model's own value.
     pub value: f64,
+    /// 2.5 % quantile over the ensemble (Hazen), same unit.
     pub lo_95: f64,
+    /// 97.5 % quantile over the ensemble (Hazen), same unit.
     pub hi_95: f64,
 }
 
@@ -479,16 +490,21 @@ impl Band {
 /// The 95 % bands of one level's predicted resonance quantities.
 #[derive(Debug, Clone, Serialize)]
 pub struct PredictionBand {
+    /// File name of the level's sweep.
     pub file: String,
+    /// "fit" or "predicted".
     pub role: String,
     /// Peak of the response per unit force (the level's quantity per N).
     pub peak: Band,
+    /// Measured peak of the response per unit force (same unit as `peak`).
     pub peak_measured: f64,
     /// Amplitude resonance (Hz).
     pub resonance_hz: Band,
+    /// Measured amplitude resonance (Hz).
     pub resonance_measured_hz: f64,
     /// Phase resonance (Hz).
     pub phase_resonance_hz: Band,
+    /// Measured phase resonance (Hz; NaN where the phase does not pass quadrature in the band).
     #[serde(serialize_with = "super::report::phase_resonance_or_reason")]
     pub phase_resonance_measured_hz: f64,
     /// Ensemble models whose every row converged (the others are left out).
@@ -588,13 +604,20 @@ pub fn prediction_bands<S: Parametrised>(
 /// `model.json`; its diagnostics are repeated here for the report) and the bands.
 #[derive(Debug, Clone, Serialize)]
 pub struct Estimate {
+    /// The Gaussian approximation at the optimum.
     pub covariance: ParameterCovariance,
+    /// The models drawn from the posterior (saved with the model, not in the report's JSON).
     #[serde(skip)]
     pub ensemble: Ensemble,
+    /// Fraction of accepted Metropolis proposals (both chains, after burn-in).
     pub acceptance_rate: f64,
+    /// Gelman–Rubin `R̂` of `ln J` over the chains (near 1: they agree on the fit quality).
     pub r_hat_ln_j: f64,
+    /// Parameters (name, `R̂`) whose `R̂` exceeds [`MAX_R_HAT`]: not determined by the data.
     pub undetermined: Vec<(String, f64)>,
+    /// 95 % interval of every parameter.
     pub intervals: Vec<ParameterInterval>,
+    /// 95 % bands of every level's peak, resonance and phase resonance.
     pub bands: Vec<PredictionBand>,
 }
 
@@ -602,10 +625,12 @@ pub struct Estimate {
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "status", rename_all = "snake_case")]
 pub enum Uncertainty {
+    /// Covariance, ensemble and bands were estimated.
     Estimated(Box<Estimate>),
     /// Why no band could be given (a parameter the data do not determine, a failed solve, an
     /// ensemble that could not be sampled).
     NotEstimated {
+        /// What stopped the estimate.
         reason: String,
     },
 }

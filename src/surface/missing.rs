@@ -7,7 +7,7 @@
 //! A height map with missing points is a [`MaskedGrid`] (heights NaN where missing).
 //!
 //! * **Statistics** are computed over the measured points only, with SurfaceTopography's
-//!   definitions (see [`crate::surface::stats`]); the PSD needs every point and is refused
+//!   definitions (see [`crate::surface::stats`](mod@crate::surface::stats)); the PSD needs every point and is refused
 //!   until the points are filled.
 //! * **Contact** needs every point: a command refuses a map with missing points unless it is
 //!   told how to fill them (`--fill harmonic` or `--fill nearest`), and then reports how many

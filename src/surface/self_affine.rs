@@ -18,7 +18,7 @@
 //! expected spectrum (the method of e.g. tamaas' `SurfaceGeneratorFilter`); the patch is one
 //! period of an infinite surface (`Grid2::periodic == true`). `C0` is not an input: the heights
 //! are scaled so that the **rms gradient** `[⟨|∇h|²⟩]^½`, from first differences with the
-//! periodic wrap as [`crate::surface::stats`] (and SurfaceTopography) compute it, equals the
+//! periodic wrap as [`crate::surface::stats`](fn@crate::surface::stats) (and SurfaceTopography) compute it, equals the
 //! requested value.
 //!
 //! Reproducibility: the noise is drawn serially from a `ChaCha8Rng` seeded with `seed`, in

@@ -1,4 +1,4 @@
-//! Topography files: readers (one module per format) and writers, with [`read`] and [`write`]
+//! Topography files: readers (one module per format) and writers, with [`read`] and [`write`](fn@write)
 //! choosing the format from the file name and, for text files, the content.
 //!
 //! | file | read | write | content |
@@ -86,10 +86,10 @@ fn read_any_spacing(path: &Path) -> Result<Topography> {
     }
 }
 
-/// Extensions [`write`] accepts.
+/// Extensions [`write`](fn@write) accepts.
 pub const WRITABLE: &[&str] = &["npy", "x3p", "csv", "txt", "asc", "png"];
 
-/// Check, before any work is done, that `path` names a format [`write`] knows.
+/// Check, before any work is done, that `path` names a format [`write`](fn@write) knows.
 pub fn check_writable_format(path: &Path) -> Result<()> {
     let ext = extension(path);
     if WRITABLE.contains(&ext.as_str()) {

@@ -89,9 +89,13 @@ pub fn write_field(
 /// Header of a `.npy` file: element type, memory order, shape and where the data start.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NpyHeader {
+    /// Numpy type string, e.g. `<f8` (little-endian float64).
     pub descr: String,
+    /// Column-major (Fortran) memory order.
     pub fortran_order: bool,
+    /// Array shape.
     pub shape: Vec<usize>,
+    /// Byte offset of the data from the start of the file.
     pub data_offset: u64,
 }
 

@@ -17,7 +17,7 @@
 //!   `Record3/DataLink/ValidPointsLink` (`bindata/valid.bin`: one bit per point in the order of
 //!   the heights, least-significant bit first, 1 = valid, `⌈SizeX·SizeY/8⌉` bytes; checked
 //!   against `MD5ChecksumValidPoints` when given). Such a map is read as a
-//!   [`MaskedGrid`](crate::surface::missing::MaskedGrid); the writer writes NaN heights and the
+//!   [`MaskedGrid`]; the writer writes NaN heights and the
 //!   validity mask for it.
 //! - Limits: `SizeX·SizeY` is checked against [`crate::core::limits::MAX_GRID_POINTS`] and the memory
 //!   available, and every entry is read with at most the bytes `main.xml` promises, before
