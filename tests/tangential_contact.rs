@@ -453,3 +453,89 @@ fn loops_on_an_under_resolved_contact_are_flagged() {
         );
     }
 }
+
+/// `--hardness-pa`: without it (and with a hardness no contact pressure reaches) the loops are
+/// the elastic ones, byte for byte; with a hardness below the peak pressures the loops run on
+/// the bounded pressure (plastic area > 0, a different energy) and the headers say so; a
+/// hardness at or below a nominal pressure is refused by name.
+#[test]
+fn cli_hardness_bounds_the_pressure_of_the_loops() {
+    let dir = tempfile::tempdir().unwrap();
+    let run_with = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "--grid",
+            "128",
+            "--pressures-pa",
+            "1e6,1e7",
+            "--cycles",
+            "1",
+            "--steps-per-cycle",
+            "8",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = run_cli(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+        (read("tangential_loops.csv"), read("tangential_energy.csv"))
+    };
+    let data = |csv: &str| -> Vec<String> {
+        csv.lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(String::from)
+            .collect()
+    };
+    let (elastic_loops, elastic_energy) = run_with("elastic", &[]);
+    assert!(elastic_loops.contains("# no hardness: elastic normal contact"));
+    let (high_loops, high_energy) = run_with("unreached", &["--hardness-pa", "1e15"]);
+    assert_eq!(data(&elastic_loops), data(&high_loops));
+    assert_eq!(data(&elastic_energy), data(&high_energy));
+    let column = |csv: &str, name: &str| -> Vec<f64> {
+        let rows = data(csv);
+        let k = rows[0].split(',').position(|c| c == name).unwrap();
+        rows[1..]
+            .iter()
+            .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+            .collect()
+    };
+    assert!(column(&elastic_energy, "plastic_area_ratio")
+        .iter()
+        .all(|&a| a == 0.0));
+    let (plastic_loops, plastic_energy) = run_with("plastic", &["--hardness-pa", "5e8"]);
+    assert!(
+        plastic_loops.contains("# hardness_Pa = 5e8"),
+        "{plastic_loops}"
+    );
+    let plastic_area = column(&plastic_energy, "plastic_area_ratio");
+    assert!(plastic_area.iter().all(|&a| a > 0.0), "{plastic_area:?}");
+    let (e_el, e_pl) = (
+        column(&elastic_energy, "dissipated_J_per_m2"),
+        column(&plastic_energy, "dissipated_J_per_m2"),
+    );
+    assert!(
+        e_el.iter().zip(&e_pl).all(|(a, b)| a != b),
+        "{e_el:?} {e_pl:?}"
+    );
+    let o = run_cli(&[
+        "--grid",
+        "128",
+        "--pressures-pa",
+        "1e6,1e7",
+        "--hardness-pa",
+        "5e6",
+        "--out-dir",
+        dir.path().join("refused").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--hardness-pa"),
+        "{err}"
+    );
+    assert!(!dir
+        .path()
+        .join("refused")
+        .join("tangential_loops.csv")
+        .exists());
+}

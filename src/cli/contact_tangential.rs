@@ -65,6 +65,12 @@ pub struct TangentialArgs {
     /// Poisson's ratio of both bodies (-).
     #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     poisson_ratio: f64,
+    /// Hardness H bounding the contact pressure (elastic–perfectly plastic normal contact; the
+    /// loops run on the bounded pressure): a value in Pa, or a material whose documented
+    /// hardness to use: `steel-42crmo4` (340 HV, 3.334 GPa) or `inconel-718` (450 HV,
+    /// 4.413 GPa); sources in docs/contact.md. Without it the contact is elastic.
+    #[arg(long, allow_hyphen_values = true)]
+    hardness_pa: Option<String>,
     /// Compliance operator of the tangential solver: auto, dense or fft.
     #[arg(long, default_value = "auto")]
     operator: String,
@@ -130,6 +136,22 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             .unwrap_or(&REFERENCE_PRESSURES_PA),
     )
     .map_err(|e| super::rename_param(e, "--pressures-pa"))?;
+    let hardness_pa = args
+        .hardness_pa
+        .as_deref()
+        .map(super::contact_normal::parse_hardness)
+        .transpose()?;
+    if let (Some(h), Some(&p)) = (hardness_pa, pressures.last()) {
+        if p >= h {
+            return Err(Error::param(
+                "--hardness-pa",
+                format!(
+                    "H = {h:e} Pa must exceed the highest nominal pressure {p:e} Pa (a contact \
+                     at p̄ ≥ H is plastic over the whole patch)"
+                ),
+            ));
+        }
+    }
     let operator = match args.operator.as_str() {
         "auto" => Operator::Auto,
         "dense" => Operator::Dense,
@@ -231,7 +253,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         &NormalProblem {
             surface: &surface,
             e_star_pa: e_star,
-            hardness_pa: None,
+            hardness_pa,
         },
         NormalOptions::default(),
     )?;
@@ -364,6 +386,13 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         "# youngs_modulus_Pa = {:e}, poisson_ratio = {} (both bodies), friction_coefficient = {mu}",
         material.youngs_modulus_pa, material.poisson_ratio
     );
+    let _ = match hardness_pa {
+        Some(h) => writeln!(
+            head,
+            "# hardness_Pa = {h:e}: elastic-perfectly plastic normal contact (pressure <= H, monotonic loading to each pressure); Coulomb bound mu*p on that bounded pressure"
+        ),
+        None => writeln!(head, "# no hardness: elastic normal contact"),
+    };
     let _ = writeln!(
         head,
         "# loading: displacement along x, delta(t) = amplitude_m * sin(2 pi step / steps_per_cycle), amplitude_m = {amplitude:e} ({amplitude_note}), cycles = {}, steps_per_cycle = {}",
@@ -386,7 +415,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     );
     let _ = writeln!(
         energy,
-        "pressure_Pa,cycle,dissipated_J_per_m2,dissipated_J,frictional_work_J,contact_area_ratio,contact_points,operator"
+        "pressure_Pa,cycle,dissipated_J_per_m2,dissipated_J,frictional_work_J,contact_area_ratio,plastic_area_ratio,contact_points,operator"
     );
     // Wall times in a file of their own, so that the loops and energies are reproducible byte
     // for byte (as `contact normal` keeps its timings apart).
@@ -419,12 +448,13 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         for c in &r.cycles {
             let _ = writeln!(
                 energy,
-                "{p:e},{},{:e},{:e},{:e},{:e},{},{:?}",
+                "{p:e},{},{:e},{:e},{:e},{:e},{:e},{},{:?}",
                 c.cycle,
                 c.dissipated_j_per_m2,
                 c.dissipated_j,
                 c.frictional_work_j,
                 sol.contact_area_ratio,
+                sol.plastic_area_ratio,
                 r.metadata.contact_points,
                 r.metadata.operator,
             );
