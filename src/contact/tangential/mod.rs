@@ -61,6 +61,7 @@
 //! lower estimated cost; see BENCHMARKS.md for the measured comparison.
 
 mod compliance;
+pub mod varying_load;
 
 use crate::core::error::{require_positive, Error, Result};
 use crate::core::fft::Boundary;
@@ -349,6 +350,76 @@ impl TangentialSolver {
         })
     }
 
+    /// Replace the pressure field, keeping the history (varying normal load): the traction
+    /// bounds become `μ p_i` of the new field on the solver's points, which must hold every
+    /// point of the new contact set (build the solver on a field whose contact set contains all
+    /// those of the history, e.g. their point-wise maximum). A point of the set with `p = 0` is
+    /// out of contact: its traction is zero and its relative displacement `g_i = δ − (C q)_i` is
+    /// carried along, so that when it comes back into contact it starts to stick from where it
+    /// is (Kalker 1990, §2.3: the slip is the change of the relative displacement since the
+    /// previous instant, at points in contact at both). The secant predictor is dropped (the
+    /// next step starts from the current traction).
+    ///
+    /// Errors: a different shape, a negative or non-finite pressure, contact outside the
+    /// solver's points, or no contact at all.
+    pub fn set_pressure(&mut self, pressure: &Array2<f64>) -> Result<()> {
+        if pressure.dim() != (self.nx, self.ny) {
+            return Err(Error::param(
+                "pressure",
+                format!(
+                    "shape {:?} differs from the solver's {:?}",
+                    pressure.dim(),
+                    (self.nx, self.ny)
+                ),
+            ));
+        }
+        if let Some(((i, j), v)) = pressure
+            .indexed_iter()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(Error::param(
+                "pressure",
+                format!("must be finite and ≥ 0, got {v} Pa at grid point ({i}, {j})"),
+            ));
+        }
+        let mu = self.metadata.friction_coefficient;
+        let limit: Vec<f64> = self
+            .points
+            .iter()
+            .map(|&(i, j)| mu * pressure[[i, j]])
+            .collect();
+        let covered = limit.iter().filter(|&&r| r > 0.0).count();
+        let total = pressure.iter().filter(|&&p| p > 0.0).count();
+        if covered < total {
+            return Err(Error::param(
+                "pressure",
+                format!(
+                    "{} contact points lie outside the solver's {} points: build the solver on \
+                     a field whose contact set holds every one of the history",
+                    total - covered,
+                    self.points.len()
+                ),
+            ));
+        }
+        if covered == 0 {
+            return Err(Error::Data(
+                "tangential contact: the pressure field has no contact (no point with p > 0); \
+                 nothing can carry shear"
+                    .into(),
+            ));
+        }
+        self.max_limit = limit.iter().cloned().fold(0.0, f64::max);
+        self.limit = limit;
+        self.metadata.normal_force_n = self.element_area * pressure.sum();
+        self.previous = None;
+        Ok(())
+    }
+
+    /// Number of the solver's points in contact (`p > 0`) under the current pressure.
+    pub fn points_in_contact(&self) -> usize {
+        self.limit.iter().filter(|&&r| r > 0.0).count()
+    }
+
     /// Facts about the set-up (assumption, operator, contact points, normal force, ...).
     pub fn metadata(&self) -> &TangentialMetadata {
         &self.metadata
@@ -459,7 +530,11 @@ impl TangentialSolver {
             let g = [shift[0] - u[k][0], shift[1] - u[k][1]];
             let dg = [g[0] - self.slip[k][0], g[1] - self.slip[k][1]];
             work += q_new[k][0] * dg[0] + q_new[k][1] * dg[1];
-            self.slip_path[k] += dg[0].hypot(dg[1]);
+            // Slip is counted where the point is in contact (a point out of contact, possible
+            // after `set_pressure`, only moves with the body).
+            if self.limit[k] > 0.0 {
+                self.slip_path[k] += dg[0].hypot(dg[1]);
+            }
             self.slip[k] = g;
         }
         let old_q = std::mem::replace(&mut self.q, q_new);
@@ -476,12 +551,13 @@ impl TangentialSolver {
         let force = [fsum[0] * self.element_area, fsum[1] * self.element_area];
         let area = self.metadata.nominal_area_m2;
         let stick = (0..n).filter(|&k| self.sticks(k)).count();
+        let in_contact = self.limit.iter().filter(|&&r| r > 0.0).count().max(1);
         Ok(TangentialStep {
             shift_m: shift,
             force_n: force,
             mean_shear_pa: [force[0] / area, force[1] / area],
-            stick_fraction: stick as f64 / n as f64,
-            accumulated_slip_m: self.slip_path.iter().sum::<f64>() / n as f64,
+            stick_fraction: stick as f64 / in_contact as f64,
+            accumulated_slip_m: self.slip_path.iter().sum::<f64>() / in_contact as f64,
             frictional_work_j: work * self.element_area,
             iterations,
             residual,
@@ -1317,6 +1393,55 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("amplitude"), "{e}");
+    }
+
+    /// `set_pressure` keeps the history on the solver's points: a field with contact outside
+    /// them, of another shape or without contact is refused; a point that leaves contact drops
+    /// its traction, and the stick fraction counts the points in contact only.
+    #[test]
+    fn set_pressure_follows_the_contact_within_the_solver_points() {
+        let p = blob(16, 11);
+        let mut s = solver(&p, Boundary::ZeroPadded, Operator::Dense, 0.5).unwrap();
+        s.step(Control::Displacement([2e-12, 0.0])).unwrap();
+        let mut wider = p.clone();
+        wider[[15, 10]] += 1e5;
+        assert!(p[[15, 10]] == 0.0);
+        let e = s.set_pressure(&wider).unwrap_err().to_string();
+        assert!(e.contains("outside the solver"), "{e}");
+        let e = s
+            .set_pressure(&Array2::zeros((16, 10)))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("shape"), "{e}");
+        let e = s
+            .set_pressure(&Array2::zeros((16, 11)))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no contact"), "{e}");
+        // Half the pressure, the second spot released.
+        let mut less = p.mapv(|v| 0.5 * v);
+        for ((i, j), v) in less.indexed_iter_mut() {
+            if ((i as f64 - 12.0).powi(2) + (j as f64 - 3.0).powi(2)).sqrt() < 2.0 {
+                *v = 0.0;
+            }
+        }
+        s.set_pressure(&less).unwrap();
+        let in_contact = less.iter().filter(|&&v| v > 0.0).count();
+        assert_eq!(s.points_in_contact(), in_contact);
+        let st = s.step(Control::Displacement([2e-12, 0.0])).unwrap();
+        let (qx, qy) = s.traction();
+        for ((i, j), &v) in less.indexed_iter() {
+            if v == 0.0 {
+                assert_eq!((qx[[i, j]], qy[[i, j]]), (0.0, 0.0));
+            } else {
+                assert!(qx[[i, j]].hypot(qy[[i, j]]) <= 0.5 * v * (1.0 + 1e-12));
+            }
+        }
+        let sticking = s.stick_mask().iter().filter(|b| **b).count();
+        assert_eq!(st.stick_fraction, sticking as f64 / in_contact as f64);
+        assert!(
+            (s.friction_limit_n() - 0.5 * less.sum() * 1.5e-12).abs() < 1e-9 * s.friction_limit_n()
+        );
     }
 
     #[test]
