@@ -6,9 +6,24 @@
 //! kept apart so that the other files are reproducible), `tangential_loops.png` (mean shear stress vs
 //! displacement, all pressures) and `tangential_loops_normalised.png` (τ/(μ p̄), so that the
 //! low-pressure loops are visible too).
+//!
+//! With `--normal-amplitude-ratio r` the normal load oscillates with the displacement,
+//! p̄(t) = p̄·(1 + r·sin(ωt + φ)) (`--normal-phase-deg φ`): the loops, energies and plots are then
+//! those of the varying load, `tangential_loops.csv` gains the normal pressure and the element's
+//! shear stress of each step, and the Valanis element of the table (λ ∝ 1/Fz, E0 and k fitted to
+//! the constant-load loop at p̄) is run on the same history: `tangential_element.csv` (energies
+//! per cycle and the element's error), `tangential_element_loops.png`,
+//! `tangential_element_energy.png`.
 
+use asperity::calibrate::varying_load::{
+    check_element, constant_load_loop, varying_load_loop, ElementCheck,
+};
 use asperity::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
 use asperity::contact::sweep::{checked_pressures, REFERENCE_PRESSURES_PA};
+use asperity::contact::tangential::varying_load::{
+    oscillate_with_normal_load, NormalLoadOscillation, TangentialSide, VaryingLoadHistory,
+    VaryingLoadResult,
+};
 use asperity::contact::tangential::{
     oscillate, Control, Operator, Oscillation, OscillationResult, TangentialOptions,
     TangentialProblem, TangentialSolver,
@@ -71,6 +86,16 @@ pub struct TangentialArgs {
     /// 4.413 GPa); sources in docs/contact.md. Without it the contact is elastic.
     #[arg(long, allow_hyphen_values = true)]
     hardness_pa: Option<String>,
+    /// Normal load oscillating with the tangential displacement: p̄(t) = p̄·(1 + r·sin(ωt + φ))
+    /// about each pressure p̄, with this amplitude ratio r in [0, 1) (0: constant normal load).
+    /// The Valanis element fitted at constant load is then run on the same history
+    /// (`tangential_element.csv`).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    normal_amplitude_ratio: f64,
+    /// Phase φ of the normal load ahead of the tangential displacement (degrees): 0 in phase,
+    /// 180 out of phase, any value.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    normal_phase_deg: f64,
     /// Compliance operator of the tangential solver: auto, dense or fft.
     #[arg(long, default_value = "auto")]
     operator: String,
@@ -96,6 +121,13 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         "tangential_loops.png",
         "tangential_loops_normalised.png",
     ])?;
+    if args.normal_amplitude_ratio > 0.0 {
+        out.writes(&[
+            "tangential_element.csv",
+            "tangential_element_loops.png",
+            "tangential_element_energy.png",
+        ])?;
+    }
     super::surface_inputs(&mut out, &args.surface, "--surface")?;
     asperity::core::limits::check_steps(
         "--cycles",
@@ -128,6 +160,30 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     if args.steps_per_cycle < 4 {
         return Err(Error::param("--steps-per-cycle", "must be at least 4"));
     }
+    let ratio = args.normal_amplitude_ratio;
+    if !(ratio.is_finite() && (0.0..1.0).contains(&ratio)) {
+        return Err(Error::param(
+            "--normal-amplitude-ratio",
+            format!(
+                "the normal load amplitude over its mean must lie in [0, 1) (the contact stays \
+                 closed), got {ratio}"
+            ),
+        ));
+    }
+    if !args.normal_phase_deg.is_finite() {
+        return Err(Error::param(
+            "--normal-phase-deg",
+            format!("must be finite, got {}", args.normal_phase_deg),
+        ));
+    }
+    let varying = ratio > 0.0;
+    if varying && args.cycles < 2 {
+        return Err(Error::param(
+            "--cycles",
+            "with a varying normal load give at least 2 (the element is compared on the last, \
+             steady cycle)",
+        ));
+    }
     let material = super::material_from_flags(args.youngs_modulus_pa, args.poisson_ratio)?;
     let e_star = composite_modulus(material, material)?;
     let pressures = checked_pressures(
@@ -142,6 +198,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         .map(super::contact_normal::parse_hardness)
         .transpose()?;
     if let (Some(h), Some(&p)) = (hardness_pa, pressures.last()) {
+        let p = p * (1.0 + ratio);
         if p >= h {
             return Err(Error::param(
                 "--hardness-pa",
@@ -245,7 +302,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let steps_per_pressure = (args.cycles * args.steps_per_cycle) as u64;
     let bar = super::progress_bar(
         "tangential",
-        pressures.len() as u64 * (1 + steps_per_pressure),
+        pressures.len() as u64 * (1 + steps_per_pressure * (1 + u64::from(varying))),
     );
 
     // Normal contact at each pressure (ascending, warm-started).
@@ -367,6 +424,61 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         }
         results.push(r);
     }
+    // Varying normal load: the same amplitude with the normal load oscillating about each
+    // pressure; the element fitted to the constant-load loop above is run on the same history.
+    let n = args.steps_per_cycle;
+    let mut element: Vec<(ElementCheck, Vec<f64>)> = Vec::new();
+    if varying {
+        let mut varying_results = Vec::with_capacity(pressures.len());
+        for (k, &p) in pressures.iter().enumerate() {
+            bar.set_message(format!("{:.2} MPa, varying normal load", p / 1e6));
+            let done = bar.position();
+            let r: VaryingLoadResult = oscillate_with_normal_load(
+                &NormalProblem {
+                    surface: &surface,
+                    e_star_pa: e_star,
+                    hardness_pa,
+                },
+                NormalOptions::default(),
+                &TangentialSide {
+                    friction_coefficient: mu,
+                    body1: material,
+                    body2: material,
+                    options,
+                },
+                &VaryingLoadHistory {
+                    tangential_amplitude: Control::Displacement([amplitude, 0.0]),
+                    normal: NormalLoadOscillation {
+                        mean_pressure_pa: p,
+                        amplitude_ratio: ratio,
+                        phase_rad: args.normal_phase_deg.to_radians(),
+                    },
+                    cycles: args.cycles,
+                    steps_per_cycle: n,
+                },
+                |i, _| bar.set_position(done + i as u64),
+            )?;
+            let check = check_element(
+                &constant_load_loop(&results[k], p, n)?,
+                &varying_load_loop(&r, n)?,
+                &asperity::calibrate::FitOptions {
+                    mu,
+                    ..asperity::calibrate::FitOptions::default()
+                },
+            )
+            .map_err(|e| Error::Data(format!("element check at {p:e} Pa: {e}")))?;
+            let normal_pressure: Vec<f64> = r.steps.iter().map(|s| s.mean_pressure_pa).collect();
+            element.push((check, normal_pressure));
+            varying_results.push(OscillationResult {
+                steps: r.steps.iter().map(|s| s.tangential).collect(),
+                cycles: r.cycles.clone(),
+                metadata: r.metadata.clone(),
+                wall_time_s: r.wall_time_s,
+            });
+        }
+        // From here on the loops, energies and plots are those of the varying load.
+        results = varying_results;
+    }
     bar.finish_and_clear();
 
     // CSVs with a provenance header.
@@ -398,6 +510,18 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         "# loading: displacement along x, delta(t) = amplitude_m * sin(2 pi step / steps_per_cycle), amplitude_m = {amplitude:e} ({amplitude_note}), cycles = {}, steps_per_cycle = {}",
         args.cycles, args.steps_per_cycle
     );
+    if varying {
+        let _ = writeln!(
+            head,
+            "# normal load: p(t) = pressure_Pa * (1 + r sin(2 pi step / steps_per_cycle + phase)), r = {ratio}, phase_deg = {}; applied first at step 0 (virgin state); {}",
+            args.normal_phase_deg,
+            if hardness_pa.is_some() {
+                "hardness: the plastic state of the largest load, every load elastic on its residual surface"
+            } else {
+                "elastic"
+            }
+        );
+    }
     let _ = writeln!(
         head,
         "# mean shear stress = tangential force / nominal area; accumulated slip = slip path length averaged over the contact area; tolerance = {:e}",
@@ -406,9 +530,14 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let mut loops = head.clone();
     let _ = writeln!(
         loops,
-        "pressure_Pa,cycle,step,displacement_m,mean_shear_stress_Pa,mean_shear_stress_y_Pa,force_N,stick_fraction,accumulated_slip_m,iterations,residual"
+        "pressure_Pa,cycle,step,displacement_m,mean_shear_stress_Pa,mean_shear_stress_y_Pa,force_N,stick_fraction,accumulated_slip_m,iterations,residual{}",
+        if varying {
+            ",normal_pressure_Pa,element_mean_shear_stress_Pa"
+        } else {
+            ""
+        }
     );
-    let mut energy = head;
+    let mut energy = head.clone();
     let _ = writeln!(
         energy,
         "# cycle 1 starts from the virgin state (includes the initial loading branch); dissipated = loop area of mean shear stress vs displacement"
@@ -421,11 +550,16 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     // for byte (as `contact normal` keeps its timings apart).
     let mut timings =
         String::from("pressure_Pa,setup_time_s,oscillation_wall_time_s,step_wall_time_max_s\n");
-    let n = args.steps_per_cycle;
-    for ((&p, r), sol) in pressures.iter().zip(&results).zip(&normals) {
+    for (k, ((&p, r), sol)) in pressures.iter().zip(&results).zip(&normals).enumerate() {
         for (i, st) in r.steps.iter().enumerate() {
             let cycle = if i == 0 { 1 } else { (i - 1) / n + 1 };
-            let _ = writeln!(
+            let extra = match element.get(k) {
+                Some((check, normal_pressure)) => {
+                    format!(",{:e},{:e}", normal_pressure[i], check.element_shear_pa[i])
+                }
+                None => String::new(),
+            };
+            let _ = write!(
                 loops,
                 "{p:e},{cycle},{i},{:e},{:e},{:e},{:e},{:.6},{:e},{},{:e}",
                 st.shift_m[0],
@@ -437,6 +571,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 st.iterations,
                 st.residual,
             );
+            let _ = writeln!(loops, "{extra}");
         }
         let _ = writeln!(
             timings,
@@ -463,6 +598,9 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     asperity::core::output::write_string_atomic(&out.path("tangential_loops.csv")?, &loops)?;
     asperity::core::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
     asperity::core::output::write_string_atomic(&out.path("tangential_timings.csv")?, &timings)?;
+    if varying {
+        write_element_outputs(&mut out, &head, &pressures, &element, &results, (mu, n))?;
+    }
 
     let series = |norm: bool| -> Vec<Series> {
         pressures
@@ -521,5 +659,111 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         args.out_dir.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+/// `tangential_element.csv` and its two plots: the table's element (fitted at constant load)
+/// against the BEM under the varying normal load, per pressure. `(mu, steps_per_cycle)`.
+fn write_element_outputs(
+    out: &mut asperity::core::output::OutputSet,
+    head: &str,
+    pressures: &[f64],
+    element: &[(ElementCheck, Vec<f64>)],
+    results: &[OscillationResult],
+    (mu, n): (f64, usize),
+) -> Result<()> {
+    let mut csv = head.to_string();
+    let _ = writeln!(
+        csv,
+        "# element: Valanis, lambda = E0/(mu Fz (1 - k Et/E0)) with Fz = the normal pressure of the step (the 3-D element's law); E0 and k fitted to the constant-load BEM loop at pressure_Pa with the same displacement amplitude (mu fixed, Et = 0), then driven through the varying history; energies per cycle on the last (steady) cycle; element_energy_error = (element - BEM)/BEM; refit = E0 and k fitted to the varying loop itself (the best this law can do)"
+    );
+    let _ = writeln!(
+        csv,
+        "pressure_Pa,bem_constant_load_J_per_m2,bem_J_per_m2,element_J_per_m2,element_energy_error,element_R2,E0_N_per_m3,k,constant_load_fit_R2,refit_E0_N_per_m3,refit_k,refit_R2,refit_energy_error"
+    );
+    for (&p, (c, _)) in pressures.iter().zip(element) {
+        let _ = writeln!(
+            csv,
+            "{p:e},{:e},{:e},{:e},{:.6},{:.6},{:e},{:.6},{:.6},{:e},{:.6},{:.6},{:.6}",
+            c.bem_constant_energy_j_per_m2,
+            c.bem_energy_j_per_m2,
+            c.element_energy_j_per_m2,
+            c.energy_rel_error,
+            c.r2,
+            c.table_params.e0,
+            c.table_params.k,
+            c.table_fit_r2,
+            c.refit_params.e0,
+            c.refit_params.k,
+            c.refit_r2,
+            c.refit_energy_rel_error,
+        );
+    }
+    asperity::core::output::write_string_atomic(&out.path("tangential_element.csv")?, &csv)?;
+    // Loops of the last cycle, normalised by μ p̄: the BEM as lines, the element as markers of
+    // the same colour.
+    let mut loops = Vec::new();
+    for (i, ((&p, r), (c, _))) in pressures.iter().zip(results).zip(element).enumerate() {
+        let last = r.steps.len() - 1 - n..r.steps.len();
+        let f = 1.0 / (mu * p);
+        loops.push(
+            Series::line(
+                format!("BEM {} MPa", p / 1e6),
+                r.steps[last.clone()]
+                    .iter()
+                    .map(|s| (s.shift_m[0] * 1e6, s.mean_shear_pa[0] * f))
+                    .collect(),
+            )
+            .with_colour(i),
+        );
+        loops.push(
+            Series::markers(
+                format!("element {} MPa", p / 1e6),
+                last.map(|j| (r.steps[j].shift_m[0] * 1e6, c.element_shear_pa[j] * f))
+                    .collect(),
+            )
+            .with_colour(i),
+        );
+    }
+    line_plot(
+        &out.path("tangential_element_loops.png")?,
+        &LinePlot {
+            title: "Varying normal load: BEM loops (lines) and the element's (markers)",
+            x_label: "tangential displacement (µm)",
+            y_label: "mean shear stress / (μ p̄) (-)",
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+        },
+        &loops,
+    )?;
+    let energy = |label: &str, f: &dyn Fn(&ElementCheck) -> f64| {
+        Series::markers(
+            label.to_string(),
+            pressures
+                .iter()
+                .zip(element)
+                .map(|(&p, (c, _))| (p / 1e6, f(c).abs().max(f64::MIN_POSITIVE)))
+                .collect(),
+        )
+    };
+    line_plot(
+        &out.path("tangential_element_energy.png")?,
+        &LinePlot {
+            title: "Energy per cycle: BEM at constant and varying normal load, element",
+            x_label: "mean nominal pressure (MPa)",
+            y_label: "energy per cycle (J/m²)",
+            x_scale: Scale::Log,
+            y_scale: Scale::Log,
+        },
+        &[
+            energy("BEM, constant normal load", &|c| {
+                c.bem_constant_energy_j_per_m2
+            }),
+            energy("BEM, varying normal load", &|c| c.bem_energy_j_per_m2),
+            energy("element (λ ∝ 1/Fz), varying", &|c| {
+                c.element_energy_j_per_m2
+            }),
+        ],
+    )?;
     Ok(())
 }
