@@ -28,26 +28,37 @@ use crate::element::dissipated_energy;
 use crate::element::valanis::{integrate_reference, ValanisParams};
 
 /// The BEM loop of a constant normal load `pressure_pa` (Pa) as fit data: shear stress and
-/// displacement along x over the whole history, the last of its cycles of `steps_per_cycle`
-/// steps as the steady one.
+/// displacement along the unit vector `direction` (the loading direction) over the whole
+/// history, the last of its cycles of `steps_per_cycle` steps as the steady one.
 pub fn constant_load_loop(
     result: &OscillationResult,
     pressure_pa: f64,
     steps_per_cycle: usize,
+    direction: [f64; 2],
 ) -> Result<LoopData> {
-    let q: Vec<f64> = result.steps.iter().map(|s| s.shift_m[0]).collect();
-    let force: Vec<f64> = result.steps.iter().map(|s| s.mean_shear_pa[0]).collect();
+    let along = |v: [f64; 2]| v[0] * direction[0] + v[1] * direction[1];
+    let q: Vec<f64> = result.steps.iter().map(|s| along(s.shift_m)).collect();
+    let force: Vec<f64> = result
+        .steps
+        .iter()
+        .map(|s| along(s.mean_shear_pa))
+        .collect();
     let steady = last_cycle(q.len(), steps_per_cycle)?;
     Ok(LoopData::constant_load(q, force, pressure_pa, steady))
 }
 
-/// The BEM loop of a varying-load history as fit data (normal load: the mean pressure of each
-/// step), the last cycle as the steady one.
-pub fn varying_load_loop(result: &VaryingLoadResult, steps_per_cycle: usize) -> Result<LoopData> {
+/// The BEM loop of a varying-load history as fit data (along the unit vector `direction`;
+/// normal load: the mean pressure of each step), the last cycle as the steady one.
+pub fn varying_load_loop(
+    result: &VaryingLoadResult,
+    steps_per_cycle: usize,
+    direction: [f64; 2],
+) -> Result<LoopData> {
+    let along = |v: [f64; 2]| v[0] * direction[0] + v[1] * direction[1];
     let q: Vec<f64> = result
         .steps
         .iter()
-        .map(|s| s.tangential.shift_m[0])
+        .map(|s| along(s.tangential.shift_m))
         .collect();
     let steady = last_cycle(q.len(), steps_per_cycle)?;
     Ok(LoopData {
@@ -55,7 +66,7 @@ pub fn varying_load_loop(result: &VaryingLoadResult, steps_per_cycle: usize) -> 
         force: result
             .steps
             .iter()
-            .map(|s| s.tangential.mean_shear_pa[0])
+            .map(|s| along(s.tangential.mean_shear_pa))
             .collect(),
         normal_load: result.steps.iter().map(|s| s.mean_pressure_pa).collect(),
         steady,

@@ -25,8 +25,8 @@ use asperity::contact::tangential::varying_load::{
     VaryingLoadResult,
 };
 use asperity::contact::tangential::{
-    oscillate, Control, Operator, Oscillation, OscillationResult, TangentialOptions,
-    TangentialProblem, TangentialSolver,
+    oscillate, oscillate_elliptical, Control, EllipticalPath, Operator, Oscillation,
+    OscillationResult, TangentialOptions, TangentialProblem, TangentialSolver,
 };
 use asperity::core::fft::Boundary;
 use asperity::core::material::composite_modulus;
@@ -96,6 +96,15 @@ pub struct TangentialArgs {
     /// 180 out of phase, any value.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     normal_phase_deg: f64,
+    /// In-plane direction of the displacement, angle from x towards y (degrees).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    direction_deg: f64,
+    /// Elliptical path: the second semi-axis over the amplitude, perpendicular to the direction
+    /// (turned +90°): δ(t) = δa·(e1·sin ωt + e·e2·(1 − cos ωt)), an ellipse through the origin;
+    /// 1 a circle of radius δa, 0 (default) the straight to-and-fro. Not with a varying normal
+    /// load.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    path_minor_ratio: f64,
     /// Compliance operator of the tangential solver: auto, dense or fft.
     #[arg(long, default_value = "auto")]
     operator: String,
@@ -177,6 +186,29 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         ));
     }
     let varying = ratio > 0.0;
+    for (flag, v) in [
+        ("--direction-deg", args.direction_deg),
+        ("--path-minor-ratio", args.path_minor_ratio),
+    ] {
+        if !v.is_finite() {
+            return Err(Error::param(flag, format!("must be finite, got {v}")));
+        }
+    }
+    if varying && args.path_minor_ratio != 0.0 {
+        return Err(Error::param(
+            "--path-minor-ratio",
+            "an elliptical path is not combined with a varying normal load (use a straight \
+             path, --path-minor-ratio 0)",
+        ));
+    }
+    let theta = args.direction_deg.to_radians();
+    // Unit vectors along the direction and turned +90°; exactly (1, 0), (0, 1) at 0°.
+    let (e1, e2) = if args.direction_deg == 0.0 {
+        ([1.0, 0.0], [0.0, 1.0])
+    } else {
+        ([theta.cos(), theta.sin()], [-theta.sin(), theta.cos()])
+    };
+    let in_plane = args.direction_deg != 0.0 || args.path_minor_ratio != 0.0;
     if varying && args.cycles < 2 {
         return Err(Error::param(
             "--cycles",
@@ -382,7 +414,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
         None => {
             let last = pressures.len() - 1;
             let s = build(&normals[last].pressure)?;
-            let d = s.gross_slip_displacement([1.0, 0.0])?;
+            let d = s.gross_slip_displacement(e1)?;
             solvers[last] = Some(s);
             (
                 DEFAULT_AMPLITUDE_FACTOR * d,
@@ -403,15 +435,30 @@ pub fn run(args: TangentialArgs) -> Result<()> {
             None => build(&normals[k].pressure)?,
         };
         let done = bar.position();
-        let r = oscillate(
-            &mut s,
-            &Oscillation {
-                amplitude: Control::Displacement([amplitude, 0.0]),
-                cycles: args.cycles,
-                steps_per_cycle: args.steps_per_cycle,
-            },
-            |i, _| bar.set_position(done + i as u64),
-        )?;
+        let major = Control::Displacement([amplitude * e1[0], amplitude * e1[1]]);
+        let r = if args.path_minor_ratio == 0.0 {
+            oscillate(
+                &mut s,
+                &Oscillation {
+                    amplitude: major,
+                    cycles: args.cycles,
+                    steps_per_cycle: args.steps_per_cycle,
+                },
+                |i, _| bar.set_position(done + i as u64),
+            )?
+        } else {
+            let b = args.path_minor_ratio * amplitude;
+            oscillate_elliptical(
+                &mut s,
+                &EllipticalPath {
+                    major,
+                    minor: [b * e2[0], b * e2[1]],
+                    cycles: args.cycles,
+                    steps_per_cycle: args.steps_per_cycle,
+                },
+                |i, _| bar.set_position(done + i as u64),
+            )?
+        };
         for c in &r.cycles {
             asperity::core::sanity::finite_result(
                 &format!(
@@ -447,7 +494,10 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                     options,
                 },
                 &VaryingLoadHistory {
-                    tangential_amplitude: Control::Displacement([amplitude, 0.0]),
+                    tangential_amplitude: Control::Displacement([
+                        amplitude * e1[0],
+                        amplitude * e1[1],
+                    ]),
                     normal: NormalLoadOscillation {
                         mean_pressure_pa: p,
                         amplitude_ratio: ratio,
@@ -459,8 +509,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 |i, _| bar.set_position(done + i as u64),
             )?;
             let check = check_element(
-                &constant_load_loop(&results[k], p, n)?,
-                &varying_load_loop(&r, n)?,
+                &constant_load_loop(&results[k], p, n, e1)?,
+                &varying_load_loop(&r, n, e1)?,
                 &asperity::calibrate::FitOptions {
                     mu,
                     ..asperity::calibrate::FitOptions::default()
@@ -507,7 +557,14 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     };
     let _ = writeln!(
         head,
-        "# loading: displacement along x, delta(t) = amplitude_m * sin(2 pi step / steps_per_cycle), amplitude_m = {amplitude:e} ({amplitude_note}), cycles = {}, steps_per_cycle = {}",
+        "# loading: {}, amplitude_m = {amplitude:e} ({amplitude_note}), cycles = {}, steps_per_cycle = {}",
+        if !in_plane {
+            "displacement along x, delta(t) = amplitude_m * sin(2 pi step / steps_per_cycle)".to_string()
+        } else if args.path_minor_ratio == 0.0 {
+            format!("displacement along e1 = (cos, sin)({} deg), delta(t) = amplitude_m * e1 * sin(2 pi step / steps_per_cycle); displacement_m, mean_shear_stress_Pa, force_N are x components", args.direction_deg)
+        } else {
+            format!("elliptical path delta(t) = amplitude_m * (e1 sin(theta) + {} e2 (1 - cos(theta))), theta = 2 pi step / steps_per_cycle, e1 = (cos, sin)({} deg), e2 = e1 turned +90 deg; displacement_m, mean_shear_stress_Pa, force_N are x components; dissipated = loop integral of T . d(delta) over both components", args.path_minor_ratio, args.direction_deg)
+        },
         args.cycles, args.steps_per_cycle
     );
     if varying {
@@ -530,7 +587,8 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     let mut loops = head.clone();
     let _ = writeln!(
         loops,
-        "pressure_Pa,cycle,step,displacement_m,mean_shear_stress_Pa,mean_shear_stress_y_Pa,force_N,stick_fraction,accumulated_slip_m,iterations,residual{}",
+        "pressure_Pa,cycle,step,displacement_m,mean_shear_stress_Pa,mean_shear_stress_y_Pa,force_N,stick_fraction,accumulated_slip_m,iterations,residual{}{}",
+        if in_plane { ",displacement_y_m,force_y_N" } else { "" },
         if varying {
             ",normal_pressure_Pa,element_mean_shear_stress_Pa"
         } else {
@@ -553,6 +611,11 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     for (k, ((&p, r), sol)) in pressures.iter().zip(&results).zip(&normals).enumerate() {
         for (i, st) in r.steps.iter().enumerate() {
             let cycle = if i == 0 { 1 } else { (i - 1) / n + 1 };
+            let in_plane_columns = if in_plane {
+                format!(",{:e},{:e}", st.shift_m[1], st.force_n[1])
+            } else {
+                String::new()
+            };
             let extra = match element.get(k) {
                 Some((check, normal_pressure)) => {
                     format!(",{:e},{:e}", normal_pressure[i], check.element_shear_pa[i])
@@ -571,7 +634,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                 st.iterations,
                 st.residual,
             );
-            let _ = writeln!(loops, "{extra}");
+            let _ = writeln!(loops, "{in_plane_columns}{extra}");
         }
         let _ = writeln!(
             timings,
@@ -599,9 +662,11 @@ pub fn run(args: TangentialArgs) -> Result<()> {
     asperity::core::output::write_string_atomic(&out.path("tangential_energy.csv")?, &energy)?;
     asperity::core::output::write_string_atomic(&out.path("tangential_timings.csv")?, &timings)?;
     if varying {
-        write_element_outputs(&mut out, &head, &pressures, &element, &results, (mu, n))?;
+        write_element_outputs(&mut out, &head, &pressures, &element, &results, (mu, n, e1))?;
     }
 
+    // Loops along the loading direction (x at 0°).
+    let along = |v: [f64; 2]| v[0] * e1[0] + v[1] * e1[1];
     let series = |norm: bool| -> Vec<Series> {
         pressures
             .iter()
@@ -612,7 +677,7 @@ pub fn run(args: TangentialArgs) -> Result<()> {
                     format!("{} MPa", p / 1e6),
                     r.steps
                         .iter()
-                        .map(|s| (s.shift_m[0] * 1e6, s.mean_shear_pa[0] * f))
+                        .map(|s| (along(s.shift_m) * 1e6, along(s.mean_shear_pa) * f))
                         .collect(),
                 )
             })
@@ -670,8 +735,9 @@ fn write_element_outputs(
     pressures: &[f64],
     element: &[(ElementCheck, Vec<f64>)],
     results: &[OscillationResult],
-    (mu, n): (f64, usize),
+    (mu, n, e1): (f64, usize, [f64; 2]),
 ) -> Result<()> {
+    let along = |v: [f64; 2]| v[0] * e1[0] + v[1] * e1[1];
     let mut csv = head.to_string();
     let _ = writeln!(
         csv,
@@ -711,7 +777,7 @@ fn write_element_outputs(
                 format!("BEM {} MPa", p / 1e6),
                 r.steps[last.clone()]
                     .iter()
-                    .map(|s| (s.shift_m[0] * 1e6, s.mean_shear_pa[0] * f))
+                    .map(|s| (along(s.shift_m) * 1e6, along(s.mean_shear_pa) * f))
                     .collect(),
             )
             .with_colour(i),
@@ -719,7 +785,7 @@ fn write_element_outputs(
         loops.push(
             Series::markers(
                 format!("element {} MPa", p / 1e6),
-                last.map(|j| (r.steps[j].shift_m[0] * 1e6, c.element_shear_pa[j] * f))
+                last.map(|j| (along(r.steps[j].shift_m) * 1e6, c.element_shear_pa[j] * f))
                     .collect(),
             )
             .with_colour(i),

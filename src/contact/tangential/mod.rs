@@ -168,6 +168,14 @@ impl Control {
             Control::Displacement(v) | Control::Force(v) => v,
         }
     }
+
+    /// The same kind of control with another vector.
+    fn with_vector(self, v: [f64; 2]) -> Self {
+        match self {
+            Control::Displacement(_) => Control::Displacement(v),
+            Control::Force(_) => Control::Force(v),
+        }
+    }
 }
 
 /// The state after one load step.
@@ -1004,7 +1012,8 @@ fn project_disks_with_sum(
 }
 
 /// A sinusoidal history: `control(t) = amplitude · sin(2π k / steps_per_cycle)`, `k = 1 ..=
-/// cycles·steps_per_cycle`, starting from the virgin state.
+/// cycles·steps_per_cycle`, starting from the virgin state: a to-and-fro along the amplitude's
+/// in-plane direction (any angle; [`EllipticalPath`] for a path that encloses an area).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Oscillation {
     /// Amplitude: displacement δa (m) or force T* (N), with its direction.
@@ -1051,7 +1060,7 @@ pub struct OscillationResult {
 pub fn oscillate(
     solver: &mut TangentialSolver,
     oscillation: &Oscillation,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<OscillationResult> {
     let start = Instant::now();
     let a = oscillation.amplitude.vector();
@@ -1071,9 +1080,106 @@ pub fn oscillate(
             format!("must be at least 4, got {}", oscillation.steps_per_cycle),
         ));
     }
-    solver.reset();
     let n = oscillation.steps_per_cycle;
-    let total = oscillation.cycles * n;
+    run_history(
+        solver,
+        oscillation.cycles,
+        n,
+        |k| {
+            let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+            // sin of exact multiples of π are set to zero so that cycles close exactly.
+            let s = if (2 * k) % n == 0 { 0.0 } else { phase.sin() };
+            oscillation.amplitude.scaled(s)
+        },
+        start,
+        progress,
+    )
+}
+
+/// A closed elliptical path of the tangential load in the plane, from the virgin state:
+/// `control(θ) = major · sin θ + minor · (1 − cos θ)`, `θ = 2π k / steps_per_cycle`: the ellipse
+/// with semi-axes `major` and `minor` centred on `minor`, through the origin, travelled once per
+/// cycle; a circle of radius `|major|` when `minor ⟂ major` and `|minor| = |major|`; the
+/// to-and-fro of [`Oscillation`] when `minor = 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EllipticalPath {
+    /// First semi-axis: displacement (m) or force (N), with its direction.
+    pub major: Control,
+    /// Second semi-axis, same unit and control (m or N).
+    pub minor: [f64; 2],
+    /// Number of cycles (≥ 1).
+    pub cycles: usize,
+    /// Steps per cycle (≥ 4, a multiple of 4 keeps the extremes on steps).
+    pub steps_per_cycle: usize,
+}
+
+/// Run an elliptical path from the virgin state (the solver is reset first). The energy of a
+/// cycle is `∮ T·dδ` over both components. Errors as [`oscillate`], and a non-finite minor axis.
+pub fn oscillate_elliptical(
+    solver: &mut TangentialSolver,
+    path: &EllipticalPath,
+    progress: impl FnMut(usize, usize),
+) -> Result<OscillationResult> {
+    let start = Instant::now();
+    let (a, b) = (path.major.vector(), path.minor);
+    if !(a[0].is_finite() && a[1].is_finite() && a[0].hypot(a[1]) > 0.0) {
+        return Err(Error::param(
+            "major",
+            format!("the path's first semi-axis must be finite and non-zero, got {a:?}"),
+        ));
+    }
+    if !(b[0].is_finite() && b[1].is_finite()) {
+        return Err(Error::param(
+            "minor",
+            format!("the path's second semi-axis must be finite, got {b:?}"),
+        ));
+    }
+    if path.cycles == 0 {
+        return Err(Error::param("cycles", "must be at least 1"));
+    }
+    if path.steps_per_cycle < 4 {
+        return Err(Error::param(
+            "steps_per_cycle",
+            format!("must be at least 4, got {}", path.steps_per_cycle),
+        ));
+    }
+    let n = path.steps_per_cycle;
+    run_history(
+        solver,
+        path.cycles,
+        n,
+        |k| {
+            let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+            // Exact at multiples of π/2 so that cycles close exactly.
+            let (s, c) = if (4 * k) % n != 0 {
+                (phase.sin(), 1.0 - phase.cos())
+            } else {
+                match (4 * k / n) % 4 {
+                    0 => (0.0, 0.0),
+                    1 => (1.0, 1.0),
+                    2 => (0.0, 2.0),
+                    _ => (-1.0, 1.0),
+                }
+            };
+            path.major
+                .with_vector([a[0] * s + b[0] * c, a[1] * s + b[1] * c])
+        },
+        start,
+        progress,
+    )
+}
+
+/// Run `control(k)`, `k = 1 ..= cycles·n`, from the virgin state; energies per cycle.
+fn run_history(
+    solver: &mut TangentialSolver,
+    cycles: usize,
+    n: usize,
+    control: impl Fn(usize) -> Control,
+    start: Instant,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<OscillationResult> {
+    solver.reset();
+    let total = cycles * n;
     let mut steps = Vec::with_capacity(total + 1);
     steps.push(TangentialStep {
         shift_m: [0.0; 2],
@@ -1088,14 +1194,11 @@ pub fn oscillate(
         wall_time_s: 0.0,
     });
     for k in 1..=total {
-        let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-        // sin of exact multiples of π are set to zero so that cycles close exactly.
-        let s = if (2 * k) % n == 0 { 0.0 } else { phase.sin() };
-        steps.push(solver.step(oscillation.amplitude.scaled(s))?);
+        steps.push(solver.step(control(k))?);
         progress(k, total);
     }
     let area = solver.metadata().nominal_area_m2;
-    let cycles = (0..oscillation.cycles)
+    let cycles = (0..cycles)
         .map(|c| {
             let w = loop_area(&steps[c * n..=(c + 1) * n]);
             let fw = steps[c * n + 1..=(c + 1) * n]
