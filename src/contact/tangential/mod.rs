@@ -8,8 +8,10 @@
 //! would change the pressure. For two bodies this coupling enters as
 //! `(1−2ν1)/G1 − (1−2ν2)/G2` and vanishes when both bodies are of the same material
 //! (Johnson, *Contact Mechanics*, 1985, §7.1; Kalker's "quasi-identical" bodies). The solver
-//! assumes it: the pressure `p` from the normal solver is held fixed and only the tangential
-//! problem is solved. Every result carries [`QUASI_IDENTICAL_ASSUMPTION`].
+//! assumes it: the pressure `p` from the normal solver is not changed by the shear and only the
+//! tangential problem is solved, on a fixed pressure field or, under a varying normal load, on
+//! the normal solution of each step ([`varying_load`]). Every result carries
+//! [`QUASI_IDENTICAL_ASSUMPTION`].
 //!
 //! # The problem of one load step
 //! On the contact set `{p > 0}` (fixed during the history), with `C` the tangential compliance
@@ -75,7 +77,8 @@ use std::time::Instant;
 
 /// The modelling assumption carried in every result's metadata.
 pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
-coupling neglected (exact for two bodies of the same material); pressure held fixed";
+coupling neglected (exact for two bodies of the same material); the pressure is the normal \
+solution's, unaffected by the shear";
 
 /// How the compliance product `u = C q` on the contact points is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
