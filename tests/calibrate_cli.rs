@@ -528,3 +528,56 @@ fn invalid_configs_are_refused_naming_the_key_without_output() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--grid"));
     assert!(!out.exists());
 }
+
+/// `hardness_pa` in the config: the same surfaces calibrated elastic and hardness-limited
+/// (steel-42crmo4, 3.33 GPa). The table says which kn it holds (elastic, or unloading/reloading
+/// about the plastic state); where the hardness binds the contact is larger and the unloading
+/// kn stiffer than the elastic one (the stiffness of the flattened contact, Barber's theorem),
+/// and the loops change; where no point reaches H every value is the elastic one.
+#[test]
+fn hardness_in_the_config_bounds_the_pressure_and_labels_kn() {
+    let dir = tempfile::tempdir().unwrap();
+    let hard = dir.path().join("hard.toml");
+    let text = reference_config().replace(
+        "poisson_ratio = 0.3\n",
+        "poisson_ratio = 0.3\nhardness_pa = \"steel-42crmo4\"\n",
+    );
+    assert!(text.contains("hardness_pa"));
+    std::fs::write(&hard, text).unwrap();
+    let run = |cfg: &str, name: &str| {
+        let out = dir.path().join(name);
+        let o = asperity(&[
+            "calibrate",
+            cfg,
+            "--grid",
+            "256",
+            "--realisations",
+            "2",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        CalibrationTable::read_csv(&out.join("calibration_table.csv")).unwrap()
+    };
+    let reference = Path::new(env!("CARGO_MANIFEST_DIR")).join("calib/reference.toml");
+    let elastic = run(reference.to_str().unwrap(), "elastic");
+    let plastic = run(hard.to_str().unwrap(), "plastic");
+    assert!(elastic.comments[0].contains("elastic contact stiffness"));
+    assert!(
+        plastic.comments[0].contains("unloading/reloading") && plastic.comments[0].contains("3.33"),
+        "{:?}",
+        plastic.comments
+    );
+    let mut bound = 0;
+    for (e, p) in elastic.rows.iter().zip(&plastic.rows) {
+        if p.contact_area_ratio == e.contact_area_ratio {
+            assert_eq!(p.element.kn_n_per_m3, e.element.kn_n_per_m3, "{} Pa", e.pressure_pa);
+        } else {
+            bound += 1;
+            assert!(p.contact_area_ratio > e.contact_area_ratio);
+            assert!(p.element.kn_n_per_m3 > e.element.kn_n_per_m3, "{} Pa", e.pressure_pa);
+            assert!(p.energy_per_cycle_j_per_m2 != e.energy_per_cycle_j_per_m2);
+        }
+    }
+    assert!(bound >= 2, "the hardness binds at the higher pressures");
+}

@@ -553,3 +553,95 @@ fn cli_hardness_columns_and_residual_surfaces() {
         assert!(!bad.exists() || std::fs::read_dir(&bad).unwrap().next().is_none());
     }
 }
+
+/// Tangential loops on the hardness-limited contact: a sphere flattened at 20 `P_H` (its
+/// contact a disc of radius `a` larger than Hertz's) under a small tangential force
+/// `T = 0.01 μP` (load control, Coulomb bound μ·p with the bounded pressure). Its tangential
+/// stiffness `T/δ` is Mindlin's `8a/s`, `s = Σ (2−ν_k)/G_k` (Mindlin 1949; Johnson 1985,
+/// §7.2: the stiffness of a stuck circular contact of radius `a`, whatever its pressure
+/// distribution), with `a` the actual (plastic) contact radius, and the ratio to the
+/// unloading normal stiffness is Mindlin's `kt/kn = 2(1−ν)/(2−ν)` (`kn = 2E*a`).
+///
+/// Tolerance 1 %: the discretisation error of the stuck disc at 60 points across (−0.6 % for
+/// the elastic Hertz contact on the same kind of grid, run alongside; −0.4 % measured for the
+/// plastic one) plus the microslip at `T = 0.01 μP` (the Cattaneo–Mindlin secant is
+/// `1 − x/6 ≈ 0.2 %` below the initial slope at `x = T/μP`). The plastic radius is 35 % larger
+/// than Hertz's at this load, so the test tells the radii apart.
+#[test]
+fn flattened_sphere_tangential_stiffness_is_mindlins_with_the_plastic_radius() {
+    use asperity::contact::tangential::{
+        Control, TangentialOptions, TangentialProblem, TangentialSolver,
+    };
+    use asperity::core::fft::Boundary;
+    use asperity::core::material::{composite_modulus, Material};
+    let body = Material::STEEL;
+    let (radius, hardness, mu) = (0.01, 2.0e9, 0.5);
+    let e_star = composite_modulus(body, body).unwrap();
+    let g = body.shear_modulus_pa();
+    let nu = body.poisson_ratio;
+    let s_t = 2.0 * (2.0 - nu) / g;
+    let p_h = hertz_saturation_load(radius, hardness, e_star);
+    for (case, hardness, force) in [
+        ("hardness-limited, 20 P_H", Some(hardness), 20.0 * p_h),
+        ("elastic Hertz, 20 P_H", None, 20.0 * p_h),
+    ] {
+        let a_expected = match hardness {
+            Some(h) => (force / (PI * h)).sqrt(),
+            None => Hertz::new(radius, force, e_star).radius,
+        };
+        let dx = 2.0 * a_expected / 60.0;
+        let s = sphere(128, dx, radius);
+        let mut normal = solver(&s, e_star, hardness);
+        let sol = normal.solve_load(force / s.area(), None).unwrap();
+        let a = (sol.contact_points as f64 * dx * dx / PI).sqrt();
+        let kn = normal.contact_stiffness(&sol).unwrap().kn_n_per_m3 * s.area();
+        let mut t = TangentialSolver::new(
+            &TangentialProblem {
+                pressure: &sol.pressure,
+                dx,
+                dy: dx,
+                boundary: Boundary::ZeroPadded,
+                friction_coefficient: mu,
+                body1: body,
+                body2: body,
+            },
+            TangentialOptions {
+                tolerance: 1e-8,
+                ..TangentialOptions::default()
+            },
+        )
+        .unwrap();
+        // The Coulomb bound is μ times the bounded pressure.
+        assert!(t.traction_bound_pa() <= mu * hardness.unwrap_or(f64::INFINITY));
+        let x = 0.01;
+        let tf = x * t.friction_limit_n();
+        let st = t.step(Control::Force([tf, 0.0])).unwrap();
+        let kt = tf / st.shift_m[0];
+        let mindlin = 8.0 * a / s_t;
+        eprintln!(
+            "{case}: plastic points {}, a = {a:.5e} m (Hertz {:.5e}), kt = {kt:.5e} N/m, \
+             8a/s = {mindlin:.5e} ({:+.2} %), kt/kn = {:.4} vs 2(1−ν)/(2−ν) = {:.4}",
+            sol.plastic_points,
+            Hertz::new(radius, force, e_star).radius,
+            100.0 * (kt / mindlin - 1.0),
+            kt / kn,
+            2.0 * (1.0 - nu) / (2.0 - nu)
+        );
+        assert!(
+            (kt / mindlin - 1.0).abs() < 0.01,
+            "{case}: {kt:e} vs {mindlin:e}"
+        );
+        let ratio = 2.0 * (1.0 - nu) / (2.0 - nu);
+        assert!(
+            (kt / kn / ratio - 1.0).abs() < 0.01,
+            "{case}: kt/kn {}",
+            kt / kn
+        );
+        if hardness.is_some() {
+            assert!(sol.plastic_points > sol.elastic_points / 2);
+            // The plastic radius exceeds Hertz's by more than the tolerance: the test tells
+            // the two apart.
+            assert!(a > 1.1 * Hertz::new(radius, force, e_star).radius);
+        }
+    }
+}

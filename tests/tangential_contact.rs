@@ -453,3 +453,285 @@ fn loops_on_an_under_resolved_contact_are_flagged() {
         );
     }
 }
+
+/// `--hardness-pa`: without it (and with a hardness no contact pressure reaches) the loops are
+/// the elastic ones, byte for byte; with a hardness below the peak pressures the loops run on
+/// the bounded pressure (plastic area > 0, a different energy) and the headers say so; a
+/// hardness at or below a nominal pressure is refused by name.
+#[test]
+fn cli_hardness_bounds_the_pressure_of_the_loops() {
+    let dir = tempfile::tempdir().unwrap();
+    let run_with = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "--grid",
+            "128",
+            "--pressures-pa",
+            "1e6,1e7",
+            "--cycles",
+            "1",
+            "--steps-per-cycle",
+            "8",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = run_cli(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+        (read("tangential_loops.csv"), read("tangential_energy.csv"))
+    };
+    let data = |csv: &str| -> Vec<String> {
+        csv.lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(String::from)
+            .collect()
+    };
+    let (elastic_loops, elastic_energy) = run_with("elastic", &[]);
+    assert!(elastic_loops.contains("# no hardness: elastic normal contact"));
+    let (high_loops, high_energy) = run_with("unreached", &["--hardness-pa", "1e15"]);
+    assert_eq!(data(&elastic_loops), data(&high_loops));
+    assert_eq!(data(&elastic_energy), data(&high_energy));
+    let column = |csv: &str, name: &str| -> Vec<f64> {
+        let rows = data(csv);
+        let k = rows[0].split(',').position(|c| c == name).unwrap();
+        rows[1..]
+            .iter()
+            .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+            .collect()
+    };
+    assert!(column(&elastic_energy, "plastic_area_ratio")
+        .iter()
+        .all(|&a| a == 0.0));
+    let (plastic_loops, plastic_energy) = run_with("plastic", &["--hardness-pa", "5e8"]);
+    assert!(
+        plastic_loops.contains("# hardness_Pa = 5e8"),
+        "{plastic_loops}"
+    );
+    let plastic_area = column(&plastic_energy, "plastic_area_ratio");
+    assert!(plastic_area.iter().all(|&a| a > 0.0), "{plastic_area:?}");
+    let (e_el, e_pl) = (
+        column(&elastic_energy, "dissipated_J_per_m2"),
+        column(&plastic_energy, "dissipated_J_per_m2"),
+    );
+    assert!(
+        e_el.iter().zip(&e_pl).all(|(a, b)| a != b),
+        "{e_el:?} {e_pl:?}"
+    );
+    let o = run_cli(&[
+        "--grid",
+        "128",
+        "--pressures-pa",
+        "1e6,1e7",
+        "--hardness-pa",
+        "5e6",
+        "--out-dir",
+        dir.path().join("refused").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--hardness-pa"),
+        "{err}"
+    );
+    assert!(!dir
+        .path()
+        .join("refused")
+        .join("tangential_loops.csv")
+        .exists());
+}
+
+/// Any in-plane direction: `T = T* e sin θ` along 0°, 30° and 90° on the Hertz contact (44
+/// points across): the energy per cycle is Mindlin–Deresiewicz's within 1.5 % in every direction
+/// (measured −0.96 %, about half of it the trapezoidal loop area over 40 steps), the directions
+/// agree with each other within 0.5 % (measured 0.006 %; the square grid is the only anisotropy)
+/// and the displacement stays along the force (its perpendicular part below 0.1 %: the Cerruti
+/// kernel of quasi-identical bodies is isotropic and the contact axisymmetric).
+#[test]
+fn loops_along_any_in_plane_direction() {
+    let a = Hertz::new(R, P, e_star()).radius;
+    let dx = 2.0 * a / 44.0;
+    let n = 50;
+    let p = hertz_pressure(n, dx);
+    let cm = closed_form(a);
+    let t_star = 0.5 * MU * P;
+    let want = cm.energy_per_cycle(t_star);
+    let mut energies = Vec::new();
+    for deg in [0.0f64, 30.0, 90.0] {
+        let e = [deg.to_radians().cos(), deg.to_radians().sin()];
+        let mut s = solver_on(&p, dx);
+        let r = oscillate(
+            &mut s,
+            &Oscillation {
+                amplitude: Control::Force([t_star * e[0], t_star * e[1]]),
+                cycles: 2,
+                steps_per_cycle: 40,
+            },
+            |_, _| {},
+        )
+        .unwrap();
+        let w = r.cycles[1].dissipated_j;
+        let worst_perp = r
+            .steps
+            .iter()
+            .map(|st| (st.shift_m[1] * e[0] - st.shift_m[0] * e[1]).abs())
+            .fold(0.0, f64::max);
+        let peak = r
+            .steps
+            .iter()
+            .map(|st| st.shift_m[0].hypot(st.shift_m[1]))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{deg}°: W = {w:.5e} J, closed form {want:.5e} J ({:+.3} %), perpendicular shift {:.2e} of the peak",
+            100.0 * (w / want - 1.0),
+            worst_perp / peak
+        );
+        assert!((w / want - 1.0).abs() < 0.015, "{deg}°: {w} vs {want}");
+        assert!(worst_perp < 1e-3 * peak, "{deg}°");
+        energies.push(w);
+    }
+    for w in &energies[1..] {
+        assert!((w / energies[0] - 1.0).abs() < 0.005, "{energies:?}");
+    }
+}
+
+/// Elliptical and circular paths (`oscillate_elliptical`): a minor axis of zero is the straight
+/// to-and-fro bit for bit; a circle of radius `ρ = 20 δ_gs` (gross slip all round) dissipates
+/// Coulomb's `μP·2πρ` per cycle within 1 % (measured −0.42 %: the elastic displacement turns
+/// with the traction, `O((δ_gs/ρ)²)`, and the loop area is taken on the 80-gon, whose chords
+/// leave the tangent by π/80), and a flat ellipse (minor axis 0.1) dissipates
+/// more than the straight path at the same major amplitude in partial slip.
+#[test]
+fn elliptical_and_circular_paths() {
+    use asperity::contact::tangential::{oscillate_elliptical, EllipticalPath};
+    let a = Hertz::new(R, P, e_star()).radius;
+    let dx = 2.0 * a / 30.0;
+    let n = 34;
+    let p = hertz_pressure(n, dx);
+    let mut s = solver_on(&p, dx);
+    let gross = s.gross_slip_displacement([1.0, 0.0]).unwrap();
+    let da = 0.5 * gross;
+    let straight = oscillate(
+        &mut s,
+        &Oscillation {
+            amplitude: Control::Displacement([da, 0.0]),
+            cycles: 2,
+            steps_per_cycle: 40,
+        },
+        |_, _| {},
+    )
+    .unwrap();
+    let path = |minor: f64, major: f64, steps: usize| EllipticalPath {
+        major: Control::Displacement([major, 0.0]),
+        minor: [0.0, minor],
+        cycles: 2,
+        steps_per_cycle: steps,
+    };
+    let flat0 = oscillate_elliptical(&mut s, &path(0.0, da, 40), |_, _| {}).unwrap();
+    assert_eq!(flat0.cycles, straight.cycles);
+    let ellipse = oscillate_elliptical(&mut s, &path(0.1 * da, da, 40), |_, _| {}).unwrap();
+    eprintln!(
+        "straight {:.5e} J, ellipse 0.1 {:.5e} J",
+        straight.cycles[1].dissipated_j, ellipse.cycles[1].dissipated_j
+    );
+    assert!(ellipse.cycles[1].dissipated_j > straight.cycles[1].dissipated_j);
+    let rho = 20.0 * gross;
+    let circle = oscillate_elliptical(&mut s, &path(rho, rho, 80), |_, _| {}).unwrap();
+    let coulomb = MU * P * 2.0 * std::f64::consts::PI * rho;
+    let w = circle.cycles[1].dissipated_j;
+    eprintln!(
+        "circle: W = {w:.5e} J, μP·2πρ = {coulomb:.5e} J ({:+.3} %)",
+        100.0 * (w / coulomb - 1.0)
+    );
+    assert!((w / coulomb - 1.0).abs() < 0.01, "{w} vs {coulomb}");
+    // The traction turns with the path: the force has the magnitude μP at every step of the
+    // second cycle (gross slip).
+    for st in &circle.steps[81..] {
+        let f = st.force_n[0].hypot(st.force_n[1]);
+        assert!((f / (MU * P) - 1.0).abs() < 0.02, "{f}");
+    }
+}
+
+/// `--direction-deg` and `--path-minor-ratio`: the loop along 90° has its displacement along y
+/// (the x components stay zero, `displacement_y_m` and `force_y_N` are written); a circle
+/// (`--path-minor-ratio 1`) runs; non-finite values, and an ellipse with a varying normal load,
+/// are refused by flag.
+#[test]
+fn cli_direction_and_elliptical_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "--grid",
+            "128",
+            "--pressures-pa",
+            "1e7",
+            "--cycles",
+            "1",
+            "--steps-per-cycle",
+            "8",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        (run_cli(&args), out)
+    };
+    let (o, out) = run("y", &["--direction-deg", "90"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("tangential_loops.csv")).unwrap();
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|c| *c == n).unwrap();
+    let (dx, dy, fy) = (
+        col("displacement_m"),
+        col("displacement_y_m"),
+        col("force_y_N"),
+    );
+    let (mut peak, mut peak_force): (f64, f64) = (0.0, 0.0);
+    for l in lines {
+        let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap_or(0.0)).collect();
+        assert!(f[dx].abs() <= 1e-12 * f[dy].abs().max(1e-30), "{l}");
+        peak = peak.max(f[dy].abs());
+        peak_force = peak_force.max(f[fy].abs());
+    }
+    assert!(peak > 0.0 && peak_force > 0.0);
+    let (o, out) = run(
+        "circle",
+        &["--path-minor-ratio", "1", "--direction-deg", "20"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let energy = std::fs::read_to_string(out.join("tangential_energy.csv")).unwrap();
+    assert!(energy.contains("elliptical path"), "{energy}");
+    for (flags, name) in [
+        (vec!["--direction-deg", "nan"], "--direction-deg"),
+        (vec!["--path-minor-ratio", "inf"], "--path-minor-ratio"),
+        (
+            vec![
+                "--path-minor-ratio",
+                "0.5",
+                "--normal-amplitude-ratio",
+                "0.2",
+                "--cycles",
+                "2",
+            ],
+            "--path-minor-ratio",
+        ),
+    ] {
+        let bad = dir.path().join("bad");
+        let mut args = vec![
+            "--grid",
+            "128",
+            "--pressures-pa",
+            "1e7",
+            "--out-dir",
+            bad.to_str().unwrap(),
+        ];
+        args.extend(flags.iter().copied());
+        let o = run_cli(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(name),
+            "{flags:?}: {err}"
+        );
+        assert!(!bad.exists() || !bad.join("tangential_loops.csv").exists());
+    }
+}

@@ -21,6 +21,9 @@
 //! [material]                # both bodies (quasi-identical: normal/tangential decouple)
 //! youngs_modulus_pa = 2.1e11
 //! poisson_ratio = 0.3
+//! # hardness_pa = 3.33e9    # optional: elastic–perfectly plastic contact, p ≤ H (Pa, or a
+//! #                         # grade name such as "steel-42crmo4"); kn is then the
+//! #                         # unloading/reloading stiffness about the plastic state
 //!
 //! [contact]
 //! mu = 0.6                  # friction coefficient: BEM slip limit, held fixed in the fit
@@ -47,13 +50,30 @@ use crate::surface::generate::GaussianSurfaceSpec;
 use std::path::Path;
 
 /// Elastic material of both bodies.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialConfig {
     /// Young's modulus (Pa).
     pub youngs_modulus_pa: f64,
     /// Poisson's ratio (-).
     pub poisson_ratio: f64,
+    /// Indentation hardness H (Pa, or a grade of [`crate::core::material::MATERIAL_GRADES`] by
+    /// name): the contact pressure is bounded by it (hardness-limited normal contact,
+    /// [`crate::contact::normal`]), the tangential loops run on that bounded pressure and the
+    /// table's kn is the unloading/reloading stiffness about the plastically deformed state.
+    /// Absent: elastic contact.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hardness_pa: Option<crate::core::material::Hardness>,
+}
+
+impl MaterialConfig {
+    /// The hardness in Pa (`None`: elastic contact), checked; errors name `material.hardness_pa`.
+    pub fn hardness(&self) -> Result<Option<f64>> {
+        self.hardness_pa
+            .as_ref()
+            .map(|h| h.pa("material.hardness_pa"))
+            .transpose()
+    }
 }
 
 /// Friction and solver tolerances.
@@ -143,6 +163,7 @@ impl CalibrationConfig {
             material: MaterialConfig {
                 youngs_modulus_pa: 210e9,
                 poisson_ratio: 0.3,
+                hardness_pa: None,
             },
             contact: ContactConfig {
                 mu: 0.6,
@@ -219,6 +240,7 @@ impl CalibrationConfig {
             poisson_ratio: self.material.poisson_ratio,
         }
         .validated("material")?;
+        let hardness = self.material.hardness()?;
         let c = &self.contact;
         crate::core::sanity::friction_coefficient("contact.mu", c.mu)?;
         crate::core::sanity::tolerance("contact.normal_tolerance", c.normal_tolerance)?;
@@ -248,6 +270,17 @@ impl CalibrationConfig {
                     format!(
                         "must be strictly increasing: entry {i} ({p}) follows {}",
                         l.pressures_pa[i - 1]
+                    ),
+                ));
+            }
+        }
+        if let (Some(h), Some(&p)) = (hardness, l.pressures_pa.last()) {
+            if p >= h {
+                return Err(Error::param(
+                    "material.hardness_pa",
+                    format!(
+                        "H = {h:e} Pa must exceed the highest nominal pressure {p:e} Pa (a \
+                         contact at p̄ ≥ H is plastic over the whole patch)"
                     ),
                 ));
             }
@@ -440,5 +473,45 @@ mod tests {
             "amplitude_factors = [0.4, 0.2]",
         ));
         assert!(msg.contains("loading.amplitude_factors"), "{msg}");
+    }
+
+    /// `material.hardness_pa`: absent means elastic (the reference file has none); a number in
+    /// Pa or a grade name; an unknown name, a non-positive value or one not above the highest
+    /// nominal pressure is refused naming the key.
+    #[test]
+    fn hardness_is_a_value_or_a_grade_name() {
+        let base = reference_text();
+        assert!(!base.contains("hardness_pa"));
+        assert_eq!(
+            CalibrationConfig::reference().material.hardness().unwrap(),
+            None
+        );
+        let with = |v: &str| {
+            base.replace(
+                "poisson_ratio = 0.3\n",
+                &format!("poisson_ratio = 0.3\nhardness_pa = {v}\n"),
+            )
+        };
+        let cfg = CalibrationConfig::from_toml_str(&with("3.0e9")).unwrap();
+        assert_eq!(cfg.material.hardness().unwrap(), Some(3.0e9));
+        let cfg = CalibrationConfig::from_toml_str(&with("\"inconel-718\"")).unwrap();
+        let h = crate::core::material::material_grade("inconel-718")
+            .unwrap()
+            .hardness_pa();
+        assert_eq!(cfg.material.hardness().unwrap(), Some(h));
+        // The canonical TOML keeps it.
+        let again = CalibrationConfig::from_toml_str(&cfg.to_toml_string().unwrap()).unwrap();
+        assert_eq!(again, cfg);
+        for (v, what) in [
+            ("\"brass\"", "steel-42crmo4"),
+            ("-1e9", "> 0"),
+            ("5e6", "exceed"),
+        ] {
+            let msg = refused(&with(v));
+            assert!(
+                msg.contains("material.hardness_pa") && msg.contains(what),
+                "{v}: {msg}"
+            );
+        }
     }
 }

@@ -10,6 +10,7 @@ pub mod pipeline;
 pub mod statistics;
 pub mod sweep;
 pub mod table;
+pub mod varying_load;
 
 pub use config::CalibrationConfig;
 pub use fit::{fit_valanis, fit_valanis_loops, FitOptions, FitResult, LoopData};

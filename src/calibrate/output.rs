@@ -808,7 +808,7 @@ fn sidecar(
             "realisations": "Gaussian surfaces of the [surface] statistics with seeds seed, seed+1, ...; per pressure the mean and the half-width of the 95 % Student-t confidence interval of the mean",
             "loading": "per pressure one history of increasing displacement amplitudes (amplitude_factors x gross-slip displacement) along x: virgin quarter cycle, then per amplitude one half cycle (its point reflection completes the steady loop, Masing) and the continuation to the next amplitude",
             "fit": "one Valanis element per pressure and realisation fitted to all amplitudes together (mean of 1 - R^2 over the loops, each loop from the element's virgin state), and one per amplitude; Fz = nominal pressure, mu fixed; Nelder-Mead (argmin) on E0 = E0ref*exp(t0), k = logistic(t1), Et = E0*logistic(t2)",
-            "kn": "dp/d(approach) from the tangent problem on the contact set",
+            "kn": crate::calibrate::table::kn_comment(run.config.material.hardness()?),
             "convergence": "grid: the same surfaces with half the points per side (paired differences); patch: independent surfaces on the half-size patch at the same spacing (Welch); converged when the 95 % interval of the change lies within the tolerance",
             "tangential_assumption": crate::contact::tangential::QUASI_IDENTICAL_ASSUMPTION,
         },

@@ -464,7 +464,7 @@ pub fn calibrate_surface(
         &NormalProblem {
             surface,
             e_star_pa: e_star,
-            hardness_pa: None,
+            hardness_pa: config.material.hardness()?,
         },
         NormalOptions {
             tolerance: config.contact.normal_tolerance,
@@ -796,6 +796,9 @@ pub fn assemble(
             .map(|pc| Verdict::worst([pc.grid_verdict, pc.patch_verdict]))
             .collect(),
     )?;
+    let table = table.with_comments(vec![crate::calibrate::table::kn_comment(
+        config.material.hardness()?,
+    )])?;
     let surface_description = match source {
         SurfaceSource::Given { description, .. } => description.clone(),
         SurfaceSource::Generated => {

@@ -30,6 +30,12 @@
 //! trust is known wherever the table goes (`asperity elements` counts the elements resting on
 //! such rows).
 //!
+//! Lines starting with `#` before the header are comments: a table from `asperity calibrate` says
+//! there which normal stiffness `kn` is ([`kn_comment`]): the elastic contact stiffness, or, with
+//! a hardness, the unloading/reloading stiffness about the plastically deformed state (the
+//! stiffness an element carries; the loading tangent is smaller). They are read back with the
+//! table ([`CalibrationTable::comments`]).
+//!
 //! [`CalibrationTable::read_csv`] reads every form; interpolation uses the means.
 //!
 //! # Interpolation
@@ -279,6 +285,24 @@ pub struct CalibrationTable {
     /// Per row: the worse of its grid and patch-size convergence verdicts, or `None` (a table
     /// written without them).
     pub convergence: Option<Vec<Verdict>>,
+    /// Comment lines written before the header (without the leading `# `), e.g. what kn is.
+    pub comments: Vec<String>,
+}
+
+/// The comment that says which normal stiffness the `kn_N_per_m3` column holds: with a hardness
+/// H (Pa), the unloading/reloading stiffness about the plastically deformed state; without, the
+/// elastic contact stiffness.
+pub fn kn_comment(hardness_pa: Option<f64>) -> String {
+    match hardness_pa {
+        Some(h) => format!(
+            "kn_N_per_m3 = unloading/reloading stiffness about the plastically deformed state \
+             (hardness_Pa = {h:e}, elastic-perfectly plastic contact, pressure <= H; the loading \
+             tangent is smaller); tangential loops on the hardness-limited pressure"
+        ),
+        None => "kn_N_per_m3 = elastic contact stiffness dp/d(approach) (no hardness: elastic \
+                 contact)"
+            .to_string(),
+    }
 }
 
 impl CalibrationTable {
@@ -288,6 +312,7 @@ impl CalibrationTable {
             rows,
             intervals: None,
             convergence: None,
+            comments: Vec::new(),
         };
         table.validate()?;
         Ok(table)
@@ -302,6 +327,18 @@ impl CalibrationTable {
             ));
         }
         self.convergence = Some(verdicts);
+        Ok(self)
+    }
+
+    /// The table with these comment lines before its header (each one line, without `#`).
+    pub fn with_comments(mut self, comments: Vec<String>) -> Result<Self> {
+        if let Some(c) = comments.iter().find(|c| c.contains(['\n', '\r'])) {
+            return Err(Error::param(
+                "comments",
+                format!("a comment must be one line, got {c:?}"),
+            ));
+        }
+        self.comments = comments;
         Ok(self)
     }
 
@@ -336,6 +373,7 @@ impl CalibrationTable {
             rows,
             intervals: Some(intervals),
             convergence: None,
+            comments: Vec::new(),
         };
         table.validate()?;
         Ok(table)
@@ -452,6 +490,7 @@ impl CalibrationTable {
             rows,
             intervals: with_intervals.then_some(intervals),
             convergence: with_convergence.then_some(convergence),
+            comments: leading_comments(path)?,
         })
     }
 
@@ -459,6 +498,9 @@ impl CalibrationTable {
     pub fn write_csv(&self, path: &Path) -> Result<()> {
         self.validate()?;
         write_atomic(path, |w| {
+            for c in &self.comments {
+                writeln!(w, "# {c}").map_err(|e| Error::io(path, e))?;
+            }
             let mut wtr = csv::Writer::from_writer(w);
             let io = |e: csv::Error| Error::Data(format!("{}: {e}", path.display()));
             let mut header: Vec<&str> = COLUMNS.to_vec();
@@ -534,6 +576,21 @@ impl CalibrationTable {
             range: RangeFlag::Within,
         }
     }
+}
+
+/// The `#` lines before a CSV file's header, without the `#` and surrounding blanks.
+fn leading_comments(path: &Path) -> Result<Vec<String>> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut comments = Vec::new();
+    for line in std::io::BufReader::new(file).lines() {
+        let line = line.map_err(|e| Error::io(path, e))?;
+        match line.trim_start().strip_prefix('#') {
+            Some(c) => comments.push(c.trim().to_string()),
+            None => break,
+        }
+    }
+    Ok(comments)
 }
 
 /// Power-law continuation `v(p) = v_end·(p/p_end)^m` of one column beyond the end row, `m` from
@@ -899,5 +956,26 @@ mod tests {
         // Interpolation uses the means, as for a table without intervals.
         assert_eq!(back.interpolate(2e6), table().interpolate(2e6));
         assert!(CalibrationTable::with_intervals(t.rows.clone(), vec![iv]).is_err());
+    }
+
+    /// The comment that says which kn the table holds is written before the header and read
+    /// back; a multi-line comment is refused.
+    #[test]
+    fn kn_comment_round_trips() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        let t = table()
+            .with_comments(vec![kn_comment(Some(3.3e9))])
+            .unwrap();
+        t.write_csv(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.starts_with("# kn_N_per_m3 = unloading/reloading stiffness"),
+            "{text}"
+        );
+        let back = CalibrationTable::read_csv(&path).unwrap();
+        assert_eq!(back, t);
+        assert!(kn_comment(None).contains("elastic"));
+        assert!(table().with_comments(vec!["a\nb".into()]).is_err());
     }
 }

@@ -163,13 +163,7 @@ pub fn realisations_note(n: usize) -> String {
 
 /// `--hardness-pa`: a value in Pa (finite, > 0) or a material grade's documented hardness.
 pub fn parse_hardness(text: &str) -> Result<f64> {
-    let flag = "--hardness-pa";
-    match text.trim().parse::<f64>() {
-        Ok(h) => asperity::core::error::require_positive(flag, h),
-        Err(_) => asperity::core::material::material_grade(text.trim())
-            .map(|g| g.hardness_pa())
-            .map_err(|e| super::rename_param(e, flag)),
-    }
+    asperity::core::material::Hardness::parse(text).pa("--hardness-pa")
 }
 
 /// The sweep from the flags, every input checked, errors naming the flag.

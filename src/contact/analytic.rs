@@ -131,6 +131,87 @@ impl CattaneoMindlin {
     }
 }
 
+/// Mindlin–Deresiewicz oblique loading of a Hertz contact: from the normal force `P0` without
+/// shear, the normal force `P` and the tangential force `T` increase together with a constant
+/// ratio `dT/dP = k` (Mindlin & Deresiewicz, J. Appl. Mech. 20 (1953) 327–344; Johnson,
+/// *Contact Mechanics*, 1985, §7.5). Quasi-identical bodies, SI units (N, m, Pa).
+///
+/// The shear traction is a superposition of Hertz distributions of the same sphere
+/// (`p_P(r)`, the Hertz pressure of the load `P`, radius `a(P)`). Inside its own contact `p_P`
+/// as a shear traction displaces the surface by `3P·s/(16a)` plus a quadratic term in `r` whose
+/// coefficient `∝ p0/a = 2E*/(πR)` is the same for every load, so a combination whose weights
+/// sum to zero displaces the region where all its terms act rigidly (Mindlin 1949; Jäger, J.
+/// Tribol. 120 (1998) 677–684):
+///
+/// - `k ≤ μ`: **no slip**. Every increment `dq = k·dp` is of that kind and `|dq| ≤ μ dp`, so
+///   `q = k (p_P − p_P0)` with no slip anywhere, and `δ = (3k·s/16)(P/a − P0/a0)`
+///   (`∫ dT / (8a/s)` with the contact radius growing, `∫ dP/a = (3/2) P/a`).
+/// - `k > μ`: **slip in an annulus** `c < r < a`: `q = μ (p_P − p_Pc)` with `P_c` from
+///   `μ (P − P_c) = T = k (P − P0)`, i.e. `P_c = P − (k/μ)(P − P0)`, the stick radius
+///   `c = a(P_c)` shrinking as `P` grows, and `δ = (3μ·s/16)(P/a − P_c/c)` (at `P0 = P`, constant
+///   normal load, Cattaneo–Mindlin's [`CattaneoMindlin::displacement`]). Gross slip when
+///   `P_c ≤ 0`, i.e. `T ≥ μP`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObliqueLoading {
+    /// Sphere radius R (m).
+    pub sphere_radius: f64,
+    /// Composite modulus E* (Pa).
+    pub e_star: f64,
+    /// Friction coefficient μ (-).
+    pub friction_coefficient: f64,
+    /// Tangential compliance sum `s = Σ (2-ν_k)/G_k` (1/Pa).
+    pub compliance_sum: f64,
+    /// Normal force at the start, without shear, P0 (N).
+    pub initial_normal_force: f64,
+    /// Ratio of the increments dT/dP = k (-), ≥ 0.
+    pub ratio: f64,
+}
+
+impl ObliqueLoading {
+    /// Tangential force at normal force `P ≥ P0`: `T = k (P − P0)` (N).
+    pub fn tangential_force(&self, p: f64) -> f64 {
+        self.ratio * (p - self.initial_normal_force)
+    }
+
+    fn radius(&self, p: f64) -> f64 {
+        Hertz::new(self.sphere_radius, p, self.e_star).radius
+    }
+
+    /// The normal force `P_c` whose Hertz contact is the stick zone (N): `P` when `k ≤ μ` (no
+    /// slip), `P − (k/μ)(P − P0)` otherwise; ≤ 0 is gross slip.
+    pub fn stick_load(&self, p: f64) -> f64 {
+        let (k, mu) = (self.ratio, self.friction_coefficient);
+        if k <= mu {
+            p
+        } else {
+            p - k / mu * (p - self.initial_normal_force)
+        }
+    }
+
+    /// Stick radius at normal force `P` (m): `a(P)` when `k ≤ μ`, `a(P_c)` otherwise, 0 at gross
+    /// slip.
+    pub fn stick_radius(&self, p: f64) -> f64 {
+        let pc = self.stick_load(p);
+        if pc > 0.0 {
+            self.radius(pc)
+        } else {
+            0.0
+        }
+    }
+
+    /// Tangential displacement at normal force `P ≥ P0` (m); `None` at gross slip.
+    pub fn displacement(&self, p: f64) -> Option<f64> {
+        let (k, mu, s) = (self.ratio, self.friction_coefficient, self.compliance_sum);
+        let p0 = self.initial_normal_force;
+        let (a, a0) = (self.radius(p), self.radius(p0));
+        if k <= mu {
+            return Some(3.0 * k * s / 16.0 * (p / a - p0 / a0));
+        }
+        let pc = self.stick_load(p);
+        (pc > 0.0).then(|| 3.0 * mu * s / 16.0 * (p / a - pc / self.radius(pc)))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -198,5 +279,43 @@ mod tests {
         // Small-load limit of the compliance: δ ≈ T·s/(8a).
         let t = 1e-6;
         assert!((cm.displacement(t) * cm.initial_stiffness() / t - 1.0).abs() < 1e-5);
+    }
+
+    /// Oblique loading: the two regimes meet at `k = μ`; for `k > μ` the displacement is
+    /// Cattaneo–Mindlin's at the same `T/(μP)` when `P0 → P` is written as the same stick load
+    /// (`P_c/P = 1 − T/(μP)`), and gross slip comes at `T = μP`.
+    #[test]
+    fn oblique_loading_regimes() {
+        let (r, e_star, mu, s) = (0.05, 1e9, 0.4, 1e-8);
+        let ob = |k: f64| ObliqueLoading {
+            sphere_radius: r,
+            e_star,
+            friction_coefficient: mu,
+            compliance_sum: s,
+            initial_normal_force: 5.0,
+            ratio: k,
+        };
+        let p = 7.0;
+        let below = ob(mu).displacement(p).unwrap();
+        let above = ob(mu * (1.0 + 1e-9)).displacement(p).unwrap();
+        assert!((below / above - 1.0).abs() < 1e-6, "{below} {above}");
+        // k > μ: δ equals Cattaneo–Mindlin's at (P, T) (the stick zone is a Hertz contact of
+        // P_c = P(1 − T/μP) in both).
+        let o = ob(2.0 * mu);
+        let t = o.tangential_force(p);
+        let a = Hertz::new(r, p, e_star).radius;
+        let cm = CattaneoMindlin {
+            contact_radius: a,
+            normal_force: p,
+            friction_coefficient: mu,
+            compliance_sum: s,
+        };
+        let d = o.displacement(p).unwrap();
+        assert!((d / cm.displacement(t) - 1.0).abs() < 1e-12);
+        assert!((o.stick_radius(p) - cm.stick_radius(t)).abs() < 1e-12 * a);
+        // Gross slip: T = 2μ(P − 5) ≥ μP from P = 10.
+        assert!(o.displacement(10.0 + 1e-9).is_none());
+        // No slip below μ: the stick zone is the whole contact.
+        assert_eq!(ob(0.5 * mu).stick_radius(p), a);
     }
 }

@@ -116,6 +116,41 @@ pub fn material_grade(name: &str) -> Result<&'static MaterialGrade> {
         })
 }
 
+/// A hardness as given by a user: a value in Pa, or the name of a material grade whose
+/// documented hardness to use ([`MATERIAL_GRADES`]). In TOML a number or a string
+/// (`hardness_pa = 3.3e9` or `hardness_pa = "steel-42crmo4"`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+pub enum Hardness {
+    /// Hardness H (Pa).
+    Pa(f64),
+    /// A grade of [`MATERIAL_GRADES`], by name.
+    Grade(String),
+}
+
+impl Hardness {
+    /// A number (Pa) or a grade name, as typed on a command line.
+    pub fn parse(text: &str) -> Self {
+        match text.trim().parse::<f64>() {
+            Ok(h) => Hardness::Pa(h),
+            Err(_) => Hardness::Grade(text.trim().to_string()),
+        }
+    }
+
+    /// H (Pa), checked (finite, > 0; a known grade); errors carry `name`.
+    pub fn pa(&self, name: &str) -> Result<f64> {
+        match self {
+            Hardness::Pa(h) => require_positive(name, *h),
+            Hardness::Grade(g) => material_grade(g)
+                .map(|g| g.hardness_pa())
+                .map_err(|e| match e {
+                    Error::InvalidParameter { message, .. } => Error::param(name, message),
+                    other => other,
+                }),
+        }
+    }
+}
+
 /// Composite (contact) modulus of two elastic bodies (Johnson, *Contact Mechanics*, 1985, eq. 4.22):
 ///
 /// `1/E* = (1-ν1²)/E1 + (1-ν2²)/E2`  (Pa).

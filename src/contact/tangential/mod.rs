@@ -8,8 +8,10 @@
 //! would change the pressure. For two bodies this coupling enters as
 //! `(1−2ν1)/G1 − (1−2ν2)/G2` and vanishes when both bodies are of the same material
 //! (Johnson, *Contact Mechanics*, 1985, §7.1; Kalker's "quasi-identical" bodies). The solver
-//! assumes it: the pressure `p` from the normal solver is held fixed and only the tangential
-//! problem is solved. Every result carries [`QUASI_IDENTICAL_ASSUMPTION`].
+//! assumes it: the pressure `p` from the normal solver is not changed by the shear and only the
+//! tangential problem is solved, on a fixed pressure field or, under a varying normal load, on
+//! the normal solution of each step ([`varying_load`]). Every result carries
+//! [`QUASI_IDENTICAL_ASSUMPTION`].
 //!
 //! # The problem of one load step
 //! On the contact set `{p > 0}` (fixed during the history), with `C` the tangential compliance
@@ -61,6 +63,7 @@
 //! lower estimated cost; see BENCHMARKS.md for the measured comparison.
 
 mod compliance;
+pub mod varying_load;
 
 use crate::core::error::{require_positive, Error, Result};
 use crate::core::fft::Boundary;
@@ -74,7 +77,8 @@ use std::time::Instant;
 
 /// The modelling assumption carried in every result's metadata.
 pub const QUASI_IDENTICAL_ASSUMPTION: &str = "quasi-identical materials: normal-tangential \
-coupling neglected (exact for two bodies of the same material); pressure held fixed";
+coupling neglected (exact for two bodies of the same material); the pressure is the normal \
+solution's, unaffected by the shear";
 
 /// How the compliance product `u = C q` on the contact points is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -165,6 +169,14 @@ impl Control {
     fn vector(self) -> [f64; 2] {
         match self {
             Control::Displacement(v) | Control::Force(v) => v,
+        }
+    }
+
+    /// The same kind of control with another vector.
+    fn with_vector(self, v: [f64; 2]) -> Self {
+        match self {
+            Control::Displacement(_) => Control::Displacement(v),
+            Control::Force(_) => Control::Force(v),
         }
     }
 }
@@ -349,6 +361,76 @@ impl TangentialSolver {
         })
     }
 
+    /// Replace the pressure field, keeping the history (varying normal load): the traction
+    /// bounds become `μ p_i` of the new field on the solver's points, which must hold every
+    /// point of the new contact set (build the solver on a field whose contact set contains all
+    /// those of the history, e.g. their point-wise maximum). A point of the set with `p = 0` is
+    /// out of contact: its traction is zero and its relative displacement `g_i = δ − (C q)_i` is
+    /// carried along, so that when it comes back into contact it starts to stick from where it
+    /// is (Kalker 1990, §2.3: the slip is the change of the relative displacement since the
+    /// previous instant, at points in contact at both). The secant predictor is dropped (the
+    /// next step starts from the current traction).
+    ///
+    /// Errors: a different shape, a negative or non-finite pressure, contact outside the
+    /// solver's points, or no contact at all.
+    pub fn set_pressure(&mut self, pressure: &Array2<f64>) -> Result<()> {
+        if pressure.dim() != (self.nx, self.ny) {
+            return Err(Error::param(
+                "pressure",
+                format!(
+                    "shape {:?} differs from the solver's {:?}",
+                    pressure.dim(),
+                    (self.nx, self.ny)
+                ),
+            ));
+        }
+        if let Some(((i, j), v)) = pressure
+            .indexed_iter()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(Error::param(
+                "pressure",
+                format!("must be finite and ≥ 0, got {v} Pa at grid point ({i}, {j})"),
+            ));
+        }
+        let mu = self.metadata.friction_coefficient;
+        let limit: Vec<f64> = self
+            .points
+            .iter()
+            .map(|&(i, j)| mu * pressure[[i, j]])
+            .collect();
+        let covered = limit.iter().filter(|&&r| r > 0.0).count();
+        let total = pressure.iter().filter(|&&p| p > 0.0).count();
+        if covered < total {
+            return Err(Error::param(
+                "pressure",
+                format!(
+                    "{} contact points lie outside the solver's {} points: build the solver on \
+                     a field whose contact set holds every one of the history",
+                    total - covered,
+                    self.points.len()
+                ),
+            ));
+        }
+        if covered == 0 {
+            return Err(Error::Data(
+                "tangential contact: the pressure field has no contact (no point with p > 0); \
+                 nothing can carry shear"
+                    .into(),
+            ));
+        }
+        self.max_limit = limit.iter().cloned().fold(0.0, f64::max);
+        self.limit = limit;
+        self.metadata.normal_force_n = self.element_area * pressure.sum();
+        self.previous = None;
+        Ok(())
+    }
+
+    /// Number of the solver's points in contact (`p > 0`) under the current pressure.
+    pub fn points_in_contact(&self) -> usize {
+        self.limit.iter().filter(|&&r| r > 0.0).count()
+    }
+
     /// Facts about the set-up (assumption, operator, contact points, normal force, ...).
     pub fn metadata(&self) -> &TangentialMetadata {
         &self.metadata
@@ -465,7 +547,11 @@ impl TangentialSolver {
             let g = [shift[0] - u[k][0], shift[1] - u[k][1]];
             let dg = [g[0] - self.slip[k][0], g[1] - self.slip[k][1]];
             work += q_new[k][0] * dg[0] + q_new[k][1] * dg[1];
-            self.slip_path[k] += dg[0].hypot(dg[1]);
+            // Slip is counted where the point is in contact (a point out of contact, possible
+            // after `set_pressure`, only moves with the body).
+            if self.limit[k] > 0.0 {
+                self.slip_path[k] += dg[0].hypot(dg[1]);
+            }
             self.slip[k] = g;
         }
         let old_q = std::mem::replace(&mut self.q, q_new);
@@ -482,12 +568,13 @@ impl TangentialSolver {
         let force = [fsum[0] * self.element_area, fsum[1] * self.element_area];
         let area = self.metadata.nominal_area_m2;
         let stick = (0..n).filter(|&k| self.sticks(k)).count();
+        let in_contact = self.limit.iter().filter(|&&r| r > 0.0).count().max(1);
         Ok(TangentialStep {
             shift_m: shift,
             force_n: force,
             mean_shear_pa: [force[0] / area, force[1] / area],
-            stick_fraction: stick as f64 / n as f64,
-            accumulated_slip_m: self.slip_path.iter().sum::<f64>() / n as f64,
+            stick_fraction: stick as f64 / in_contact as f64,
+            accumulated_slip_m: self.slip_path.iter().sum::<f64>() / in_contact as f64,
             frictional_work_j: work * self.element_area,
             iterations,
             residual,
@@ -934,7 +1021,8 @@ fn project_disks_with_sum(
 }
 
 /// A sinusoidal history: `control(t) = amplitude · sin(2π k / steps_per_cycle)`, `k = 1 ..=
-/// cycles·steps_per_cycle`, starting from the virgin state.
+/// cycles·steps_per_cycle`, starting from the virgin state: a to-and-fro along the amplitude's
+/// in-plane direction (any angle; [`EllipticalPath`] for a path that encloses an area).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Oscillation {
     /// Amplitude: displacement δa (m) or force T* (N), with its direction.
@@ -981,7 +1069,7 @@ pub struct OscillationResult {
 pub fn oscillate(
     solver: &mut TangentialSolver,
     oscillation: &Oscillation,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<OscillationResult> {
     let start = Instant::now();
     let a = oscillation.amplitude.vector();
@@ -1001,9 +1089,106 @@ pub fn oscillate(
             format!("must be at least 4, got {}", oscillation.steps_per_cycle),
         ));
     }
-    solver.reset();
     let n = oscillation.steps_per_cycle;
-    let total = oscillation.cycles * n;
+    run_history(
+        solver,
+        oscillation.cycles,
+        n,
+        |k| {
+            let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+            // sin of exact multiples of π are set to zero so that cycles close exactly.
+            let s = if (2 * k) % n == 0 { 0.0 } else { phase.sin() };
+            oscillation.amplitude.scaled(s)
+        },
+        start,
+        progress,
+    )
+}
+
+/// A closed elliptical path of the tangential load in the plane, from the virgin state:
+/// `control(θ) = major · sin θ + minor · (1 − cos θ)`, `θ = 2π k / steps_per_cycle`: the ellipse
+/// with semi-axes `major` and `minor` centred on `minor`, through the origin, travelled once per
+/// cycle; a circle of radius `|major|` when `minor ⟂ major` and `|minor| = |major|`; the
+/// to-and-fro of [`Oscillation`] when `minor = 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EllipticalPath {
+    /// First semi-axis: displacement (m) or force (N), with its direction.
+    pub major: Control,
+    /// Second semi-axis, same unit and control (m or N).
+    pub minor: [f64; 2],
+    /// Number of cycles (≥ 1).
+    pub cycles: usize,
+    /// Steps per cycle (≥ 4, a multiple of 4 keeps the extremes on steps).
+    pub steps_per_cycle: usize,
+}
+
+/// Run an elliptical path from the virgin state (the solver is reset first). The energy of a
+/// cycle is `∮ T·dδ` over both components. Errors as [`oscillate`], and a non-finite minor axis.
+pub fn oscillate_elliptical(
+    solver: &mut TangentialSolver,
+    path: &EllipticalPath,
+    progress: impl FnMut(usize, usize),
+) -> Result<OscillationResult> {
+    let start = Instant::now();
+    let (a, b) = (path.major.vector(), path.minor);
+    if !(a[0].is_finite() && a[1].is_finite() && a[0].hypot(a[1]) > 0.0) {
+        return Err(Error::param(
+            "major",
+            format!("the path's first semi-axis must be finite and non-zero, got {a:?}"),
+        ));
+    }
+    if !(b[0].is_finite() && b[1].is_finite()) {
+        return Err(Error::param(
+            "minor",
+            format!("the path's second semi-axis must be finite, got {b:?}"),
+        ));
+    }
+    if path.cycles == 0 {
+        return Err(Error::param("cycles", "must be at least 1"));
+    }
+    if path.steps_per_cycle < 4 {
+        return Err(Error::param(
+            "steps_per_cycle",
+            format!("must be at least 4, got {}", path.steps_per_cycle),
+        ));
+    }
+    let n = path.steps_per_cycle;
+    run_history(
+        solver,
+        path.cycles,
+        n,
+        |k| {
+            let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+            // Exact at multiples of π/2 so that cycles close exactly.
+            let (s, c) = if (4 * k) % n != 0 {
+                (phase.sin(), 1.0 - phase.cos())
+            } else {
+                match (4 * k / n) % 4 {
+                    0 => (0.0, 0.0),
+                    1 => (1.0, 1.0),
+                    2 => (0.0, 2.0),
+                    _ => (-1.0, 1.0),
+                }
+            };
+            path.major
+                .with_vector([a[0] * s + b[0] * c, a[1] * s + b[1] * c])
+        },
+        start,
+        progress,
+    )
+}
+
+/// Run `control(k)`, `k = 1 ..= cycles·n`, from the virgin state; energies per cycle.
+fn run_history(
+    solver: &mut TangentialSolver,
+    cycles: usize,
+    n: usize,
+    control: impl Fn(usize) -> Control,
+    start: Instant,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<OscillationResult> {
+    solver.reset();
+    let total = cycles * n;
     let mut steps = Vec::with_capacity(total + 1);
     steps.push(TangentialStep {
         shift_m: [0.0; 2],
@@ -1018,14 +1203,11 @@ pub fn oscillate(
         wall_time_s: 0.0,
     });
     for k in 1..=total {
-        let phase = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-        // sin of exact multiples of π are set to zero so that cycles close exactly.
-        let s = if (2 * k) % n == 0 { 0.0 } else { phase.sin() };
-        steps.push(solver.step(oscillation.amplitude.scaled(s))?);
+        steps.push(solver.step(control(k))?);
         progress(k, total);
     }
     let area = solver.metadata().nominal_area_m2;
-    let cycles = (0..oscillation.cycles)
+    let cycles = (0..cycles)
         .map(|c| {
             let w = loop_area(&steps[c * n..=(c + 1) * n]);
             let fw = steps[c * n + 1..=(c + 1) * n]
@@ -1323,6 +1505,55 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("amplitude"), "{e}");
+    }
+
+    /// `set_pressure` keeps the history on the solver's points: a field with contact outside
+    /// them, of another shape or without contact is refused; a point that leaves contact drops
+    /// its traction, and the stick fraction counts the points in contact only.
+    #[test]
+    fn set_pressure_follows_the_contact_within_the_solver_points() {
+        let p = blob(16, 11);
+        let mut s = solver(&p, Boundary::ZeroPadded, Operator::Dense, 0.5).unwrap();
+        s.step(Control::Displacement([2e-12, 0.0])).unwrap();
+        let mut wider = p.clone();
+        wider[[15, 10]] += 1e5;
+        assert!(p[[15, 10]] == 0.0);
+        let e = s.set_pressure(&wider).unwrap_err().to_string();
+        assert!(e.contains("outside the solver"), "{e}");
+        let e = s
+            .set_pressure(&Array2::zeros((16, 10)))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("shape"), "{e}");
+        let e = s
+            .set_pressure(&Array2::zeros((16, 11)))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no contact"), "{e}");
+        // Half the pressure, the second spot released.
+        let mut less = p.mapv(|v| 0.5 * v);
+        for ((i, j), v) in less.indexed_iter_mut() {
+            if ((i as f64 - 12.0).powi(2) + (j as f64 - 3.0).powi(2)).sqrt() < 2.0 {
+                *v = 0.0;
+            }
+        }
+        s.set_pressure(&less).unwrap();
+        let in_contact = less.iter().filter(|&&v| v > 0.0).count();
+        assert_eq!(s.points_in_contact(), in_contact);
+        let st = s.step(Control::Displacement([2e-12, 0.0])).unwrap();
+        let (qx, qy) = s.traction();
+        for ((i, j), &v) in less.indexed_iter() {
+            if v == 0.0 {
+                assert_eq!((qx[[i, j]], qy[[i, j]]), (0.0, 0.0));
+            } else {
+                assert!(qx[[i, j]].hypot(qy[[i, j]]) <= 0.5 * v * (1.0 + 1e-12));
+            }
+        }
+        let sticking = s.stick_mask().iter().filter(|b| **b).count();
+        assert_eq!(st.stick_fraction, sticking as f64 / in_contact as f64);
+        assert!(
+            (s.friction_limit_n() - 0.5 * less.sum() * 1.5e-12).abs() < 1e-9 * s.friction_limit_n()
+        );
     }
 
     #[test]
