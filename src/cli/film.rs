@@ -3,7 +3,7 @@
 //! set, prints the notes and the region table.
 
 use asperity::film::colour::DEFAULT_MAX_COLOUR_DISTANCE;
-use asperity::film::pipeline::{self, FilmConfig, FilmReport, FIXED_OUTPUTS, REGION_PLOTS};
+use asperity::film::pipeline::{self, FilmConfig, FilmReport};
 use asperity::film::regions::{DEFAULT_MAX_ELONGATION, DEFAULT_MIN_SOLIDITY, DEFAULT_RIM_PIXELS};
 use asperity::Result;
 use std::path::PathBuf;
@@ -174,23 +174,9 @@ pub fn run(args: FilmArgs) -> Result<()> {
     let args = *args.opts;
     let config = args.config();
     config.check()?;
-    // Refused now, before any work: an --out-dir that is a file or not writable.
-    let mut out = asperity::core::output::OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    // Every file film writes is its own: one of an earlier run into the same --out-dir that this
-    // run does not write (a `preload_reduced.csv` of a run with --reduce-mesh-size-mm, the
-    // plots of a region that no longer exists) is removed after the commit, so that no reader
-    // (`asperity elements`) picks up a stale file.
-    for name in FIXED_OUTPUTS {
-        out.owns(name, "")?;
-    }
-    for (prefix, suffix) in REGION_PLOTS {
-        out.owns(prefix, suffix)?;
-    }
-    // No output may be (or remove) one of the inputs.
-    out.input(&args.image, "--image")?;
-    out.inputs(&args.colour_table, "--colour-table")?;
-    out.inputs(&args.density_calibration, "--density-calibration")?;
-    out.inputs(&args.nodes, "--nodes")?;
+    // Refused now, before any work: an --out-dir that is a file or not writable, an output that
+    // is one of the inputs.
+    let mut out = pipeline::output_set(&config, &args.out_dir, "--out-dir")?;
     let report = pipeline::run(&config, &mut |m| eprintln!("{m}"))?;
     // Every input is checked: stage the outputs (they appear together at the end).
     let staged = out.staging_dir()?;

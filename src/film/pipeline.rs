@@ -57,7 +57,7 @@ use super::scan::{self, Channel, PaperLevel};
 use super::{FittedRegion, NodePixel};
 use crate::core::error::{Error, Result};
 use crate::core::hash::{provenance_json, InputFile};
-use crate::core::output::write_string_atomic;
+use crate::core::output::{write_string_atomic, OutputSet};
 use crate::core::plot::{heatmap, HeatMap};
 use ndarray::Array2;
 use std::path::{Path, PathBuf};
@@ -239,6 +239,26 @@ impl FilmConfig {
             "reduce_mesh_size_mm": self.reduce_mesh_size_mm,
         })
     }
+}
+
+/// The output set of a run into `out_dir` (`flag` names it in errors), declared before any work:
+/// an `out_dir` that is a file or not writable is refused now; every file the command writes is
+/// its own (one of an earlier run that this run does not write, such as a `preload_reduced.csv`
+/// or the plots of a region that no longer exists, is removed at the commit, so that no reader
+/// picks up a stale file); no output may be, or remove, one of the inputs.
+pub fn output_set(config: &FilmConfig, out_dir: &Path, flag: &str) -> Result<OutputSet> {
+    let mut out = OutputSet::in_dir(out_dir, flag)?;
+    for name in FIXED_OUTPUTS {
+        out.owns(name, "")?;
+    }
+    for (prefix, suffix) in REGION_PLOTS {
+        out.owns(prefix, suffix)?;
+    }
+    out.input(&config.image, "--image")?;
+    out.inputs(&config.colour_table, "--colour-table")?;
+    out.inputs(&config.density_calibration, "--density-calibration")?;
+    out.inputs(&config.nodes, "--nodes")?;
+    Ok(out)
 }
 
 /// A region that could not be fitted, and why.
