@@ -31,7 +31,6 @@
 use crate::calibrate::convergence::Verdict;
 use crate::calibrate::table::{CalibrationTable, RangeFlag};
 use crate::core::error::{Error, Result};
-use crate::core::hash::sha256_file;
 use crate::element::ContactParams;
 use crate::film::nodes::Preload;
 use std::path::Path;
@@ -242,50 +241,7 @@ pub fn write_csv(path: &Path, rows: &[ElementRow]) -> Result<()> {
     })
 }
 
-/// One input file in a provenance record.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct InputFile {
-    /// What the file is to the command (e.g. "preload", "calibration_table", "image").
-    pub role: String,
-    /// Path as given.
-    pub path: String,
-    /// SHA-256 of the file's content (hex).
-    pub sha256: String,
-}
-
-impl InputFile {
-    /// Record `path` (hashing its content) under `role`.
-    pub fn new(role: &str, path: &Path) -> Result<Self> {
-        Ok(Self {
-            role: role.to_string(),
-            path: path.display().to_string(),
-            sha256: sha256_file(path)?,
-        })
-    }
-}
-
-/// Provenance JSON written beside an output: tool, version, inputs with hashes, parameters and
-/// a summary.
-pub fn provenance_json(
-    command: &str,
-    inputs: &[InputFile],
-    parameters: serde_json::Value,
-    summary: serde_json::Value,
-) -> serde_json::Value {
-    let now = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    serde_json::json!({
-        "tool": "asperity",
-        "crate_version": env!("CARGO_PKG_VERSION"),
-        "command": command,
-        "created_unix_s": now,
-        "inputs": inputs,
-        "parameters": parameters,
-        "summary": summary,
-    })
-}
+pub use crate::core::hash::{provenance_json, InputFile};
 
 #[cfg(test)]
 mod tests {

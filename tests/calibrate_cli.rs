@@ -571,11 +571,19 @@ fn hardness_in_the_config_bounds_the_pressure_and_labels_kn() {
     let mut bound = 0;
     for (e, p) in elastic.rows.iter().zip(&plastic.rows) {
         if p.contact_area_ratio == e.contact_area_ratio {
-            assert_eq!(p.element.kn_n_per_m3, e.element.kn_n_per_m3, "{} Pa", e.pressure_pa);
+            assert_eq!(
+                p.element.kn_n_per_m3, e.element.kn_n_per_m3,
+                "{} Pa",
+                e.pressure_pa
+            );
         } else {
             bound += 1;
             assert!(p.contact_area_ratio > e.contact_area_ratio);
-            assert!(p.element.kn_n_per_m3 > e.element.kn_n_per_m3, "{} Pa", e.pressure_pa);
+            assert!(
+                p.element.kn_n_per_m3 > e.element.kn_n_per_m3,
+                "{} Pa",
+                e.pressure_pa
+            );
             assert!(p.energy_per_cycle_j_per_m2 != e.energy_per_cycle_j_per_m2);
         }
     }

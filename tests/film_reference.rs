@@ -111,3 +111,50 @@ fn order_4_fit_on_a_real_patch_reports_r_squared() {
         assert!(f.r_squared > 0.0 && f.r_squared < 1.0);
     }
 }
+
+/// The library's film pipeline (the function `asperity film` and Python's `film()` call) on the
+/// reference film: the six 8 mm patches, each fitted, the pen marks and tape reported as
+/// below-range components and said so in the messages; nodes placed on patch 1 carry the
+/// requested total load, and its reduction preserves it.
+#[test]
+fn the_film_pipeline_finds_fits_and_preloads_the_reference_patches() {
+    use asperity::film::pipeline::{self, FilmConfig};
+    let (Some(img), Some(table)) = (
+        reference_file("film/prescale-lw-pressure-map.png"),
+        reference_file("film/prescale-lw-colour-table.csv"),
+    ) else {
+        return;
+    };
+    let nodes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("calib/film/example-nodes-8mm-patch.csv");
+    let config = FilmConfig {
+        pixel_size_mm: Some(PIXEL_SIZE_M * 1e3),
+        nodes: Some(nodes),
+        nodes_region: Some(1),
+        node_offset_mm: Some(vec![52.137, 223.796]),
+        total_load_n: Some(100.5),
+        reduce_mesh_size_mm: Some(1.0),
+        ..FilmConfig::with_colour_table(img, table)
+    };
+    let mut logged = Vec::new();
+    let report = pipeline::run(&config, &mut |m| logged.push(m.to_string())).unwrap();
+    assert_eq!(logged, report.messages);
+    assert_eq!(report.regions.len(), 6);
+    assert!(report.fits.iter().all(Option::is_some));
+    for s in &report.summaries {
+        assert!((s.equivalent_diameter_m * 1e3 - 8.0).abs() <= 0.5, "{s:?}");
+    }
+    assert!(!report.below_range_patches.is_empty());
+    assert!(report
+        .messages
+        .iter()
+        .any(|m| m.contains("entirely below the film's measuring range")));
+    let n = report.nodes.as_ref().unwrap();
+    assert_eq!(n.region, 1);
+    let total: f64 = n.preloads.iter().map(|p| p.n0_n).sum();
+    assert!((total - 100.5).abs() < 1e-9, "{total}");
+    let reduced = n.reduced.as_ref().unwrap();
+    assert!(reduced.nodes.len() < n.preloads.len());
+    let total: f64 = reduced.nodes.iter().map(|p| p.n0_n).sum();
+    assert!((total - 100.5).abs() < 1e-9, "{total}");
+}

@@ -19,7 +19,7 @@ GIL.
 The data flow, in the order of the modules: ``Surface`` (generate, read, stats) →
 ``NormalSolver`` / ``normal_sweep`` → ``TangentialSolver`` (hysteresis loops) →
 ``ValanisParams`` / ``valanis_integrate`` / ``fit_valanis`` → ``CalibrationTable`` (read,
-interpolate; or ``calibrate``, the whole chain) → ``FilmMap`` / ``film_preloads`` →
+interpolate; or ``calibrate``, the whole chain) → ``film`` (or ``FilmMap`` / ``film_preloads``) →
 ``join_elements`` → ``ResponseModel`` (forced response, harmonic balance) → ``diagnose``.
 """
 
@@ -27,6 +27,7 @@ from . import errors
 from ._native import (
     CalibrationTable,
     FilmMap,
+    FilmResult,
     NormalSolution,
     NormalSolver,
     ResponseModel,
@@ -43,6 +44,7 @@ from ._native import (
     diagnose,
     dissipated_energy,
     equivalent_surface,
+    film,
     film_preloads,
     fit_valanis,
     fit_valanis_loops,
@@ -97,6 +99,8 @@ __all__ = [
     "join_elements",
     "read_preloads",
     "write_preloads",
+    "film",
+    "FilmResult",
     "FilmMap",
     "Region",
     "PolyFit",

@@ -507,6 +507,71 @@ def film_preloads(
 def reduce_preloads(preloads: Columns, mesh_size_m: float) -> Columns:
     """Keep one node per triangle of an h-mesh (m) with summed area and load."""
 
+class FilmResult:
+    """What ``film()`` found: the pressure map, its regions with summaries and fits, the node
+    preloads and their reduction, and the run's notes and warnings."""
+
+    @property
+    def film_map(self) -> FilmMap: ...
+    @property
+    def regions(self) -> List[Region]: ...
+    @property
+    def fits(self) -> List[Optional[PolyFit]]:
+        """The fit of each region, ``None`` where it could not be fitted."""
+    @property
+    def summaries(self) -> List[Dict[str, Any]]: ...
+    @property
+    def pixel_size_m(self) -> float: ...
+    @property
+    def pixel_size_source(self) -> str: ...
+    @property
+    def range_pa(self) -> Tuple[float, float]: ...
+    @property
+    def preloads(self) -> Optional[Columns]:
+        """With nodes: id, x_m, y_m, area_m2, pressure_Pa, N0_N and pixel_class (``preload.csv``)."""
+    @property
+    def reduced_preloads(self) -> Optional[Columns]:
+        """With a reduction mesh: the reduced preloads (``preload_reduced.csv``)."""
+    @property
+    def summary(self) -> Dict[str, Any]:
+        """The ``summary`` of ``film.json``."""
+    @property
+    def messages(self) -> List[str]:
+        """Notes and warnings, in order (the CLI prints them to stderr)."""
+    @property
+    def written(self) -> List[Path]: ...
+
+def film(
+    image: Path,
+    *,
+    pixel_size_mm: Optional[float] = None,
+    colour_table: Optional[Path] = None,
+    density_calibration: Optional[Path] = None,
+    max_colour_distance: float = 20.0,
+    channel: str = "luma",
+    stain_rgb: Optional[Sequence[float]] = None,
+    unstained_density: Optional[float] = None,
+    smooth_mm: Optional[float] = None,
+    roi_rect_mm: Optional[Sequence[float]] = None,
+    roi_polygon_mm: Optional[Sequence[Tuple[float, float]]] = None,
+    min_patch_diameter_mm: float = 2.0,
+    rim_pixels: int = 3,
+    max_elongation: float = 3.0,
+    min_solidity: float = 0.6,
+    fit_order: int = 4,
+    nodes: Optional[Path] = None,
+    nodes_region: Optional[int] = None,
+    node_offset_mm: Optional[Tuple[float, float]] = None,
+    node_rotation_deg: float = 0.0,
+    node_scale: float = 1.0,
+    total_load_n: Optional[float] = None,
+    reduce_mesh_size_mm: Optional[float] = None,
+    out_dir: Optional[Path] = None,
+) -> FilmResult:
+    """The pipeline of ``asperity film`` (the library function the CLI calls), keyword arguments
+    named after its flags (lengths on the film in mm, rotation in degrees). With ``out_dir``,
+    writes the command's files there."""
+
 # ---------------------------------------------------------------- forced response
 
 class ResponseModel:

@@ -1,6 +1,7 @@
 //! Pressure-measurement film → pressure map (Pa), regions, polynomial fit, preloads per node
-//! (N), node reduction: the building blocks of `asperity film`, composed in Python the way the
-//! CLI composes them. Film frame: x right, y up, metres, origin at the centre of the image's
+//! (N), node reduction: `film()` runs the library's pipeline of `asperity film`
+//! (`asperity::film::pipeline`, the function the CLI calls); the building blocks are bound too,
+//! for composing other pipelines. Film frame: x right, y up, metres, origin at the centre of the image's
 //! bottom-left pixel; arrays are indexed `[i, j]` at `(i·s, j·s)` for pixel size `s`.
 
 use crate::arrays::{borrow_f64, view};
@@ -452,4 +453,230 @@ pub fn reduce_preloads<'py>(
     let fine = preloads_from_columns(preloads)?;
     let r = reduce::reduce(&fine, mesh_size_m).py()?;
     preload_columns(py, &r.nodes)
+}
+
+/// The parameter named by a library error of the film pipeline, as the keyword argument of
+/// `film()` (`--pixel-size-mm` → `pixel_size_mm`).
+fn keyword_error(e: asperity::Error) -> asperity::Error {
+    match e {
+        asperity::Error::InvalidParameter { name, message } if name.starts_with("--") => {
+            let keyword = name
+                .trim_start_matches("--")
+                .replace(" / --", " / ")
+                .replace('-', "_");
+            asperity::Error::param(keyword, message)
+        }
+        other => other,
+    }
+}
+
+/// The whole film pipeline of `asperity film` (module `asperity::film::pipeline`): image →
+/// pressure map → regions → polynomial fits → node preloads → reduction, with the same
+/// parameters (lengths on the film in mm, as the CLI's flags) and the same checks.
+#[pyclass(frozen, module = "asperity")]
+pub struct FilmResult {
+    inner: asperity::film::pipeline::FilmReport,
+    written: Vec<PathBuf>,
+}
+
+#[pymethods]
+impl FilmResult {
+    /// The pressure map (a copy).
+    #[getter]
+    fn film_map(&self) -> FilmMap {
+        FilmMap {
+            inner: self.inner.map.clone(),
+        }
+    }
+
+    /// The regions (automatic patches, or the region of interest).
+    #[getter]
+    fn regions(&self) -> Vec<Region> {
+        self.inner
+            .regions
+            .iter()
+            .map(|r| Region { inner: r.clone() })
+            .collect()
+    }
+
+    /// The fit of each region, `None` where the region could not be fitted.
+    #[getter]
+    fn fits(&self) -> Vec<Option<PolyFit>> {
+        self.inner
+            .fits
+            .iter()
+            .map(|f| f.clone().map(|inner| PolyFit { inner }))
+            .collect()
+    }
+
+    /// Summary of each region (as `FilmMap.summarise`).
+    #[getter]
+    fn summaries<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.summaries)
+    }
+
+    /// Pixel size (m) and where it came from.
+    #[getter]
+    fn pixel_size_m(&self) -> f64 {
+        self.inner.pixel_size_m
+    }
+
+    #[getter]
+    fn pixel_size_source(&self) -> &str {
+        &self.inner.pixel_size_source
+    }
+
+    /// Calibrated range (Pa), bottom and top.
+    #[getter]
+    fn range_pa(&self) -> (f64, f64) {
+        self.inner.range_pa
+    }
+
+    /// With nodes: the preloads as columns `id, x_m, y_m, area_m2, pressure_Pa, N0_N` (film
+    /// frame) and `pixel_class`, as `preload.csv`; else `None`.
+    #[getter]
+    fn preloads<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(n) = &self.inner.nodes else {
+            return Ok(None);
+        };
+        let columns = preload_columns(py, &n.preloads)?;
+        let classes: Vec<&str> = n.pixel_classes.iter().map(|c| c.name()).collect();
+        columns.set_item("pixel_class", classes)?;
+        Ok(Some(columns))
+    }
+
+    /// With a reduction mesh: the reduced preloads as columns (as `preload_reduced.csv`).
+    #[getter]
+    fn reduced_preloads<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        match self.inner.nodes.as_ref().and_then(|n| n.reduced.as_ref()) {
+            Some(r) => Ok(Some(preload_columns(py, &r.nodes)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// The `summary` of `film.json` (pixel counts, regions, fits, regions not fitted,
+    /// below-range patches, node preload summary and pixel classes, reduction).
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.summary_json())
+    }
+
+    /// The notes and warnings of the run, in order (the CLI prints them to stderr).
+    #[getter]
+    fn messages(&self) -> Vec<String> {
+        self.inner.messages.clone()
+    }
+
+    /// The files written (with `out_dir`).
+    #[getter]
+    fn written(&self) -> Vec<PathBuf> {
+        self.written.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "FilmResult({} regions, {} fitted, {})",
+            self.inner.regions.len(),
+            self.inner.fits.iter().filter(|f| f.is_some()).count(),
+            match &self.inner.nodes {
+                Some(n) => format!("{} nodes preloaded", n.preloads.len()),
+                None => "no nodes".to_string(),
+            }
+        )
+    }
+}
+
+/// `asperity film` from Python: the library's film pipeline with the command's parameters, as
+/// keyword arguments named after its flags (lengths on the film in mm, rotation in degrees).
+/// With `out_dir`, writes the command's files there (the same files, refused and committed the
+/// same way). Returns a `FilmResult`; errors name the keyword argument.
+#[pyfunction]
+#[pyo3(signature = (image, *, pixel_size_mm=None, colour_table=None, density_calibration=None,
+    max_colour_distance=DEFAULT_MAX_COLOUR_DISTANCE, channel="luma".to_string(), stain_rgb=None,
+    unstained_density=None, smooth_mm=None, roi_rect_mm=None, roi_polygon_mm=None,
+    min_patch_diameter_mm=2.0, rim_pixels=DEFAULT_RIM_PIXELS,
+    max_elongation=regions::DEFAULT_MAX_ELONGATION, min_solidity=regions::DEFAULT_MIN_SOLIDITY,
+    fit_order=4, nodes=None, nodes_region=None, node_offset_mm=None, node_rotation_deg=0.0,
+    node_scale=1.0, total_load_n=None, reduce_mesh_size_mm=None, out_dir=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn film(
+    py: Python<'_>,
+    image: PathBuf,
+    pixel_size_mm: Option<f64>,
+    colour_table: Option<PathBuf>,
+    density_calibration: Option<PathBuf>,
+    max_colour_distance: f64,
+    channel: String,
+    stain_rgb: Option<Vec<f64>>,
+    unstained_density: Option<f64>,
+    smooth_mm: Option<f64>,
+    roi_rect_mm: Option<Vec<f64>>,
+    roi_polygon_mm: Option<Vec<(f64, f64)>>,
+    min_patch_diameter_mm: f64,
+    rim_pixels: usize,
+    max_elongation: f64,
+    min_solidity: f64,
+    fit_order: usize,
+    nodes: Option<PathBuf>,
+    nodes_region: Option<usize>,
+    node_offset_mm: Option<(f64, f64)>,
+    node_rotation_deg: f64,
+    node_scale: f64,
+    total_load_n: Option<f64>,
+    reduce_mesh_size_mm: Option<f64>,
+    out_dir: Option<PathBuf>,
+) -> PyResult<FilmResult> {
+    use asperity::film::pipeline::{self, FilmConfig};
+    let config = FilmConfig {
+        image,
+        pixel_size_mm,
+        colour_table,
+        max_colour_distance,
+        density_calibration,
+        channel,
+        stain_rgb,
+        unstained_density,
+        smooth_mm,
+        roi_rect_mm,
+        // The polygon's text form `x,y;x,y;...` (mm), as the CLI takes it and film.json
+        // records it; `{}` prints each f64 so that it reads back exactly.
+        roi_polygon_mm: roi_polygon_mm.map(|v| {
+            v.iter()
+                .map(|(x, y)| format!("{x},{y}"))
+                .collect::<Vec<_>>()
+                .join(";")
+        }),
+        min_patch_diameter_mm,
+        rim_pixels,
+        max_elongation,
+        min_solidity,
+        fit_order,
+        nodes,
+        nodes_region,
+        node_offset_mm: node_offset_mm.map(|(x, y)| vec![x, y]),
+        node_rotation_deg,
+        node_scale,
+        total_load_n,
+        reduce_mesh_size_mm,
+    };
+    let (inner, written) = py
+        .detach(|| {
+            let out = match &out_dir {
+                Some(dir) => Some(pipeline::output_set(&config, dir, "out_dir")?),
+                None => None,
+            };
+            let report = pipeline::run(&config, &mut |_| {})?;
+            let written = match out {
+                Some(mut out) => {
+                    let staged = out.staging_dir()?;
+                    report.write(&staged)?;
+                    out.commit()?
+                }
+                None => Vec::new(),
+            };
+            Ok::<_, asperity::Error>((report, written))
+        })
+        .map_err(keyword_error)
+        .py()?;
+    Ok(FilmResult { inner, written })
 }

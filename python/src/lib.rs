@@ -51,6 +51,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(film::read_nodes, m)?)?;
     m.add_function(wrap_pyfunction!(film::film_preloads, m)?)?;
     m.add_function(wrap_pyfunction!(film::reduce_preloads, m)?)?;
+    m.add_class::<film::FilmResult>()?;
+    m.add_function(wrap_pyfunction!(film::film, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose::read_record, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose::diagnose, m)?)?;
     Ok(())

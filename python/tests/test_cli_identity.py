@@ -178,6 +178,43 @@ def test_film_preloads_equal_the_cli(cli, tmp_path, data_file, repo):
     assert float(regions_csv[0]["fit_R2"]) == pytest.approx(fit.r_squared, abs=5e-5)
 
 
+def test_film_pipeline_is_the_clis(cli, tmp_path, data_file, repo):
+    """``film()`` runs the library function the CLI calls: with ``out_dir`` it writes the CLI's
+    files byte for byte (film.json up to its creation time), and its result holds what they
+    hold."""
+    image = data_file("film/prescale-lw-pressure-map.png")
+    colours = data_file("film/prescale-lw-colour-table.csv")
+    nodes_path = repo / "calib" / "film" / "example-nodes-8mm-patch.csv"
+    out = tmp_path / "cli"
+    cli("film", "--image", image, "--colour-table", colours, "--pixel-size-mm", "0.2343",
+        "--nodes", nodes_path, "--nodes-region", "1", "--node-offset-mm", "52.137,223.796",
+        "--total-load-n", "100.5", "--reduce-mesh-size-mm", "1", "--out-dir", out)
+    got = ap.film(image, colour_table=colours, pixel_size_mm=0.2343, nodes=nodes_path,
+                  nodes_region=1, node_offset_mm=(52.137, 223.796), total_load_n=100.5,
+                  reduce_mesh_size_mm=1.0, out_dir=tmp_path / "py")
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(p.name for p in (tmp_path / "py").iterdir())
+    assert sorted(p.name for p in got.written) == names
+    for name in names:
+        ours, theirs = (tmp_path / "py" / name).read_bytes(), (out / name).read_bytes()
+        if name == "film.json":
+            ours, theirs = (json.loads(ours), json.loads(theirs))
+            for j in (ours, theirs):
+                del j["created_unix_s"]
+        assert ours == theirs, name
+    assert len(got.regions) == 6 and all(f is not None for f in got.fits)
+    assert got.summary == json.loads((out / "film.json").read_text())["summary"]
+    assert np.array_equal(got.film_map.pressure_pa, np.load(out / "pressure_map_Pa.npy"),
+                          equal_nan=True)
+    assert got.preloads["N0_N"].sum() == pytest.approx(100.5, rel=1e-12)
+    assert got.reduced_preloads["N0_N"].sum() == pytest.approx(100.5, rel=1e-12)
+    assert any("nodes on region 1" in m for m in got.messages)
+    # Errors name the keyword argument.
+    with pytest.raises(ap.ParameterError, match="pixel_size_mm") as e:
+        ap.film(image, colour_table=colours, pixel_size_mm=-1.0)
+    assert e.value.name == "pixel_size_mm"
+
+
 def test_diagnose_equals_the_cli(cli, tmp_path, data_file):
     record = data_file("loops/brfd-dataset2-0.5Hz30lbtension0.5amplitude.csv")
     cli("diagnose", record, "--out-dir", tmp_path)

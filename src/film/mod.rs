@@ -7,9 +7,12 @@
 //! * [`nodes`]: contact nodes, placement on the film, tributary areas, preloads `N0 = σ·A`.
 //! * [`reduce`]: node reduction on a coarse triangular mesh (area and load preserved).
 //! * [`scan`]: raw scans: reading the image (limits, dpi), smoothing, density channel, paper level.
+//! * [`pipeline`]: `asperity film` as one call, [`pipeline::FilmConfig`] in,
+//!   [`pipeline::FilmReport`] out (maps, regions, fits, node preloads, reduction, messages).
 
 pub mod colour;
 pub mod nodes;
+pub mod pipeline;
 pub mod polyfit;
 pub mod reduce;
 pub mod regions;
