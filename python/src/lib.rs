@@ -14,6 +14,7 @@ mod dynamics;
 mod element;
 mod errors;
 mod film;
+mod identify;
 mod surface;
 
 use pyo3::prelude::*;
@@ -55,5 +56,12 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(film::film, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose::read_record, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose::diagnose, m)?)?;
+    m.add_class::<identify::ParameterEstimate>()?;
+    m.add_class::<identify::LevelError>()?;
+    m.add_class::<identify::IdentifyReport>()?;
+    m.add_class::<identify::FilePrediction>()?;
+    m.add_class::<identify::PredictReport>()?;
+    m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::predict, m)?)?;
     Ok(())
 }
