@@ -54,6 +54,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(film::reduce_preloads, m)?)?;
     m.add_class::<film::FilmResult>()?;
     m.add_function(wrap_pyfunction!(film::film, m)?)?;
+    m.add_class::<diagnose::Record>()?;
+    m.add_class::<diagnose::DiagnoseErrors>()?;
+    m.add_class::<diagnose::DiagnoseReport>()?;
     m.add_function(wrap_pyfunction!(diagnose::read_record, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose::diagnose, m)?)?;
     m.add_class::<identify::ParameterEstimate>()?;

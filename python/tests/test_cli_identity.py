@@ -220,17 +220,23 @@ def test_diagnose_equals_the_cli(cli, tmp_path, data_file):
     cli("diagnose", record, "--out-dir", tmp_path)
     expected = json.loads((tmp_path / "diagnose.json").read_text())
     rec = ap.read_record(record)
-    got = ap.diagnose(rec["time_s"], rec["displacement_m"], rec["force_N"], source=str(record))
-    series = got.pop("series")
-    assert "backlash" in got.pop("text")
-    # The JSON report is the CLI's, value for value (JSON has no tuples: compare via JSON),
-    # but for the wall times and the input's column names.
-    for report in (got, expected):
-        del report["baseline_fit"]["wall_time_s"]
-        for r in report["rounds"]:
-            for c in r["candidates"]:
+    report = ap.diagnose(rec.time_s, rec.displacement_m, rec.force_n, source=str(record))
+    got = json.loads(report.json)
+    assert "backlash" in report.text
+    # The JSON report is the CLI's, value for value, but for the wall times and the input's
+    # column names.
+    for r in (got, expected):
+        del r["baseline_fit"]["wall_time_s"]
+        for rnd in r["rounds"]:
+            for c in rnd["candidates"]:
                 del c["fit"]["wall_time_s"]
-        report["input"].pop("columns")
-    assert json.loads(json.dumps(got)) == expected
-    assert got["effects_added"] == ["backlash"]
-    assert len(series["final_force_N"]) == expected["samples_analysed"]
+        r["input"].pop("columns")
+    assert got == expected
+    # The typed fields are the report's.
+    assert report.effects_added == expected["effects_added"] == ["backlash"]
+    assert report.errors_after.nrms == expected["errors_after"]["nrms"]
+    assert report.errors_before.held_out_rms_over_noise == (
+        expected["errors_before"]["held_out_rms_over_noise"])
+    assert report.samples_analysed == expected["samples_analysed"]
+    assert report.training_cycles == expected["training_cycles"]
+    assert len(report.final_force_n) == expected["samples_analysed"]
