@@ -102,6 +102,81 @@ impl Surface {
         Ok(Self::from_grid(grid))
     }
 
+    /// Surface from a SurfaceTopography `Topography` (or any object with its interface:
+    /// `heights()`, `physical_sizes`, `nb_grid_pts`, `unit`, `is_periodic`): heights and sizes
+    /// are converted from the topography's `unit` to metres, the spacing is the physical size
+    /// over the grid points, and the periodicity is the topography's. A topography without a
+    /// unit, of another dimension than 2, or with undefined (masked) points is refused.
+    /// SurfaceTopography is not needed to call this.
+    #[staticmethod]
+    fn from_topography(t: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let py = t.py();
+        let unit: Option<String> = t.getattr("unit")?.extract()?;
+        let unit = unit.ok_or_else(|| {
+            crate::errors::parameter(
+                py,
+                "unit",
+                "the topography has no length unit: give it one (e.g. Topography(..., unit=\"m\"))"
+                    .into(),
+            )
+        })?;
+        let metres = asperity::surface::io::units::metres_per_unit(&unit).ok_or_else(|| {
+            crate::errors::parameter(
+                py,
+                "unit",
+                format!("{unit:?} is not a length unit (m, mm, µm, nm, Å, pm)"),
+            )
+        })?;
+        let n: Vec<usize> = t.getattr("nb_grid_pts")?.extract()?;
+        let sizes: Vec<f64> = t.getattr("physical_sizes")?.extract()?;
+        if n.len() != 2 || sizes.len() != 2 {
+            return Err(crate::errors::parameter(
+                py,
+                "topography",
+                format!(
+                    "a Surface needs an area (2 grid dimensions), got {} (a line scan: use Profile)",
+                    n.len()
+                ),
+            ));
+        }
+        if t.getattr("has_undefined_data")
+            .and_then(|v| v.extract::<bool>())
+            .unwrap_or(false)
+        {
+            return Err(crate::errors::parameter(
+                py,
+                "topography",
+                "it has undefined (masked) points: fill them first (e.g. t.interpolate_undefined_data())"
+                    .into(),
+            ));
+        }
+        let heights = t.call_method0("heights")?;
+        let np = py.import("numpy")?;
+        let kwargs = pyo3::types::PyDict::new(py);
+        kwargs.set_item("dtype", np.getattr("float64")?)?;
+        let heights = np.call_method("ascontiguousarray", (heights,), Some(&kwargs))?;
+        let h = borrow_f64::<Ix2>(&heights, "heights", "heights, shape nb_grid_pts")?;
+        if h.as_array().shape() != [n[0], n[1]] {
+            return Err(crate::errors::parameter(
+                py,
+                "topography",
+                format!(
+                    "heights() has shape {:?}, nb_grid_pts is {n:?}",
+                    h.as_array().shape()
+                ),
+            ));
+        }
+        let periodic: bool = t.getattr("is_periodic")?.extract()?;
+        let grid = Grid2::new(
+            h.as_array().mapv(|z| z * metres),
+            sizes[0] * metres / n[0] as f64,
+            sizes[1] * metres / n[1] as f64,
+            periodic,
+        )
+        .py()?;
+        Ok(Self::from_grid(grid))
+    }
+
     /// A periodic Gaussian-correlated patch (autocorrelation `rq_m² exp(-(x²/clx_m² + y²/cly_m²))`,
     /// Rq exact), the same surface as `asperity surface generate` for the same arguments. The
     /// defaults are the reference case: Rq 0.177 µm, 1/e correlation length 6.6 µm, 250 µm

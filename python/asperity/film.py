@@ -1,0 +1,30 @@
+"""Pressure-measurement film → pressure map, regions, polynomial fit, preloads per node.
+
+Film frame in m, pressures in Pa, preloads in N. ``asperity.film(...)`` calls
+:func:`asperity.film.film`.
+"""
+
+from ._native import (
+    FilmMap,
+    FilmResult,
+    PolyFit,
+    Region,
+    film,
+    film_preloads,
+    read_nodes,
+    reduce_preloads,
+)
+from ._stage import make_callable
+
+__all__ = [
+    "film",
+    "FilmResult",
+    "FilmMap",
+    "Region",
+    "PolyFit",
+    "read_nodes",
+    "film_preloads",
+    "reduce_preloads",
+]
+
+make_callable(__name__)
