@@ -47,7 +47,7 @@ from .calibrate import (
     valanis_integrate,
     write_preloads,
 )
-from .contact import NormalSolution, NormalSolver, TangentialSolver, normal_sweep
+from .contact import Convergence, NormalSolution, NormalSolver, TangentialSolver, normal_sweep
 from .dynamics import ResponseModel
 from .film import FilmMap, FilmResult, PolyFit, Region, film_preloads, read_nodes, reduce_preloads
 from .identify import (
@@ -63,7 +63,15 @@ from .identify import (
     predict,
     read_record,
 )
-from .surface import Profile, Surface, composite_modulus, equivalent_surface, read_topography
+from .surface import (
+    PowerSpectrum,
+    Profile,
+    Surface,
+    SurfaceStats,
+    composite_modulus,
+    equivalent_surface,
+    read_topography,
+)
 from .errors import (
     ArrayTypeError,
     ConvergenceError,
@@ -88,11 +96,14 @@ __all__ = [
     "ResourceLimitError",
     "Surface",
     "Profile",
+    "SurfaceStats",
+    "PowerSpectrum",
     "read_topography",
     "composite_modulus",
     "equivalent_surface",
     "NormalSolver",
     "NormalSolution",
+    "Convergence",
     "normal_sweep",
     "TangentialSolver",
     "ValanisParams",

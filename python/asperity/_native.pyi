@@ -20,6 +20,7 @@ Columns = Dict[str, np.ndarray]
 __version__: str
 __all__ = [
     "CalibrationTable",
+    "Convergence",
     "DiagnoseErrors",
     "DiagnoseReport",
     "FilePrediction",
@@ -31,12 +32,14 @@ __all__ = [
     "NormalSolver",
     "ParameterEstimate",
     "PolyFit",
+    "PowerSpectrum",
     "PredictReport",
     "Profile",
     "Record",
     "Region",
     "ResponseModel",
     "Surface",
+    "SurfaceStats",
     "TangentialSolver",
     "ValanisFit",
     "ValanisParams",
@@ -119,11 +122,11 @@ class Surface:
     @property
     def size_m(self) -> Tuple[float, float]:
         """(nx·dx, ny·dy) (m)."""
-    def stats(self, detrend: str = "mean") -> Dict[str, Any]:
-        """Ra, Rq (m), Rsk, Rku, rms slopes/gradient, correlation lengths (m), ...: the keys of
+    def stats(self, detrend: str = "mean") -> "SurfaceStats":
+        """Ra, Rq (m), Rsk, Rku, rms slopes/gradient, correlation lengths (m), ...: those of
         ``asperity surface stats --json``. ``detrend``: "mean" or "plane"."""
-    def power_spectrum(self, detrend: str = "mean") -> Dict[str, Any]:
-        """Radially averaged PSD: ``q_rad_per_m``, ``c_m4``, ``count``, ``dim`` (= 2)."""
+    def power_spectrum(self, detrend: str = "mean") -> "PowerSpectrum":
+        """Radially averaged PSD (``c`` in m⁴, ``dim`` 2)."""
 
 @final
 class Profile:
@@ -138,9 +141,9 @@ class Profile:
     def dx_m(self) -> float: ...
     @property
     def periodic(self) -> bool: ...
-    def stats(self, detrend: str = "mean") -> Dict[str, Any]: ...
-    def power_spectrum(self, detrend: str = "mean") -> Dict[str, Any]:
-        """PSD: ``q_rad_per_m``, ``c_m3``, ``count``, ``dim`` (= 1)."""
+    def stats(self, detrend: str = "mean") -> "SurfaceStats": ...
+    def power_spectrum(self, detrend: str = "mean") -> "PowerSpectrum":
+        """PSD (``c`` in m³, ``dim`` 1)."""
     def __len__(self) -> int: ...
 
 def read_topography(path: Path) -> Union[Surface, Profile]:
@@ -158,6 +161,78 @@ def equivalent_surface(body1: Surface, body2: Surface) -> Surface:
     """h1 − h2 on a common grid: the equivalent rough surface against a flat half-space."""
 
 # ---------------------------------------------------------------- normal contact
+
+@final
+class SurfaceStats:
+    """Statistics of a topography (SI units; None where undefined)."""
+
+    @property
+    def kind(self) -> str:
+        """"profile" or "area"."""
+    @property
+    def uniform(self) -> bool: ...
+    @property
+    def periodic(self) -> bool: ...
+    @property
+    def detrend(self) -> str:
+        """"mean" or "plane"."""
+    @property
+    def nx(self) -> int: ...
+    @property
+    def ny(self) -> int: ...
+    @property
+    def missing_points(self) -> int: ...
+    @property
+    def dx_m(self) -> float: ...
+    @property
+    def dy_m(self) -> Optional[float]:
+        """None for a profile."""
+    @property
+    def lx_m(self) -> float: ...
+    @property
+    def ly_m(self) -> Optional[float]: ...
+    @property
+    def ra_m(self) -> float:
+        """Ra (m)."""
+    @property
+    def rq_m(self) -> float:
+        """Rq (m)."""
+    @property
+    def rsk(self) -> float: ...
+    @property
+    def rku(self) -> float: ...
+    @property
+    def rms_slope(self) -> float:
+        """Along x."""
+    @property
+    def rms_slope_y(self) -> Optional[float]: ...
+    @property
+    def rms_gradient(self) -> Optional[float]: ...
+    @property
+    def correlation_length_1_over_e_m(self) -> Optional[float]: ...
+    @property
+    def correlation_length_0_2_m(self) -> Optional[float]: ...
+    @property
+    def correlation_length_x_1_over_e_m(self) -> Optional[float]: ...
+    @property
+    def correlation_length_y_1_over_e_m(self) -> Optional[float]: ...
+
+@final
+class PowerSpectrum:
+    """A power spectral density, radially averaged for areas."""
+
+    @property
+    def dim(self) -> int:
+        """1 (profile) or 2 (area)."""
+    @property
+    def q_rad_per_m(self) -> F64Array:
+        """Angular wavenumbers, bin centres (rad/m)."""
+    @property
+    def c(self) -> F64Array:
+        """PSD: m³ (profile) or m⁴ (area)."""
+    @property
+    def count(self) -> npt.NDArray[np.uint64]:
+        """Fourier coefficients per bin."""
 
 @final
 class NormalSolution:
@@ -226,8 +301,23 @@ class NormalSolution:
     @property
     def wall_time_s(self) -> float: ...
     @property
-    def convergence(self) -> Dict[str, Any]:
-        """``iterations``, ``residual``, ``tolerance``, ``converged``, ``wall_time_s``."""
+    def convergence(self) -> "Convergence": ...
+
+@final
+class Convergence:
+    """How a normal solve converged."""
+
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float:
+        """Final relative residual."""
+    @property
+    def tolerance(self) -> float: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def wall_time_s(self) -> float: ...
 
 @final
 class NormalSolver:

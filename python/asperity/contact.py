@@ -3,6 +3,6 @@
 Pressures in Pa, gaps and displacements in m, forces in N.
 """
 
-from ._native import NormalSolution, NormalSolver, TangentialSolver, normal_sweep
+from ._native import Convergence, NormalSolution, NormalSolver, TangentialSolver, normal_sweep
 
-__all__ = ["NormalSolver", "NormalSolution", "normal_sweep", "TangentialSolver"]
+__all__ = ["NormalSolver", "NormalSolution", "Convergence", "normal_sweep", "TangentialSolver"]

@@ -4,6 +4,22 @@ Heights in m, spacings in m, moduli in Pa. ``Surface.from_topography`` takes a
 SurfaceTopography ``Topography``.
 """
 
-from ._native import Profile, Surface, composite_modulus, equivalent_surface, read_topography
+from ._native import (
+    PowerSpectrum,
+    Profile,
+    Surface,
+    SurfaceStats,
+    composite_modulus,
+    equivalent_surface,
+    read_topography,
+)
 
-__all__ = ["Surface", "Profile", "read_topography", "composite_modulus", "equivalent_surface"]
+__all__ = [
+    "Surface",
+    "Profile",
+    "SurfaceStats",
+    "PowerSpectrum",
+    "read_topography",
+    "composite_modulus",
+    "equivalent_surface",
+]

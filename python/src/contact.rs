@@ -29,6 +29,34 @@ pub struct NormalSolution {
     pub periodic: bool,
 }
 
+/// How a normal solve converged.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct Convergence {
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Relative tolerance asked for.
+    pub tolerance: f64,
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+    /// Wall-clock time of the solve (s).
+    pub wall_time_s: f64,
+}
+
+#[pymethods]
+impl Convergence {
+    fn __repr__(&self) -> String {
+        format!(
+            "Convergence({} iterations, residual {:.3e} / tolerance {:.1e}, converged={})",
+            self.iterations,
+            self.residual,
+            self.tolerance,
+            if self.converged { "True" } else { "False" }
+        )
+    }
+}
+
 #[pymethods]
 impl NormalSolution {
     /// Contact pressure p (Pa); zero outside the contact.
@@ -185,16 +213,16 @@ impl NormalSolution {
         self.inner.wall_time_s
     }
 
-    /// The convergence record: iterations, residual, tolerance, converged, wall_time_s.
+    /// The convergence record: iterations, residual, tolerance, converged, wall time.
     #[getter]
-    fn convergence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("iterations", self.inner.iterations)?;
-        d.set_item("residual", self.inner.residual)?;
-        d.set_item("tolerance", self.tolerance)?;
-        d.set_item("converged", self.inner.converged)?;
-        d.set_item("wall_time_s", self.inner.wall_time_s)?;
-        Ok(d)
+    fn convergence(&self) -> Convergence {
+        Convergence {
+            iterations: self.inner.iterations,
+            residual: self.inner.residual,
+            tolerance: self.tolerance,
+            converged: self.inner.converged,
+            wall_time_s: self.inner.wall_time_s,
+        }
     }
 
     fn __repr__(&self) -> String {

@@ -24,11 +24,14 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<surface::Surface>()?;
     m.add_class::<surface::Profile>()?;
+    m.add_class::<surface::SurfaceStats>()?;
+    m.add_class::<surface::PowerSpectrum>()?;
     m.add_function(wrap_pyfunction!(surface::read_topography, m)?)?;
     m.add_function(wrap_pyfunction!(surface::composite_modulus, m)?)?;
     m.add_function(wrap_pyfunction!(surface::equivalent_surface, m)?)?;
     m.add_class::<contact::NormalSolver>()?;
     m.add_class::<contact::NormalSolution>()?;
+    m.add_class::<contact::Convergence>()?;
     m.add_function(wrap_pyfunction!(contact::normal_sweep, m)?)?;
     m.add_class::<contact::TangentialSolver>()?;
     m.add_class::<element::ValanisParams>()?;

@@ -65,7 +65,11 @@ def test_surface_from_topography_matches_surfacetopography():
     assert s.dx_m == pytest.approx(2e-6, rel=1e-15)
     assert np.allclose(s.heights, h_um * 1e-6, rtol=1e-15, atol=0)
     # The peer's own Sq (mean subtracted), converted from µm.
-    assert s.stats("mean")["rq_m"] == pytest.approx(t.Sq() * 1e-6, rel=1e-12)
+    stats = s.stats("mean")
+    assert stats.rq_m == pytest.approx(t.Sq() * 1e-6, rel=1e-12)
+    # Slopes are dimensionless: the peer's along x (Rdq) and its gradient, unconverted.
+    assert stats.rms_slope == pytest.approx(t.Rdq(), rel=1e-12)
+    assert stats.rms_gradient == pytest.approx(t.rms_gradient(), rel=1e-12)
     # A non-periodic topography in mm keeps its window kind and scale.
     t2 = st.Topography(h_um * 1e-3, (0.128, 0.096), unit="mm", periodic=False)
     s2 = ap.Surface.from_topography(t2)

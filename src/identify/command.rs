@@ -6,7 +6,7 @@
 //! Each command runs in two steps so that a caller can show progress: [`prepare_identify`]
 //! (or [`prepare_predict`]) checks the settings, declares the output set and reads the
 //! measured files — every error of the inputs is raised here, before any fit — then the
-//! prepared run's `run` fits or predicts, and its [`Outcome::write`] writes the command's files
+//! prepared run's `run` fits or predicts, and the outcome's `write` writes the command's files
 //! through the output set (all appear or none).
 
 use super::effects::Effect;
@@ -228,14 +228,16 @@ impl<R> Outcome<R> {
 }
 
 impl Outcome<IdentifyReport> {
-    /// Write `identify`'s files (see [`Outcome::write_with`]).
+    /// Write `identify`'s files through the output set (all appear or none); returns the
+    /// report and the files' final paths (none without an output directory).
     pub fn write(self) -> Result<(IdentifyReport, Vec<PathBuf>)> {
         self.write_with(|r, d| r.write(d))
     }
 }
 
 impl Outcome<Prediction> {
-    /// Write `predict`'s files (see [`Outcome::write_with`]).
+    /// Write `predict`'s files through the output set (all appear or none); returns the
+    /// report and the files' final paths (none without an output directory).
     pub fn write(self) -> Result<(Prediction, Vec<PathBuf>)> {
         self.write_with(|r, d| r.write(d))
     }
