@@ -33,6 +33,7 @@ written before the modules keeps working; typed code calls the function by its f
 from . import calibrate, contact, dynamics, errors, film, identify, surface
 from ._native import __version__
 from .calibrate import (
+    CalibrationRun,
     CalibrationTable,
     ValanisFit,
     ValanisParams,
@@ -116,6 +117,7 @@ __all__ = [
     "fit_valanis_loops",
     "student_t_975",
     "CalibrationTable",
+    "CalibrationRun",
     "calibrate",
     "join_elements",
     "read_preloads",

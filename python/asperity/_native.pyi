@@ -19,6 +19,7 @@ Columns = Dict[str, np.ndarray]
 
 __version__: str
 __all__ = [
+    "CalibrationRun",
     "CalibrationTable",
     "Convergence",
     "DiagnoseErrors",
@@ -563,18 +564,38 @@ def calibrate(
     realisations: Optional[int] = None,
     surface: Optional[Surface] = None,
     out_dir: Optional[Path] = None,
-) -> Dict[str, Any]:
+) -> "CalibrationRun":
     """The chain of ``asperity calibrate`` (surfaces → normal sweep → tangential loops at several
     amplitudes → Valanis fits → table with 95 % intervals, grid and patch checks) on the TOML
     ``config`` (None: the built-in reference case), ``grid``/``realisations`` overriding it, or
     on one given ``surface`` (heights in m). With ``out_dir`` the CLI's files, identical to its
     own on the same inputs (``calibration_timings.csv`` excepted).
 
-    Returns ``table`` (CalibrationTable: means per pressure in Pa; kn, E0, Et in N/m³),
-    ``realisations`` (columns per realisation × pressure: realisation, seed (−1: given surface),
-    pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m (m),
-    E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points), ``convergence``
-    (as in calibration.json), ``warnings``, ``written`` (paths), ``times`` (stage times, s)."""
+    Returns a ``CalibrationRun``."""
+
+@final
+class CalibrationRun:
+    """What ``calibrate`` produced."""
+
+    @property
+    def table(self) -> CalibrationTable:
+        """Means per pressure (Pa); kn, E0, Et in N/m³."""
+    @property
+    def realisations(self) -> Columns:
+        """Columns per realisation × pressure: realisation, seed (−1: given surface),
+        pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m (m),
+        E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points."""
+    @property
+    def convergence(self) -> Dict[str, Any]:
+        """The grid and patch checks per pressure, as in calibration.json."""
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def written(self) -> List[str]:
+        """Files written into ``out_dir`` (empty without one)."""
+    @property
+    def times(self) -> Dict[str, Any]:
+        """Wall time of each stage (s)."""
 
 def join_elements(
     preloads: Columns, table: CalibrationTable, out: Optional[Path] = None

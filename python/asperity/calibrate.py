@@ -6,6 +6,7 @@ Stiffnesses in N/m or Pa/m, forces in N, pressures in Pa. ``asperity.calibrate(.
 """
 
 from ._native import (
+    CalibrationRun,
     CalibrationTable,
     ValanisFit,
     ValanisParams,
@@ -34,6 +35,7 @@ __all__ = [
     "fit_valanis_loops",
     "student_t_975",
     "CalibrationTable",
+    "CalibrationRun",
     "calibrate",
     "join_elements",
     "read_preloads",

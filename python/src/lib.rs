@@ -44,6 +44,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(element::fit_valanis_loops, m)?)?;
     m.add_function(wrap_pyfunction!(element::student_t_975, m)?)?;
     m.add_class::<calibrate::CalibrationTable>()?;
+    m.add_class::<calibrate::CalibrationRun>()?;
     m.add_function(wrap_pyfunction!(calibrate::join_elements, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_class::<dynamics::ResponseModel>()?;
