@@ -49,7 +49,7 @@ from .calibrate import (
     write_preloads,
 )
 from .contact import Convergence, NormalSolution, NormalSolver, TangentialSolver, normal_sweep
-from .dynamics import ResponseModel
+from .dynamics import ResponseModel, SweepResult
 from .film import FilmMap, FilmResult, PolyFit, Region, film_preloads, read_nodes, reduce_preloads
 from .identify import (
     DiagnoseErrors,
@@ -131,6 +131,7 @@ __all__ = [
     "film_preloads",
     "reduce_preloads",
     "ResponseModel",
+    "SweepResult",
     "read_record",
     "Record",
     "diagnose",

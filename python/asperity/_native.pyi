@@ -41,6 +41,7 @@ __all__ = [
     "ResponseModel",
     "Surface",
     "SurfaceStats",
+    "SweepResult",
     "TangentialSolver",
     "ValanisFit",
     "ValanisParams",
@@ -847,16 +848,47 @@ class ResponseModel:
         time_samples: Optional[int] = None,
         points: Optional[int] = None,
         formulation: Optional[str] = None,
-    ) -> Dict[str, Any]:
+    ) -> "SweepResult":
         """Force-controlled frequency sweep at ``level_n`` (N) over [start, end] Hz (unset
         values: the model file's [sweep]; for array models harmonics 5, points 200, formulation
-        "auto"). Returns ``columns`` (the columns of response_level_<i>.csv: frequency_Hz,
-        <dof>_h<k>_amplitude_m (m), <dof>_h<k>_phase_rad, dissipated_energy_J (J per cycle),
-        stick/slip/separation fractions, newton_iterations, relative_residual),
-        ``coordinate_harmonics`` (points, n, coefficients; m), ``harmonic_orders``, ``peak``
-        (index), ``peak_elements`` (columns per element at the peak), ``level_N``,
-        ``formulation``, ``unknowns``, ``rejected_steps``, ``turning_points``, ``jacobians``,
-        ``wall_time_s``."""
+        "auto")."""
+
+@final
+class SweepResult:
+    """One level's force-controlled sweep (the results of ``asperity response``)."""
+
+    @property
+    def columns(self) -> Columns:
+        """The columns of response_level_<i>.csv: frequency_Hz, <dof>_h<k>_amplitude_m (m),
+        <dof>_h<k>_phase_rad, dissipated_energy_J (J per cycle), stick/slip/separation
+        fractions, newton_iterations, relative_residual."""
+    @property
+    def coordinate_harmonics(self) -> F64Array:
+        """(points, n, coefficients) harmonic coefficients of every coordinate (m)."""
+    @property
+    def harmonic_orders(self) -> List[int]: ...
+    @property
+    def peak(self) -> int:
+        """Index of the largest first-harmonic amplitude of the first response."""
+    @property
+    def peak_elements(self) -> Dict[str, Any]:
+        """Columns per element at the peak: element, law, dissipated_energy_J, stick_fraction,
+        slip_fraction, separation_fraction."""
+    @property
+    def level_n(self) -> float: ...
+    @property
+    def formulation(self) -> str:
+        """``"coordinates"`` or ``"receptance"``."""
+    @property
+    def unknowns(self) -> int: ...
+    @property
+    def rejected_steps(self) -> int: ...
+    @property
+    def turning_points(self) -> int: ...
+    @property
+    def jacobians(self) -> int: ...
+    @property
+    def wall_time_s(self) -> float: ...
 
 # ---------------------------------------------------------------- identify and diagnose
 

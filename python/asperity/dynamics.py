@@ -4,6 +4,6 @@ balance and time integration of a linear structure with nonlinear joints.
 Frequencies in Hz, forces in N, displacements in m.
 """
 
-from ._native import ResponseModel
+from ._native import ResponseModel, SweepResult
 
-__all__ = ["ResponseModel"]
+__all__ = ["ResponseModel", "SweepResult"]

@@ -48,6 +48,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate::join_elements, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_class::<dynamics::ResponseModel>()?;
+    m.add_class::<dynamics::SweepResult>()?;
     m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::write_preloads, m)?)?;
     m.add_class::<film::FilmMap>()?;
