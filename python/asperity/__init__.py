@@ -35,6 +35,7 @@ from ._native import __version__
 from .calibrate import (
     CalibrationRun,
     CalibrationTable,
+    LoopFit,
     ValanisFit,
     ValanisParams,
     dissipated_energy,
@@ -48,7 +49,19 @@ from .calibrate import (
     valanis_integrate,
     write_preloads,
 )
-from .contact import Convergence, NormalSolution, NormalSolver, TangentialSolver, normal_sweep
+from .contact import (
+    AmplitudeHistory,
+    AmplitudeLoop,
+    Convergence,
+    CycleEnergy,
+    NormalSolution,
+    NormalSolver,
+    OscillationResult,
+    TangentialMetadata,
+    TangentialSolver,
+    TangentialStep,
+    normal_sweep,
+)
 from .dynamics import ResponseModel, SweepResult
 from .film import FilmMap, FilmResult, PolyFit, Region, film_preloads, read_nodes, reduce_preloads
 from .identify import (
@@ -107,8 +120,15 @@ __all__ = [
     "Convergence",
     "normal_sweep",
     "TangentialSolver",
+    "TangentialStep",
+    "TangentialMetadata",
+    "OscillationResult",
+    "CycleEnergy",
+    "AmplitudeHistory",
+    "AmplitudeLoop",
     "ValanisParams",
     "ValanisFit",
+    "LoopFit",
     "valanis_integrate",
     "normal_load_history",
     "dissipated_energy",

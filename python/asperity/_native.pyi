@@ -19,9 +19,12 @@ Columns = Dict[str, np.ndarray]
 
 __version__: str
 __all__ = [
+    "AmplitudeHistory",
+    "AmplitudeLoop",
     "CalibrationRun",
     "CalibrationTable",
     "Convergence",
+    "CycleEnergy",
     "DiagnoseErrors",
     "DiagnoseReport",
     "FilePrediction",
@@ -29,8 +32,10 @@ __all__ = [
     "FilmResult",
     "IdentifyReport",
     "LevelError",
+    "LoopFit",
     "NormalSolution",
     "NormalSolver",
+    "OscillationResult",
     "ParameterEstimate",
     "PolyFit",
     "PowerSpectrum",
@@ -42,7 +47,9 @@ __all__ = [
     "Surface",
     "SurfaceStats",
     "SweepResult",
+    "TangentialMetadata",
     "TangentialSolver",
+    "TangentialStep",
     "ValanisFit",
     "ValanisParams",
     "__version__",
@@ -411,7 +418,7 @@ class TangentialSolver:
         *,
         displacement_m: Optional[Tuple[float, float]] = None,
         force_n: Optional[Tuple[float, float]] = None,
-    ) -> Dict[str, Any]:
+    ) -> "TangentialStep":
         """One step imposing a rigid shift (m) or a total tangential force (N)."""
     def oscillate(
         self,
@@ -420,13 +427,9 @@ class TangentialSolver:
         amplitude_n: Optional[Tuple[float, float]] = None,
         cycles: int = 3,
         steps_per_cycle: int = 40,
-    ) -> Dict[str, Any]:
-        """Sinusoidal history from the virgin state. ``steps`` (columns: displacement_m,
-        displacement_y_m, force_N, force_y_N, mean_shear_stress_Pa, mean_shear_stress_y_Pa,
-        stick_fraction, accumulated_slip_m, frictional_work_J, iterations, residual,
-        wall_time_s; step 0 = unloaded), ``cycles`` (dissipated_J, dissipated_J_per_m2,
-        frictional_work_J per cycle), ``metadata``, ``wall_time_s``."""
-    def amplitude_loops(self, factors: Sequence[float], steps_per_cycle: int = 40) -> Dict[str, Any]:
+    ) -> "OscillationResult":
+        """Sinusoidal history from the virgin state (step 0 = unloaded)."""
+    def amplitude_loops(self, factors: Sequence[float], steps_per_cycle: int = 40) -> "AmplitudeHistory":
         """The calibration's history of increasing amplitudes (factors × gross-slip
         displacement); per amplitude the steady loop and its fit data (``fit_q``, ``fit_force``,
         ``steady``)."""
@@ -440,9 +443,145 @@ class TangentialSolver:
     def friction_limit_n(self) -> float:
         """μP (N)."""
     @property
-    def metadata(self) -> Dict[str, Any]: ...
+    def metadata(self) -> "TangentialMetadata": ...
+
+@final
+class TangentialStep:
+    """One tangential load step (SI)."""
+
+    @property
+    def shift_m(self) -> Tuple[float, float]:
+        """Rigid shift (dx, dy) (m)."""
+    @property
+    def force_n(self) -> Tuple[float, float]:
+        """Total tangential force (Tx, Ty) (N)."""
+    @property
+    def mean_shear_pa(self) -> Tuple[float, float]: ...
+    @property
+    def stick_fraction(self) -> float: ...
+    @property
+    def accumulated_slip_m(self) -> float: ...
+    @property
+    def frictional_work_j(self) -> float: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+@final
+class CycleEnergy:
+    """Energy of one load cycle."""
+
+    @property
+    def cycle(self) -> int:
+        """1-based; cycle 1 includes the initial loading branch."""
+    @property
+    def dissipated_j(self) -> float:
+        """Loop area (J)."""
+    @property
+    def dissipated_j_per_m2(self) -> float: ...
+    @property
+    def frictional_work_j(self) -> float: ...
+
+@final
+class TangentialMetadata:
+    """Set-up facts of a tangential solver."""
+
+    @property
+    def assumption(self) -> str: ...
+    @property
+    def friction_coefficient(self) -> float: ...
+    @property
+    def grid(self) -> Tuple[int, int]: ...
+    @property
+    def boundary(self) -> str: ...
+    @property
+    def operator(self) -> str: ...
+    @property
+    def contact_points(self) -> int: ...
+    @property
+    def normal_force_n(self) -> float: ...
+    @property
+    def nominal_area_m2(self) -> float: ...
+    @property
+    def compliance_norm_m_per_pa(self) -> float: ...
+    @property
+    def setup_time_s(self) -> float: ...
+
+@final
+class OscillationResult:
+    """A sinusoidal tangential history (the results of ``asperity contact tangential``)."""
+
+    @property
+    def steps(self) -> Columns:
+        """Columns per step: displacement_m, displacement_y_m, force_N, force_y_N,
+        mean_shear_stress_Pa, mean_shear_stress_y_Pa, stick_fraction, accumulated_slip_m,
+        frictional_work_J, iterations, residual, wall_time_s."""
+    @property
+    def cycles(self) -> List[CycleEnergy]: ...
+    @property
+    def metadata(self) -> TangentialMetadata: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+@final
+class AmplitudeLoop:
+    """One amplitude's steady loop and the data the calibration fits."""
+
+    @property
+    def amplitude_factor(self) -> float: ...
+    @property
+    def amplitude_m(self) -> float: ...
+    @property
+    def displacement_m(self) -> F64Array: ...
+    @property
+    def shear_stress_pa(self) -> F64Array: ...
+    @property
+    def loop_area_j_per_m2(self) -> float: ...
+    @property
+    def dissipation_j_per_m2(self) -> float: ...
+    @property
+    def closure_error(self) -> float: ...
+    @property
+    def fit_q(self) -> F64Array: ...
+    @property
+    def fit_force(self) -> F64Array: ...
+    @property
+    def steady(self) -> Tuple[int, int]:
+        """[start, end) of the steady cycle in ``fit_q``."""
+
+@final
+class AmplitudeHistory:
+    """The calibration's history of increasing amplitudes."""
+
+    @property
+    def gross_slip_displacement_m(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def loops(self) -> List[AmplitudeLoop]: ...
 
 # ---------------------------------------------------------------- Valanis element
+
+@final
+class LoopFit:
+    """How well a fitted element reproduces one loop."""
+
+    @property
+    def r2(self) -> float: ...
+    @property
+    def nrmse(self) -> float: ...
+    @property
+    def energy_data(self) -> float: ...
+    @property
+    def energy_model(self) -> float: ...
+    @property
+    def energy_rel_error(self) -> float:
+        """energy_model / energy_data − 1."""
 
 @final
 class ValanisParams:
@@ -500,7 +639,7 @@ class ValanisFit:
     @property
     def model_force(self) -> F64Array: ...
     @property
-    def loops(self) -> List[Dict[str, float]]: ...
+    def loops(self) -> List["LoopFit"]: ...
     @property
     def iterations(self) -> int: ...
     @property

@@ -8,6 +8,7 @@ Stiffnesses in N/m or Pa/m, forces in N, pressures in Pa. ``asperity.calibrate(.
 from ._native import (
     CalibrationRun,
     CalibrationTable,
+    LoopFit,
     ValanisFit,
     ValanisParams,
     calibrate,
@@ -27,6 +28,7 @@ from ._stage import make_callable
 __all__ = [
     "ValanisParams",
     "ValanisFit",
+    "LoopFit",
     "valanis_integrate",
     "normal_load_history",
     "dissipated_energy",

@@ -3,6 +3,30 @@
 Pressures in Pa, gaps and displacements in m, forces in N.
 """
 
-from ._native import Convergence, NormalSolution, NormalSolver, TangentialSolver, normal_sweep
+from ._native import (
+    AmplitudeHistory,
+    AmplitudeLoop,
+    Convergence,
+    CycleEnergy,
+    NormalSolution,
+    NormalSolver,
+    OscillationResult,
+    TangentialMetadata,
+    TangentialSolver,
+    TangentialStep,
+    normal_sweep,
+)
 
-__all__ = ["NormalSolver", "NormalSolution", "Convergence", "normal_sweep", "TangentialSolver"]
+__all__ = [
+    "NormalSolver",
+    "NormalSolution",
+    "Convergence",
+    "normal_sweep",
+    "TangentialSolver",
+    "TangentialStep",
+    "TangentialMetadata",
+    "OscillationResult",
+    "CycleEnergy",
+    "AmplitudeHistory",
+    "AmplitudeLoop",
+]

@@ -34,8 +34,15 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<contact::Convergence>()?;
     m.add_function(wrap_pyfunction!(contact::normal_sweep, m)?)?;
     m.add_class::<contact::TangentialSolver>()?;
+    m.add_class::<contact::TangentialStep>()?;
+    m.add_class::<contact::CycleEnergy>()?;
+    m.add_class::<contact::TangentialMetadata>()?;
+    m.add_class::<contact::OscillationResult>()?;
+    m.add_class::<contact::AmplitudeLoop>()?;
+    m.add_class::<contact::AmplitudeHistory>()?;
     m.add_class::<element::ValanisParams>()?;
     m.add_class::<element::ValanisFit>()?;
+    m.add_class::<element::LoopFit>()?;
     m.add_function(wrap_pyfunction!(element::valanis_integrate, m)?)?;
     m.add_function(wrap_pyfunction!(element::normal_load_history, m)?)?;
     m.add_function(wrap_pyfunction!(element::dissipated_energy, m)?)?;

@@ -104,7 +104,7 @@ def test_tangential_loops_equal_the_cli(cli, tmp_path):
     sol = ap.NormalSolver(s, e_star_pa=E_STAR).solve_load(2e6)
     t = ap.TangentialSolver(sol, friction_coefficient=0.6)
     r = t.oscillate(amplitude_m=(amplitude, 0.0), cycles=1, steps_per_cycle=8)
-    st = r["steps"]
+    st = r.steps
     assert len(rows) == len(st["displacement_m"]) == 9
     for k, row in enumerate(rows):
         assert float(row["displacement_m"]) == st["displacement_m"][k]
@@ -116,8 +116,12 @@ def test_tangential_loops_equal_the_cli(cli, tmp_path):
         assert int(row["iterations"]) == st["iterations"][k]
         assert row["stick_fraction"] == f"{st['stick_fraction'][k]:.6f}"
     energy = csv_rows(tmp_path / "tangential_energy.csv")
-    assert float(energy[0]["dissipated_J_per_m2"]) == r["cycles"][0]["dissipated_j_per_m2"]
-    assert r["cycles"][0]["dissipated_j_per_m2"] > 0
+    assert float(energy[0]["dissipated_J_per_m2"]) == r.cycles[0].dissipated_j_per_m2
+    assert r.cycles[0].dissipated_j_per_m2 > 0
+    assert r.metadata.friction_coefficient == 0.6 and r.metadata.grid == (128, 128)
+    assert r.metadata.contact_points == sol.contact_points
+    step = t.step(displacement_m=(amplitude, 0.0))
+    assert step.shift_m == (amplitude, 0.0) and step.converged
 
 
 def test_elements_equal_the_cli(cli, tmp_path, repo):
