@@ -63,7 +63,17 @@ from .contact import (
     normal_sweep,
 )
 from .dynamics import ResponseModel, SweepResult
-from .film import FilmMap, FilmResult, PolyFit, Region, film_preloads, read_nodes, reduce_preloads
+from .film import (
+    ClassCounts,
+    FilmMap,
+    FilmResult,
+    PolyFit,
+    Region,
+    RegionSummary,
+    film_preloads,
+    read_nodes,
+    reduce_preloads,
+)
 from .identify import (
     DiagnoseErrors,
     DiagnoseReport,
@@ -147,6 +157,8 @@ __all__ = [
     "FilmMap",
     "Region",
     "PolyFit",
+    "RegionSummary",
+    "ClassCounts",
     "read_nodes",
     "film_preloads",
     "reduce_preloads",

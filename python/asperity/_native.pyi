@@ -23,6 +23,7 @@ __all__ = [
     "AmplitudeLoop",
     "CalibrationRun",
     "CalibrationTable",
+    "ClassCounts",
     "Convergence",
     "CycleEnergy",
     "DiagnoseErrors",
@@ -43,6 +44,7 @@ __all__ = [
     "Profile",
     "Record",
     "Region",
+    "RegionSummary",
     "ResponseModel",
     "Surface",
     "SurfaceStats",
@@ -806,7 +808,7 @@ class FilmMap:
     def pixel_class(self) -> npt.NDArray[np.uint8]:
         """Codes into ``class_names``."""
     @property
-    def class_counts(self) -> Dict[str, int]: ...
+    def class_counts(self) -> "ClassCounts": ...
     @property
     def pixel_size_m(self) -> float: ...
     @property
@@ -818,8 +820,52 @@ class FilmMap:
         self, x0_m: float, y0_m: float, x1_m: float, y1_m: float, id: int = 1
     ) -> Region: ...
     def roi_polygon(self, vertices_m: Sequence[Tuple[float, float]], id: int = 1) -> Region: ...
-    def summarise(self, region: Region) -> Dict[str, Any]: ...
+    def summarise(self, region: Region) -> "RegionSummary": ...
     def fit(self, region: Region, order: int = 4) -> PolyFit: ...
+
+@final
+class ClassCounts:
+    """Pixel counts per class."""
+
+    @property
+    def in_range(self) -> int: ...
+    @property
+    def unstained(self) -> int: ...
+    @property
+    def below_range(self) -> int: ...
+    @property
+    def above_range(self) -> int:
+        """Saturated pixels."""
+    @property
+    def off_curve(self) -> int:
+        """Pixels far from the colour curve (rejected)."""
+
+@final
+class RegionSummary:
+    """Summary of a region of a film map (film frame, m; pressures in Pa)."""
+
+    @property
+    def id(self) -> int: ...
+    @property
+    def centre_x_m(self) -> float: ...
+    @property
+    def centre_y_m(self) -> float: ...
+    @property
+    def area_m2(self) -> float: ...
+    @property
+    def equivalent_diameter_m(self) -> float: ...
+    @property
+    def mean_pressure_pa(self) -> float:
+        """NaN when no pixel is in range."""
+    @property
+    def max_pressure_pa(self) -> float: ...
+    @property
+    def in_range_load_n(self) -> float:
+        """Load of the in-range pixels (N): a lower bound of the region's load."""
+    @property
+    def counts(self) -> ClassCounts: ...
+    @property
+    def saturated_fraction(self) -> float: ...
 
 def read_nodes(path: Path) -> Columns:
     """Nodes CSV (mesh frame) → id, x_m, y_m, area_m2 (NaN where absent)."""
@@ -856,7 +902,7 @@ class FilmResult:
     def fits(self) -> List[Optional[PolyFit]]:
         """The fit of each region, ``None`` where it could not be fitted."""
     @property
-    def summaries(self) -> List[Dict[str, Any]]: ...
+    def summaries(self) -> List["RegionSummary"]: ...
     @property
     def pixel_size_m(self) -> float: ...
     @property

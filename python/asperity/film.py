@@ -5,10 +5,12 @@ Film frame in m, pressures in Pa, preloads in N. ``asperity.film(...)`` calls
 """
 
 from ._native import (
+    ClassCounts,
     FilmMap,
     FilmResult,
     PolyFit,
     Region,
+    RegionSummary,
     film,
     film_preloads,
     read_nodes,
@@ -22,6 +24,8 @@ __all__ = [
     "FilmMap",
     "Region",
     "PolyFit",
+    "RegionSummary",
+    "ClassCounts",
     "read_nodes",
     "film_preloads",
     "reduce_preloads",

@@ -59,6 +59,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::write_preloads, m)?)?;
     m.add_class::<film::FilmMap>()?;
+    m.add_class::<film::ClassCounts>()?;
+    m.add_class::<film::RegionSummary>()?;
     m.add_class::<film::Region>()?;
     m.add_class::<film::PolyFit>()?;
     m.add_function(wrap_pyfunction!(film::read_nodes, m)?)?;

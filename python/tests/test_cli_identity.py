@@ -214,6 +214,14 @@ def test_film_pipeline_is_the_clis(cli, tmp_path, data_file, repo):
         assert ours == theirs, name
     assert len(got.regions) == 6 and all(f is not None for f in got.fits)
     assert got.summary == json.loads((out / "film.json").read_text())["summary"]
+    # The typed region summaries are the JSON's, field for field.
+    assert len(got.summaries) == len(got.summary["regions"])
+    for ours, theirs in zip(got.summaries, got.summary["regions"]):
+        counts = theirs.pop("counts")
+        assert {k: getattr(ours, k) for k in theirs} == theirs
+        assert {k: getattr(ours.counts, k) for k in counts} == counts
+    total = got.film_map.class_counts
+    assert sum(getattr(total, k) for k in ap.FilmMap.class_names) == got.film_map.shape[0] * got.film_map.shape[1]
     assert np.array_equal(got.film_map.pressure_pa, np.load(out / "pressure_map_Pa.npy"),
                           equal_nan=True)
     assert got.preloads["N0_N"].sum() == pytest.approx(100.5, rel=1e-12)
