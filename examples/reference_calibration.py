@@ -77,14 +77,14 @@ def realisation(grid, seed, log):
         # %% 3. Loops at every amplitude from one history, and one element fitted to them all.
         t = ap.TangentialSolver(sol, friction_coefficient=MU, tolerance=TANGENTIAL_TOLERANCE)
         history = t.amplitude_loops(AMPLITUDE_FACTORS, STEPS_PER_CYCLE)
-        loops = history["loops"]
+        loops = history.loops
         fit = ap.fit_valanis_loops(
-            [(l["fit_q"], l["fit_force"], p, l["steady"]) for l in loops], mu=MU
+            [(l.fit_q, l.fit_force, p, l.steady) for l in loops], mu=MU
         )
-        errors = ", ".join(f"{100 * e['energy_rel_error']:+.0f} %" for e in fit.loops)
+        errors = ", ".join(f"{100 * e.energy_rel_error:+.0f} %" for e in fit.loops)
         log(f"  seed {seed}, {p / 1e6:5.1f} MPa: area ratio {sol.contact_area_ratio:.3e}, kn {kn:.3e} N/m³, "
             f"E0 {fit.params.e0:.3e} N/m³, k {fit.params.k:.3f}, mean R² {fit.r2:.4f}; energy error per amplitude: {errors}")
-        results.append((sol.contact_area_ratio, kn, fit, loops[-1]["loop_area_j_per_m2"]))
+        results.append((sol.contact_area_ratio, kn, fit, loops[-1].loop_area_j_per_m2))
     return results
 
 

@@ -16,50 +16,85 @@ copied; a ``Surface`` copies its heights once). Arrays handed out are either rea
 a result object's memory or new arrays; nothing is copied twice. Long computations release the
 GIL.
 
-The data flow, in the order of the modules: ``Surface`` (generate, read, stats) →
-``NormalSolver`` / ``normal_sweep`` → ``TangentialSolver`` (hysteresis loops) →
-``ValanisParams`` / ``valanis_integrate`` / ``fit_valanis`` → ``CalibrationTable`` (read,
-interpolate; or ``calibrate``, the whole chain) → ``film`` (or ``FilmMap`` / ``film_preloads``) →
-``join_elements`` → ``ResponseModel`` (forced response, harmonic balance) → ``diagnose``.
+The data flow, one sub-module per stage (every name is also at the top level):
+:mod:`asperity.surface` (``Surface``: generate, read, stats, ``from_topography``) →
+:mod:`asperity.contact` (``NormalSolver`` / ``normal_sweep``, ``TangentialSolver``: hysteresis
+loops) → :mod:`asperity.calibrate` (``ValanisParams`` / ``valanis_integrate`` / ``fit_valanis``,
+``CalibrationTable``, ``calibrate``: the whole chain, ``join_elements``) → :mod:`asperity.film`
+(``film``, or ``FilmMap`` / ``film_preloads``) → :mod:`asperity.dynamics` (``ResponseModel``:
+forced response, harmonic balance) → :mod:`asperity.identify` (``identify`` / ``predict`` on
+measured frequency responses, ``diagnose`` on a hysteresis record).
+
+``asperity.film``, ``asperity.calibrate`` and ``asperity.identify`` are modules that can also be
+called as their function (``asperity.film(...)`` is ``asperity.film.film(...)``), so that code
+written before the modules keeps working; typed code calls the function by its full name.
 """
 
-from . import errors
-from ._native import (
+from . import calibrate, contact, dynamics, errors, film, identify, surface
+from ._native import __version__
+from .calibrate import (
+    CalibrationRun,
     CalibrationTable,
-    FilmMap,
-    FilmResult,
-    NormalSolution,
-    NormalSolver,
-    ResponseModel,
-    PolyFit,
-    Profile,
-    Region,
-    Surface,
-    TangentialSolver,
+    LoopFit,
     ValanisFit,
     ValanisParams,
-    __version__,
-    calibrate,
-    composite_modulus,
-    diagnose,
     dissipated_energy,
-    equivalent_surface,
-    film,
-    film_preloads,
     fit_valanis,
     fit_valanis_loops,
-    student_t_975,
     join_elements,
     normal_load_history,
-    normal_sweep,
-    read_nodes,
     read_preloads,
-    read_record,
-    read_topography,
-    reduce_preloads,
     sine_history,
+    student_t_975,
     valanis_integrate,
     write_preloads,
+)
+from .contact import (
+    AmplitudeHistory,
+    AmplitudeLoop,
+    Convergence,
+    CycleEnergy,
+    NormalSolution,
+    NormalSolver,
+    OscillationResult,
+    TangentialMetadata,
+    TangentialSolver,
+    TangentialStep,
+    normal_sweep,
+)
+from .dynamics import ResponseModel, SweepResult
+from .film import (
+    ClassCounts,
+    FilmMap,
+    FilmResult,
+    PolyFit,
+    Region,
+    RegionSummary,
+    film_preloads,
+    read_nodes,
+    reduce_preloads,
+)
+from .identify import (
+    DiagnoseErrors,
+    DiagnoseReport,
+    FilePrediction,
+    IdentifyReport,
+    LevelError,
+    ParameterEstimate,
+    PredictReport,
+    Record,
+    diagnose,
+    predict,
+    read_record,
+)
+from .surface import (
+    PowerSpectrum,
+    Profile,
+    Surface,
+    SurfaceStats,
+    composite_modulus,
+    equivalent_surface,
+    read_topography,
 )
 from .errors import (
     ArrayTypeError,
@@ -75,18 +110,35 @@ from .errors import (
 __all__ = [
     "__version__",
     "errors",
-    *errors.__all__,
+    "Error",
+    "FileError",
+    "ParseError",
+    "ParameterError",
+    "DataError",
+    "ConvergenceError",
+    "ArrayTypeError",
+    "ResourceLimitError",
     "Surface",
     "Profile",
+    "SurfaceStats",
+    "PowerSpectrum",
     "read_topography",
     "composite_modulus",
     "equivalent_surface",
     "NormalSolver",
     "NormalSolution",
+    "Convergence",
     "normal_sweep",
     "TangentialSolver",
+    "TangentialStep",
+    "TangentialMetadata",
+    "OscillationResult",
+    "CycleEnergy",
+    "AmplitudeHistory",
+    "AmplitudeLoop",
     "ValanisParams",
     "ValanisFit",
+    "LoopFit",
     "valanis_integrate",
     "normal_load_history",
     "dissipated_energy",
@@ -95,6 +147,7 @@ __all__ = [
     "fit_valanis_loops",
     "student_t_975",
     "CalibrationTable",
+    "CalibrationRun",
     "calibrate",
     "join_elements",
     "read_preloads",
@@ -104,10 +157,26 @@ __all__ = [
     "FilmMap",
     "Region",
     "PolyFit",
+    "RegionSummary",
+    "ClassCounts",
     "read_nodes",
     "film_preloads",
     "reduce_preloads",
     "ResponseModel",
+    "SweepResult",
     "read_record",
+    "Record",
     "diagnose",
+    "DiagnoseReport",
+    "DiagnoseErrors",
+    "identify",
+    "IdentifyReport",
+    "ParameterEstimate",
+    "LevelError",
+    "predict",
+    "PredictReport",
+    "FilePrediction",
+    "surface",
+    "contact",
+    "dynamics",
 ]

@@ -8,7 +8,7 @@ dimensions, not contiguous, non-finite values).
 """
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -18,9 +18,71 @@ Path = Union[str, "PathLike[str]"]
 Columns = Dict[str, np.ndarray]
 
 __version__: str
+__all__ = [
+    "AmplitudeHistory",
+    "AmplitudeLoop",
+    "CalibrationRun",
+    "CalibrationTable",
+    "ClassCounts",
+    "Convergence",
+    "CycleEnergy",
+    "DiagnoseErrors",
+    "DiagnoseReport",
+    "FilePrediction",
+    "FilmMap",
+    "FilmResult",
+    "IdentifyReport",
+    "LevelError",
+    "LoopFit",
+    "NormalSolution",
+    "NormalSolver",
+    "OscillationResult",
+    "ParameterEstimate",
+    "PolyFit",
+    "PowerSpectrum",
+    "PredictReport",
+    "Profile",
+    "Record",
+    "Region",
+    "RegionSummary",
+    "ResponseModel",
+    "Surface",
+    "SurfaceStats",
+    "SweepResult",
+    "TangentialMetadata",
+    "TangentialSolver",
+    "TangentialStep",
+    "ValanisFit",
+    "ValanisParams",
+    "__version__",
+    "calibrate",
+    "composite_modulus",
+    "diagnose",
+    "dissipated_energy",
+    "equivalent_surface",
+    "film",
+    "film_preloads",
+    "fit_valanis",
+    "fit_valanis_loops",
+    "identify",
+    "join_elements",
+    "normal_load_history",
+    "normal_sweep",
+    "predict",
+    "read_nodes",
+    "read_preloads",
+    "read_record",
+    "read_topography",
+    "reduce_preloads",
+    "sine_history",
+    "student_t_975",
+    "valanis_integrate",
+    "write_preloads",
+]
 
 # ---------------------------------------------------------------- surfaces
 
+@final
 class Surface:
     """Heights (m) on a regular grid, ``heights[i, j]`` at ``(i·dx_m, j·dy_m)``.
 
@@ -28,11 +90,15 @@ class Surface:
     otherwise a finite window (zero-padded kernel). Immutable; ``heights`` is a read-only view.
     """
 
-    def __init__(
-        self, heights: F64Array, dx_m: float, dy_m: Optional[float] = None, periodic: bool = False
-    ) -> None:
+    def __new__(
+        cls, heights: F64Array, dx_m: float, dy_m: Optional[float] = None, periodic: bool = False
+    ) -> "Surface":
         """From heights (m), shape (nx, ny), spacings (m; ``dy_m`` defaults to ``dx_m``).
         Copies the heights once. NaN/inf raise ``ParameterError`` naming the grid point."""
+    @staticmethod
+    def from_topography(t: Any) -> "Surface":
+        """From a SurfaceTopography ``Topography`` (duck-typed: ``heights()``,
+        ``physical_sizes``, ``nb_grid_pts``, ``unit``, ``is_periodic``), converted to metres."""
     @staticmethod
     def generate(
         *,
@@ -67,12 +133,13 @@ class Surface:
     @property
     def size_m(self) -> Tuple[float, float]:
         """(nx·dx, ny·dy) (m)."""
-    def stats(self, detrend: str = "mean") -> Dict[str, Any]:
-        """Ra, Rq (m), Rsk, Rku, rms slopes/gradient, correlation lengths (m), ...: the keys of
+    def stats(self, detrend: str = "mean") -> "SurfaceStats":
+        """Ra, Rq (m), Rsk, Rku, rms slopes/gradient, correlation lengths (m), ...: those of
         ``asperity surface stats --json``. ``detrend``: "mean" or "plane"."""
-    def power_spectrum(self, detrend: str = "mean") -> Dict[str, Any]:
-        """Radially averaged PSD: ``q_rad_per_m``, ``c_m4``, ``count``, ``dim`` (= 2)."""
+    def power_spectrum(self, detrend: str = "mean") -> "PowerSpectrum":
+        """Radially averaged PSD (``c`` in m⁴, ``dim`` 2)."""
 
+@final
 class Profile:
     """A 1-D line scan (heights in m), as read from a Dektak CSV or a profile text file."""
 
@@ -85,9 +152,9 @@ class Profile:
     def dx_m(self) -> float: ...
     @property
     def periodic(self) -> bool: ...
-    def stats(self, detrend: str = "mean") -> Dict[str, Any]: ...
-    def power_spectrum(self, detrend: str = "mean") -> Dict[str, Any]:
-        """PSD: ``q_rad_per_m``, ``c_m3``, ``count``, ``dim`` (= 1)."""
+    def stats(self, detrend: str = "mean") -> "SurfaceStats": ...
+    def power_spectrum(self, detrend: str = "mean") -> "PowerSpectrum":
+        """PSD (``c`` in m³, ``dim`` 1)."""
     def __len__(self) -> int: ...
 
 def read_topography(path: Path) -> Union[Surface, Profile]:
@@ -106,6 +173,79 @@ def equivalent_surface(body1: Surface, body2: Surface) -> Surface:
 
 # ---------------------------------------------------------------- normal contact
 
+@final
+class SurfaceStats:
+    """Statistics of a topography (SI units; None where undefined)."""
+
+    @property
+    def kind(self) -> str:
+        """"profile" or "area"."""
+    @property
+    def uniform(self) -> bool: ...
+    @property
+    def periodic(self) -> bool: ...
+    @property
+    def detrend(self) -> str:
+        """"mean" or "plane"."""
+    @property
+    def nx(self) -> int: ...
+    @property
+    def ny(self) -> int: ...
+    @property
+    def missing_points(self) -> int: ...
+    @property
+    def dx_m(self) -> float: ...
+    @property
+    def dy_m(self) -> Optional[float]:
+        """None for a profile."""
+    @property
+    def lx_m(self) -> float: ...
+    @property
+    def ly_m(self) -> Optional[float]: ...
+    @property
+    def ra_m(self) -> float:
+        """Ra (m)."""
+    @property
+    def rq_m(self) -> float:
+        """Rq (m)."""
+    @property
+    def rsk(self) -> float: ...
+    @property
+    def rku(self) -> float: ...
+    @property
+    def rms_slope(self) -> float:
+        """Along x."""
+    @property
+    def rms_slope_y(self) -> Optional[float]: ...
+    @property
+    def rms_gradient(self) -> Optional[float]: ...
+    @property
+    def correlation_length_1_over_e_m(self) -> Optional[float]: ...
+    @property
+    def correlation_length_0_2_m(self) -> Optional[float]: ...
+    @property
+    def correlation_length_x_1_over_e_m(self) -> Optional[float]: ...
+    @property
+    def correlation_length_y_1_over_e_m(self) -> Optional[float]: ...
+
+@final
+class PowerSpectrum:
+    """A power spectral density, radially averaged for areas."""
+
+    @property
+    def dim(self) -> int:
+        """1 (profile) or 2 (area)."""
+    @property
+    def q_rad_per_m(self) -> F64Array:
+        """Angular wavenumbers, bin centres (rad/m)."""
+    @property
+    def c(self) -> F64Array:
+        """PSD: m³ (profile) or m⁴ (area)."""
+    @property
+    def count(self) -> npt.NDArray[np.uint64]:
+        """Fourier coefficients per bin."""
+
+@final
 class NormalSolution:
     """A converged normal-contact solution (SI). Arrays are read-only views (no copy)."""
 
@@ -120,6 +260,25 @@ class NormalSolution:
         """Elastic surface displacement u = K ⊛ p (m), both bodies combined."""
     @property
     def spacing_m(self) -> Tuple[float, float]: ...
+    @property
+    def hardness_pa(self) -> Optional[float]:
+        """Hardness H that bounded the pressure (Pa); None for elastic contact."""
+    @property
+    def elastic_points(self) -> int:
+        """Grid points in elastic contact, 0 < p < H."""
+    @property
+    def plastic_points(self) -> int:
+        """Grid points in plastic contact, p = H."""
+    @property
+    def elastic_area_ratio(self) -> float: ...
+    @property
+    def plastic_area_ratio(self) -> float: ...
+    @property
+    def plastic_volume_m3(self) -> float:
+        """Plastically displaced volume (m³)."""
+    def plastic_penetration(self) -> F64Array:
+        """max(−g, 0) at the plastic points, 0 elsewhere (m): the residual surface after
+        unloading is the heights minus it."""
     @property
     def periodic(self) -> bool: ...
     @property
@@ -153,9 +312,25 @@ class NormalSolution:
     @property
     def wall_time_s(self) -> float: ...
     @property
-    def convergence(self) -> Dict[str, Any]:
-        """``iterations``, ``residual``, ``tolerance``, ``converged``, ``wall_time_s``."""
+    def convergence(self) -> "Convergence": ...
 
+@final
+class Convergence:
+    """How a normal solve converged."""
+
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float:
+        """Final relative residual."""
+    @property
+    def tolerance(self) -> float: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+@final
 class NormalSolver:
     """Normal contact solver of one surface against an elastic half-space (E* in Pa):
     projected CG, preconditioned or Polonsky–Keer (``method`` "auto", "preconditioned",
@@ -164,15 +339,17 @@ class NormalSolver:
     Plan and kernel are built once; solves release the GIL. Reaching ``max_iterations`` raises
     ``ConvergenceError``."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         surface: Surface,
         *,
         e_star_pa: float,
+        hardness_pa: Optional[float] = None,
         tolerance: float = 1e-10,
         max_iterations: int = 5000,
         method: str = "auto",
-    ) -> None: ...
+    ) -> "NormalSolver":
+        """``hardness_pa``: elastic–perfectly plastic contact, pressure ≤ H (Pa)."""
     def solve_load(
         self, mean_pressure_pa: float, warm_start: Optional[NormalSolution] = None
     ) -> NormalSolution:
@@ -181,6 +358,9 @@ class NormalSolver:
         self, approach_m: float, warm_start: Optional[NormalSolution] = None
     ) -> NormalSolution:
         """Displacement control at rigid approach δ (m) from first contact."""
+    def loading_stiffness(self, solution: NormalSolution) -> float:
+        """Loading tangent dp̄/dδ (N/m³) of a hardness-limited solution (plastic points held at
+        H); ``contact_stiffness`` is the unloading/reloading one an element carries."""
     def contact_stiffness(self, solution: NormalSolution) -> float:
         """kn = dp̄/dδ (N/m³) of a converged solution of this solver, from the tangent problem
         on its contact set (one linear solve; what ``normal_sweep`` and ``calibrate`` use)."""
@@ -200,6 +380,7 @@ def normal_sweep(
     pressures_pa: Sequence[float],
     *,
     e_star_pa: float,
+    hardness_pa: Optional[float] = None,
     tolerance: float = 1e-10,
     max_iterations: int = 5000,
     method: str = "auto",
@@ -213,11 +394,12 @@ def normal_sweep(
 
 # ---------------------------------------------------------------- tangential contact
 
+@final
 class TangentialSolver:
     """Coulomb partial slip with history on a fixed pressure field (quasi-identical materials)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         pressure: Union[NormalSolution, F64Array],
         *,
         friction_coefficient: float,
@@ -230,7 +412,7 @@ class TangentialSolver:
         tolerance: float = 1e-6,
         max_iterations: int = 20000,
         operator: str = "auto",
-    ) -> None:
+    ) -> "TangentialSolver":
         """``pressure``: a NormalSolution, or pressures (Pa, (nx, ny)) with ``spacing_m`` and
         ``periodic``. ``operator``: "auto", "dense" or "fft"."""
     def step(
@@ -238,7 +420,7 @@ class TangentialSolver:
         *,
         displacement_m: Optional[Tuple[float, float]] = None,
         force_n: Optional[Tuple[float, float]] = None,
-    ) -> Dict[str, Any]:
+    ) -> "TangentialStep":
         """One step imposing a rigid shift (m) or a total tangential force (N)."""
     def oscillate(
         self,
@@ -247,13 +429,9 @@ class TangentialSolver:
         amplitude_n: Optional[Tuple[float, float]] = None,
         cycles: int = 3,
         steps_per_cycle: int = 40,
-    ) -> Dict[str, Any]:
-        """Sinusoidal history from the virgin state. ``steps`` (columns: displacement_m,
-        displacement_y_m, force_N, force_y_N, mean_shear_stress_Pa, mean_shear_stress_y_Pa,
-        stick_fraction, accumulated_slip_m, frictional_work_J, iterations, residual,
-        wall_time_s; step 0 = unloaded), ``cycles`` (dissipated_J, dissipated_J_per_m2,
-        frictional_work_J per cycle), ``metadata``, ``wall_time_s``."""
-    def amplitude_loops(self, factors: Sequence[float], steps_per_cycle: int = 40) -> Dict[str, Any]:
+    ) -> "OscillationResult":
+        """Sinusoidal history from the virgin state (step 0 = unloaded)."""
+    def amplitude_loops(self, factors: Sequence[float], steps_per_cycle: int = 40) -> "AmplitudeHistory":
         """The calibration's history of increasing amplitudes (factors × gross-slip
         displacement); per amplitude the steady loop and its fit data (``fit_q``, ``fit_force``,
         ``steady``)."""
@@ -267,15 +445,152 @@ class TangentialSolver:
     def friction_limit_n(self) -> float:
         """μP (N)."""
     @property
-    def metadata(self) -> Dict[str, Any]: ...
+    def metadata(self) -> "TangentialMetadata": ...
+
+@final
+class TangentialStep:
+    """One tangential load step (SI)."""
+
+    @property
+    def shift_m(self) -> Tuple[float, float]:
+        """Rigid shift (dx, dy) (m)."""
+    @property
+    def force_n(self) -> Tuple[float, float]:
+        """Total tangential force (Tx, Ty) (N)."""
+    @property
+    def mean_shear_pa(self) -> Tuple[float, float]: ...
+    @property
+    def stick_fraction(self) -> float: ...
+    @property
+    def accumulated_slip_m(self) -> float: ...
+    @property
+    def frictional_work_j(self) -> float: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+@final
+class CycleEnergy:
+    """Energy of one load cycle."""
+
+    @property
+    def cycle(self) -> int:
+        """1-based; cycle 1 includes the initial loading branch."""
+    @property
+    def dissipated_j(self) -> float:
+        """Loop area (J)."""
+    @property
+    def dissipated_j_per_m2(self) -> float: ...
+    @property
+    def frictional_work_j(self) -> float: ...
+
+@final
+class TangentialMetadata:
+    """Set-up facts of a tangential solver."""
+
+    @property
+    def assumption(self) -> str: ...
+    @property
+    def friction_coefficient(self) -> float: ...
+    @property
+    def grid(self) -> Tuple[int, int]: ...
+    @property
+    def boundary(self) -> str: ...
+    @property
+    def operator(self) -> str: ...
+    @property
+    def contact_points(self) -> int: ...
+    @property
+    def normal_force_n(self) -> float: ...
+    @property
+    def nominal_area_m2(self) -> float: ...
+    @property
+    def compliance_norm_m_per_pa(self) -> float: ...
+    @property
+    def setup_time_s(self) -> float: ...
+
+@final
+class OscillationResult:
+    """A sinusoidal tangential history (the results of ``asperity contact tangential``)."""
+
+    @property
+    def steps(self) -> Columns:
+        """Columns per step: displacement_m, displacement_y_m, force_N, force_y_N,
+        mean_shear_stress_Pa, mean_shear_stress_y_Pa, stick_fraction, accumulated_slip_m,
+        frictional_work_J, iterations, residual, wall_time_s."""
+    @property
+    def cycles(self) -> List[CycleEnergy]: ...
+    @property
+    def metadata(self) -> TangentialMetadata: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+@final
+class AmplitudeLoop:
+    """One amplitude's steady loop and the data the calibration fits."""
+
+    @property
+    def amplitude_factor(self) -> float: ...
+    @property
+    def amplitude_m(self) -> float: ...
+    @property
+    def displacement_m(self) -> F64Array: ...
+    @property
+    def shear_stress_pa(self) -> F64Array: ...
+    @property
+    def loop_area_j_per_m2(self) -> float: ...
+    @property
+    def dissipation_j_per_m2(self) -> float: ...
+    @property
+    def closure_error(self) -> float: ...
+    @property
+    def fit_q(self) -> F64Array: ...
+    @property
+    def fit_force(self) -> F64Array: ...
+    @property
+    def steady(self) -> Tuple[int, int]:
+        """[start, end) of the steady cycle in ``fit_q``."""
+
+@final
+class AmplitudeHistory:
+    """The calibration's history of increasing amplitudes."""
+
+    @property
+    def gross_slip_displacement_m(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def loops(self) -> List[AmplitudeLoop]: ...
 
 # ---------------------------------------------------------------- Valanis element
 
+@final
+class LoopFit:
+    """How well a fitted element reproduces one loop."""
+
+    @property
+    def r2(self) -> float: ...
+    @property
+    def nrmse(self) -> float: ...
+    @property
+    def energy_data(self) -> float: ...
+    @property
+    def energy_model(self) -> float: ...
+    @property
+    def energy_rel_error(self) -> float:
+        """energy_model / energy_data − 1."""
+
+@final
 class ValanisParams:
     """Valanis element, in the order of the Rust constructor: e0 (N/m³ per area or N/m per
     element), 0 ≤ k < 1, 0 ≤ et < e0, mu > 0."""
 
-    def __init__(self, e0: float, k: float, et: float, mu: float) -> None: ...
+    def __new__(cls, e0: float, k: float, et: float, mu: float) -> "ValanisParams": ...
     @property
     def e0(self) -> float: ...
     @property
@@ -309,6 +624,7 @@ def dissipated_energy(q: F64Array, f: F64Array) -> float:
 def sine_history(amplitude: float, cycles: int, points_per_cycle: int) -> F64Array:
     """amplitude·sin(2π i / points_per_cycle), i = 0 … cycles·points_per_cycle."""
 
+@final
 class ValanisFit:
     @property
     def params(self) -> ValanisParams: ...
@@ -325,7 +641,7 @@ class ValanisFit:
     @property
     def model_force(self) -> F64Array: ...
     @property
-    def loops(self) -> List[Dict[str, float]]: ...
+    def loops(self) -> List["LoopFit"]: ...
     @property
     def iterations(self) -> int: ...
     @property
@@ -363,6 +679,7 @@ def student_t_975(dof: float) -> float:
 
 # ---------------------------------------------------------------- calibration table, elements
 
+@final
 class CalibrationTable:
     """kn, E0, Et (N/m³), k, μ, area ratio, fit R², energy per cycle (J/m²) versus pressure (Pa)."""
 
@@ -376,8 +693,7 @@ class CalibrationTable:
     @overload
     def interpolate(self, pressure_pa: float) -> Dict[str, float]: ...
     @overload
-    def interpolate(self, pressure_pa: F64Array) -> Columns: ...
-    def interpolate(self, pressure_pa: Any) -> Any:
+    def interpolate(self, pressure_pa: F64Array) -> Columns:
         """Monotone cubic in ln p; outside the table the end pair's power law for kn, E0 and the
         contact area ratio (Et keeps Et/E0, k and μ the end row's); ``range``: −1 below,
         0 within, +1 above."""
@@ -390,18 +706,38 @@ def calibrate(
     realisations: Optional[int] = None,
     surface: Optional[Surface] = None,
     out_dir: Optional[Path] = None,
-) -> Dict[str, Any]:
+) -> "CalibrationRun":
     """The chain of ``asperity calibrate`` (surfaces → normal sweep → tangential loops at several
     amplitudes → Valanis fits → table with 95 % intervals, grid and patch checks) on the TOML
     ``config`` (None: the built-in reference case), ``grid``/``realisations`` overriding it, or
     on one given ``surface`` (heights in m). With ``out_dir`` the CLI's files, identical to its
     own on the same inputs (``calibration_timings.csv`` excepted).
 
-    Returns ``table`` (CalibrationTable: means per pressure in Pa; kn, E0, Et in N/m³),
-    ``realisations`` (columns per realisation × pressure: realisation, seed (−1: given surface),
-    pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m (m),
-    E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points), ``convergence``
-    (as in calibration.json), ``warnings``, ``written`` (paths), ``times`` (stage times, s)."""
+    Returns a ``CalibrationRun``."""
+
+@final
+class CalibrationRun:
+    """What ``calibrate`` produced."""
+
+    @property
+    def table(self) -> CalibrationTable:
+        """Means per pressure (Pa); kn, E0, Et in N/m³."""
+    @property
+    def realisations(self) -> Columns:
+        """Columns per realisation × pressure: realisation, seed (−1: given surface),
+        pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m (m),
+        E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points."""
+    @property
+    def convergence(self) -> Dict[str, Any]:
+        """The grid and patch checks per pressure, as in calibration.json."""
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def written(self) -> List[str]:
+        """Files written into ``out_dir`` (empty without one)."""
+    @property
+    def times(self) -> Dict[str, Any]:
+        """Wall time of each stage (s)."""
 
 def join_elements(
     preloads: Columns, table: CalibrationTable, out: Optional[Path] = None
@@ -419,6 +755,7 @@ def write_preloads(path: Path, preloads: Columns, comment: str = "") -> None:
 
 # ---------------------------------------------------------------- film
 
+@final
 class Region:
     @property
     def id(self) -> int: ...
@@ -429,6 +766,7 @@ class Region:
         """[x0, x1, y0, y1] (m), pixel edges included."""
     def __len__(self) -> int: ...
 
+@final
 class PolyFit:
     @property
     def order(self) -> int: ...
@@ -445,10 +783,10 @@ class PolyFit:
     @overload
     def __call__(self, x_m: float, y_m: float) -> float: ...
     @overload
-    def __call__(self, x_m: F64Array, y_m: F64Array) -> F64Array: ...
-    def __call__(self, x_m: Any, y_m: Any) -> Any:
+    def __call__(self, x_m: F64Array, y_m: F64Array) -> F64Array:
         """Fitted pressure (Pa) at film points (m)."""
 
+@final
 class FilmMap:
     """Film image → per-pixel class and pressure (Pa). Frame: x right, y up, m, origin at the
     centre of the bottom-left pixel."""
@@ -470,7 +808,7 @@ class FilmMap:
     def pixel_class(self) -> npt.NDArray[np.uint8]:
         """Codes into ``class_names``."""
     @property
-    def class_counts(self) -> Dict[str, int]: ...
+    def class_counts(self) -> "ClassCounts": ...
     @property
     def pixel_size_m(self) -> float: ...
     @property
@@ -482,8 +820,52 @@ class FilmMap:
         self, x0_m: float, y0_m: float, x1_m: float, y1_m: float, id: int = 1
     ) -> Region: ...
     def roi_polygon(self, vertices_m: Sequence[Tuple[float, float]], id: int = 1) -> Region: ...
-    def summarise(self, region: Region) -> Dict[str, Any]: ...
+    def summarise(self, region: Region) -> "RegionSummary": ...
     def fit(self, region: Region, order: int = 4) -> PolyFit: ...
+
+@final
+class ClassCounts:
+    """Pixel counts per class."""
+
+    @property
+    def in_range(self) -> int: ...
+    @property
+    def unstained(self) -> int: ...
+    @property
+    def below_range(self) -> int: ...
+    @property
+    def above_range(self) -> int:
+        """Saturated pixels."""
+    @property
+    def off_curve(self) -> int:
+        """Pixels far from the colour curve (rejected)."""
+
+@final
+class RegionSummary:
+    """Summary of a region of a film map (film frame, m; pressures in Pa)."""
+
+    @property
+    def id(self) -> int: ...
+    @property
+    def centre_x_m(self) -> float: ...
+    @property
+    def centre_y_m(self) -> float: ...
+    @property
+    def area_m2(self) -> float: ...
+    @property
+    def equivalent_diameter_m(self) -> float: ...
+    @property
+    def mean_pressure_pa(self) -> float:
+        """NaN when no pixel is in range."""
+    @property
+    def max_pressure_pa(self) -> float: ...
+    @property
+    def in_range_load_n(self) -> float:
+        """Load of the in-range pixels (N): a lower bound of the region's load."""
+    @property
+    def counts(self) -> ClassCounts: ...
+    @property
+    def saturated_fraction(self) -> float: ...
 
 def read_nodes(path: Path) -> Columns:
     """Nodes CSV (mesh frame) → id, x_m, y_m, area_m2 (NaN where absent)."""
@@ -507,6 +889,7 @@ def film_preloads(
 def reduce_preloads(preloads: Columns, mesh_size_m: float) -> Columns:
     """Keep one node per triangle of an h-mesh (m) with summed area and load."""
 
+@final
 class FilmResult:
     """What ``film()`` found: the pressure map, its regions with summaries and fits, the node
     preloads and their reduction, and the run's notes and warnings."""
@@ -519,7 +902,7 @@ class FilmResult:
     def fits(self) -> List[Optional[PolyFit]]:
         """The fit of each region, ``None`` where it could not be fitted."""
     @property
-    def summaries(self) -> List[Dict[str, Any]]: ...
+    def summaries(self) -> List["RegionSummary"]: ...
     @property
     def pixel_size_m(self) -> float: ...
     @property
@@ -574,6 +957,7 @@ def film(
 
 # ---------------------------------------------------------------- forced response
 
+@final
 class ResponseModel:
     """Linear structure with contact elements, excitation and observed responses, for the
     multi-harmonic-balance forced response of ``asperity response`` (AFT, pseudo-arclength
@@ -649,18 +1033,66 @@ class ResponseModel:
         time_samples: Optional[int] = None,
         points: Optional[int] = None,
         formulation: Optional[str] = None,
-    ) -> Dict[str, Any]:
+    ) -> "SweepResult":
         """Force-controlled frequency sweep at ``level_n`` (N) over [start, end] Hz (unset
         values: the model file's [sweep]; for array models harmonics 5, points 200, formulation
-        "auto"). Returns ``columns`` (the columns of response_level_<i>.csv: frequency_Hz,
-        <dof>_h<k>_amplitude_m (m), <dof>_h<k>_phase_rad, dissipated_energy_J (J per cycle),
-        stick/slip/separation fractions, newton_iterations, relative_residual),
-        ``coordinate_harmonics`` (points, n, coefficients; m), ``harmonic_orders``, ``peak``
-        (index), ``peak_elements`` (columns per element at the peak), ``level_N``,
-        ``formulation``, ``unknowns``, ``rejected_steps``, ``turning_points``, ``jacobians``,
-        ``wall_time_s``."""
+        "auto")."""
 
-# ---------------------------------------------------------------- diagnose
+@final
+class SweepResult:
+    """One level's force-controlled sweep (the results of ``asperity response``)."""
+
+    @property
+    def columns(self) -> Columns:
+        """The columns of response_level_<i>.csv: frequency_Hz, <dof>_h<k>_amplitude_m (m),
+        <dof>_h<k>_phase_rad, dissipated_energy_J (J per cycle), stick/slip/separation
+        fractions, newton_iterations, relative_residual."""
+    @property
+    def coordinate_harmonics(self) -> F64Array:
+        """(points, n, coefficients) harmonic coefficients of every coordinate (m)."""
+    @property
+    def harmonic_orders(self) -> List[int]: ...
+    @property
+    def peak(self) -> int:
+        """Index of the largest first-harmonic amplitude of the first response."""
+    @property
+    def peak_elements(self) -> Dict[str, Any]:
+        """Columns per element at the peak: element, law, dissipated_energy_J, stick_fraction,
+        slip_fraction, separation_fraction."""
+    @property
+    def level_n(self) -> float: ...
+    @property
+    def formulation(self) -> str:
+        """``"coordinates"`` or ``"receptance"``."""
+    @property
+    def unknowns(self) -> int: ...
+    @property
+    def rejected_steps(self) -> int: ...
+    @property
+    def turning_points(self) -> int: ...
+    @property
+    def jacobians(self) -> int: ...
+    @property
+    def wall_time_s(self) -> float: ...
+
+# ---------------------------------------------------------------- identify and diagnose
+
+@final
+class Record:
+    """A measured hysteresis record (float64 arrays)."""
+
+    @property
+    def time_s(self) -> F64Array:
+        """Sample times (s)."""
+    @property
+    def displacement_m(self) -> F64Array:
+        """Tangential displacement (m)."""
+    @property
+    def force_n(self) -> F64Array:
+        """Tangential force (N)."""
+    @property
+    def normal_force_n(self) -> Optional[F64Array]:
+        """Normal force (N); None without a normal-force column."""
 
 def read_record(
     path: Path,
@@ -669,8 +1101,81 @@ def read_record(
     displacement_column: str = "displacement_m",
     force_column: str = "friction_force_N",
     normal_force_column: Optional[str] = None,
-) -> Columns:
-    """Record CSV → time_s (s), displacement_m (m), force_N (N)[, normal_force_N (N)]."""
+) -> Record:
+    """Record CSV → time (s), displacement (m), force (N)[, normal force (N)]."""
+
+@final
+class DiagnoseErrors:
+    """Errors of a model's force against the record, over all complete cycles."""
+
+    @property
+    def nrms(self) -> float:
+        """RMS force residual / force amplitude."""
+    @property
+    def peak_force_error(self) -> float:
+        """Mean absolute error of the cycles' maximum and minimum force / force amplitude."""
+    @property
+    def energy_error(self) -> float:
+        """Mean |E_model − E_measured| / E_measured of the energy dissipated per cycle."""
+    @property
+    def held_out_nrms(self) -> float:
+        """Normalised RMS force error on the held-out cycles."""
+    @property
+    def held_out_rms_over_noise(self) -> float:
+        """RMS force residual on the held-out cycles / noise floor."""
+
+@final
+class DiagnoseReport:
+    """The report of ``asperity diagnose``; ``json`` is its diagnose.json."""
+
+    @property
+    def verdict(self) -> str:
+        """effect(s) found, model adequate, model inadequate, or undecided."""
+    @property
+    def conclusion(self) -> str: ...
+    @property
+    def effects_added(self) -> List[str]:
+        """Effect ids, in the order accepted."""
+    @property
+    def errors_before(self) -> DiagnoseErrors:
+        """Errors of the Valanis baseline."""
+    @property
+    def errors_after(self) -> DiagnoseErrors:
+        """Errors of the final model."""
+    @property
+    def noise_sigma_n(self) -> float:
+        """Noise floor of the force per sample (N)."""
+    @property
+    def samples_analysed(self) -> int: ...
+    @property
+    def complete_cycles(self) -> int: ...
+    @property
+    def training_cycles(self) -> List[int]:
+        """0-based."""
+    @property
+    def held_out_cycles(self) -> List[int]:
+        """0-based."""
+    @property
+    def text(self) -> str:
+        """The report as diagnose.txt holds it."""
+    @property
+    def json(self) -> str:
+        """The report as diagnose.json holds it (JSON text)."""
+    @property
+    def time_s(self) -> F64Array:
+        """Sample times analysed (s)."""
+    @property
+    def displacement_m(self) -> F64Array:
+        """Displacement analysed (m)."""
+    @property
+    def force_n(self) -> F64Array:
+        """Measured force analysed (N)."""
+    @property
+    def baseline_force_n(self) -> F64Array:
+        """Force of the baseline (N)."""
+    @property
+    def final_force_n(self) -> F64Array:
+        """Force of the final model (N)."""
 
 def diagnose(
     time_s: F64Array,
@@ -682,6 +1187,174 @@ def diagnose(
     normal_n: Optional[float] = None,
     max_effects: int = 2,
     source: str = "numpy arrays",
-) -> Dict[str, Any]:
-    """The report of ``asperity diagnose`` (as in diagnose.json) plus ``series`` (arrays of the
-    analysed samples and both models' forces) and ``text``."""
+) -> DiagnoseReport:
+    """Valanis baseline (fitted, or ``baseline`` with ``normal_n``) → missing effect selected on
+    held-out cycles → errors before and after: ``asperity diagnose`` on arrays."""
+
+@final
+class ParameterEstimate:
+    """A parameter of an identified model, its value and 95 % interval (unit ``unit``)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def unit(self) -> str:
+        """SI unit; "-" for a ratio."""
+    @property
+    def value(self) -> float: ...
+    @property
+    def lo_95(self) -> Optional[float]:
+        """2.5 % quantile over the posterior ensemble; None without bands or on a bound."""
+    @property
+    def hi_95(self) -> Optional[float]:
+        """97.5 % quantile; None as for ``lo_95``."""
+    @property
+    def at_bound(self) -> bool: ...
+
+@final
+class LevelError:
+    """A model's errors on one measured level or file (relative to its measured peak)."""
+
+    @property
+    def file(self) -> str: ...
+    @property
+    def role(self) -> str:
+        """``"fit"`` or ``"predicted"`` (held out)."""
+    @property
+    def mean_force_n(self) -> float:
+        """Mean drive force amplitude (N)."""
+    @property
+    def resonance_measured_hz(self) -> float: ...
+    @property
+    def resonance_model_hz(self) -> float: ...
+    @property
+    def resonance_error_hz(self) -> Optional[float]:
+        """Model minus measured (Hz); None where the measured peak is on the band's edge."""
+    @property
+    def phase_resonance_error_hz(self) -> float:
+        """Model minus measured quadrature frequency (Hz; NaN where not available)."""
+    @property
+    def peak_measured(self) -> float:
+        """Peak response per unit force (the level's quantity per N)."""
+    @property
+    def peak_model(self) -> float: ...
+    @property
+    def peak_error(self) -> float:
+        """peak_model / peak_measured − 1."""
+    @property
+    def rms_complex(self) -> float:
+        """RMS complex residual over the rows / peak."""
+    @property
+    def failed_rows(self) -> int: ...
+
+@final
+class IdentifyReport:
+    """The report of ``asperity identify``."""
+
+    @property
+    def kind(self) -> str:
+        """``"mode"`` (single nonlinear mode) or ``"reduced"`` (reduced model updated)."""
+    @property
+    def selected_effects(self) -> List[str]:
+        """Effect ids the held-out evidence added, in the order accepted."""
+    @property
+    def verdict(self) -> str: ...
+    @property
+    def fit_levels(self) -> List[int]:
+        """1-based, by increasing mean force."""
+    @property
+    def parameters(self) -> List[ParameterEstimate]:
+        """The final model's parameters with their 95 % intervals."""
+    @property
+    def uncertainty_reason(self) -> Optional[str]:
+        """Why the parameters have no intervals; None where they have."""
+    @property
+    def errors_before(self) -> List[LevelError]:
+        """Per level: errors of the baseline (reduced: the model as given)."""
+    @property
+    def errors_after(self) -> List[LevelError]:
+        """Per level: errors of the final model."""
+    @property
+    def held_out_errors(self) -> List[LevelError]:
+        """Errors of the final model on the levels not fitted."""
+    @property
+    def text(self) -> str:
+        """The report as identify.txt holds it."""
+    @property
+    def written(self) -> List[str]:
+        """Files written into ``out_dir`` (empty without one)."""
+    @property
+    def wall_time_s(self) -> float: ...
+
+def identify(
+    files: Sequence[Path],
+    *,
+    fit_levels: Optional[Sequence[int]] = None,
+    family: str = "jenkins",
+    candidates: Optional[Sequence[str]] = None,
+    max_effects: int = 3,
+    thorough: bool = False,
+    starts: Optional[int] = None,
+    particles: Optional[int] = None,
+    swarm_iterations: Optional[int] = None,
+    local_iterations: Optional[int] = None,
+    seed: int = 1,
+    response_amplitude: Optional[Sequence[float]] = None,
+    chain_steps: Optional[int] = None,
+    rows: str = "all",
+    structure: Optional[Path] = None,
+    out_dir: Optional[Path] = None,
+) -> IdentifyReport:
+    """``asperity identify``: one measured sweep per level → identified nonlinear mode (or the
+    reduced model of ``structure`` updated) → errors on the levels not used. Keywords follow the
+    command's flags (errors name the flag); ``out_dir`` writes the command's files."""
+
+@final
+class FilePrediction:
+    """A saved model's prediction of one measured file."""
+
+    @property
+    def file(self) -> str: ...
+    @property
+    def errors(self) -> LevelError: ...
+    @property
+    def force_rms_error(self) -> Optional[float]:
+        """Response control: RMS of F_model/F_meas − 1; None under force control."""
+    @property
+    def peak_amplitude_m(self) -> float:
+        """Largest drive-point displacement amplitude (m)."""
+    @property
+    def extrapolation(self) -> Optional[str]: ...
+    @property
+    def not_one_mode(self) -> Optional[str]: ...
+
+@final
+class PredictReport:
+    """The report of ``asperity predict``."""
+
+    @property
+    def model_file(self) -> str: ...
+    @property
+    def control(self) -> str:
+        """``"force"`` or ``"response"``."""
+    @property
+    def control_source(self) -> str: ...
+    @property
+    def convention_source(self) -> str: ...
+    @property
+    def files(self) -> List[FilePrediction]: ...
+    @property
+    def text(self) -> str:
+        """The report as predict.txt holds it."""
+    @property
+    def written(self) -> List[str]: ...
+
+def predict(
+    model: Path,
+    files: Sequence[Path],
+    *,
+    control: Optional[str] = None,
+    out_dir: Optional[Path] = None,
+) -> PredictReport:
+    """``asperity predict``: score a saved model (model.json of ``identify``) on measured
+    files; ``control`` "force" or "response" (default: the files' headers)."""

@@ -302,6 +302,36 @@ pub fn write_preloads(path: PathBuf, preloads: &Bound<'_, PyDict>, comment: &str
     }
 }
 
+/// What `calibrate()` produced (the results of `asperity calibrate`).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct CalibrationRun {
+    /// The table of the means over the realisations.
+    pub table: Py<CalibrationTable>,
+    /// Columns per realisation × pressure: realisation, seed (−1 for a given surface),
+    /// pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m,
+    /// E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points.
+    pub realisations: Py<PyDict>,
+    /// The grid and patch checks per pressure, as calibration.json records them.
+    pub convergence: Py<PyAny>,
+    /// Warnings of the run.
+    pub warnings: Vec<String>,
+    /// Files written into `out_dir` (empty without one).
+    pub written: Vec<String>,
+    /// Wall time of each stage (s).
+    pub times: Py<PyAny>,
+}
+
+#[pymethods]
+impl CalibrationRun {
+    fn __repr__(&self) -> String {
+        format!(
+            "CalibrationRun({} warnings, {} files written)",
+            self.warnings.len(),
+            self.written.len()
+        )
+    }
+}
+
 /// The calibration chain of `asperity calibrate` (surfaces → normal sweep → tangential loops at
 /// several amplitudes → Valanis fits → table with 95 % intervals, grid and patch checks).
 ///
@@ -311,11 +341,7 @@ pub fn write_preloads(path: PathBuf, preloads: &Bound<'_, PyDict>, comment: &str
 /// checks). With `out_dir`, writes the files of `asperity calibrate --out-dir` (identical to
 /// the CLI's on the same inputs, `calibration_timings.csv` excepted).
 ///
-/// Returns a dict: `"table"` (CalibrationTable of the means), `"realisations"` (columns per
-/// realisation × pressure: realisation, seed (−1 for a given surface), pressure_Pa,
-/// contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m, E0_N_per_m3, k,
-/// Et_N_per_m3, fit_R2, contact_spots, median_spot_points), `"convergence"` (per pressure, as
-/// in calibration.json), `"warnings"`, `"written"` (paths) and `"times"` (stage times, s).
+/// Returns a `CalibrationRun`.
 #[pyfunction]
 #[pyo3(signature = (config=None, *, grid=None, realisations=None, surface=None, out_dir=None))]
 pub fn calibrate<'py>(
@@ -325,7 +351,7 @@ pub fn calibrate<'py>(
     realisations: Option<usize>,
     surface: Option<&crate::surface::Surface>,
     out_dir: Option<PathBuf>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<CalibrationRun> {
     use asperity::calibrate::config::CalibrationConfig;
     use asperity::calibrate::output::{self, ConfigSource};
     use asperity::calibrate::pipeline::{self, SurfaceSource};
@@ -388,16 +414,6 @@ pub fn calibrate<'py>(
             Ok::<_, asperity::Error>((run, written))
         })
         .py()?;
-    let out = PyDict::new(py);
-    out.set_item(
-        "table",
-        Bound::new(
-            py,
-            CalibrationTable {
-                inner: run.table.clone(),
-            },
-        )?,
-    )?;
     let rows: Vec<(
         usize,
         &pipeline::Realisation,
@@ -446,16 +462,17 @@ pub fn calibrate<'py>(
             PyArray1::from_vec(py, rows.iter().map(|r| f(r.2)).collect::<Vec<_>>()),
         )?;
     }
-    out.set_item("realisations", cols)?;
-    out.set_item("convergence", to_python(py, &run.convergence)?)?;
-    out.set_item("warnings", run.warnings.clone())?;
-    out.set_item(
-        "written",
-        written
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>(),
-    )?;
-    out.set_item("times", to_python(py, &run.times)?)?;
-    Ok(out)
+    Ok(CalibrationRun {
+        table: Py::new(
+            py,
+            CalibrationTable {
+                inner: run.table.clone(),
+            },
+        )?,
+        realisations: cols.unbind(),
+        convergence: to_python(py, &run.convergence)?.unbind(),
+        warnings: run.warnings.clone(),
+        written: written.iter().map(|p| p.display().to_string()).collect(),
+        times: to_python(py, &run.times)?.unbind(),
+    })
 }

@@ -3,7 +3,7 @@
 //! Pressures and moduli in Pa, lengths and gaps in m, forces in N, energies in J.
 
 use crate::arrays::{borrow_f64, view};
-use crate::errors::{to_python, IntoPy};
+use crate::errors::IntoPy;
 use crate::surface::Surface;
 use asperity::calibrate::amplitudes;
 use asperity::contact::normal::{self, NormalOptions, NormalProblem};
@@ -27,6 +27,34 @@ pub struct NormalSolution {
     tolerance: f64,
     /// Boundary of the surface it was solved on.
     pub periodic: bool,
+}
+
+/// How a normal solve converged.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct Convergence {
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Relative tolerance asked for.
+    pub tolerance: f64,
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+    /// Wall-clock time of the solve (s).
+    pub wall_time_s: f64,
+}
+
+#[pymethods]
+impl Convergence {
+    fn __repr__(&self) -> String {
+        format!(
+            "Convergence({} iterations, residual {:.3e} / tolerance {:.1e}, converged={})",
+            self.iterations,
+            self.residual,
+            self.tolerance,
+            if self.converged { "True" } else { "False" }
+        )
+    }
 }
 
 #[pymethods]
@@ -185,16 +213,16 @@ impl NormalSolution {
         self.inner.wall_time_s
     }
 
-    /// The convergence record: iterations, residual, tolerance, converged, wall_time_s.
+    /// The convergence record: iterations, residual, tolerance, converged, wall time.
     #[getter]
-    fn convergence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("iterations", self.inner.iterations)?;
-        d.set_item("residual", self.inner.residual)?;
-        d.set_item("tolerance", self.tolerance)?;
-        d.set_item("converged", self.inner.converged)?;
-        d.set_item("wall_time_s", self.inner.wall_time_s)?;
-        Ok(d)
+    fn convergence(&self) -> Convergence {
+        Convergence {
+            iterations: self.inner.iterations,
+            residual: self.inner.residual,
+            tolerance: self.tolerance,
+            converged: self.inner.converged,
+            wall_time_s: self.inner.wall_time_s,
+        }
     }
 
     fn __repr__(&self) -> String {
@@ -500,6 +528,164 @@ fn control(displacement_m: Option<[f64; 2]>, force_n: Option<[f64; 2]>) -> PyRes
 
 /// Partial-slip solver on one fixed pressure field (quasi-identical materials: normal–tangential
 /// coupling neglected, exact for two bodies of the same material). Holds the contact history.
+/// One tangential load step (SI).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct TangentialStep {
+    /// Rigid shift (dx, dy) of the bodies (m).
+    pub shift_m: (f64, f64),
+    /// Total tangential force (Tx, Ty) (N).
+    pub force_n: (f64, f64),
+    /// Mean shear stress (Pa) over the nominal area.
+    pub mean_shear_pa: (f64, f64),
+    /// Fraction of the contact points in stick.
+    pub stick_fraction: f64,
+    /// Slip accumulated since the virgin state, summed over the points (m).
+    pub accumulated_slip_m: f64,
+    /// Frictional work since the virgin state (J).
+    pub frictional_work_j: f64,
+    /// Solver iterations of the step.
+    pub iterations: usize,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+    /// Wall-clock time of the step (s).
+    pub wall_time_s: f64,
+}
+
+impl From<&tangential::TangentialStep> for TangentialStep {
+    fn from(s: &tangential::TangentialStep) -> Self {
+        Self {
+            shift_m: (s.shift_m[0], s.shift_m[1]),
+            force_n: (s.force_n[0], s.force_n[1]),
+            mean_shear_pa: (s.mean_shear_pa[0], s.mean_shear_pa[1]),
+            stick_fraction: s.stick_fraction,
+            accumulated_slip_m: s.accumulated_slip_m,
+            frictional_work_j: s.frictional_work_j,
+            iterations: s.iterations,
+            residual: s.residual,
+            converged: s.converged,
+            wall_time_s: s.wall_time_s,
+        }
+    }
+}
+
+/// Energy of one load cycle.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct CycleEnergy {
+    /// Cycle number (1-based; cycle 1 includes the initial loading branch).
+    pub cycle: usize,
+    /// Loop area ∮T·dδ (J).
+    pub dissipated_j: f64,
+    /// The same per nominal area (J/m²).
+    pub dissipated_j_per_m2: f64,
+    /// Frictional work of the cycle (J).
+    pub frictional_work_j: f64,
+}
+
+/// Set-up facts of a tangential solver.
+#[pyclass(frozen, get_all, skip_from_py_object, module = "asperity")]
+#[derive(Clone)]
+pub struct TangentialMetadata {
+    /// The coupling assumption.
+    pub assumption: String,
+    /// Friction coefficient μ.
+    pub friction_coefficient: f64,
+    /// Grid points (nx, ny).
+    pub grid: (usize, usize),
+    /// `"periodic"` or the finite window's boundary.
+    pub boundary: String,
+    /// The shear compliance operator.
+    pub operator: String,
+    /// Points in contact.
+    pub contact_points: usize,
+    /// Normal force (N).
+    pub normal_force_n: f64,
+    /// Nominal area (m²).
+    pub nominal_area_m2: f64,
+    /// Norm of the compliance operator (m/Pa).
+    pub compliance_norm_m_per_pa: f64,
+    /// Set-up time (s).
+    pub setup_time_s: f64,
+}
+
+/// A serde-named enum's name (the JSON string).
+fn serde_name<T: serde::Serialize>(v: &T) -> String {
+    match serde_json::to_value(v) {
+        Ok(serde_json::Value::String(s)) => s,
+        Ok(other) => other.to_string(),
+        Err(e) => e.to_string(),
+    }
+}
+
+impl From<&tangential::TangentialMetadata> for TangentialMetadata {
+    fn from(m: &tangential::TangentialMetadata) -> Self {
+        Self {
+            assumption: m.assumption.to_string(),
+            friction_coefficient: m.friction_coefficient,
+            grid: m.grid,
+            boundary: serde_name(&m.boundary),
+            operator: serde_name(&m.operator),
+            contact_points: m.contact_points,
+            normal_force_n: m.normal_force_n,
+            nominal_area_m2: m.nominal_area_m2,
+            compliance_norm_m_per_pa: m.compliance_norm_m_per_pa,
+            setup_time_s: m.setup_time_s,
+        }
+    }
+}
+
+/// A sinusoidal tangential history (the results of `asperity contact tangential`).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct OscillationResult {
+    /// Columns per step (step 0: unloaded): displacement_m, displacement_y_m, force_N,
+    /// force_y_N, mean_shear_stress_Pa, mean_shear_stress_y_Pa, stick_fraction,
+    /// accumulated_slip_m, frictional_work_J, iterations, residual, wall_time_s.
+    pub steps: Py<PyDict>,
+    /// Energy per cycle.
+    pub cycles: Vec<Py<CycleEnergy>>,
+    /// The solver's set-up facts.
+    pub metadata: TangentialMetadata,
+    /// Wall-clock time of the history (s).
+    pub wall_time_s: f64,
+}
+
+/// One amplitude's loop of the calibration's loading history.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct AmplitudeLoop {
+    /// Amplitude over the gross-slip displacement.
+    pub amplitude_factor: f64,
+    /// Amplitude (m).
+    pub amplitude_m: f64,
+    /// Steady cycle +a → −a → +a: displacement (m).
+    pub displacement_m: Py<PyArray1<f64>>,
+    /// Mean shear stress at those samples (Pa).
+    pub shear_stress_pa: Py<PyArray1<f64>>,
+    /// Loop area ∮τ dδ (J/m²).
+    pub loop_area_j_per_m2: f64,
+    /// Frictional dissipation of the computed half cycle, doubled (J/m²).
+    pub dissipation_j_per_m2: f64,
+    /// Closure error of the computed half cycle (0 for an exactly closed Masing loop).
+    pub closure_error: f64,
+    /// Displacement of the loop as the calibration fits it (m).
+    pub fit_q: Py<PyArray1<f64>>,
+    /// Shear stress of the loop as the calibration fits it (Pa).
+    pub fit_force: Py<PyArray1<f64>>,
+    /// Index range [start, end) of the steady cycle in `fit_q`.
+    pub steady: (usize, usize),
+}
+
+/// The calibration's loading history: loops at increasing amplitudes.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct AmplitudeHistory {
+    /// Gross-slip displacement δ_gs (m) the amplitudes are scaled by.
+    pub gross_slip_displacement_m: f64,
+    /// Load steps taken.
+    pub steps: usize,
+    /// One loop per amplitude, in order.
+    pub loops: Vec<Py<AmplitudeLoop>>,
+}
+
 #[pyclass(module = "asperity")]
 pub struct TangentialSolver {
     inner: tangential::TangentialSolver,
@@ -581,25 +767,24 @@ impl TangentialSolver {
     }
 
     /// One load step from the current state: impose a rigid shift `displacement_m=(dx, dy)` (m)
-    /// or a total force `force_n=(Tx, Ty)` (N). Returns the step record (dict, SI).
+    /// or a total force `force_n=(Tx, Ty)` (N). Returns the step's `TangentialStep`.
     #[pyo3(signature = (*, displacement_m=None, force_n=None))]
-    fn step<'py>(
+    fn step(
         &mut self,
-        py: Python<'py>,
+        py: Python<'_>,
         displacement_m: Option<[f64; 2]>,
         force_n: Option<[f64; 2]>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    ) -> PyResult<TangentialStep> {
         let c = control(displacement_m, force_n)?;
         let inner = &mut self.inner;
         let s = py.detach(|| inner.step(c)).py()?;
-        to_python(py, &s)
+        Ok(TangentialStep::from(&s))
     }
 
     /// A sinusoidal history from the virgin state (the solver is reset first):
     /// `amplitude · sin(2π k / steps_per_cycle)`, `k = 1 … cycles·steps_per_cycle`, with the
     /// amplitude a displacement `amplitude_m=(ax, ay)` (m) or a force `amplitude_n` (N).
-    /// Returns `{"steps": {column: array}, "cycles": [...], "metadata": {...}, "wall_time_s"}`;
-    /// step 0 is the unloaded initial state.
+    /// Returns an `OscillationResult`; step 0 is the unloaded initial state.
     #[pyo3(signature = (*, amplitude_m=None, amplitude_n=None, cycles=3, steps_per_cycle=40))]
     fn oscillate<'py>(
         &mut self,
@@ -608,7 +793,7 @@ impl TangentialSolver {
         amplitude_n: Option<[f64; 2]>,
         cycles: usize,
         steps_per_cycle: usize,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<OscillationResult> {
         let amplitude = control(amplitude_m, amplitude_n)?;
         let inner = &mut self.inner;
         let r = py
@@ -649,62 +834,75 @@ impl TangentialSolver {
         )?;
         steps.set_item("residual", col(&|s| s.residual))?;
         steps.set_item("wall_time_s", col(&|s| s.wall_time_s))?;
-        let out = PyDict::new(py);
-        out.set_item("steps", steps)?;
-        out.set_item("cycles", to_python(py, &r.cycles)?)?;
-        out.set_item("metadata", to_python(py, &r.metadata)?)?;
-        out.set_item("wall_time_s", r.wall_time_s)?;
-        Ok(out)
+        Ok(OscillationResult {
+            steps: steps.unbind(),
+            cycles: r
+                .cycles
+                .iter()
+                .map(|c| {
+                    Py::new(
+                        py,
+                        CycleEnergy {
+                            cycle: c.cycle,
+                            dissipated_j: c.dissipated_j,
+                            dissipated_j_per_m2: c.dissipated_j_per_m2,
+                            frictional_work_j: c.frictional_work_j,
+                        },
+                    )
+                })
+                .collect::<PyResult<Vec<_>>>()?,
+            metadata: TangentialMetadata::from(&r.metadata),
+            wall_time_s: r.wall_time_s,
+        })
     }
 
     /// The calibration's loading history (`asperity::calibrate::amplitudes`): one history of
     /// increasing displacement amplitudes `factors × δ_gs` along x from the virgin state (the
     /// solver is reset first), one half cycle per amplitude completed by its point reflection
-    /// (Masing). Returns `{"gross_slip_displacement_m", "steps", "loops": [{"amplitude_factor",
-    /// "amplitude_m", "displacement_m", "shear_stress_pa", "loop_area_j_per_m2",
-    /// "dissipation_j_per_m2", "closure_error", "fit_q", "fit_force", "steady"}]}`; `fit_q`,
-    /// `fit_force` and `steady` are the loop as the calibration fits it (the element's virgin
-    /// quarter cycle to +a, then the steady cycle), for `fit_valanis_loops` with the pressure
-    /// as the normal load.
+    /// (Masing). Returns an `AmplitudeHistory`; each loop's `fit_q`, `fit_force` and `steady`
+    /// are the loop as the calibration fits it (the element's virgin quarter cycle to +a, then
+    /// the steady cycle), for `fit_valanis_loops` with the pressure as the normal load.
     #[pyo3(signature = (factors, steps_per_cycle=40))]
     fn amplitude_loops<'py>(
         &mut self,
         py: Python<'py>,
         factors: Vec<f64>,
         steps_per_cycle: usize,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<AmplitudeHistory> {
         let inner = &mut self.inner;
         let sweep = py
             .detach(|| amplitudes::run(inner, &factors, steps_per_cycle, || {}))
             .py()?;
-        let out = PyDict::new(py);
-        out.set_item("gross_slip_displacement_m", sweep.gross_slip_displacement_m)?;
-        out.set_item("steps", sweep.steps)?;
-        let mut loops = Vec::new();
-        for (j, l) in sweep.loops.iter().enumerate() {
-            let d = PyDict::new(py);
-            d.set_item("amplitude_factor", l.amplitude_factor)?;
-            d.set_item("amplitude_m", l.amplitude_m)?;
-            d.set_item(
-                "displacement_m",
-                PyArray1::from_slice(py, &l.displacement_m),
-            )?;
-            d.set_item(
-                "shear_stress_pa",
-                PyArray1::from_slice(py, &l.shear_stress_pa),
-            )?;
-            d.set_item("loop_area_j_per_m2", l.loop_area_j_per_m2)?;
-            d.set_item("dissipation_j_per_m2", l.dissipation_j_per_m2)?;
-            d.set_item("closure_error", l.closure_error)?;
-            // The normal load is set by the caller; 1.0 here only fills the field.
-            let data = asperity::calibrate::pipeline::loop_data(&sweep, j, steps_per_cycle, 1.0);
-            d.set_item("fit_q", PyArray1::from_vec(py, data.q))?;
-            d.set_item("fit_force", PyArray1::from_vec(py, data.force))?;
-            d.set_item("steady", (data.steady.start, data.steady.end))?;
-            loops.push(d);
-        }
-        out.set_item("loops", loops)?;
-        Ok(out)
+        let loops = sweep
+            .loops
+            .iter()
+            .enumerate()
+            .map(|(j, l)| {
+                // The normal load is set by the caller; 1.0 here only fills the field.
+                let data =
+                    asperity::calibrate::pipeline::loop_data(&sweep, j, steps_per_cycle, 1.0);
+                Py::new(
+                    py,
+                    AmplitudeLoop {
+                        amplitude_factor: l.amplitude_factor,
+                        amplitude_m: l.amplitude_m,
+                        displacement_m: PyArray1::from_slice(py, &l.displacement_m).unbind(),
+                        shear_stress_pa: PyArray1::from_slice(py, &l.shear_stress_pa).unbind(),
+                        loop_area_j_per_m2: l.loop_area_j_per_m2,
+                        dissipation_j_per_m2: l.dissipation_j_per_m2,
+                        closure_error: l.closure_error,
+                        fit_q: PyArray1::from_vec(py, data.q).unbind(),
+                        fit_force: PyArray1::from_vec(py, data.force).unbind(),
+                        steady: (data.steady.start, data.steady.end),
+                    },
+                )
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(AmplitudeHistory {
+            gross_slip_displacement_m: sweep.gross_slip_displacement_m,
+            steps: sweep.steps,
+            loops,
+        })
     }
 
     /// Shift (m) along `direction` at which every contact point slips (gross slip).
@@ -743,10 +941,10 @@ impl TangentialSolver {
         self.inner.friction_limit_n()
     }
 
-    /// Set-up facts (dict): assumption, μ, grid, boundary, operator, contact points, normal force
-    /// (N), nominal area (m²), compliance norm (m/Pa), setup time (s).
+    /// Set-up facts: assumption, μ, grid, boundary, operator, contact points, normal force (N),
+    /// nominal area (m²), compliance norm (m/Pa), setup time (s).
     #[getter]
-    fn metadata<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, self.inner.metadata())
+    fn metadata(&self) -> TangentialMetadata {
+        TangentialMetadata::from(self.inner.metadata())
     }
 }

@@ -144,6 +144,49 @@ impl ResponseModel {
     }
 }
 
+/// A force-controlled frequency sweep of a `ResponseModel` (the results of one level of
+/// `asperity response`).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct SweepResult {
+    /// The columns of `response_level_<i>.csv`: frequency_Hz, <dof>_h<k>_amplitude_m (m),
+    /// <dof>_h<k>_phase_rad, dissipated_energy_J (J per cycle), stick/slip/separation
+    /// fractions, newton_iterations, relative_residual.
+    pub columns: Py<PyDict>,
+    /// Harmonic coefficients of every coordinate, shape (points, n, coefficients) (m).
+    pub coordinate_harmonics: Py<PyArray3<f64>>,
+    /// Harmonic orders of the coefficients.
+    pub harmonic_orders: Vec<usize>,
+    /// Index of the largest first-harmonic amplitude of the first response.
+    pub peak: usize,
+    /// Columns per element at the peak: element, law, dissipated_energy_J, stick_fraction,
+    /// slip_fraction, separation_fraction.
+    pub peak_elements: Py<PyDict>,
+    /// Excitation level (N).
+    pub level_n: f64,
+    /// `"coordinates"` or `"receptance"`.
+    pub formulation: String,
+    /// Unknowns of the harmonic-balance system.
+    pub unknowns: usize,
+    /// Continuation steps rejected.
+    pub rejected_steps: usize,
+    /// Turning points passed.
+    pub turning_points: usize,
+    /// Jacobians evaluated.
+    pub jacobians: usize,
+    /// Wall-clock time of the sweep (s).
+    pub wall_time_s: f64,
+}
+
+#[pymethods]
+impl SweepResult {
+    fn __repr__(&self) -> String {
+        format!(
+            "SweepResult(level {} N, {} formulation, peak at point {})",
+            self.level_n, self.formulation, self.peak
+        )
+    }
+}
+
 #[pymethods]
 impl ResponseModel {
     /// Read a model file (TOML) exactly as `asperity response` does.
@@ -354,7 +397,7 @@ impl ResponseModel {
         time_samples: Option<usize>,
         points: Option<usize>,
         formulation: Option<String>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<SweepResult> {
         let s = self.file.as_ref().map(|(_, f)| &f.sweep);
         let need = |v: Option<f64>, file: Option<f64>, name: &str| {
             v.or(file).ok_or_else(|| {
@@ -403,12 +446,10 @@ impl ResponseModel {
                 Ok::<_, asperity::Error>((system, r))
             })
             .py()?;
-        let out = PyDict::new(py);
         let cols = PyDict::new(py);
         for (name, values) in report::level_columns(&system, &self.responses, &result) {
             cols.set_item(name, PyArray1::from_vec(py, values))?;
         }
-        out.set_item("columns", cols)?;
         let (n, len) = (self.structure.n(), system.harmonics.len());
         let mut x = Array3::<f64>::zeros((result.branch.points.len(), n, len));
         for (i, p) in result.branch.points.iter().enumerate() {
@@ -419,9 +460,6 @@ impl ResponseModel {
                 }
             }
         }
-        out.set_item("coordinate_harmonics", PyArray3::from_owned_array(py, x))?;
-        out.set_item("harmonic_orders", system.harmonics.orders().to_vec())?;
-        out.set_item("peak", result.peak)?;
         let pe = PyDict::new(py);
         let el = &self.structure.elements;
         let c = &result.peak_elements;
@@ -445,21 +483,24 @@ impl ResponseModel {
         ] {
             pe.set_item(name, PyArray1::from_vec(py, c.iter().map(f).collect()))?;
         }
-        out.set_item("peak_elements", pe)?;
-        out.set_item("level_N", level_n)?;
-        out.set_item(
-            "formulation",
-            match system.formulation() {
+        Ok(SweepResult {
+            columns: cols.unbind(),
+            coordinate_harmonics: PyArray3::from_owned_array(py, x).unbind(),
+            harmonic_orders: system.harmonics.orders().to_vec(),
+            peak: result.peak,
+            peak_elements: pe.unbind(),
+            level_n,
+            formulation: match system.formulation() {
                 asperity::dynamics::hbm::Formulation::Coordinates => "coordinates",
                 asperity::dynamics::hbm::Formulation::Receptance => "receptance",
-            },
-        )?;
-        out.set_item("unknowns", system.unknowns())?;
-        out.set_item("rejected_steps", result.branch.rejected_steps)?;
-        out.set_item("turning_points", result.branch.turning_points)?;
-        out.set_item("jacobians", result.branch.jacobians)?;
-        out.set_item("wall_time_s", result.branch.wall_time_s)?;
-        Ok(out)
+            }
+            .to_string(),
+            unknowns: system.unknowns(),
+            rejected_steps: result.branch.rejected_steps,
+            turning_points: result.branch.turning_points,
+            jacobians: result.branch.jacobians,
+            wall_time_s: result.branch.wall_time_s,
+        })
     }
 
     fn __repr__(&self) -> String {

@@ -168,6 +168,21 @@ pub struct ValanisFit {
     inner: fit::FitResult,
 }
 
+/// How well a fitted element reproduces one loop.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct LoopFit {
+    /// Coefficient of determination of the force.
+    pub r2: f64,
+    /// RMS force error over the force range.
+    pub nrmse: f64,
+    /// Energy per cycle of the data (J, or J/m² for stresses).
+    pub energy_data: f64,
+    /// Energy per cycle of the model (same unit).
+    pub energy_model: f64,
+    /// `energy_model / energy_data − 1`.
+    pub energy_rel_error: f64,
+}
+
 #[pymethods]
 impl ValanisFit {
     /// Best parameters (μ as given).
@@ -214,21 +229,23 @@ impl ValanisFit {
         PyArray1::from_slice(py, &self.inner.loops[0].model_force)
     }
 
-    /// Per loop (several loops fitted together): `{"r2", "nrmse", "energy_data",
-    /// "energy_model", "energy_rel_error"}`.
+    /// Per loop (several loops fitted together): its `LoopFit`.
     #[getter]
-    fn loops<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
+    fn loops(&self, py: Python<'_>) -> PyResult<Vec<Py<LoopFit>>> {
         self.inner
             .loops
             .iter()
             .map(|l| {
-                let d = pyo3::types::PyDict::new(py);
-                d.set_item("r2", l.r2)?;
-                d.set_item("nrmse", l.nrmse)?;
-                d.set_item("energy_data", l.energy_data)?;
-                d.set_item("energy_model", l.energy_model)?;
-                d.set_item("energy_rel_error", l.energy_rel_error)?;
-                Ok(d)
+                Py::new(
+                    py,
+                    LoopFit {
+                        r2: l.r2,
+                        nrmse: l.nrmse,
+                        energy_data: l.energy_data,
+                        energy_model: l.energy_model,
+                        energy_rel_error: l.energy_rel_error,
+                    },
+                )
             })
             .collect()
     }

@@ -36,6 +36,76 @@ fn class_code(c: PixelClass) -> u8 {
         .expect("every class listed") as u8
 }
 
+/// Pixel counts per class of a film map or region.
+#[pyclass(frozen, get_all, skip_from_py_object, module = "asperity")]
+#[derive(Clone)]
+pub struct ClassCounts {
+    /// Pixels inside the calibrated pressure range.
+    pub in_range: usize,
+    /// Unstained pixels.
+    pub unstained: usize,
+    /// Stained pixels below the film's range.
+    pub below_range: usize,
+    /// Pixels at or above the upper end of the range (saturated).
+    pub above_range: usize,
+    /// Pixels far from the colour curve (rejected).
+    pub off_curve: usize,
+}
+
+impl From<&regions::ClassCounts> for ClassCounts {
+    fn from(c: &regions::ClassCounts) -> Self {
+        Self {
+            in_range: c.in_range,
+            unstained: c.unstained,
+            below_range: c.below_range,
+            above_range: c.above_range,
+            off_curve: c.off_curve,
+        }
+    }
+}
+
+/// Summary of a region of a film map (film frame, m; pressures in Pa).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct RegionSummary {
+    /// Region id.
+    pub id: usize,
+    /// Centroid x of the region's pixels (m).
+    pub centre_x_m: f64,
+    /// Centroid y (m).
+    pub centre_y_m: f64,
+    /// Pixel count × pixel area (m²).
+    pub area_m2: f64,
+    /// Diameter of the circle of that area (m).
+    pub equivalent_diameter_m: f64,
+    /// Mean in-range pressure (Pa; NaN when none is in range).
+    pub mean_pressure_pa: f64,
+    /// Largest in-range pressure (Pa).
+    pub max_pressure_pa: f64,
+    /// Load carried by the in-range pixels (N): a lower bound of the region's load.
+    pub in_range_load_n: f64,
+    /// Pixels of each class in the region.
+    pub counts: ClassCounts,
+    /// Saturated pixels over the pressure-bearing ones (NaN when there are none).
+    pub saturated_fraction: f64,
+}
+
+impl From<&regions::RegionSummary> for RegionSummary {
+    fn from(r: &regions::RegionSummary) -> Self {
+        Self {
+            id: r.id,
+            centre_x_m: r.centre_x_m,
+            centre_y_m: r.centre_y_m,
+            area_m2: r.area_m2,
+            equivalent_diameter_m: r.equivalent_diameter_m,
+            mean_pressure_pa: r.mean_pressure_pa,
+            max_pressure_pa: r.max_pressure_pa,
+            in_range_load_n: r.in_range_load_n,
+            counts: ClassCounts::from(&r.counts),
+            saturated_fraction: r.saturated_fraction,
+        }
+    }
+}
+
 /// A film image read into pressure: per-pixel class and pressure (Pa, NaN unless in range).
 #[pyclass(frozen, module = "asperity")]
 pub struct FilmMap {
@@ -113,8 +183,8 @@ impl FilmMap {
 
     /// Pixel counts per class.
     #[getter]
-    fn class_counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.inner.class_counts())
+    fn class_counts(&self) -> ClassCounts {
+        ClassCounts::from(&self.inner.class_counts())
     }
 
     /// Pixel size (m).
@@ -183,9 +253,9 @@ impl FilmMap {
 
     /// Summary of a region: centre, area, equivalent diameter (m, m²), mean/max pressure (Pa),
     /// in-range load (N), pixel counts by class.
-    fn summarise<'py>(&self, py: Python<'py>, region: &Region) -> PyResult<Bound<'py, PyAny>> {
+    fn summarise(&self, region: &Region) -> PyResult<RegionSummary> {
         let s = regions::summarise(&self.inner, &region.inner).py()?;
-        to_python(py, &s)
+        Ok(RegionSummary::from(&s))
     }
 
     /// Order-`order` polynomial fit of the region's in-range pressures (Householder QR).
@@ -511,8 +581,12 @@ impl FilmResult {
 
     /// Summary of each region (as `FilmMap.summarise`).
     #[getter]
-    fn summaries<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.inner.summaries)
+    fn summaries(&self) -> Vec<RegionSummary> {
+        self.inner
+            .summaries
+            .iter()
+            .map(RegionSummary::from)
+            .collect()
     }
 
     /// Pixel size (m) and where it came from.

@@ -2,7 +2,7 @@
 //! Heights in m, spacings in m, moduli in Pa.
 
 use crate::arrays::{borrow_f64, view};
-use crate::errors::{to_python, IntoPy};
+use crate::errors::IntoPy;
 use asperity::core::material::{self, Material};
 use asperity::surface::combine;
 use asperity::surface::generate::GaussianSurfaceSpec;
@@ -12,7 +12,6 @@ use asperity::Grid2;
 use ndarray::{ArrayView1, Ix2};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 use std::path::PathBuf;
 
 /// A rough surface: heights (m) on a regular grid, `heights[i, j]` at `(i·dx_m, j·dy_m)`.
@@ -47,36 +46,122 @@ fn detrend(text: &str) -> PyResult<Detrend> {
     text.parse::<Detrend>().py()
 }
 
-/// Statistics and PSD of any topography, as dicts (SI units).
-fn stats_dict<'py>(
-    py: Python<'py>,
-    topo: &Topography,
-    detrend_: &str,
-) -> PyResult<Bound<'py, PyAny>> {
-    let d = detrend(detrend_)?;
-    let s = py.detach(|| stats::stats(topo, d)).py()?;
-    to_python(py, &s)
+/// Statistics of a topography (the keys of `asperity surface stats --json`; SI units, slopes
+/// dimensionless; `None` where undefined).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct SurfaceStats {
+    /// `"profile"` or `"area"`.
+    pub kind: String,
+    /// Whether the samples are uniformly spaced.
+    pub uniform: bool,
+    /// Whether the topography is one period of a periodic surface.
+    pub periodic: bool,
+    /// What was removed first: `"mean"` or `"plane"`.
+    pub detrend: String,
+    /// Points along x.
+    pub nx: usize,
+    /// Points along y (1 for a profile).
+    pub ny: usize,
+    /// Missing points (excluded from every statistic).
+    pub missing_points: usize,
+    /// Spacing along x (m; the mean spacing of a nonuniform profile).
+    pub dx_m: f64,
+    /// Spacing along y (m); `None` for a profile.
+    pub dy_m: Option<f64>,
+    /// Size along x (m).
+    pub lx_m: f64,
+    /// Size along y (m); `None` for a profile.
+    pub ly_m: Option<f64>,
+    /// Arithmetic mean deviation Ra (m).
+    pub ra_m: f64,
+    /// Root-mean-square height Rq (m).
+    pub rq_m: f64,
+    /// Skewness Rsk.
+    pub rsk: f64,
+    /// Kurtosis Rku.
+    pub rku: f64,
+    /// RMS slope along x.
+    pub rms_slope: f64,
+    /// RMS slope along y (area only).
+    pub rms_slope_y: Option<f64>,
+    /// RMS gradient (area only).
+    pub rms_gradient: Option<f64>,
+    /// Correlation length where the (radially averaged) ACF drops below 1/e (m).
+    pub correlation_length_1_over_e_m: Option<f64>,
+    /// Correlation length where the ACF drops below 0.2 (m).
+    pub correlation_length_0_2_m: Option<f64>,
+    /// 1/e correlation length along x (area only, m).
+    pub correlation_length_x_1_over_e_m: Option<f64>,
+    /// 1/e correlation length along y (area only, m).
+    pub correlation_length_y_1_over_e_m: Option<f64>,
 }
 
-fn psd_dict<'py>(
-    py: Python<'py>,
-    topo: &Topography,
-    detrend_: &str,
-) -> PyResult<Bound<'py, PyDict>> {
+#[pymethods]
+impl SurfaceStats {
+    fn __repr__(&self) -> String {
+        format!(
+            "SurfaceStats({}, {} x {}, Rq = {:.6e} m)",
+            self.kind, self.nx, self.ny, self.rq_m
+        )
+    }
+}
+
+/// Statistics of any topography.
+fn surface_stats(py: Python<'_>, topo: &Topography, detrend_: &str) -> PyResult<SurfaceStats> {
+    let d = detrend(detrend_)?;
+    let s = py.detach(|| stats::stats(topo, d)).py()?;
+    Ok(SurfaceStats {
+        kind: s.kind.to_string(),
+        uniform: s.uniform,
+        periodic: s.periodic,
+        detrend: match s.detrend {
+            Detrend::Mean => "mean",
+            Detrend::Plane => "plane",
+        }
+        .to_string(),
+        nx: s.nx,
+        ny: s.ny,
+        missing_points: s.missing_points,
+        dx_m: s.dx_m,
+        dy_m: s.dy_m,
+        lx_m: s.lx_m,
+        ly_m: s.ly_m,
+        ra_m: s.ra_m,
+        rq_m: s.rq_m,
+        rsk: s.rsk,
+        rku: s.rku,
+        rms_slope: s.rms_slope,
+        rms_slope_y: s.rms_slope_y,
+        rms_gradient: s.rms_gradient,
+        correlation_length_1_over_e_m: s.correlation_length_1_over_e_m,
+        correlation_length_0_2_m: s.correlation_length_0_2_m,
+        correlation_length_x_1_over_e_m: s.correlation_length_x_1_over_e_m,
+        correlation_length_y_1_over_e_m: s.correlation_length_y_1_over_e_m,
+    })
+}
+
+/// A power spectral density, radially averaged for areas.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct PowerSpectrum {
+    /// 1 for a profile, 2 for an area.
+    pub dim: usize,
+    /// Angular wavenumbers, bin centres (rad/m).
+    pub q_rad_per_m: Py<PyArray1<f64>>,
+    /// PSD values: m³ for a profile, m⁴ for an area.
+    pub c: Py<PyArray1<f64>>,
+    /// Fourier coefficients in each bin.
+    pub count: Py<PyArray1<u64>>,
+}
+
+fn power_spectrum(py: Python<'_>, topo: &Topography, detrend_: &str) -> PyResult<PowerSpectrum> {
     let d = detrend(detrend_)?;
     let psd = py.detach(|| stats::power_spectrum(topo, d)).py()?;
-    let out = PyDict::new(py);
-    out.set_item("dim", psd.dim)?;
-    out.set_item("q_rad_per_m", PyArray1::from_vec(py, psd.q))?;
-    out.set_item(
-        if psd.dim == 1 { "c_m3" } else { "c_m4" },
-        PyArray1::from_vec(py, psd.c),
-    )?;
-    out.set_item(
-        "count",
-        PyArray1::from_vec(py, psd.count.into_iter().map(|c| c as u64).collect()),
-    )?;
-    Ok(out)
+    Ok(PowerSpectrum {
+        dim: psd.dim,
+        q_rad_per_m: PyArray1::from_vec(py, psd.q).unbind(),
+        c: PyArray1::from_vec(py, psd.c).unbind(),
+        count: PyArray1::from_vec(py, psd.count.into_iter().map(|c| c as u64).collect()).unbind(),
+    })
 }
 
 #[pymethods]
@@ -96,6 +181,81 @@ impl Surface {
             h.as_array().to_owned(),
             dx_m,
             dy_m.unwrap_or(dx_m),
+            periodic,
+        )
+        .py()?;
+        Ok(Self::from_grid(grid))
+    }
+
+    /// Surface from a SurfaceTopography `Topography` (or any object with its interface:
+    /// `heights()`, `physical_sizes`, `nb_grid_pts`, `unit`, `is_periodic`): heights and sizes
+    /// are converted from the topography's `unit` to metres, the spacing is the physical size
+    /// over the grid points, and the periodicity is the topography's. A topography without a
+    /// unit, of another dimension than 2, or with undefined (masked) points is refused.
+    /// SurfaceTopography is not needed to call this.
+    #[staticmethod]
+    fn from_topography(t: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let py = t.py();
+        let unit: Option<String> = t.getattr("unit")?.extract()?;
+        let unit = unit.ok_or_else(|| {
+            crate::errors::parameter(
+                py,
+                "unit",
+                "the topography has no length unit: give it one (e.g. Topography(..., unit=\"m\"))"
+                    .into(),
+            )
+        })?;
+        let metres = asperity::surface::io::units::metres_per_unit(&unit).ok_or_else(|| {
+            crate::errors::parameter(
+                py,
+                "unit",
+                format!("{unit:?} is not a length unit (m, mm, µm, nm, Å, pm)"),
+            )
+        })?;
+        let n: Vec<usize> = t.getattr("nb_grid_pts")?.extract()?;
+        let sizes: Vec<f64> = t.getattr("physical_sizes")?.extract()?;
+        if n.len() != 2 || sizes.len() != 2 {
+            return Err(crate::errors::parameter(
+                py,
+                "topography",
+                format!(
+                    "a Surface needs an area (2 grid dimensions), got {} (a line scan: use Profile)",
+                    n.len()
+                ),
+            ));
+        }
+        if t.getattr("has_undefined_data")
+            .and_then(|v| v.extract::<bool>())
+            .unwrap_or(false)
+        {
+            return Err(crate::errors::parameter(
+                py,
+                "topography",
+                "it has undefined (masked) points: fill them first (e.g. t.interpolate_undefined_data())"
+                    .into(),
+            ));
+        }
+        let heights = t.call_method0("heights")?;
+        let np = py.import("numpy")?;
+        let kwargs = pyo3::types::PyDict::new(py);
+        kwargs.set_item("dtype", np.getattr("float64")?)?;
+        let heights = np.call_method("ascontiguousarray", (heights,), Some(&kwargs))?;
+        let h = borrow_f64::<Ix2>(&heights, "heights", "heights, shape nb_grid_pts")?;
+        if h.as_array().shape() != [n[0], n[1]] {
+            return Err(crate::errors::parameter(
+                py,
+                "topography",
+                format!(
+                    "heights() has shape {:?}, nb_grid_pts is {n:?}",
+                    h.as_array().shape()
+                ),
+            ));
+        }
+        let periodic: bool = t.getattr("is_periodic")?.extract()?;
+        let grid = Grid2::new(
+            h.as_array().mapv(|z| z * metres),
+            sizes[0] * metres / n[0] as f64,
+            sizes[1] * metres / n[1] as f64,
             periodic,
         )
         .py()?;
@@ -196,17 +356,16 @@ impl Surface {
         (self.grid().lx(), self.grid().ly())
     }
 
-    /// Statistics (the keys of `asperity surface stats --json`; SI units, slopes
-    /// dimensionless; `None` where undefined). `detrend`: "mean" or "plane".
+    /// Statistics (those of `asperity surface stats --json`). `detrend`: "mean" or "plane".
     #[pyo3(signature = (detrend="mean"))]
-    fn stats<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyAny>> {
-        stats_dict(py, &self.topo, detrend)
+    fn stats(&self, py: Python<'_>, detrend: &str) -> PyResult<SurfaceStats> {
+        surface_stats(py, &self.topo, detrend)
     }
 
-    /// Radially averaged power spectral density: `q_rad_per_m`, `c_m4`, `count`.
+    /// Radially averaged power spectral density (`c` in m⁴).
     #[pyo3(signature = (detrend="mean"))]
-    fn power_spectrum<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyDict>> {
-        psd_dict(py, &self.topo, detrend)
+    fn power_spectrum(&self, py: Python<'_>, detrend: &str) -> PyResult<PowerSpectrum> {
+        power_spectrum(py, &self.topo, detrend)
     }
 
     fn __repr__(&self) -> String {
@@ -269,14 +428,14 @@ impl Profile {
 
     /// Statistics, as for `Surface.stats`.
     #[pyo3(signature = (detrend="mean"))]
-    fn stats<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyAny>> {
-        stats_dict(py, &self.topo, detrend)
+    fn stats(&self, py: Python<'_>, detrend: &str) -> PyResult<SurfaceStats> {
+        surface_stats(py, &self.topo, detrend)
     }
 
-    /// Power spectral density: `q_rad_per_m`, `c_m3`, `count`.
+    /// Power spectral density (`c` in m³).
     #[pyo3(signature = (detrend="mean"))]
-    fn power_spectrum<'py>(&self, py: Python<'py>, detrend: &str) -> PyResult<Bound<'py, PyDict>> {
-        psd_dict(py, &self.topo, detrend)
+    fn power_spectrum(&self, py: Python<'_>, detrend: &str) -> PyResult<PowerSpectrum> {
+        power_spectrum(py, &self.topo, detrend)
     }
 
     fn __len__(&self) -> usize {

@@ -36,26 +36,26 @@ def test_calibrate_equals_the_cli(cli, repo, tmp_path):
     cli("calibrate", config, "--out-dir", tmp_path / "cli")
     r = ap.calibrate(config, out_dir=tmp_path / "py")
     names = sorted(p.name for p in (tmp_path / "cli").iterdir())
-    assert sorted(p.rsplit("/", 1)[-1] for p in r["written"]) == names
+    assert sorted(p.rsplit("/", 1)[-1] for p in r.written) == names
     compared = [n for n in names if n != "calibration_timings.csv"]
     assert len(compared) >= 14
     match, mismatch, errors = filecmp.cmpfiles(tmp_path / "cli", tmp_path / "py", compared, shallow=False)
     assert mismatch == [] and errors == [], (mismatch, errors)
     # The returned numbers are the files' numbers (shortest round-trip decimals in the CSVs).
-    table = r["table"].columns()
+    table = r.table.columns()
     cli_table = ap.CalibrationTable.read_csv(tmp_path / "cli" / "calibration_table.csv").columns()
     for k, v in cli_table.items():
         assert np.array_equal(table[k], v), k
     real = rows(tmp_path / "cli" / "calibration_realisations.csv")
-    c = r["realisations"]
+    c = r.realisations
     assert len(real) == len(c["kn_N_per_m3"]) == 4
     for name in ["pressure_Pa", "kn_N_per_m3", "E0_N_per_m3", "k", "fit_R2", "mean_gap_m"]:
         assert np.array_equal(c[name], [float(x[name]) for x in real]), name
     assert list(c["seed"]) == [1, 1, 2, 2]
     # Two realisations differ (the comparison can fail).
     assert c["kn_N_per_m3"][0] != c["kn_N_per_m3"][2]
-    assert [p["pressure_pa"] for p in r["convergence"]["pressures"]] == [1e6, 5e6]
-    assert any("contact spots" in w for w in r["warnings"])
+    assert [p["pressure_pa"] for p in r.convergence["pressures"]] == [1e6, 5e6]
+    assert any("contact spots" in w for w in r.warnings)
 
 
 def test_calibrate_on_a_given_surface(repo, tmp_path):
@@ -63,11 +63,11 @@ def test_calibrate_on_a_given_surface(repo, tmp_path):
     s = ap.Surface.generate(rq_m=0.177e-6, clx_m=6.6e-6, cly_m=6.6e-6, lx_m=64e-6, ly_m=64e-6,
                             nx=64, ny=64, seed=1)
     r = ap.calibrate(config, surface=s)
-    assert list(r["realisations"]["seed"]) == [-1, -1]
+    assert list(r.realisations["seed"]) == [-1, -1]
     # The same surface as the generated realisation 1: the same kn.
     g = ap.calibrate(config, realisations=1)
-    assert np.array_equal(r["realisations"]["kn_N_per_m3"], g["realisations"]["kn_N_per_m3"])
-    assert r["written"] == []
+    assert np.array_equal(r.realisations["kn_N_per_m3"], g.realisations["kn_N_per_m3"])
+    assert r.written == []
 
 
 def test_bad_calibration_input(repo, tmp_path):

@@ -42,6 +42,14 @@ def cli_stats(cli, path, tmp_path):
     return json.loads(r.stdout)
 
 
+def assert_stats_equal(got, expected):
+    """Every field of a SurfaceStats equals the CLI's JSON key of the same name."""
+    fields = [k for k in dir(got) if not k.startswith("_")]
+    assert len(fields) == 22
+    for key in fields:
+        assert expected[key] == getattr(got, key), key
+
+
 @pytest.mark.parametrize("detrend", ["mean", "plane"])
 def test_statistics_equal_the_cli(cli, tmp_path, detrend):
     s = ap.Surface.generate(nx=128, seed=3)
@@ -50,10 +58,9 @@ def test_statistics_equal_the_cli(cli, tmp_path, detrend):
     r = cli("surface", "stats", path, "--json", "--detrend", detrend, "--psd-out", tmp_path / "psd.csv")
     expected = json.loads(r.stdout)
     got = s.stats(detrend)
-    for key, value in got.items():
-        assert expected[key] == value, key
+    assert_stats_equal(got, expected)
     if detrend == "mean":
-        assert got["rq_m"] == pytest.approx(0.177e-6, rel=1e-12)
+        assert got.rq_m == pytest.approx(0.177e-6, rel=1e-12)
 
 
 def test_profile_statistics_equal_the_cli(cli, tmp_path, data_file):
@@ -61,8 +68,7 @@ def test_profile_statistics_equal_the_cli(cli, tmp_path, data_file):
     p = ap.read_topography(path)
     assert isinstance(p, ap.Profile)
     expected = cli_stats(cli, path, tmp_path)
-    for key, value in p.stats().items():
-        assert expected[key] == value, key
+    assert_stats_equal(p.stats(), expected)
 
 
 def test_normal_sweep_equals_the_cli(cli, tmp_path):
@@ -98,7 +104,7 @@ def test_tangential_loops_equal_the_cli(cli, tmp_path):
     sol = ap.NormalSolver(s, e_star_pa=E_STAR).solve_load(2e6)
     t = ap.TangentialSolver(sol, friction_coefficient=0.6)
     r = t.oscillate(amplitude_m=(amplitude, 0.0), cycles=1, steps_per_cycle=8)
-    st = r["steps"]
+    st = r.steps
     assert len(rows) == len(st["displacement_m"]) == 9
     for k, row in enumerate(rows):
         assert float(row["displacement_m"]) == st["displacement_m"][k]
@@ -110,8 +116,12 @@ def test_tangential_loops_equal_the_cli(cli, tmp_path):
         assert int(row["iterations"]) == st["iterations"][k]
         assert row["stick_fraction"] == f"{st['stick_fraction'][k]:.6f}"
     energy = csv_rows(tmp_path / "tangential_energy.csv")
-    assert float(energy[0]["dissipated_J_per_m2"]) == r["cycles"][0]["dissipated_j_per_m2"]
-    assert r["cycles"][0]["dissipated_j_per_m2"] > 0
+    assert float(energy[0]["dissipated_J_per_m2"]) == r.cycles[0].dissipated_j_per_m2
+    assert r.cycles[0].dissipated_j_per_m2 > 0
+    assert r.metadata.friction_coefficient == 0.6 and r.metadata.grid == (128, 128)
+    assert r.metadata.contact_points == sol.contact_points
+    step = t.step(displacement_m=(amplitude, 0.0))
+    assert step.shift_m == (amplitude, 0.0) and step.converged
 
 
 def test_elements_equal_the_cli(cli, tmp_path, repo):
@@ -204,6 +214,14 @@ def test_film_pipeline_is_the_clis(cli, tmp_path, data_file, repo):
         assert ours == theirs, name
     assert len(got.regions) == 6 and all(f is not None for f in got.fits)
     assert got.summary == json.loads((out / "film.json").read_text())["summary"]
+    # The typed region summaries are the JSON's, field for field.
+    assert len(got.summaries) == len(got.summary["regions"])
+    for ours, theirs in zip(got.summaries, got.summary["regions"]):
+        counts = theirs.pop("counts")
+        assert {k: getattr(ours, k) for k in theirs} == theirs
+        assert {k: getattr(ours.counts, k) for k in counts} == counts
+    total = got.film_map.class_counts
+    assert sum(getattr(total, k) for k in ap.FilmMap.class_names) == got.film_map.shape[0] * got.film_map.shape[1]
     assert np.array_equal(got.film_map.pressure_pa, np.load(out / "pressure_map_Pa.npy"),
                           equal_nan=True)
     assert got.preloads["N0_N"].sum() == pytest.approx(100.5, rel=1e-12)
@@ -220,17 +238,23 @@ def test_diagnose_equals_the_cli(cli, tmp_path, data_file):
     cli("diagnose", record, "--out-dir", tmp_path)
     expected = json.loads((tmp_path / "diagnose.json").read_text())
     rec = ap.read_record(record)
-    got = ap.diagnose(rec["time_s"], rec["displacement_m"], rec["force_N"], source=str(record))
-    series = got.pop("series")
-    assert "backlash" in got.pop("text")
-    # The JSON report is the CLI's, value for value (JSON has no tuples: compare via JSON),
-    # but for the wall times and the input's column names.
-    for report in (got, expected):
-        del report["baseline_fit"]["wall_time_s"]
-        for r in report["rounds"]:
-            for c in r["candidates"]:
+    report = ap.diagnose(rec.time_s, rec.displacement_m, rec.force_n, source=str(record))
+    got = json.loads(report.json)
+    assert "backlash" in report.text
+    # The JSON report is the CLI's, value for value, but for the wall times and the input's
+    # column names.
+    for r in (got, expected):
+        del r["baseline_fit"]["wall_time_s"]
+        for rnd in r["rounds"]:
+            for c in rnd["candidates"]:
                 del c["fit"]["wall_time_s"]
-        report["input"].pop("columns")
-    assert json.loads(json.dumps(got)) == expected
-    assert got["effects_added"] == ["backlash"]
-    assert len(series["final_force_N"]) == expected["samples_analysed"]
+        r["input"].pop("columns")
+    assert got == expected
+    # The typed fields are the report's.
+    assert report.effects_added == expected["effects_added"] == ["backlash"]
+    assert report.errors_after.nrms == expected["errors_after"]["nrms"]
+    assert report.errors_before.held_out_rms_over_noise == (
+        expected["errors_before"]["held_out_rms_over_noise"])
+    assert report.samples_analysed == expected["samples_analysed"]
+    assert report.training_cycles == expected["training_cycles"]
+    assert len(report.final_force_n) == expected["samples_analysed"]

@@ -82,7 +82,7 @@ def test_file_model_and_array_model_equal_the_cli(cli, tmp_path):
         r = from_file.sweep(level)
         with open(tmp_path / "out" / f"response_level_{i}.csv") as f:
             rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
-        cols = r["columns"]
+        cols = r.columns
         assert list(cols) == list(rows[0])
         assert len(rows) == len(cols["frequency_Hz"]) > 10
         for name, values in cols.items():
@@ -91,13 +91,13 @@ def test_file_model_and_array_model_equal_the_cli(cli, tmp_path):
         # The same model from arrays: the same numbers, bit for bit.
         a = from_arrays.sweep(level, 15.0, 50.0, harmonics=3, odd_only=True, points=15)
         for name, values in cols.items():
-            assert np.array_equal(a["columns"][name], values), name
-        assert r["harmonic_orders"] == [1, 3]
-        x = r["coordinate_harmonics"]
+            assert np.array_equal(a.columns[name], values), name
+        assert r.harmonic_orders == [1, 3]
+        x = r.coordinate_harmonics
         assert x.shape == (len(rows), 2, 4)  # cos and sin of orders 1 and 3
         assert np.allclose(np.hypot(x[:, 0, 0], x[:, 0, 1]), cols["m1.x_h1_amplitude_m"], rtol=1e-14)
-        assert list(r["peak_elements"]["element"]) == ["7", "11"]
-        peaks.append(cols["m1.x_h1_amplitude_m"][r["peak"]] / level)
+        assert list(r.peak_elements["element"]) == ["7", "11"]
+        peaks.append(cols["m1.x_h1_amplitude_m"][r.peak] / level)
     # Microslip: more damping at the higher level, the receptance peak falls (can fail).
     assert peaks[1] < 0.9 * peaks[0]
 
@@ -106,14 +106,14 @@ def test_modal_model_with_a_jenkins_element_sweeps(tmp_path):
     m = ap.ResponseModel.modal([20.0], [0.01], np.array([1.0]))
     m.attach_jenkins("j", 5e3, 0.5, np.array([[1.0]]))
     r = m.sweep(0.2, 15.0, 30.0, harmonics=3, points=40)
-    c = r["columns"]
-    assert r["formulation"] in ("coordinates", "receptance")
+    c = r.columns
+    assert r.formulation in ("coordinates", "receptance")
     assert c["frequency_Hz"][0] == pytest.approx(15.0)
     assert c["frequency_Hz"][-1] == pytest.approx(30.0)
     # Every point converged to the corrector's default tolerance (1e-7 relative residual).
     assert np.all(c["relative_residual"] <= 1e-7)
     # The stuck Jenkins spring stiffens the mode above 20 Hz: the peak lies above it.
-    assert c["frequency_Hz"][r["peak"]] > 20.0
+    assert c["frequency_Hz"][r.peak] > 20.0
 
 
 def test_bad_model_input_raises_named_errors(tmp_path):

@@ -1,11 +1,12 @@
 //! `asperity identify` and `asperity predict`: measured frequency responses → identified
 //! single-nonlinear-mode model → errors on the levels and tests not used.
-use asperity::core::output::OutputSet;
-use asperity::identify::effects::Effect;
+use asperity::identify::command::{
+    prepare_identify, prepare_predict, IdentifyConfig, PredictConfig,
+};
 use asperity::identify::model::Family;
 use asperity::identify::pipeline::FitRows;
-use asperity::identify::{identify, predict, read_sweeps, Control, Options};
-use asperity::{Error, Result};
+use asperity::identify::Control;
+use asperity::Result;
 use std::path::PathBuf;
 
 /// Joint element family of the baseline.
@@ -21,13 +22,6 @@ pub enum FamilyArg {
 pub enum RowsArg {
     All,
     Settled,
-}
-
-fn fit_rows(rows: RowsArg) -> FitRows {
-    match rows {
-        RowsArg::All => FitRows::All,
-        RowsArg::Settled => FitRows::Settled,
-    }
 }
 
 /// Identify a jointed structure's nonlinear mode from stepped-sine sweeps at several excitation
@@ -117,17 +111,6 @@ pub struct IdentifyArgs {
     pub out_dir: PathBuf,
 }
 
-/// Write a result's files through the output set (all appear or none) and return their final
-/// paths.
-fn write_all(
-    mut out: OutputSet,
-    write: impl FnOnce(&std::path::Path) -> Result<Vec<PathBuf>>,
-) -> Result<Vec<PathBuf>> {
-    let staged = out.staging_dir()?;
-    write(&staged)?;
-    out.commit()
-}
-
 /// Print the report and the files written.
 fn report(text: &str, written: &[PathBuf]) {
     print!("{text}");
@@ -137,244 +120,47 @@ fn report(text: &str, written: &[PathBuf]) {
     }
 }
 
-/// `--chain-steps`, checked: 0 (no bands) or at least 1000.
-fn chain_steps(args: &IdentifyArgs) -> Result<Option<usize>> {
-    match args.chain_steps {
-        Some(n) if n != 0 && n < 1000 => Err(Error::param(
-            "--chain-steps",
-            format!("{n} (0 for no bands, or at least 1000)"),
-        )),
-        n => Ok(n),
-    }
-}
-
-/// The search settings within the resource limits (before anything is read or fitted).
-fn check_limits(args: &IdentifyArgs) -> Result<()> {
-    use asperity::core::limits::*;
-    check_count("--starts", args.starts.unwrap_or(0), MAX_FIT_STARTS)?;
-    check_count("--particles", args.particles.unwrap_or(0), MAX_PARTICLES)?;
-    check_count(
-        "--swarm-iterations",
-        args.swarm_iterations.unwrap_or(0) as usize,
-        MAX_SWARM_ITERATIONS as usize,
-    )?;
-    check_count(
-        "--local-iterations",
-        args.local_iterations.unwrap_or(0) as usize,
-        MAX_LOCAL_ITERATIONS as usize,
-    )?;
-    check_count(
-        "--chain-steps",
-        args.chain_steps.unwrap_or(0),
-        MAX_CHAIN_STEPS,
-    )?;
-    if let Some(a) = &args.response_amplitude {
-        if let Some(v) = a.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
-            return Err(Error::param(
-                "--response-amplitude",
-                format!("amplitudes must be finite and > 0, got {v}"),
-            ));
+impl IdentifyArgs {
+    /// The library's config of these flags.
+    fn config(&self) -> IdentifyConfig {
+        IdentifyConfig {
+            files: self.files.clone(),
+            fit_levels: self.fit_levels.clone(),
+            family: match self.family {
+                FamilyArg::Jenkins => Family::Jenkins,
+                FamilyArg::Valanis => Family::Valanis,
+                FamilyArg::Iwan => Family::Iwan,
+            },
+            candidates: self.candidates.clone(),
+            max_effects: self.max_effects,
+            thorough: self.thorough,
+            starts: self.starts,
+            particles: self.particles,
+            swarm_iterations: self.swarm_iterations,
+            local_iterations: self.local_iterations,
+            seed: self.seed,
+            response_amplitude: self.response_amplitude.clone(),
+            chain_steps: self.chain_steps,
+            rows: match self.rows {
+                RowsArg::All => FitRows::All,
+                RowsArg::Settled => FitRows::Settled,
+            },
+            structure: self.structure.clone(),
         }
-    }
-    Ok(())
-}
-
-/// The search settings must allow a swarm.
-fn check_search(starts: usize, particles: usize) -> Result<()> {
-    if starts == 0 || particles < 2 {
-        return Err(Error::param(
-            "--starts/--particles",
-            "at least one start and two particles",
-        ));
-    }
-    Ok(())
-}
-
-/// The swarm and Nelder–Mead settings of `--particles`, `--swarm-iterations`,
-/// `--local-iterations` and `--seed` applied to `fit` (those not given keep its values).
-fn apply_search_args(
-    fit: asperity::identify::fit::FitOptions,
-    args: &IdentifyArgs,
-) -> asperity::identify::fit::FitOptions {
-    asperity::identify::fit::FitOptions {
-        particles: args.particles.unwrap_or(fit.particles),
-        swarm_iterations: args.swarm_iterations.unwrap_or(fit.swarm_iterations),
-        local_iterations: args.local_iterations.unwrap_or(fit.local_iterations),
-        seed: args.seed,
-        ..fit
     }
 }
 
 pub fn run_identify(args: IdentifyArgs) -> Result<()> {
-    check_limits(&args)?;
-    if let Some(structure) = &args.structure {
-        return run_identify_reduced(structure, &args);
-    }
-    let family = match args.family {
-        FamilyArg::Jenkins => Family::Jenkins,
-        FamilyArg::Valanis => Family::Valanis,
-        FamilyArg::Iwan => Family::Iwan,
-    };
-    let mut opts = if args.thorough {
-        Options::thorough(family)
-    } else {
-        Options::new(family)
-    };
-    opts.fit_levels = args.fit_levels.clone();
-    if let Some(c) = &args.candidates {
-        opts.select.candidates = parse_candidates(c, &Effect::ALL)?;
-    }
-    opts.select.max_effects = args.max_effects;
-    if let Some(n) = args.starts {
-        opts.select.baseline_fit.starts = n;
-    }
-    check_search(
-        opts.select.baseline_fit.starts,
-        args.particles.unwrap_or(opts.select.baseline_fit.particles),
-    )?;
-    opts.select.baseline_fit = apply_search_args(opts.select.baseline_fit, &args);
-    opts.select.candidate_fit = apply_search_args(opts.select.candidate_fit, &args);
-    opts.final_fit = apply_search_args(opts.final_fit, &args);
-    opts.response_amplitudes = args.response_amplitude.clone();
-    opts.rows = fit_rows(args.rows);
-    if let Some(n) = chain_steps(&args)? {
-        opts.chain_steps = n;
-    }
-    let out = identify_outputs(&args)?;
-    let sweeps = read_sweeps(&args.files)?;
-    if let Some(note) = work_note(opts.estimated_evaluations(), &sweeps) {
+    let run = prepare_identify(&args.config(), Some((&args.out_dir, "--out-dir")))?;
+    if let Some(note) = run.note() {
         eprintln!("{note}");
     }
-    let bar = super::progress_bar("identify", opts.estimated_evaluations());
+    let bar = super::progress_bar(run.title(), run.estimated_evaluations());
     bar.set_message("model evaluations");
-    let result = identify(sweeps, &opts, Some(&bar));
+    let result = run.run(Some(&bar));
     bar.finish_and_clear();
-    let id = result?;
-    report(&id.text(), &write_all(out, |d| id.write(d))?);
-    Ok(())
-}
-
-/// The output set of `identify` with its inputs declared: the measured files (and the model
-/// file of `--structure` with the files it names, added by the caller) are never written over.
-fn identify_outputs(args: &IdentifyArgs) -> Result<OutputSet> {
-    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("identify-level", ".png")?;
-    out.writes(&[
-        "identify.txt",
-        "identify.json",
-        "model.json",
-        "identify-rows.csv",
-        "identify-backbone.csv",
-        "identify-backbone.png",
-        "identify-response-controlled.csv",
-    ])?;
-    out.inputs(&args.files, "measured file")?;
-    out.inputs(&args.structure, "--structure")?;
-    Ok(out)
-}
-
-/// Seconds per model evaluation per measured row of the single-mode identification: measured
-/// as the wall time of `identify` with its defaults (`--max-effects 0 --chain-steps 0`) on the
-/// four Brake–Reuss files of `../shared/data/frf` (164 rows), 23 s on the 2-core machine shared
-/// with other builds, over its estimated evaluations × rows; rounded up.
-const SECONDS_PER_ROW_EVALUATION: f64 = 2e-5;
-
-/// Above this estimate (s) a command says up front how long it will take and what bounds it.
-const LONG_WORK_S: f64 = 600.0;
-
-/// A note before a search estimated at more than [`LONG_WORK_S`]: its size, and the flags and
-/// files that bound it.
-fn work_note(evaluations: u64, sweeps: &[asperity::identify::measured::Sweep]) -> Option<String> {
-    let rows: usize = sweeps.iter().map(|s| s.rows.len()).sum();
-    let seconds = evaluations as f64 * rows as f64 * SECONDS_PER_ROW_EVALUATION;
-    if seconds <= LONG_WORK_S {
-        return None;
-    }
-    let largest = sweeps.iter().max_by_key(|s| s.rows.len())?;
-    Some(format!(
-        "note: about {evaluations} model evaluations over {rows} measured rows: roughly {:.0} \
-         min; bounded by --starts, --particles, --swarm-iterations, --local-iterations, \
-         --max-effects and --candidates, and by the rows of the files (largest: {}, {} rows; \
-         thin it to shorten every evaluation)",
-        seconds / 60.0,
-        largest.path.display(),
-        largest.rows.len()
-    ))
-}
-
-/// The effects of `--candidates` (`none`: no search), each one of `allowed`.
-fn parse_candidates(ids: &[String], allowed: &[Effect]) -> Result<Vec<Effect>> {
-    if ids.len() == 1 && ids[0].trim() == "none" {
-        return Ok(Vec::new());
-    }
-    ids.iter()
-        .map(|id| {
-            Effect::from_id(id.trim())
-                .filter(|e| allowed.contains(e))
-                .ok_or_else(|| {
-                    Error::param(
-                        "--candidates",
-                        format!(
-                            "effect {id:?} is not a candidate here; candidates: {} (or none)",
-                            allowed
-                                .iter()
-                                .map(|e| e.id())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                    )
-                })
-        })
-        .collect()
-}
-
-/// `asperity identify --structure`: update the reduced model of a response-model file.
-fn run_identify_reduced(structure: &std::path::Path, args: &IdentifyArgs) -> Result<()> {
-    use asperity::identify::fit::{FitOptions, Parametrised};
-    use asperity::identify::reduced::{
-        identify_reduced, ReducedOptions, ReducedSpec, REDUCED_EFFECTS,
-    };
-    let starts = args.starts.unwrap_or(FitOptions::default().starts);
-    if starts > 0 {
-        check_search(
-            starts,
-            args.particles.unwrap_or(FitOptions::default().particles),
-        )?;
-    }
-    let mut out = identify_outputs(args)?;
-    for (role, p) in asperity::dynamics::model_file::referenced_files(structure)? {
-        out.input(&p, &format!("--structure {role}"))?;
-    }
-    let spec = ReducedSpec::load(structure)?;
-    let sweeps = read_sweeps(&args.files)?;
-    let fit_levels =
-        asperity::identify::pipeline::choose_fit_levels(&sweeps, args.fit_levels.as_deref())?;
-    let opts = FitOptions {
-        starts,
-        ..apply_search_args(FitOptions::default(), args)
-    };
-    let dim = spec.params().len() as u64;
-    let local = asperity::identify::fit::local_iteration_cap(opts.local_iterations, dim as usize);
-    // The update; the effect search, if it runs, lengthens the bar by its own estimate.
-    let estimate = opts.swarm_evaluations() + (opts.starts as u64 + 1) * local;
-    let bar = super::progress_bar("identify (reduced model)", estimate);
-    bar.set_message("model evaluations");
-    let options = ReducedOptions {
-        fit: opts,
-        response_amplitudes: args.response_amplitude.clone(),
-        chain_steps: chain_steps(args)?,
-        candidates: args
-            .candidates
-            .as_ref()
-            .map(|c| parse_candidates(c, &REDUCED_EFFECTS))
-            .transpose()?,
-        max_effects: args.max_effects,
-        rows: fit_rows(args.rows),
-    };
-    let result = identify_reduced(&spec, sweeps, fit_levels, &options, Some(&bar));
-    bar.finish_and_clear();
-    let id = result?;
-    report(&id.text(), &write_all(out, |d| id.write(d))?);
+    let (id, written) = result?.write()?;
+    report(&id.text(), &written);
     Ok(())
 }
 
@@ -409,32 +195,19 @@ pub enum ControlArg {
 }
 
 pub fn run_predict(args: PredictArgs) -> Result<()> {
-    let flag = args.control.map(|c| match c {
-        ControlArg::Force => Control::Force,
-        ControlArg::Response => Control::Response,
-    });
-    let mut out = OutputSet::in_dir(&args.out_dir, "--out-dir")?;
-    out.owns("predict-", ".png")?;
-    out.writes(&["predict.txt", "predict.json", "predict-rows.csv"])?;
-    out.inputs(&args.files, "measured file")?;
-    for (role, p) in asperity::identify::predict::model_inputs(&args.model)? {
-        out.input(&p, &role)?;
-    }
-    let sweeps = read_sweeps(&args.files)?;
-    let control = asperity::identify::predict::choose_control(&sweeps, flag)?;
-    let rows: usize = sweeps.iter().map(|s| s.rows.len()).sum();
-    let bar = super::spinner(&format!(
-        "predicting {rows} rows of {} file(s)",
-        sweeps.len()
-    ));
-    let p = predict(&args.model, sweeps, control);
+    let config = PredictConfig {
+        model: args.model,
+        files: args.files,
+        control: args.control.map(|c| match c {
+            ControlArg::Force => Control::Force,
+            ControlArg::Response => Control::Response,
+        }),
+    };
+    let run = prepare_predict(&config, Some((&args.out_dir, "--out-dir")))?;
+    let bar = super::spinner(&run.title());
+    let result = run.run();
     bar.finish_and_clear();
-    let p = p?;
-    let written = write_all(out, |d| p.write(d))?;
-    print!("{}", p.text());
-    println!("\nwrote:");
-    for w in written {
-        println!("  {}", w.display());
-    }
+    let (p, written) = result?.write()?;
+    report(&p.text(), &written);
     Ok(())
 }

@@ -11,6 +11,7 @@
 //! ```
 
 pub mod backbone;
+pub mod command;
 pub mod effects;
 pub mod fit;
 pub mod measured;
