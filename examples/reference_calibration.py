@@ -147,7 +147,7 @@ def main():
     same = all(np.array_equal(table[c], ref[c]) for c in ref)
     print(f"\nagainst {args.compare}: {'identical, bit for bit' if same else f'largest relative difference {worst:.2e}'}")
     at = reference.interpolate(3e6)
-    print(f"at 3 MPa: kn {at['kn_N_per_m3']:.3e} N/m³, E0 {at['E0_N_per_m3']:.3e} N/m³, k {at['k']:.3f}")
+    print(f"at 3 MPa: kn {at.kn_n_per_m3:.3e} N/m³, E0 {at.e0_n_per_m3:.3e} N/m³, k {at.k:.3f}")
     return 0 if same or worst < 1e-9 else 1
 
 

@@ -21,34 +21,51 @@ __version__: str
 __all__ = [
     "AmplitudeHistory",
     "AmplitudeLoop",
+    "BelowRangePatch",
+    "CalibrationConvergence",
     "CalibrationRun",
     "CalibrationTable",
     "ClassCounts",
     "Convergence",
+    "ConvergenceCheck",
     "CycleEnergy",
     "DiagnoseErrors",
     "DiagnoseReport",
+    "ElementSummary",
     "FilePrediction",
     "FilmMap",
     "FilmResult",
+    "FilmSummary",
     "IdentifyReport",
     "LevelError",
     "LoopFit",
+    "NodeClassReading",
+    "NodePlacement",
+    "NodeSummary",
     "NormalSolution",
     "NormalSolver",
+    "NotFitted",
     "OscillationResult",
     "ParameterEstimate",
     "PolyFit",
     "PowerSpectrum",
     "PredictReport",
+    "PreloadSummary",
+    "PressureConvergence",
     "Profile",
     "Record",
+    "ReductionSummary",
     "Region",
     "RegionSummary",
     "ResponseModel",
+    "SampleSummary",
+    "StageTimes",
     "Surface",
+    "SurfaceSpec",
     "SurfaceStats",
     "SweepResult",
+    "TableColumns",
+    "TableValues",
     "TangentialMetadata",
     "TangentialSolver",
     "TangentialStep",
@@ -691,12 +708,58 @@ class CalibrationTable:
     @property
     def pressure_range(self) -> Tuple[float, float]: ...
     @overload
-    def interpolate(self, pressure_pa: float) -> Dict[str, float]: ...
+    def interpolate(self, pressure_pa: float) -> "TableValues": ...
     @overload
-    def interpolate(self, pressure_pa: F64Array) -> Columns:
+    def interpolate(self, pressure_pa: F64Array) -> "TableColumns":
         """Monotone cubic in ln p; outside the table the end pair's power law for kn, E0 and the
         contact area ratio (Et keeps Et/E0, k and μ the end row's); ``range``: −1 below,
         0 within, +1 above."""
+    def __len__(self) -> int: ...
+
+@final
+class TableValues:
+    """Element parameters the table gives at one pressure (per unit area, N/m³)."""
+
+    @property
+    def pressure_pa(self) -> float: ...
+    @property
+    def contact_area_ratio(self) -> float: ...
+    @property
+    def kn_n_per_m3(self) -> float: ...
+    @property
+    def e0_n_per_m3(self) -> float: ...
+    @property
+    def k(self) -> float: ...
+    @property
+    def mu(self) -> float: ...
+    @property
+    def et_n_per_m3(self) -> float: ...
+    @property
+    def range(self) -> int:
+        """−1 below, 0 within, +1 above the table's pressures."""
+
+@final
+class TableColumns:
+    """Element parameters the table gives at each of several pressures: float64 arrays
+    (N/m³ per unit area), ``range`` int8."""
+
+    @property
+    def pressure_pa(self) -> F64Array: ...
+    @property
+    def contact_area_ratio(self) -> F64Array: ...
+    @property
+    def kn_n_per_m3(self) -> F64Array: ...
+    @property
+    def e0_n_per_m3(self) -> F64Array: ...
+    @property
+    def k(self) -> F64Array: ...
+    @property
+    def mu(self) -> F64Array: ...
+    @property
+    def et_n_per_m3(self) -> F64Array: ...
+    @property
+    def range(self) -> "npt.NDArray[np.int8]":
+        """−1 below, 0 within, +1 above the table's pressures."""
     def __len__(self) -> int: ...
 
 def calibrate(
@@ -728,7 +791,7 @@ class CalibrationRun:
         pressure_Pa, contact_area_ratio, kn_N_per_m3, mean_gap_m, gross_slip_displacement_m (m),
         E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points."""
     @property
-    def convergence(self) -> Dict[str, Any]:
+    def convergence(self) -> "CalibrationConvergence":
         """The grid and patch checks per pressure, as in calibration.json."""
     @property
     def warnings(self) -> List[str]: ...
@@ -736,16 +799,175 @@ class CalibrationRun:
     def written(self) -> List[str]:
         """Files written into ``out_dir`` (empty without one)."""
     @property
-    def times(self) -> Dict[str, Any]:
-        """Wall time of each stage (s)."""
+    def times(self) -> "StageTimes":
+        """Wall and CPU time of each stage (s)."""
+
+@final
+class StageTimes:
+    """Wall and CPU time (s) of each stage of ``calibrate()``, summed over the chains."""
+
+    @property
+    def surface_s(self) -> float: ...
+    @property
+    def normal_s(self) -> float: ...
+    @property
+    def tangential_s(self) -> float: ...
+    @property
+    def fit_s(self) -> float: ...
+    @property
+    def surface_cpu_s(self) -> float: ...
+    @property
+    def normal_cpu_s(self) -> float: ...
+    @property
+    def tangential_cpu_s(self) -> float: ...
+    @property
+    def fit_cpu_s(self) -> float: ...
+    @property
+    def total_s(self) -> float:
+        """Wall time of the whole run."""
+
+@final
+class CalibrationConvergence:
+    """The grid and patch checks of ``calibrate()``."""
+
+    @property
+    def grid_spec(self) -> Optional["SurfaceSpec"]:
+        """The grid check's surfaces (half the points per side); None: not run."""
+    @property
+    def patch_spec(self) -> Optional["SurfaceSpec"]:
+        """The patch check's surfaces (half the patch side, same spacing); None: not run."""
+    @property
+    def notes(self) -> List[str]:
+        """Why a check was not run."""
+    @property
+    def pressures(self) -> List["PressureConvergence"]: ...
+
+@final
+class SurfaceSpec:
+    """A generated Gaussian surface: Rq, 1/e correlation lengths and patch (m), grid, seed."""
+
+    @property
+    def rq_m(self) -> float: ...
+    @property
+    def clx_m(self) -> float: ...
+    @property
+    def cly_m(self) -> float: ...
+    @property
+    def lx_m(self) -> float: ...
+    @property
+    def ly_m(self) -> float: ...
+    @property
+    def nx(self) -> int: ...
+    @property
+    def ny(self) -> int: ...
+    @property
+    def seed(self) -> int: ...
+
+@final
+class PressureConvergence:
+    """Convergence facts and verdicts at one nominal pressure (Pa)."""
+
+    @property
+    def pressure_pa(self) -> float: ...
+    @property
+    def contact_spots(self) -> "SampleSummary": ...
+    @property
+    def median_spot_points(self) -> float: ...
+    @property
+    def min_median_spot_points(self) -> int: ...
+    @property
+    def under_resolved_realisations(self) -> int: ...
+    @property
+    def min_points_across(self) -> float: ...
+    @property
+    def narrowest_is_contact(self) -> bool: ...
+    @property
+    def grid(self) -> List["ConvergenceCheck"]:
+        """kn, E0, k: n against n/2 points per side."""
+    @property
+    def patch(self) -> List["ConvergenceCheck"]:
+        """kn, E0, k: patch L against L/2."""
+    @property
+    def grid_verdict(self) -> str: ...
+    @property
+    def patch_verdict(self) -> str: ...
+
+@final
+class ConvergenceCheck:
+    """Change of a quantity (kn, E0 or k) from the coarser to the main configuration, with its
+    95 % interval, against the allowed change; verdict ``converged``, ``undetermined``,
+    ``not-converged`` or ``not-checked``."""
+
+    @property
+    def quantity(self) -> str: ...
+    @property
+    def change(self) -> float: ...
+    @property
+    def change_ci95(self) -> float: ...
+    @property
+    def tolerance(self) -> float: ...
+    @property
+    def verdict(self) -> str: ...
+
+@final
+class SampleSummary:
+    """Mean, standard deviation and 95 % interval half-width over the realisations."""
+
+    @property
+    def n(self) -> int: ...
+    @property
+    def mean(self) -> float: ...
+    @property
+    def sd(self) -> float: ...
+    @property
+    def ci95(self) -> float: ...
 
 def join_elements(
     preloads: Columns, table: CalibrationTable, out: Optional[Path] = None
-) -> Tuple[Columns, Dict[str, Any]]:
+) -> Tuple[Columns, "ElementSummary"]:
     """One element per preloaded node: kn, E0, Et (N/m) = table values × area, k, μ; columns as
     in ``asperity elements``' CSV (id, x_m, y_m, area_m2, pressure_Pa, N0_N, kn_N_per_m,
     E0_N_per_m, k, mu, Et_N_per_m, out_of_range) and a summary; nodes of zero pressure (open
     contact) are left out and counted (``n_open``, ``open_ids``, ``open_area_m2``)."""
+
+@final
+class ElementSummary:
+    """Counts and totals of ``join_elements`` (areas m², loads N, pressures Pa)."""
+
+    @property
+    def n_elements(self) -> int: ...
+    @property
+    def n_open(self) -> int:
+        """Nodes of zero pressure (open contact), left out."""
+    @property
+    def open_ids(self) -> List[int]: ...
+    @property
+    def open_area_m2(self) -> float: ...
+    @property
+    def n_below_range(self) -> int: ...
+    @property
+    def n_above_range(self) -> int: ...
+    @property
+    def below_range_ids(self) -> List[int]: ...
+    @property
+    def above_range_ids(self) -> List[int]: ...
+    @property
+    def not_converged_row_ids(self) -> List[int]:
+        """Elements whose table rows were judged not converged in grid or patch size."""
+    @property
+    def undetermined_row_ids(self) -> List[int]: ...
+    @property
+    def total_area_m2(self) -> float: ...
+    @property
+    def total_load_n(self) -> float: ...
+    @property
+    def table_pressure_min_pa(self) -> float: ...
+    @property
+    def table_pressure_max_pa(self) -> float: ...
+    @property
+    def element_pressure_min_pa(self) -> float: ...
+    @property
+    def element_pressure_max_pa(self) -> float: ...
 
 def read_preloads(path: Path) -> Columns:
     """Preload CSV → columns id, x_m, y_m, area_m2, pressure_Pa, N0_N."""
@@ -880,14 +1102,136 @@ def film_preloads(
     rotation_rad: float = 0.0,
     scale: float = 1.0,
     total_load_n: Optional[float] = None,
-) -> Tuple[Columns, Dict[str, Any]]:
+) -> Tuple[Columns, "PreloadSummary"]:
     """N0 = σ_fit(x, y)·A (N) per node placed on the film; optional rescale to a total load.
 
     The columns include ``pixel_class`` (list of str: in_range, above_range, below_range, hole),
     what the film says under each node, as ``preload.csv`` of ``asperity film``."""
 
+@final
+class PreloadSummary:
+    """Totals of the node preloads: nodes, tributary area (m²), load before and after
+    rescaling (N)."""
+
+    @property
+    def n_nodes(self) -> int: ...
+    @property
+    def total_area_m2(self) -> float: ...
+    @property
+    def raw_total_load_n(self) -> float: ...
+    @property
+    def total_load_n(self) -> float: ...
+    @property
+    def load_scale(self) -> float: ...
+    @property
+    def clamped_negative(self) -> int:
+        """Nodes whose fitted pressure was negative, set to zero."""
+    @property
+    def areas_from_triangulation(self) -> bool: ...
+    @property
+    def gap_area_m2(self) -> float: ...
+    @property
+    def gap_triangles(self) -> int: ...
+
 def reduce_preloads(preloads: Columns, mesh_size_m: float) -> Columns:
     """Keep one node per triangle of an h-mesh (m) with summed area and load."""
+
+@final
+class FilmSummary:
+    """The ``summary`` of ``film.json``: pixel counts, regions, fits, what was left out, nodes."""
+
+    @property
+    def image_pixels(self) -> ClassCounts: ...
+    @property
+    def discarded_small_components(self) -> int: ...
+    @property
+    def rejected_marks(self) -> int: ...
+    @property
+    def below_range_patches(self) -> List["BelowRangePatch"]: ...
+    @property
+    def regions_not_fitted(self) -> List["NotFitted"]: ...
+    @property
+    def regions(self) -> List[RegionSummary]: ...
+    @property
+    def fits(self) -> List[Optional[PolyFit]]: ...
+    @property
+    def nodes(self) -> Optional["NodeSummary"]: ...
+
+@final
+class BelowRangePatch:
+    """A stained component entirely below the film's range (film frame, m)."""
+
+    @property
+    def centre_x_m(self) -> float: ...
+    @property
+    def centre_y_m(self) -> float: ...
+    @property
+    def equivalent_diameter_m(self) -> float: ...
+
+@final
+class NotFitted:
+    """A region (1-based id) that could not be fitted, and why."""
+
+    @property
+    def region(self) -> int: ...
+    @property
+    def reason(self) -> str: ...
+
+@final
+class NodeSummary:
+    """The nodes of a film run: region, placement, preload totals, readings per pixel class,
+    reduction."""
+
+    @property
+    def region(self) -> int: ...
+    @property
+    def placement(self) -> "NodePlacement": ...
+    @property
+    def preloads(self) -> PreloadSummary: ...
+    @property
+    def pixel_classes(self) -> List["NodeClassReading"]: ...
+    @property
+    def reduction(self) -> Optional["ReductionSummary"]: ...
+
+@final
+class NodePlacement:
+    """Mesh frame → film frame: offset (m), counter-clockwise rotation (rad), scale."""
+
+    @property
+    def offset_x_m(self) -> float: ...
+    @property
+    def offset_y_m(self) -> float: ...
+    @property
+    def rotation_rad(self) -> float: ...
+    @property
+    def scale(self) -> float: ...
+
+@final
+class NodeClassReading:
+    """Nodes on one film pixel class and the fitted pressure under them (Pa)."""
+
+    @property
+    def pixel_class(self) -> str:
+        """in_range, above_range, below_range or hole."""
+    @property
+    def n_nodes(self) -> int: ...
+    @property
+    def fitted_pressure_min_pa(self) -> Optional[float]: ...
+    @property
+    def fitted_pressure_max_pa(self) -> Optional[float]: ...
+
+@final
+class ReductionSummary:
+    """The reduction on a coarse mesh of side ``mesh_size_m`` (m): nodes kept, area (m²), load (N)."""
+
+    @property
+    def mesh_size_m(self) -> float: ...
+    @property
+    def n_kept(self) -> int: ...
+    @property
+    def total_area_m2(self) -> float: ...
+    @property
+    def total_load_n(self) -> float: ...
 
 @final
 class FilmResult:
@@ -916,7 +1260,7 @@ class FilmResult:
     def reduced_preloads(self) -> Optional[Columns]:
         """With a reduction mesh: the reduced preloads (``preload_reduced.csv``)."""
     @property
-    def summary(self) -> Dict[str, Any]:
+    def summary(self) -> "FilmSummary":
         """The ``summary`` of ``film.json``."""
     @property
     def messages(self) -> List[str]:

@@ -2,11 +2,14 @@
 //! write; and its join with node preloads into one row per contact element.
 
 use crate::arrays::borrow_f64;
-use crate::errors::{to_python, IntoPy};
+use crate::errors::IntoPy;
+use asperity::calibrate::convergence::Check;
+use asperity::calibrate::pipeline;
 use asperity::calibrate::table::{self, RangeFlag};
 use asperity::elements::{self, ElementRow};
 use asperity::film::nodes::Preload;
 use asperity::film::NodePixel;
+use asperity::surface::generate::GaussianSurfaceSpec;
 use ndarray::Ix1;
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -95,26 +98,26 @@ impl CalibrationTable {
     /// Element parameters at `pressure_pa` (Pa; a number or a float64 array): monotone cubic
     /// (Fritsch–Carlson) in ln p inside the table; outside it kn, E0 and the contact area ratio
     /// follow the end pair's power law (Et keeps Et/E0, k and μ the end row's values).
-    /// Returns a dict with `pressure_Pa`, `contact_area_ratio`, `kn_N_per_m3`, `E0_N_per_m3`,
-    /// `k`, `mu`, `Et_N_per_m3` and `range` (−1 below, 0 within, +1 above the table), as numbers
-    /// or arrays like the argument.
+    /// Returns a `TableValues` for a number, a `TableColumns` (arrays) for an array; `range` is
+    /// −1 below, 0 within, +1 above the table.
     fn interpolate<'py>(
         &self,
         py: Python<'py>,
         pressure_pa: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
+    ) -> PyResult<Bound<'py, PyAny>> {
         if let Ok(p) = pressure_pa.extract::<f64>() {
             let v = self.inner.interpolate(p);
-            d.set_item("pressure_Pa", v.pressure_pa)?;
-            d.set_item("contact_area_ratio", v.contact_area_ratio)?;
-            d.set_item("kn_N_per_m3", v.element.kn_n_per_m3)?;
-            d.set_item("E0_N_per_m3", v.element.e0_n_per_m3)?;
-            d.set_item("k", v.element.k)?;
-            d.set_item("mu", v.element.mu)?;
-            d.set_item("Et_N_per_m3", v.element.et_n_per_m3)?;
-            d.set_item("range", range_code(v.range))?;
-            return Ok(d);
+            let values = TableValues {
+                pressure_pa: v.pressure_pa,
+                contact_area_ratio: v.contact_area_ratio,
+                kn_n_per_m3: v.element.kn_n_per_m3,
+                e0_n_per_m3: v.element.e0_n_per_m3,
+                k: v.element.k,
+                mu: v.element.mu,
+                et_n_per_m3: v.element.et_n_per_m3,
+                range: range_code(v.range),
+            };
+            return Ok(Bound::new(py, values)?.into_any());
         }
         let p = borrow_f64::<Ix1>(pressure_pa, "pressure_pa", "pressures (Pa)")?;
         let vals: Vec<_> = p
@@ -124,25 +127,20 @@ impl CalibrationTable {
             .map(|&p| self.inner.interpolate(p))
             .collect();
         let col = |f: fn(&table::Interpolated) -> f64| {
-            PyArray1::from_vec(py, vals.iter().map(f).collect::<Vec<f64>>())
+            PyArray1::from_vec(py, vals.iter().map(f).collect::<Vec<f64>>()).unbind()
         };
-        d.set_item("pressure_Pa", col(|v| v.pressure_pa))?;
-        d.set_item("contact_area_ratio", col(|v| v.contact_area_ratio))?;
-        d.set_item("kn_N_per_m3", col(|v| v.element.kn_n_per_m3))?;
-        d.set_item("E0_N_per_m3", col(|v| v.element.e0_n_per_m3))?;
-        d.set_item("k", col(|v| v.element.k))?;
-        d.set_item("mu", col(|v| v.element.mu))?;
-        d.set_item("Et_N_per_m3", col(|v| v.element.et_n_per_m3))?;
-        d.set_item(
-            "range",
-            PyArray1::from_vec(
-                py,
-                vals.iter()
-                    .map(|v| range_code(v.range))
-                    .collect::<Vec<i8>>(),
-            ),
-        )?;
-        Ok(d)
+        let columns = TableColumns {
+            pressure_pa: col(|v| v.pressure_pa),
+            contact_area_ratio: col(|v| v.contact_area_ratio),
+            kn_n_per_m3: col(|v| v.element.kn_n_per_m3),
+            e0_n_per_m3: col(|v| v.element.e0_n_per_m3),
+            k: col(|v| v.element.k),
+            mu: col(|v| v.element.mu),
+            et_n_per_m3: col(|v| v.element.et_n_per_m3),
+            range: PyArray1::from_vec(py, vals.iter().map(|v| range_code(v.range)).collect())
+                .unbind(),
+        };
+        Ok(Bound::new(py, columns)?.into_any())
     }
 
     fn __len__(&self) -> usize {
@@ -247,7 +245,7 @@ fn element_columns<'py>(py: Python<'py>, rows: &[ElementRow]) -> PyResult<Bound<
 /// columns, as `film_preloads` or `read_preloads` return) joined with the table at its
 /// pressure; kn, E0, Et scaled by the node's area (N/m), k and μ as tabulated, out-of-range
 /// pressures flagged (−1/+1) and continued by the end pair's power law, nodes of zero pressure
-/// (open contact) left out and counted. Returns `(columns, summary)`; with
+/// (open contact) left out and counted. Returns `(columns, ElementSummary)`; with
 /// `out=path` the element CSV is written too (atomic).
 #[pyfunction]
 #[pyo3(signature = (preloads, table, out=None))]
@@ -256,13 +254,13 @@ pub fn join_elements<'py>(
     preloads: &Bound<'py, PyDict>,
     table: &CalibrationTable,
     out: Option<PathBuf>,
-) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
+) -> PyResult<(Bound<'py, PyDict>, ElementSummary)> {
     let pre = preloads_from_columns(preloads)?;
     let (rows, summary) = elements::join(&pre, &table.inner).py()?;
     if let Some(path) = out {
         elements::write_csv(&path, &rows).py()?;
     }
-    Ok((element_columns(py, &rows)?, to_python(py, &summary)?))
+    Ok((element_columns(py, &rows)?, ElementSummary::from(&summary)))
 }
 
 /// Read a preload CSV (`id,x_m,y_m,area_m2,pressure_Pa,N0_N`) as a dict of columns.
@@ -312,13 +310,13 @@ pub struct CalibrationRun {
     /// E0_N_per_m3, k, Et_N_per_m3, fit_R2, contact_spots, median_spot_points.
     pub realisations: Py<PyDict>,
     /// The grid and patch checks per pressure, as calibration.json records them.
-    pub convergence: Py<PyAny>,
+    pub convergence: Py<CalibrationConvergence>,
     /// Warnings of the run.
     pub warnings: Vec<String>,
     /// Files written into `out_dir` (empty without one).
     pub written: Vec<String>,
-    /// Wall time of each stage (s).
-    pub times: Py<PyAny>,
+    /// Wall and CPU time of each stage (s).
+    pub times: Py<StageTimes>,
 }
 
 #[pymethods]
@@ -354,7 +352,7 @@ pub fn calibrate<'py>(
 ) -> PyResult<CalibrationRun> {
     use asperity::calibrate::config::CalibrationConfig;
     use asperity::calibrate::output::{self, ConfigSource};
-    use asperity::calibrate::pipeline::{self, SurfaceSource};
+    use asperity::calibrate::pipeline::SurfaceSource;
     let (mut cfg, source) = match &config {
         Some(path) => {
             let bytes = std::fs::read(path)
@@ -470,9 +468,420 @@ pub fn calibrate<'py>(
             },
         )?,
         realisations: cols.unbind(),
-        convergence: to_python(py, &run.convergence)?.unbind(),
+        convergence: Py::new(py, convergence(py, &run.convergence)?)?,
         warnings: run.warnings.clone(),
         written: written.iter().map(|p| p.display().to_string()).collect(),
-        times: to_python(py, &run.times)?.unbind(),
+        times: Py::new(py, StageTimes::from(&run.times))?,
+    })
+}
+
+/// Element parameters the table gives at one pressure (`CalibrationTable.interpolate` of a
+/// number).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct TableValues {
+    /// The pressure asked for (Pa).
+    pub pressure_pa: f64,
+    /// Real over nominal contact area.
+    pub contact_area_ratio: f64,
+    /// Normal stiffness per unit area (N/m³).
+    pub kn_n_per_m3: f64,
+    /// Valanis initial tangential stiffness per unit area (N/m³).
+    pub e0_n_per_m3: f64,
+    /// Valanis shape parameter k.
+    pub k: f64,
+    /// Friction coefficient μ.
+    pub mu: f64,
+    /// Valanis tangent stiffness after macroslip per unit area (N/m³).
+    pub et_n_per_m3: f64,
+    /// −1 below, 0 within, +1 above the table's pressures.
+    pub range: i8,
+}
+
+#[pymethods]
+impl TableValues {
+    fn __repr__(&self) -> String {
+        format!(
+            "TableValues(pressure_pa={:e}, kn_n_per_m3={:e}, e0_n_per_m3={:e}, k={}, mu={}, \
+             et_n_per_m3={:e}, range={})",
+            self.pressure_pa,
+            self.kn_n_per_m3,
+            self.e0_n_per_m3,
+            self.k,
+            self.mu,
+            self.et_n_per_m3,
+            self.range
+        )
+    }
+}
+
+/// Element parameters the table gives at each of several pressures
+/// (`CalibrationTable.interpolate` of an array): one float64 array per quantity, `range` int8.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct TableColumns {
+    /// The pressures asked for (Pa).
+    pub pressure_pa: Py<PyArray1<f64>>,
+    /// Real over nominal contact area.
+    pub contact_area_ratio: Py<PyArray1<f64>>,
+    /// Normal stiffness per unit area (N/m³).
+    pub kn_n_per_m3: Py<PyArray1<f64>>,
+    /// Valanis initial tangential stiffness per unit area (N/m³).
+    pub e0_n_per_m3: Py<PyArray1<f64>>,
+    /// Valanis shape parameter k.
+    pub k: Py<PyArray1<f64>>,
+    /// Friction coefficient μ.
+    pub mu: Py<PyArray1<f64>>,
+    /// Valanis tangent stiffness after macroslip per unit area (N/m³).
+    pub et_n_per_m3: Py<PyArray1<f64>>,
+    /// −1 below, 0 within, +1 above the table's pressures.
+    pub range: Py<PyArray1<i8>>,
+}
+
+#[pymethods]
+impl TableColumns {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        numpy::PyUntypedArrayMethods::len(self.pressure_pa.bind(py))
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!(
+            "TableColumns({} pressures)",
+            numpy::PyUntypedArrayMethods::len(self.pressure_pa.bind(py))
+        )
+    }
+}
+
+/// Counts and totals of `join_elements` (as the summary of `asperity elements`).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct ElementSummary {
+    /// Elements (nodes of non-zero pressure).
+    pub n_elements: usize,
+    /// Nodes of zero pressure (open contact), left out.
+    pub n_open: usize,
+    /// Ids of the open nodes.
+    pub open_ids: Vec<u64>,
+    /// Total tributary area of the open nodes (m²).
+    pub open_area_m2: f64,
+    /// Elements below the table's first pressure.
+    pub n_below_range: usize,
+    /// Elements above the table's last pressure (at most 10× it).
+    pub n_above_range: usize,
+    /// Ids of the elements below the table's range.
+    pub below_range_ids: Vec<u64>,
+    /// Ids of the elements above the table's range.
+    pub above_range_ids: Vec<u64>,
+    /// Elements taking their values from rows judged not converged in grid or patch size.
+    pub not_converged_row_ids: Vec<u64>,
+    /// Elements taking their values from rows whose convergence could not be judged.
+    pub undetermined_row_ids: Vec<u64>,
+    /// Total tributary area of the elements (m²).
+    pub total_area_m2: f64,
+    /// Total normal preload ΣN0 of the elements (N).
+    pub total_load_n: f64,
+    /// Smallest pressure of the table (Pa).
+    pub table_pressure_min_pa: f64,
+    /// Largest pressure of the table (Pa).
+    pub table_pressure_max_pa: f64,
+    /// Smallest element pressure (Pa).
+    pub element_pressure_min_pa: f64,
+    /// Largest element pressure (Pa).
+    pub element_pressure_max_pa: f64,
+}
+
+impl From<&elements::ElementSummary> for ElementSummary {
+    fn from(s: &elements::ElementSummary) -> Self {
+        Self {
+            n_elements: s.n_elements,
+            n_open: s.n_open,
+            open_ids: s.open_ids.clone(),
+            open_area_m2: s.open_area_m2,
+            n_below_range: s.n_below_range,
+            n_above_range: s.n_above_range,
+            below_range_ids: s.below_range_ids.clone(),
+            above_range_ids: s.above_range_ids.clone(),
+            not_converged_row_ids: s.not_converged_row_ids.clone(),
+            undetermined_row_ids: s.undetermined_row_ids.clone(),
+            total_area_m2: s.total_area_m2,
+            total_load_n: s.total_load_n,
+            table_pressure_min_pa: s.table_pressure_min_pa,
+            table_pressure_max_pa: s.table_pressure_max_pa,
+            element_pressure_min_pa: s.element_pressure_min_pa,
+            element_pressure_max_pa: s.element_pressure_max_pa,
+        }
+    }
+}
+
+#[pymethods]
+impl ElementSummary {
+    fn __repr__(&self) -> String {
+        format!(
+            "ElementSummary({} elements, {} open, {} below / {} above the table)",
+            self.n_elements, self.n_open, self.n_below_range, self.n_above_range
+        )
+    }
+}
+
+/// Wall and CPU time of each stage of `calibrate()` (s), summed over the chains.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct StageTimes {
+    /// Wall time generating (or hashing) the surfaces (s).
+    pub surface_s: f64,
+    /// Wall time of the normal-contact sweeps (s).
+    pub normal_s: f64,
+    /// Wall time of the tangential loops (s).
+    pub tangential_s: f64,
+    /// Wall time of the Valanis fits (s).
+    pub fit_s: f64,
+    /// CPU time of the surface stage (s).
+    pub surface_cpu_s: f64,
+    /// CPU time of the normal sweeps (s).
+    pub normal_cpu_s: f64,
+    /// CPU time of the tangential loops (s).
+    pub tangential_cpu_s: f64,
+    /// CPU time of the fits (s).
+    pub fit_cpu_s: f64,
+    /// Wall time of the whole run (s).
+    pub total_s: f64,
+}
+
+impl From<&pipeline::StageTimes> for StageTimes {
+    fn from(t: &pipeline::StageTimes) -> Self {
+        Self {
+            surface_s: t.surface_s,
+            normal_s: t.normal_s,
+            tangential_s: t.tangential_s,
+            fit_s: t.fit_s,
+            surface_cpu_s: t.surface_cpu_s,
+            normal_cpu_s: t.normal_cpu_s,
+            tangential_cpu_s: t.tangential_cpu_s,
+            fit_cpu_s: t.fit_cpu_s,
+            total_s: t.total_s,
+        }
+    }
+}
+
+#[pymethods]
+impl StageTimes {
+    fn __repr__(&self) -> String {
+        format!("StageTimes(total_s={:.3})", self.total_s)
+    }
+}
+
+/// A generated surface's statistics and grid (a convergence check's coarser configuration).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct SurfaceSpec {
+    /// Root-mean-square height Rq (m).
+    pub rq_m: f64,
+    /// 1/e correlation length along x (m).
+    pub clx_m: f64,
+    /// 1/e correlation length along y (m).
+    pub cly_m: f64,
+    /// Patch size along x (m).
+    pub lx_m: f64,
+    /// Patch size along y (m).
+    pub ly_m: f64,
+    /// Grid points along x.
+    pub nx: usize,
+    /// Grid points along y.
+    pub ny: usize,
+    /// Seed of the first surface.
+    pub seed: u64,
+}
+
+impl From<&GaussianSurfaceSpec> for SurfaceSpec {
+    fn from(s: &GaussianSurfaceSpec) -> Self {
+        Self {
+            rq_m: s.rq_m,
+            clx_m: s.clx_m,
+            cly_m: s.cly_m,
+            lx_m: s.lx_m,
+            ly_m: s.ly_m,
+            nx: s.nx,
+            ny: s.ny,
+            seed: s.seed,
+        }
+    }
+}
+
+#[pymethods]
+impl SurfaceSpec {
+    fn __repr__(&self) -> String {
+        format!(
+            "SurfaceSpec({}×{} points, {:e}×{:e} m)",
+            self.nx, self.ny, self.lx_m, self.ly_m
+        )
+    }
+}
+
+/// Mean, standard deviation and 95 % interval half-width of a quantity over the realisations.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct SampleSummary {
+    /// Number of values.
+    pub n: usize,
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (NaN with fewer than two values).
+    pub sd: f64,
+    /// Half-width of the 95 % confidence interval of the mean (Student t; NaN with fewer than
+    /// two values).
+    pub ci95: f64,
+}
+
+#[pymethods]
+impl SampleSummary {
+    fn __repr__(&self) -> String {
+        format!(
+            "SampleSummary(n={}, mean={}, ci95={})",
+            self.n, self.mean, self.ci95
+        )
+    }
+}
+
+/// One grid or patch check of one quantity: the change from the coarser (or smaller) to the
+/// main configuration with its 95 % interval, against the allowed change.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct ConvergenceCheck {
+    /// `kn`, `E0` or `k`.
+    pub quantity: String,
+    /// Change of the mean, main minus coarser (same unit as the quantity).
+    pub change: f64,
+    /// Half-width of the change's 95 % interval (NaN when it cannot be estimated).
+    pub change_ci95: f64,
+    /// Allowed change (same unit as the quantity).
+    pub tolerance: f64,
+    /// `converged`, `undetermined`, `not-converged` or `not-checked`.
+    pub verdict: String,
+}
+
+#[pymethods]
+impl ConvergenceCheck {
+    fn __repr__(&self) -> String {
+        format!(
+            "ConvergenceCheck({}: {} ± {} against {}, {})",
+            self.quantity, self.change, self.change_ci95, self.tolerance, self.verdict
+        )
+    }
+}
+
+/// Quantities of the checks, in the order of [`pipeline::PressureConvergence::grid`].
+const CHECKED: [&str; 3] = ["kn", "E0", "k"];
+
+fn checks(c: &[Check; 3]) -> Vec<ConvergenceCheck> {
+    CHECKED
+        .iter()
+        .zip(c)
+        .map(|(q, c)| ConvergenceCheck {
+            quantity: q.to_string(),
+            change: c.change.mean,
+            change_ci95: c.change.ci95,
+            tolerance: c.tolerance,
+            verdict: c.verdict.name().to_string(),
+        })
+        .collect()
+}
+
+/// Convergence facts and verdicts at one pressure.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct PressureConvergence {
+    /// Nominal pressure (Pa).
+    pub pressure_pa: f64,
+    /// Contact spots on the patch over the realisations.
+    pub contact_spots: Py<SampleSummary>,
+    /// Median over the realisations of the median spot size (grid points).
+    pub median_spot_points: f64,
+    /// Smallest median spot size of a realisation (grid points).
+    pub min_median_spot_points: usize,
+    /// Realisations whose grid does not resolve the narrower of contact spots and free regions.
+    pub under_resolved_realisations: usize,
+    /// Fewest grid points across the narrower phase over the realisations.
+    pub min_points_across: f64,
+    /// Whether that narrowest phase is the contact spots (else the free regions).
+    pub narrowest_is_contact: bool,
+    /// Grid checks of kn, E0, k (n against n/2 points per side, same surfaces).
+    pub grid: Vec<Py<ConvergenceCheck>>,
+    /// Patch checks of kn, E0, k (L against L/2, independent surfaces).
+    pub patch: Vec<Py<ConvergenceCheck>>,
+    /// Worst grid verdict.
+    pub grid_verdict: String,
+    /// Worst patch verdict.
+    pub patch_verdict: String,
+}
+
+#[pymethods]
+impl PressureConvergence {
+    fn __repr__(&self) -> String {
+        format!(
+            "PressureConvergence({:e} Pa: grid {}, patch {})",
+            self.pressure_pa, self.grid_verdict, self.patch_verdict
+        )
+    }
+}
+
+/// The grid and patch checks of `calibrate()` (as `convergence` in calibration.json).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct CalibrationConvergence {
+    /// The grid check's surfaces: half the points per side (None: not run).
+    pub grid_spec: Option<Py<SurfaceSpec>>,
+    /// The patch check's surfaces: half the patch side at the same spacing (None: not run).
+    pub patch_spec: Option<Py<SurfaceSpec>>,
+    /// Why a check was not run.
+    pub notes: Vec<String>,
+    /// Verdicts per pressure.
+    pub pressures: Vec<Py<PressureConvergence>>,
+}
+
+#[pymethods]
+impl CalibrationConvergence {
+    fn __repr__(&self) -> String {
+        format!("CalibrationConvergence({} pressures)", self.pressures.len())
+    }
+}
+
+fn convergence(py: Python<'_>, c: &pipeline::ConvergenceStudy) -> PyResult<CalibrationConvergence> {
+    let spec = |s: &Option<GaussianSurfaceSpec>| {
+        s.as_ref()
+            .map(|s| Py::new(py, SurfaceSpec::from(s)))
+            .transpose()
+    };
+    let list = |c: &[Check; 3]| {
+        checks(c)
+            .into_iter()
+            .map(|c| Py::new(py, c))
+            .collect::<PyResult<Vec<_>>>()
+    };
+    let pressures = c
+        .pressures
+        .iter()
+        .map(|p| {
+            Py::new(
+                py,
+                PressureConvergence {
+                    pressure_pa: p.pressure_pa,
+                    contact_spots: Py::new(
+                        py,
+                        SampleSummary {
+                            n: p.contact_spots.n,
+                            mean: p.contact_spots.mean,
+                            sd: p.contact_spots.sd,
+                            ci95: p.contact_spots.ci95,
+                        },
+                    )?,
+                    median_spot_points: p.median_spot_points,
+                    min_median_spot_points: p.min_median_spot_points,
+                    under_resolved_realisations: p.under_resolved_realisations,
+                    min_points_across: p.min_points_across,
+                    narrowest_is_contact: p.narrowest_is_contact,
+                    grid: list(&p.grid)?,
+                    patch: list(&p.patch)?,
+                    grid_verdict: p.grid_verdict.name().to_string(),
+                    patch_verdict: p.patch_verdict.name().to_string(),
+                },
+            )
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok(CalibrationConvergence {
+        grid_spec: spec(&c.grid_spec)?,
+        patch_spec: spec(&c.patch_spec)?,
+        notes: c.notes.clone(),
+        pressures,
     })
 }

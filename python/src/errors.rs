@@ -105,18 +105,3 @@ impl<T> IntoPy<T> for asperity::Result<T> {
         self.map_err(to_py)
     }
 }
-
-/// A `serde::Serialize` value as Python objects (dicts, lists, floats; `None` for NaN/absent).
-pub fn to_python<'py, T: serde::Serialize + ?Sized>(
-    py: Python<'py>,
-    value: &T,
-) -> PyResult<Bound<'py, PyAny>> {
-    pythonize::pythonize(py, value).map_err(|e| {
-        exception(
-            py,
-            "DataError",
-            format!("cannot convert a result to Python: {e}"),
-            |_| Ok(()),
-        )
-    })
-}

@@ -6,7 +6,7 @@
 
 use crate::arrays::{borrow_f64, view};
 use crate::calibrate::{preload_columns, preloads_from_columns};
-use crate::errors::{to_python, IntoPy};
+use crate::errors::IntoPy;
 use asperity::film::colour::{
     ColourTable, ColourToPressure, DensityCalibration, PixelClass, DEFAULT_MAX_COLOUR_DISTANCE,
 };
@@ -473,7 +473,7 @@ fn nodes_from_columns(columns: &Bound<'_, PyDict>) -> PyResult<Vec<Node>> {
 /// `scale`; areas come from the nodes or, when absent, from a Delaunay triangulation; the
 /// pressure is the region's fit. With `total_load_n` (N) every preload is rescaled to that
 /// total. Nodes outside the map or the region raise `asperity.DataError`.
-/// Returns `(preloads, summary)`, the preloads as columns `id, x_m, y_m, area_m2, pressure_Pa,
+/// Returns `(preloads, PreloadSummary)`, the preloads as columns `id, x_m, y_m, area_m2, pressure_Pa,
 /// N0_N` (film frame) and `pixel_class` (what the film says under each node: `in_range`,
 /// `above_range`, `below_range`, `hole`; as `preload.csv` of `asperity film`).
 #[pyfunction]
@@ -489,7 +489,7 @@ pub fn film_preloads<'py>(
     rotation_rad: f64,
     scale: f64,
     total_load_n: Option<f64>,
-) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
+) -> PyResult<(Bound<'py, PyDict>, PreloadSummary)> {
     let nodes = nodes_from_columns(nodes)?;
     let placement = Placement {
         offset_x_m: offset_m.0,
@@ -508,7 +508,7 @@ pub fn film_preloads<'py>(
         .py()?;
     let columns = preload_columns(py, &pre)?;
     columns.set_item("pixel_class", classes)?;
-    Ok((columns, to_python(py, &summary)?))
+    Ok((columns, PreloadSummary::from(&summary)))
 }
 
 /// Reduce preloaded nodes on a triangular mesh of side `mesh_size_m` (m): in each triangle the
@@ -631,8 +631,8 @@ impl FilmResult {
     /// The `summary` of `film.json` (pixel counts, regions, fits, regions not fitted,
     /// below-range patches, node preload summary and pixel classes, reduction).
     #[getter]
-    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.inner.summary_json())
+    fn summary(&self, py: Python<'_>) -> PyResult<FilmSummary> {
+        film_summary(py, &self.inner)
     }
 
     /// The notes and warnings of the run, in order (the CLI prints them to stderr).
@@ -753,4 +753,270 @@ pub fn film(
         .map_err(keyword_error)
         .py()?;
     Ok(FilmResult { inner, written })
+}
+
+/// What `film_preloads` did: counts, areas and totals of the node preloads (the `preloads` of
+/// film.json's node summary).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct PreloadSummary {
+    /// Nodes with a preload.
+    pub n_nodes: usize,
+    /// Total tributary area (m²).
+    pub total_area_m2: f64,
+    /// ΣN0 before any rescaling (N).
+    pub raw_total_load_n: f64,
+    /// ΣN0 after rescaling to `total_load_n` (N).
+    pub total_load_n: f64,
+    /// Factor applied to every preload (1 without a target load).
+    pub load_scale: f64,
+    /// Nodes whose fitted pressure was negative (polynomial undershoot), set to zero.
+    pub clamped_negative: usize,
+    /// Whether the areas came from a Delaunay triangulation.
+    pub areas_from_triangulation: bool,
+    /// Area of the Delaunay triangles left out as gaps of the node set (m²; 0 with given areas).
+    pub gap_area_m2: f64,
+    /// Number of those triangles.
+    pub gap_triangles: usize,
+}
+
+impl From<&nodes::PreloadSummary> for PreloadSummary {
+    fn from(s: &nodes::PreloadSummary) -> Self {
+        Self {
+            n_nodes: s.n_nodes,
+            total_area_m2: s.total_area_m2,
+            raw_total_load_n: s.raw_total_load_n,
+            total_load_n: s.total_load_n,
+            load_scale: s.load_scale,
+            clamped_negative: s.clamped_negative,
+            areas_from_triangulation: s.areas_from_triangulation,
+            gap_area_m2: s.gap_area_m2,
+            gap_triangles: s.gap_triangles,
+        }
+    }
+}
+
+#[pymethods]
+impl PreloadSummary {
+    fn __repr__(&self) -> String {
+        format!(
+            "PreloadSummary({} nodes, {:e} m², {} N)",
+            self.n_nodes, self.total_area_m2, self.total_load_n
+        )
+    }
+}
+
+/// A stained component entirely below the film's range (film frame, m).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct BelowRangePatch {
+    /// Centroid x (m).
+    pub centre_x_m: f64,
+    /// Centroid y (m).
+    pub centre_y_m: f64,
+    /// Diameter of the disc of the same area (m).
+    pub equivalent_diameter_m: f64,
+}
+
+/// A region that could not be fitted, and why.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct NotFitted {
+    /// Region id (1-based).
+    pub region: usize,
+    /// Why the fit was not possible.
+    pub reason: String,
+}
+
+/// Mesh frame → film frame of the node coordinates.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct NodePlacement {
+    /// Translation x of the mesh origin (m).
+    pub offset_x_m: f64,
+    /// Translation y of the mesh origin (m).
+    pub offset_y_m: f64,
+    /// Counter-clockwise rotation (rad).
+    pub rotation_rad: f64,
+    /// Uniform scale.
+    pub scale: f64,
+}
+
+/// The nodes on one film pixel class and the fitted pressure under them (Pa).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct NodeClassReading {
+    /// `in_range`, `above_range`, `below_range` or `hole`.
+    pub pixel_class: String,
+    /// Nodes on pixels of this class.
+    pub n_nodes: usize,
+    /// Smallest fitted pressure under them (Pa; None without nodes).
+    pub fitted_pressure_min_pa: Option<f64>,
+    /// Largest fitted pressure under them (Pa; None without nodes).
+    pub fitted_pressure_max_pa: Option<f64>,
+}
+
+/// The reduction of the preloaded nodes on a coarse triangular mesh.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct ReductionSummary {
+    /// Coarse triangle side (m).
+    pub mesh_size_m: f64,
+    /// Nodes kept.
+    pub n_kept: usize,
+    /// Total area of the kept nodes (m²).
+    pub total_area_m2: f64,
+    /// Total load of the kept nodes (N).
+    pub total_load_n: f64,
+}
+
+/// The node part of a film run's summary.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct NodeSummary {
+    /// Id of the region whose fit preloads the nodes.
+    pub region: usize,
+    /// How the nodes were placed on the film.
+    pub placement: Py<NodePlacement>,
+    /// Totals of the preloads.
+    pub preloads: Py<PreloadSummary>,
+    /// Nodes and fitted pressures per film pixel class (in_range, above_range, below_range,
+    /// hole).
+    pub pixel_classes: Vec<Py<NodeClassReading>>,
+    /// With a reduction mesh.
+    pub reduction: Option<Py<ReductionSummary>>,
+}
+
+/// The `summary` of film.json: what `film()` found.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct FilmSummary {
+    /// Pixel counts over the whole image.
+    pub image_pixels: Py<ClassCounts>,
+    /// Automatic detection: components smaller than the smallest patch.
+    pub discarded_small_components: usize,
+    /// Automatic detection: components rejected by their shape as marks.
+    pub rejected_marks: usize,
+    /// Stained components entirely below the range.
+    pub below_range_patches: Vec<Py<BelowRangePatch>>,
+    /// Regions that could not be fitted, and why.
+    pub regions_not_fitted: Vec<Py<NotFitted>>,
+    /// Summary of each region.
+    pub regions: Vec<Py<RegionSummary>>,
+    /// Fit of each region (None: not fitted).
+    pub fits: Vec<Option<Py<PolyFit>>>,
+    /// With nodes: their placement, preloads and readings; else None.
+    pub nodes: Option<Py<NodeSummary>>,
+}
+
+#[pymethods]
+impl FilmSummary {
+    fn __repr__(&self) -> String {
+        format!(
+            "FilmSummary({} regions, {} not fitted, {})",
+            self.regions.len(),
+            self.regions_not_fitted.len(),
+            if self.nodes.is_some() {
+                "nodes"
+            } else {
+                "no nodes"
+            }
+        )
+    }
+}
+
+fn film_summary(py: Python<'_>, r: &asperity::film::pipeline::FilmReport) -> PyResult<FilmSummary> {
+    let nodes = match &r.nodes {
+        None => None,
+        Some(n) => {
+            let pixel_classes = n
+                .class_readings
+                .iter()
+                .map(|(c, v)| {
+                    Py::new(
+                        py,
+                        NodeClassReading {
+                            pixel_class: c.name().to_string(),
+                            n_nodes: v.n_nodes,
+                            fitted_pressure_min_pa: v.fitted_pressure_min_pa,
+                            fitted_pressure_max_pa: v.fitted_pressure_max_pa,
+                        },
+                    )
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            let reduction = n
+                .reduced
+                .as_ref()
+                .map(|red| {
+                    Py::new(
+                        py,
+                        ReductionSummary {
+                            mesh_size_m: red.mesh_size_m,
+                            n_kept: red.nodes.len(),
+                            total_area_m2: red.nodes.iter().map(|p| p.area_m2).sum(),
+                            total_load_n: red.nodes.iter().map(|p| p.n0_n).sum(),
+                        },
+                    )
+                })
+                .transpose()?;
+            let p = &n.placement;
+            Some(Py::new(
+                py,
+                NodeSummary {
+                    region: n.region,
+                    placement: Py::new(
+                        py,
+                        NodePlacement {
+                            offset_x_m: p.offset_x_m,
+                            offset_y_m: p.offset_y_m,
+                            rotation_rad: p.rotation_rad,
+                            scale: p.scale,
+                        },
+                    )?,
+                    preloads: Py::new(py, PreloadSummary::from(&n.summary))?,
+                    pixel_classes,
+                    reduction,
+                },
+            )?)
+        }
+    };
+    Ok(FilmSummary {
+        image_pixels: Py::new(py, ClassCounts::from(&r.pixel_counts))?,
+        discarded_small_components: r.discarded_small_components,
+        rejected_marks: r.rejected_marks,
+        below_range_patches: r
+            .below_range_patches
+            .iter()
+            .map(|b| {
+                Py::new(
+                    py,
+                    BelowRangePatch {
+                        centre_x_m: b.centre_x_m,
+                        centre_y_m: b.centre_y_m,
+                        equivalent_diameter_m: b.equivalent_diameter_m,
+                    },
+                )
+            })
+            .collect::<PyResult<_>>()?,
+        regions_not_fitted: r
+            .not_fitted
+            .iter()
+            .map(|f| {
+                Py::new(
+                    py,
+                    NotFitted {
+                        region: f.region,
+                        reason: f.reason.clone(),
+                    },
+                )
+            })
+            .collect::<PyResult<_>>()?,
+        regions: r
+            .summaries
+            .iter()
+            .map(|s| Py::new(py, RegionSummary::from(s)))
+            .collect::<PyResult<_>>()?,
+        fits: r
+            .fits
+            .iter()
+            .map(|f| {
+                f.as_ref()
+                    .map(|f| Py::new(py, PolyFit { inner: f.clone() }))
+                    .transpose()
+            })
+            .collect::<PyResult<_>>()?,
+        nodes,
+    })
 }

@@ -4,6 +4,7 @@ bad input raises named exceptions."""
 
 import csv
 import filecmp
+import json
 
 import numpy as np
 import pytest
@@ -31,6 +32,11 @@ def rows(path):
         return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
+def same(value, recorded):
+    """A float equals its JSON record (NaN is written as null)."""
+    return bool(np.isnan(value)) if recorded is None else value == recorded
+
+
 def test_calibrate_equals_the_cli(cli, repo, tmp_path):
     config = small_config(repo, tmp_path)
     cli("calibrate", config, "--out-dir", tmp_path / "cli")
@@ -54,7 +60,31 @@ def test_calibrate_equals_the_cli(cli, repo, tmp_path):
     assert list(c["seed"]) == [1, 1, 2, 2]
     # Two realisations differ (the comparison can fail).
     assert c["kn_N_per_m3"][0] != c["kn_N_per_m3"][2]
-    assert [p["pressure_pa"] for p in r.convergence["pressures"]] == [1e6, 5e6]
+    conv = json.loads((tmp_path / "cli" / "calibration.json").read_text())["convergence"]
+    assert [p.pressure_pa for p in r.convergence.pressures] == [1e6, 5e6]
+    assert r.convergence.notes == conv["notes"]
+    for spec in ("grid_spec", "patch_spec"):
+        ours, theirs = getattr(r.convergence, spec), conv[spec]
+        assert (ours is None) == (theirs is None), spec
+        if theirs is not None:
+            assert {k: getattr(ours, k) for k in theirs} == theirs, spec
+    assert len(r.convergence.pressures) == len(conv["pressures"])
+    for ours, theirs in zip(r.convergence.pressures, conv["pressures"]):
+        assert ours.grid_verdict == theirs["grid_verdict"]
+        assert ours.patch_verdict == theirs["patch_verdict"]
+        assert ours.contact_spots.n == theirs["contact_spots"]["n"] == 2
+        assert ours.contact_spots.mean == theirs["contact_spots"]["mean"]
+        assert ours.min_median_spot_points == theirs["min_median_spot_points"]
+        for kind in ("grid", "patch"):
+            assert [c.quantity for c in getattr(ours, kind)] == ["kn", "E0", "k"]
+            assert len(theirs[kind]) == 3
+            for c, j in zip(getattr(ours, kind), theirs[kind]):
+                assert c.verdict == j["verdict"] and c.tolerance == j["tolerance"]
+                assert same(c.change, j["change"]["mean"]) and same(c.change_ci95, j["change"]["ci95"])
+    t = r.times
+    stages = [t.surface_s, t.normal_s, t.tangential_s, t.fit_s, t.surface_cpu_s, t.normal_cpu_s,
+              t.tangential_cpu_s, t.fit_cpu_s]
+    assert t.total_s > 0 and t.normal_s > 0 and all(np.isfinite(v) and v >= 0 for v in stages)
     assert any("contact spots" in w for w in r.warnings)
 
 

@@ -154,12 +154,32 @@ def test_elements_equal_the_cli(cli, tmp_path, repo):
                 digits = 12 if col == "N0_N" else 9
                 assert float(value) == float(f"{cols[col][k]:.{digits}e}"), col
     assert list(cols["out_of_range"]) == [-1, 0, 0, 0, 0, 0, 1]
-    assert summary["n_below_range"] == 1 and summary["n_above_range"] == 1
+    assert isinstance(summary, ap.ElementSummary)
+    assert summary.n_elements == n and summary.n_open == 0 and summary.open_ids == []
+    assert summary.n_below_range == 1 and summary.n_above_range == 1
+    assert summary.below_range_ids == [10] and summary.above_range_ids == [10 + n - 1]
+    # Against the nodes as written (the preload CSV holds 10 significant digits).
+    assert summary.total_area_m2 == pytest.approx(area.sum(), rel=1e-9)
+    assert summary.total_load_n == pytest.approx((pressures * area).sum(), rel=1e-9)
+    assert summary.element_pressure_min_pa == pytest.approx(pressures.min(), rel=1e-9)
+    assert summary.element_pressure_max_pa == pytest.approx(pressures.max(), rel=1e-9)
+    assert (summary.table_pressure_min_pa, summary.table_pressure_max_pa) == table.pressure_range
     # The element CSV written from Python is the CLI's, byte for byte.
     assert (tmp_path / "py-elements.csv").read_bytes() == (tmp_path / "elements.csv").read_bytes()
     # Interpolation hits the table rows exactly at the tabulated pressures.
-    at = table.interpolate(table.columns()["pressure_Pa"])
-    assert np.array_equal(at["kn_N_per_m3"], table.columns()["kn_N_per_m3"])
+    tabulated = table.columns()
+    at = table.interpolate(tabulated["pressure_Pa"])
+    assert isinstance(at, ap.TableColumns) and len(at) == len(table)
+    for attr, col in [("kn_n_per_m3", "kn_N_per_m3"), ("e0_n_per_m3", "E0_N_per_m3"), ("k", "k"),
+                      ("mu", "mu"), ("et_n_per_m3", "Et_N_per_m3"), ("contact_area_ratio", "contact_area_ratio")]:
+        assert np.array_equal(getattr(at, attr), tabulated[col]), attr
+    assert at.range.dtype == np.int8 and list(at.range) == [0] * len(table)
+    # A number gives the same values as the array's entry; below the table the range flag is −1.
+    one = table.interpolate(float(tabulated["pressure_Pa"][1]))
+    assert isinstance(one, ap.TableValues) and one.range == 0
+    assert one.kn_n_per_m3 == tabulated["kn_N_per_m3"][1] and one.mu == tabulated["mu"][1]
+    assert table.interpolate(0.5 * table.pressure_range[0]).range == -1
+    assert table.interpolate(2.0 * table.pressure_range[1]).range == 1
 
 
 def test_film_preloads_equal_the_cli(cli, tmp_path, data_file, repo):
@@ -177,7 +197,12 @@ def test_film_preloads_equal_the_cli(cli, tmp_path, data_file, repo):
     fit = m.fit(region, order=4)
     pre, summary = ap.film_preloads(m, region, fit, ap.read_nodes(nodes_path),
                                     offset_m=(52.137e-3, 223.796e-3), total_load_n=100.5)
-    assert summary["total_load_n"] == pytest.approx(100.5, rel=1e-12)
+    assert isinstance(summary, ap.PreloadSummary)
+    assert summary.total_load_n == pytest.approx(100.5, rel=1e-12)
+    assert summary.n_nodes == len(pre["id"])
+    assert summary.total_load_n == pytest.approx(pre["N0_N"].sum(), rel=1e-12)
+    assert summary.total_area_m2 == pytest.approx(pre["area_m2"].sum(), rel=1e-12)
+    assert summary.load_scale == pytest.approx(summary.total_load_n / summary.raw_total_load_n, rel=1e-12)
     reduced = ap.reduce_preloads(pre, 1e-3)
     for name, cols in [("preload.csv", pre), ("preload_reduced.csv", reduced)]:
         ap.write_preloads(tmp_path / name, cols)
@@ -186,6 +211,33 @@ def test_film_preloads_equal_the_cli(cli, tmp_path, data_file, repo):
         assert ours == theirs, name
     regions_csv = csv_rows(out / "regions.csv")
     assert float(regions_csv[0]["fit_R2"]) == pytest.approx(fit.r_squared, abs=5e-5)
+
+
+def assert_typed_equals_json(ours, theirs, where="summary"):
+    """A typed result equals its JSON record: objects attribute by attribute, lists item by
+    item, NaN written as null; the node readings per pixel class are a list of records with
+    ``pixel_class`` where the JSON keys them by class; a fit's ``frame`` is not exposed."""
+    if isinstance(theirs, dict):
+        for key, value in theirs.items():
+            if key == "frame":
+                continue
+            if key == "pixel_classes":
+                got = {r.pixel_class: r for r in ours.pixel_classes}
+                assert sorted(got) == sorted(value), where
+                for name, reading in value.items():
+                    assert_typed_equals_json(got[name], reading, f"{where}.pixel_classes.{name}")
+                continue
+            assert_typed_equals_json(getattr(ours, key), value, f"{where}.{key}")
+    elif isinstance(theirs, list):
+        ours = list(ours)
+        assert len(ours) == len(theirs), where
+        for i, (a, b) in enumerate(zip(ours, theirs)):
+            assert_typed_equals_json(a, b, f"{where}[{i}]")
+    elif theirs is None and isinstance(ours, float):
+        assert np.isnan(ours), where
+    else:
+        assert type(ours) is not dict, where
+        assert ours == theirs, where
 
 
 def test_film_pipeline_is_the_clis(cli, tmp_path, data_file, repo):
@@ -213,10 +265,12 @@ def test_film_pipeline_is_the_clis(cli, tmp_path, data_file, repo):
                 del j["created_unix_s"]
         assert ours == theirs, name
     assert len(got.regions) == 6 and all(f is not None for f in got.fits)
-    assert got.summary == json.loads((out / "film.json").read_text())["summary"]
-    # The typed region summaries are the JSON's, field for field.
-    assert len(got.summaries) == len(got.summary["regions"])
-    for ours, theirs in zip(got.summaries, got.summary["regions"]):
+    summary = json.loads((out / "film.json").read_text())["summary"]
+    # The typed summary is film.json's, field for field.
+    assert_typed_equals_json(got.summary, summary)
+    assert got.summary.nodes is not None and got.summary.nodes.reduction is not None
+    assert len(got.summaries) == len(summary["regions"])
+    for ours, theirs in zip(got.summaries, summary["regions"]):
         counts = theirs.pop("counts")
         assert {k: getattr(ours, k) for k in theirs} == theirs
         assert {k: getattr(ours.counts, k) for k in counts} == counts
