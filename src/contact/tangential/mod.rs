@@ -94,6 +94,22 @@ pub enum Operator {
     Fft,
 }
 
+impl std::str::FromStr for Operator {
+    type Err = Error;
+    /// `auto`, `dense` or `fft`.
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(Operator::Auto),
+            "dense" => Ok(Operator::Dense),
+            "fft" => Ok(Operator::Fft),
+            o => Err(Error::param(
+                "operator",
+                format!("expected auto, dense or fft, got `{o}`"),
+            )),
+        }
+    }
+}
+
 /// A tangential contact problem on a fixed pressure field.
 #[derive(Debug, Clone)]
 pub struct TangentialProblem<'a> {
