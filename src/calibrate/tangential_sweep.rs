@@ -204,11 +204,25 @@ pub struct TangentialSweep {
     pub resolution_warning: Option<String>,
 }
 
+/// The parameters that need no surface, checked.
+struct Checked {
+    /// μ (-).
+    mu: f64,
+    /// Both bodies.
+    material: Material,
+    /// `E*` (Pa).
+    e_star: f64,
+    /// Ascending (Pa).
+    pressures: Vec<f64>,
+    /// H (Pa).
+    hardness_pa: Option<f64>,
+    /// Of the tangential solver.
+    options: TangentialOptions,
+}
+
 /// Check the parameters that need no surface, under the flags' names (step 1 of the
-/// [module documentation](self)): μ, the material, `E*`, the pressures, H and the options.
-fn checked(
-    args: &TangentialSweepConfig,
-) -> Result<(f64, Material, f64, Vec<f64>, Option<f64>, TangentialOptions)> {
+/// [module documentation](self)).
+fn checked(args: &TangentialSweepConfig) -> Result<Checked> {
     crate::core::limits::check_steps(
         "--cycles",
         args.cycles,
@@ -311,7 +325,14 @@ fn checked(
         }
         other => other,
     })?;
-    Ok((mu, material, e_star, pressures, hardness_pa, options))
+    Ok(Checked {
+        mu,
+        material,
+        e_star,
+        pressures,
+        hardness_pa,
+        options,
+    })
 }
 
 /// The surface of the run and its description: the reference generated one (on `--grid` if
@@ -401,7 +422,14 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<TangentialSweep> {
     let args = config;
-    let (mu, material, e_star, pressures, hardness_pa, options) = checked(args)?;
+    let Checked {
+        mu,
+        material,
+        e_star,
+        pressures,
+        hardness_pa,
+        options,
+    } = checked(args)?;
     let (ratio, varying) = (args.normal_amplitude_ratio, args.varying());
     let (e1, e2) = args.directions();
     let (surface, source) = surface_of(args)?;
