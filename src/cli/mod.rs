@@ -14,7 +14,6 @@ pub mod progress;
 pub mod response;
 pub mod surface;
 
-use asperity::core::material::Material;
 use asperity::{Error, Grid2, Result};
 
 /// `"nx × ny points, spacing dx × dy m, periodic"` (or `non-periodic (zero-padded kernels)`).
@@ -35,12 +34,6 @@ pub fn surface_inputs(
 /// Name the CLI flag in a parameter error raised by the library.
 pub fn rename_param(e: Error, flag: &str) -> Error {
     e.renamed_param(flag)
-}
-
-/// The material of both bodies from `--youngs-modulus-pa` and `--poisson-ratio`, validated,
-/// with errors naming the flag.
-pub fn material_from_flags(youngs_modulus_pa: f64, poisson_ratio: f64) -> Result<Material> {
-    asperity::core::material::from_flags(youngs_modulus_pa, poisson_ratio)
 }
 
 /// A progress bar on stderr for `len` units of work, labelled `label` (with the current step in
