@@ -17,9 +17,10 @@
 //!    pressures (positive, ascending after sorting,
 //!    [`crate::contact::sweep::checked_pressures`]), a hardness above the highest normal load
 //!    and the solver options ([`TangentialOptions::validated`]).
-//! 2. **Surface**: the reference Gaussian surface ([`GaussianSurfaceSpec::reference`], optionally
-//!    on another grid) or the equivalent surface `h1 − h2` of one or two measured files
-//!    ([`crate::surface::io::read_equivalent_surface`], missing points filled if asked); grid
+//! 2. **Surface**: the reference Gaussian surface, optionally on another grid
+//!    ([`crate::contact::surface_sweep::reference_spec`]), or the equivalent surface `h1 − h2`
+//!    of one or two measured files ([`crate::surface::io::read_equivalent_surface`], missing
+//!    points filled if asked); grid
 //!    size and surface checked, the pressures checked against `E*` and the surface, the
 //!    amplitude against the patch size (a unit error beyond it).
 //! 3. **Normal contact** at each pressure, ascending and warm-started ([`NormalSolver`], elastic
@@ -59,7 +60,7 @@ use crate::core::grid::Grid2;
 use crate::core::material::{composite_modulus, Hardness, Material};
 use crate::core::output::OutputSet;
 use crate::core::plot::{line_plot, LinePlot, Scale, Series};
-use crate::surface::generate::{generate, GaussianSurfaceSpec};
+use crate::surface::generate::generate;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -339,24 +340,13 @@ fn checked(args: &TangentialSweepConfig) -> Result<Checked> {
 /// given) or the equivalent surface of the files, checked (step 2).
 fn surface_of(args: &TangentialSweepConfig) -> Result<(Grid2, String)> {
     let (surface, source) = if args.surface.is_empty() {
-        let mut spec = GaussianSurfaceSpec::reference();
-        if let Some(n) = args.grid {
-            if n < 8 {
-                return Err(Error::param(
-                    "--grid",
-                    format!("must be at least 8, got {n}"),
-                ));
-            }
-            spec.nx = n;
-            spec.ny = n;
+        if let Some(n) = args.grid.filter(|&n| n < 8) {
+            return Err(Error::param(
+                "--grid",
+                format!("must be at least 8, got {n}"),
+            ));
         }
-        spec.validate().map_err(|e| e.renamed_param("--grid"))?;
-        crate::core::limits::check_grid(
-            "--grid",
-            spec.nx,
-            spec.ny,
-            crate::core::limits::CONTACT_BYTES_PER_POINT,
-        )?;
+        let spec = crate::contact::surface_sweep::reference_spec(args.grid)?;
         (
             generate(&spec)?,
             format!(

@@ -194,18 +194,7 @@ fn surfaces(args: &NormalSweepConfig) -> Result<Vec<SurfaceSource>> {
         Some(s) => s.clone(),
         None => vec![GaussianSurfaceSpec::REFERENCE_SEED],
     };
-    let mut spec = GaussianSurfaceSpec::reference();
-    if let Some(n) = args.grid {
-        spec.nx = n;
-        spec.ny = n;
-        spec.validate().map_err(|e| e.renamed_param("--grid"))?;
-    }
-    crate::core::limits::check_grid(
-        "--grid",
-        spec.nx,
-        spec.ny,
-        crate::core::limits::CONTACT_BYTES_PER_POINT,
-    )?;
+    let spec = surface_sweep::reference_spec(args.grid)?;
     Ok(seeds
         .into_iter()
         .map(|seed| SurfaceSource::Generated {
