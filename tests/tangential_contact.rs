@@ -735,3 +735,62 @@ fn cli_direction_and_elliptical_path() {
         assert!(!bad.exists() || !bad.join("tangential_loops.csv").exists());
     }
 }
+
+/// The sweep as a library call (`calibrate::tangential_sweep::run`, what `contact tangential`
+/// calls): at the default amplitude, 1.5 × the gross-slip displacement of the highest pressure,
+/// every loop reaches gross slip, where every contact point carries q = μ p, so the mean shear
+/// stress is μ p̄ exactly (Coulomb's law summed over the contact); checked to 1e-5 (solver
+/// tolerance 1e-6; found within 5e-6 at 96²). The report writes the command's files.
+#[test]
+fn tangential_sweep_library_call_reaches_the_coulomb_bound_at_gross_slip() {
+    use asperity::calibrate::tangential_sweep::{self, TangentialSweepConfig};
+    let mu = 0.6;
+    let config = TangentialSweepConfig {
+        pressures_pa: Some(vec![1e6, 5e6]),
+        friction_coefficient: mu,
+        amplitude_m: None,
+        cycles: 2,
+        steps_per_cycle: 16,
+        grid: Some(96),
+        surface: Vec::new(),
+        fill: None,
+        youngs_modulus_pa: 210e9,
+        poisson_ratio: 0.3,
+        hardness: None,
+        normal_amplitude_ratio: 0.0,
+        normal_phase_deg: 0.0,
+        direction_deg: 0.0,
+        path_minor_ratio: 0.0,
+        options: TangentialOptions::default(),
+    };
+    let mut notes = Vec::new();
+    let sweep = tangential_sweep::run(&config, &|_| indicatif::ProgressBar::hidden(), &mut |m| {
+        notes.push(m.to_string())
+    })
+    .unwrap();
+    assert!(
+        notes.iter().any(|m| m.starts_with("amplitude δa")),
+        "{notes:?}"
+    );
+    assert_eq!(sweep.results.len(), 2);
+    for (&p, r) in sweep.pressures_pa.iter().zip(&sweep.results) {
+        let peak = r
+            .steps
+            .iter()
+            .map(|s| s.mean_shear_pa[0].abs())
+            .fold(0.0, f64::max);
+        assert!(
+            (peak / (mu * p) - 1.0).abs() < 1e-5,
+            "{p:e} Pa: largest mean shear stress {peak:e} Pa, μ p̄ = {:e} Pa",
+            mu * p
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("out");
+    let mut out = tangential_sweep::output_set(&config, &out_dir, "out_dir").unwrap();
+    sweep.write(&mut out).unwrap();
+    out.commit().unwrap();
+    for f in tangential_sweep::OUTPUTS {
+        assert!(out_dir.join(f).is_file(), "{f} not written");
+    }
+}

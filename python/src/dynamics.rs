@@ -7,11 +7,11 @@ use crate::arrays::{borrow_f64, finite_slice, require_finite};
 use crate::element::ValanisParams;
 use crate::errors::{parameter, IntoPy};
 use asperity::dynamics::aft::Harmonics;
-use asperity::dynamics::continuation::{sweep, ContinuationSettings};
+use asperity::dynamics::continuation::ContinuationSettings;
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use asperity::dynamics::model::{CoordinateKind, Structure};
 use asperity::dynamics::model_file::{self, ModelFile};
-use asperity::dynamics::report;
+use asperity::dynamics::{report, response};
 use asperity::element::{
     CubicSpring, HystereticElement, Jenkins, JenkinsContact, MicroslipContact,
 };
@@ -441,8 +441,14 @@ impl ResponseModel {
                     },
                     choice,
                 )?;
-                let branch = sweep(&system, level_n, &settings, &mut |_| {})?;
-                let r = report::summarise(&system, level_n, branch, &self.responses[0].1);
+                let r = response::sweep_level(
+                    &system,
+                    level_n,
+                    &settings,
+                    &self.responses[0].1,
+                    &mut |_| {},
+                )?;
+                r.branch.check_complete()?;
                 Ok::<_, asperity::Error>((system, r))
             })
             .py()?;

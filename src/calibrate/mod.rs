@@ -10,6 +10,7 @@ pub mod pipeline;
 pub mod statistics;
 pub mod sweep;
 pub mod table;
+pub mod tangential_sweep;
 pub mod varying_load;
 
 pub use config::CalibrationConfig;

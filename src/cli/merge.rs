@@ -45,7 +45,7 @@ pub fn run(args: MergeArgs) -> Result<()> {
             let merged = shard::merge::<SurfaceSweep>(&args.shards)?;
             warn_other_build(&merged.build);
             let staged = out.staging_dir()?;
-            super::contact_normal::write_outputs(&merged.config, &merged.units, &staged)?;
+            asperity::contact::normal_sweep::write_outputs(&merged.config, &merged.units, &staged)?;
             out.commit()?;
             super::contact_normal::print_summary(&merged.units)?;
             println!(

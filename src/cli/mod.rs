@@ -14,35 +14,11 @@ pub mod progress;
 pub mod response;
 pub mod surface;
 
-use asperity::core::material::Material;
 use asperity::{Error, Grid2, Result};
 
 /// `"nx × ny points, spacing dx × dy m, periodic"` (or `non-periodic (zero-padded kernels)`).
 pub fn surface_summary(surface: &Grid2) -> String {
-    format!(
-        "{} × {} points, spacing {:.4e} × {:.4e} m, {}",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        if surface.periodic {
-            "periodic"
-        } else {
-            "non-periodic (zero-padded kernels)"
-        }
-    )
-}
-
-/// The `# grid: …` provenance line of the contact CSVs.
-pub fn grid_header(surface: &Grid2) -> String {
-    format!(
-        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
-        surface.nx(),
-        surface.ny(),
-        surface.dx,
-        surface.dy,
-        surface.periodic
-    )
+    asperity::core::grid::describe(surface)
 }
 
 /// Declare topography files read by a command as inputs of its output set, each with its
@@ -52,40 +28,12 @@ pub fn surface_inputs(
     files: &[std::path::PathBuf],
     role: &str,
 ) -> Result<()> {
-    for f in files {
-        out.input(f, role)?;
-        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy")) {
-            out.input(
-                &asperity::surface::io::npy::sidecar_path(f),
-                &format!("the sidecar of {role} {}", f.display()),
-            )?;
-        }
-    }
-    Ok(())
+    asperity::surface::io::declare_inputs(out, files, role)
 }
 
 /// Name the CLI flag in a parameter error raised by the library.
 pub fn rename_param(e: Error, flag: &str) -> Error {
-    match e {
-        Error::InvalidParameter { message, .. } => Error::param(flag, message),
-        other => other,
-    }
-}
-
-/// The material of both bodies from `--youngs-modulus-pa` and `--poisson-ratio`, validated,
-/// with errors naming the flag.
-pub fn material_from_flags(youngs_modulus_pa: f64, poisson_ratio: f64) -> Result<Material> {
-    Material {
-        youngs_modulus_pa,
-        poisson_ratio,
-    }
-    .validated("material")
-    .map_err(|e| match e {
-        Error::InvalidParameter { ref name, .. } if name.ends_with("poisson_ratio") => {
-            rename_param(e, "--poisson-ratio")
-        }
-        e => rename_param(e, "--youngs-modulus-pa"),
-    })
+    e.renamed_param(flag)
 }
 
 /// A progress bar on stderr for `len` units of work, labelled `label` (with the current step in

@@ -43,6 +43,25 @@ pub enum SurfaceSource {
     },
 }
 
+/// The reference generated surface's specification ([`GaussianSurfaceSpec::reference`]) on
+/// `grid × grid` points when given (same patch and statistics), validated and within the
+/// contact solvers' memory limit; errors name `--grid`.
+pub fn reference_spec(grid: Option<usize>) -> Result<GaussianSurfaceSpec> {
+    let mut spec = GaussianSurfaceSpec::reference();
+    if let Some(n) = grid {
+        spec.nx = n;
+        spec.ny = n;
+        spec.validate().map_err(|e| e.renamed_param("--grid"))?;
+    }
+    crate::core::limits::check_grid(
+        "--grid",
+        spec.nx,
+        spec.ny,
+        crate::core::limits::CONTACT_BYTES_PER_POINT,
+    )?;
+    Ok(spec)
+}
+
 impl SurfaceSource {
     /// A topography file, hashed now.
     pub fn file(path: &Path) -> Result<Self> {

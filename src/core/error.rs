@@ -74,6 +74,15 @@ impl Error {
         }
     }
 
+    /// The same error naming parameter `name` instead (the flag of a command, the keyword of a
+    /// binding), when it is an [`Error::InvalidParameter`]; any other error unchanged.
+    pub fn renamed_param(self, name: &str) -> Self {
+        match self {
+            Error::InvalidParameter { message, .. } => Error::param(name, message),
+            other => other,
+        }
+    }
+
     /// Shorthand for [`Error::Parse`].
     pub fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
         Error::Parse {

@@ -74,6 +74,35 @@ impl Grid2 {
     }
 }
 
+/// `"nx × ny points, spacing dx × dy m, periodic"` (or `non-periodic (zero-padded kernels)`):
+/// a grid as the commands describe it on stderr.
+pub fn describe(surface: &Grid2) -> String {
+    format!(
+        "{} × {} points, spacing {:.4e} × {:.4e} m, {}",
+        surface.nx(),
+        surface.ny(),
+        surface.dx,
+        surface.dy,
+        if surface.periodic {
+            "periodic"
+        } else {
+            "non-periodic (zero-padded kernels)"
+        }
+    )
+}
+
+/// The `# grid: …` provenance line of the contact CSVs.
+pub fn csv_header(surface: &Grid2) -> String {
+    format!(
+        "# grid: {} x {} points, dx_m = {:e}, dy_m = {:e}, periodic = {}",
+        surface.nx(),
+        surface.ny(),
+        surface.dx,
+        surface.dy,
+        surface.periodic
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

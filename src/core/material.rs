@@ -44,6 +44,22 @@ impl Material {
 /// mm², so `H = HV · 9.80665 N/kgf · 10⁶ mm²/m²`.
 pub const PA_PER_HV: f64 = 9.80665e6;
 
+/// The material of both bodies of a contact command from its `--youngs-modulus-pa` and
+/// `--poisson-ratio`, validated, with errors naming the flag.
+pub fn from_flags(youngs_modulus_pa: f64, poisson_ratio: f64) -> Result<Material> {
+    Material {
+        youngs_modulus_pa,
+        poisson_ratio,
+    }
+    .validated("material")
+    .map_err(|e| match e {
+        Error::InvalidParameter { ref name, .. } if name.ends_with("poisson_ratio") => {
+            e.renamed_param("--poisson-ratio")
+        }
+        e => e.renamed_param("--youngs-modulus-pa"),
+    })
+}
+
 /// A named material with its indentation hardness: the elastic constants and the default
 /// hardness H (Pa) of the hardness-limited normal contact ([`crate::contact::normal`]), with
 /// their sources.

@@ -163,6 +163,18 @@ pub struct Branch {
 }
 
 impl Branch {
+    /// `Ok` when the sweep reached the end of its span; otherwise the error of a sweep that
+    /// stopped, naming the level and why.
+    pub fn check_complete(&self) -> Result<()> {
+        match &self.stopped {
+            None => Ok(()),
+            Some(why) => Err(Error::Data(format!(
+                "continuation at level {:.4e}: {why}",
+                self.level
+            ))),
+        }
+    }
+
     /// Points at which some element's AFT state did not become periodic within the period cap
     /// (periodicity error above `tolerance`, the [`crate::dynamics::aft::AftSettings`]
     /// tolerance): their element forces are those of the last period integrated, not of the
@@ -269,12 +281,8 @@ pub fn sweep(
     progress: &mut dyn FnMut(f64),
 ) -> Result<Branch> {
     let branch = sweep_partial(system, level, settings, progress)?;
-    match &branch.stopped {
-        None => Ok(branch),
-        Some(why) => Err(Error::Data(format!(
-            "continuation at level {level:.4e}: {why}"
-        ))),
-    }
+    branch.check_complete()?;
+    Ok(branch)
 }
 
 /// [`sweep`] that keeps the points computed when the sweep stops before the end of its span

@@ -23,4 +23,5 @@ pub mod hbm;
 pub mod model;
 pub mod model_file;
 pub mod report;
+pub mod response;
 pub mod time_integration;

@@ -385,14 +385,6 @@ impl Log<'_> {
     }
 }
 
-/// A library error renamed after its flag.
-fn rename_param(e: Error, flag: &str) -> Error {
-    match e {
-        Error::InvalidParameter { message, .. } => Error::param(flag, message),
-        other => other,
-    }
-}
-
 /// A region-of-interest error named by its flag.
 fn roi_error(e: Error, flag: &str) -> Error {
     match e {
@@ -628,7 +620,7 @@ pub fn run(config: &FilmConfig, log: &mut dyn FnMut(&str)) -> Result<FilmReport>
     let pixel_size_mm = pixel_size_m * 1e3;
     if let Some(s) = args.smooth_mm {
         crate::core::error::require_positive("--smooth-mm", s)?;
-        scan::smooth(&mut img, s / pixel_size_mm).map_err(|e| rename_param(e, "--smooth-mm"))?;
+        scan::smooth(&mut img, s / pixel_size_mm).map_err(|e| e.renamed_param("--smooth-mm"))?;
     }
     // Density mode: the channel and the paper level.
     let mut paper = None;
@@ -648,7 +640,7 @@ pub fn run(config: &FilmConfig, log: &mut dyn FnMut(&str)) -> Result<FilmReport>
             *d = d
                 .clone()
                 .with_stain([st[0], st[1], st[2]])
-                .map_err(|e| rename_param(e, "--stain-rgb"))?;
+                .map_err(|e| e.renamed_param("--stain-rgb"))?;
         }
         let first = d.points[0].0;
         let level = match args.unstained_density {

@@ -94,6 +94,22 @@ pub enum Operator {
     Fft,
 }
 
+impl std::str::FromStr for Operator {
+    type Err = Error;
+    /// `auto`, `dense` or `fft`.
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(Operator::Auto),
+            "dense" => Ok(Operator::Dense),
+            "fft" => Ok(Operator::Fft),
+            o => Err(Error::param(
+                "operator",
+                format!("expected auto, dense or fft, got `{o}`"),
+            )),
+        }
+    }
+}
+
 /// A tangential contact problem on a fixed pressure field.
 #[derive(Debug, Clone)]
 pub struct TangentialProblem<'a> {
@@ -204,6 +220,22 @@ pub struct TangentialStep {
     pub converged: bool,
     /// Wall time of the step (s).
     pub wall_time_s: f64,
+}
+
+impl TangentialStep {
+    /// The state a history starts from (step 0): no load, every point stuck.
+    pub const INITIAL: TangentialStep = TangentialStep {
+        shift_m: [0.0; 2],
+        force_n: [0.0; 2],
+        mean_shear_pa: [0.0; 2],
+        stick_fraction: 1.0,
+        accumulated_slip_m: 0.0,
+        frictional_work_j: 0.0,
+        iterations: 0,
+        residual: 0.0,
+        converged: true,
+        wall_time_s: 0.0,
+    };
 }
 
 /// Facts about a solver set up on one pressure field.
@@ -1190,24 +1222,30 @@ fn run_history(
     solver.reset();
     let total = cycles * n;
     let mut steps = Vec::with_capacity(total + 1);
-    steps.push(TangentialStep {
-        shift_m: [0.0; 2],
-        force_n: [0.0; 2],
-        mean_shear_pa: [0.0; 2],
-        stick_fraction: 1.0,
-        accumulated_slip_m: 0.0,
-        frictional_work_j: 0.0,
-        iterations: 0,
-        residual: 0.0,
-        converged: true,
-        wall_time_s: 0.0,
-    });
+    steps.push(TangentialStep::INITIAL);
     for k in 1..=total {
         steps.push(solver.step(control(k))?);
         progress(k, total);
     }
-    let area = solver.metadata().nominal_area_m2;
-    let cycles = (0..cycles)
+    let cycles = cycle_energies(&steps, cycles, n, solver.metadata().nominal_area_m2);
+    Ok(OscillationResult {
+        steps,
+        cycles,
+        metadata: solver.metadata().clone(),
+        wall_time_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The energy balance of each of the `cycles` cycles of `n` steps of a history `steps` (step 0
+/// the initial state, cycle `c` from step `(c−1)·n` to `c·n`) on a patch of nominal area
+/// `area_m2` (m²): the loop area ([`loop_area`]) and the frictional work of the cycle's steps.
+pub fn cycle_energies(
+    steps: &[TangentialStep],
+    cycles: usize,
+    n: usize,
+    area_m2: f64,
+) -> Vec<CycleEnergy> {
+    (0..cycles)
         .map(|c| {
             let w = loop_area(&steps[c * n..=(c + 1) * n]);
             let fw = steps[c * n + 1..=(c + 1) * n]
@@ -1217,17 +1255,11 @@ fn run_history(
             CycleEnergy {
                 cycle: c + 1,
                 dissipated_j: w,
-                dissipated_j_per_m2: w / area,
+                dissipated_j_per_m2: w / area_m2,
                 frictional_work_j: fw,
             }
         })
-        .collect();
-    Ok(OscillationResult {
-        steps,
-        cycles,
-        metadata: solver.metadata().clone(),
-        wall_time_s: start.elapsed().as_secs_f64(),
-    })
+        .collect()
 }
 
 /// `∫ T·dδ` along consecutive steps, trapezoidal rule (J).

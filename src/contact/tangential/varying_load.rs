@@ -38,7 +38,7 @@
 //! both are reported ([`CycleEnergy`]).
 
 use super::{
-    loop_area, Control, CycleEnergy, TangentialMetadata, TangentialOptions, TangentialProblem,
+    cycle_energies, Control, CycleEnergy, TangentialMetadata, TangentialOptions, TangentialProblem,
     TangentialSolver, TangentialStep,
 };
 use crate::contact::normal::{NormalOptions, NormalProblem, NormalSolver};
@@ -217,40 +217,15 @@ pub fn oscillate_on_fields(
     };
     solver.set_pressure(&field(0)?)?;
     let mut steps = Vec::with_capacity(total + 1);
-    steps.push(record(
-        solver,
-        TangentialStep {
-            shift_m: [0.0; 2],
-            force_n: [0.0; 2],
-            mean_shear_pa: [0.0; 2],
-            stick_fraction: 1.0,
-            accumulated_slip_m: 0.0,
-            frictional_work_j: 0.0,
-            iterations: 0,
-            residual: 0.0,
-            converged: true,
-            wall_time_s: 0.0,
-        },
-    ));
+    steps.push(record(solver, TangentialStep::INITIAL));
     for k in 1..=total {
         solver.set_pressure(&field(k % n)?)?;
         let st = solver.step(history.tangential_amplitude.scaled(history.sine(k)))?;
         steps.push(record(solver, st));
         progress(k, total);
     }
-    let cycles = (0..history.cycles)
-        .map(|c| {
-            let span = &steps[c * n..=(c + 1) * n];
-            let t: Vec<TangentialStep> = span.iter().map(|s| s.tangential).collect();
-            let w = loop_area(&t);
-            CycleEnergy {
-                cycle: c + 1,
-                dissipated_j: w,
-                dissipated_j_per_m2: w / area,
-                frictional_work_j: t[1..].iter().map(|s| s.frictional_work_j).sum(),
-            }
-        })
-        .collect();
+    let tangential: Vec<TangentialStep> = steps.iter().map(|s| s.tangential).collect();
+    let cycles = cycle_energies(&tangential, history.cycles, n, area);
     Ok((steps, cycles))
 }
 

@@ -158,6 +158,25 @@ pub fn write(path: &Path, grid: &Grid2) -> Result<()> {
     }
 }
 
+/// Declare topography files read by a command as inputs of its output set `out` (`role` names
+/// them in errors), each with its `.npy.json` sidecar where it has one: no output may be either.
+pub fn declare_inputs(
+    out: &mut crate::core::output::OutputSet,
+    files: &[std::path::PathBuf],
+    role: &str,
+) -> Result<()> {
+    for f in files {
+        out.input(f, role)?;
+        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy")) {
+            out.input(
+                &npy::sidecar_path(f),
+                &format!("the sidecar of {role} {}", f.display()),
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// The equivalent rough surface for the contact solvers from one or two topography files
 /// (areas of at least [`crate::core::sanity::MIN_CONTACT_FILE_POINTS`] points per side; a profile is
 /// refused): one file is the equivalent surface itself; two files are

@@ -1,0 +1,320 @@
+//! `asperity response` as a library call: the nonlinear forced response of a model file, one
+//! frequency sweep per excitation level ([`run`] takes the loaded model file and returns a
+//! [`ForcedResponse`]; [`ForcedResponse::write`] writes the command's files into the output set
+//! that [`output_set`] declares).
+//!
+//! The steps, in order:
+//!
+//! 1. **Settings** from the model file's `[sweep]` ([`ResponseSettings::of_model_file`]): the
+//!    harmonic basis ([`Harmonics`]), the formulation and the continuation settings (points
+//!    over the span, the cap on a branch's points).
+//! 2. **System**: the harmonic-balance problem of the structure with its elements under the
+//!    excitation ([`HbmSystem`]); described to the caller's log.
+//! 3. **Sweeps**: every level is an independent pseudo-arclength continuation over the span
+//!    ([`sweep_partial`]), run concurrently, and summarised: element cycles along the branch and
+//!    the peak of the first response ([`report::summarise`]); [`sweep_level`] is one of them.
+//!    A level whose sweep stops early keeps its points (reported with the reason); one whose
+//!    first point fails has nothing to report. Either way the other levels are reported; the
+//!    run fails only when no level has a point.
+//! 4. **Files** ([`ForcedResponse::write`]): per level `response_level_<i>.csv` and
+//!    `elements_level_<i>.csv` (`i` the level's 1-based position in the model file), one FRF
+//!    plot per response `frf_<label>.png`, and `response.json` (provenance, settings, a summary
+//!    per level and the failed levels).
+
+use crate::core::error::{Error, Result};
+use crate::core::output::{write_string_atomic, OutputSet};
+use crate::dynamics::aft::Harmonics;
+use crate::dynamics::continuation::{sweep_partial, ContinuationSettings};
+use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
+use crate::dynamics::model_file::{self, LoadedModel, SweepSection};
+use crate::dynamics::report::{self, LevelResult};
+use crate::elements::{provenance_json, InputFile};
+use nalgebra::DVector;
+use rayon::prelude::*;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// How a level is swept: the harmonic basis, the formulation of the balance and the
+/// continuation settings.
+#[derive(Clone)]
+pub struct ResponseSettings {
+    /// Harmonics retained and time samples per period.
+    pub harmonics: Harmonics,
+    /// Unknowns of the balance: the fewer, the coordinates or the receptance-condensed contact
+    /// DOFs.
+    pub formulation: FormulationChoice,
+    /// Span, points and step control of the continuation.
+    pub continuation: ContinuationSettings,
+}
+
+impl ResponseSettings {
+    /// The settings of a model file's `[sweep]`: its harmonics, formulation, span and points;
+    /// the cap on a branch's points is its `max_points`, by default the larger of the
+    /// continuation's default and 20 × points.
+    pub fn of_model_file(sweep: &SweepSection) -> Result<Self> {
+        let harmonics = Harmonics::new(sweep.harmonics, sweep.odd_only, sweep.time_samples)
+            .map_err(|e| e.renamed_param("sweep.harmonics / sweep.time_samples"))?;
+        let mut continuation =
+            ContinuationSettings::new(sweep.frequency_start_hz, sweep.frequency_end_hz);
+        continuation.points = sweep.points;
+        continuation.max_points = sweep
+            .max_points
+            .unwrap_or(continuation.max_points.max(20 * sweep.points));
+        Ok(Self {
+            harmonics,
+            formulation: sweep.formulation,
+            continuation,
+        })
+    }
+}
+
+/// The output set of a run of the model file `model` into `out_dir` (`flag` names it in
+/// errors), declared before any work: the level CSVs, the FRF plots and `response.json`; the
+/// model file and every file it names are inputs that no output may be or remove.
+pub fn output_set(model: &Path, out_dir: &Path, flag: &str) -> Result<OutputSet> {
+    let mut out = OutputSet::in_dir(out_dir, flag)?;
+    for (prefix, suffix) in [
+        ("response_level_", ".csv"),
+        ("elements_level_", ".csv"),
+        ("frf_", ".png"),
+    ] {
+        out.owns(prefix, suffix)?;
+    }
+    out.writes(&["response.json"])?;
+    for (role, p) in model_file::referenced_files(model)? {
+        out.input(&p, &format!("{role} of {}", model.display()))?;
+    }
+    Ok(out)
+}
+
+/// One level: the continuation over the settings' span at excitation `level_n` (N), kept up to
+/// where it stopped ([`sweep_partial`]), summarised with the peak of the response `peak_row`
+/// ([`report::summarise`]). `progress(fraction)` follows the span covered.
+pub fn sweep_level(
+    system: &HbmSystem<'_>,
+    level_n: f64,
+    settings: &ContinuationSettings,
+    peak_row: &DVector<f64>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<LevelResult> {
+    let branch = sweep_partial(system, level_n, settings, progress)?;
+    Ok(report::summarise(system, level_n, branch, peak_row))
+}
+
+/// What `asperity response` computed: the system and a result per level that has points.
+pub struct ForcedResponse<'a> {
+    /// The model file, loaded.
+    pub model: &'a LoadedModel,
+    /// The settings of the sweeps.
+    pub settings: ResponseSettings,
+    /// The harmonic-balance problem.
+    pub system: HbmSystem<'a>,
+    /// The levels with points, in the model file's order.
+    pub results: Vec<LevelResult>,
+    /// The 1-based position of each result's level in the model file (its files' number).
+    pub numbers: Vec<usize>,
+    /// Levels that stopped early (their points are in [`Self::results`]) or have no point,
+    /// with the reason.
+    pub failures: Vec<String>,
+}
+
+/// Sweep every excitation level of `model` (steps in the [module documentation](self)).
+/// `progress` makes the progress bar for a length (1000 per level); `log` takes the description
+/// of the system before the sweeps. Errors: invalid settings or system, or no level with a
+/// point (naming each level's failure).
+pub fn run<'a>(
+    model: &'a LoadedModel,
+    progress: &dyn Fn(u64) -> indicatif::ProgressBar,
+    log: &mut dyn FnMut(&str),
+) -> Result<ForcedResponse<'a>> {
+    let f = &model.file;
+    let settings = ResponseSettings::of_model_file(&f.sweep)?;
+    let system = HbmSystem::new(
+        &model.structure,
+        settings.harmonics.clone(),
+        Excitation {
+            force: model.force.clone(),
+            harmonic: f.excitation.harmonic,
+        },
+        settings.formulation,
+    )?;
+    log(&format!(
+        "{} coordinates ({:?}), {} elements ({} contact DOFs{}); harmonics {:?}, {} samples per period; formulation: {:?} with {} unknowns",
+        model.structure.n(),
+        model.structure.kind,
+        model.structure.elements.len(),
+        model.structure.contact_dofs(),
+        if model.out_of_range > 0 {
+            format!(", {} outside their calibration table's range", model.out_of_range)
+        } else {
+            String::new()
+        },
+        system.harmonics.orders(),
+        system.harmonics.n_time(),
+        system.formulation(),
+        system.unknowns()
+    ));
+    let levels = &f.excitation.levels_n;
+    let bar = progress((levels.len() * 1000) as u64);
+    bar.set_message(format!("{} levels", levels.len()));
+    // The levels are independent sweeps: they run concurrently (rayon tasks; the element loop
+    // inside each evaluation is parallel too and rayon shares the cores between both), so the
+    // slow gross-slip level overlaps the fast microslip ones. Progress: the sum of the levels'
+    // fractions of their span.
+    let covered: Vec<AtomicU64> = levels.iter().map(|_| AtomicU64::new(0)).collect();
+    let outcomes: Vec<Result<LevelResult>> = levels
+        .par_iter()
+        .enumerate()
+        .map(|(i, &level)| {
+            sweep_level(
+                &system,
+                level,
+                &settings.continuation,
+                &model.responses[0].1,
+                &mut |frac| {
+                    covered[i].store((frac * 1000.0) as u64, Ordering::Relaxed);
+                    bar.set_position(covered.iter().map(|p| p.load(Ordering::Relaxed)).sum());
+                },
+            )
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut failures: Vec<String> = Vec::new();
+    let mut results = Vec::new();
+    let mut numbers = Vec::new();
+    for (i, (&level, outcome)) in levels.iter().zip(outcomes).enumerate() {
+        match outcome {
+            Ok(r) => {
+                if let Some(why) = &r.branch.stopped {
+                    failures.push(format!(
+                        "level {level} N: {why} (the points up to there are written)"
+                    ));
+                }
+                results.push(r);
+                numbers.push(i + 1);
+            }
+            Err(e) => failures.push(format!("level {level} N: nothing computed: {e}")),
+        }
+    }
+    if results.is_empty() {
+        return Err(Error::Data(failures.join("; ")));
+    }
+    Ok(ForcedResponse {
+        model,
+        settings,
+        system,
+        results,
+        numbers,
+        failures,
+    })
+}
+
+/// A response label as a file-name part: ASCII letters, digits, `.` and `-` kept, anything
+/// else `_`.
+fn file_safe(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+impl ForcedResponse<'_> {
+    /// Points of a level at which an element's AFT state did not become periodic, and the
+    /// largest relative periodicity error.
+    pub fn periodicity(&self, r: &LevelResult) -> (usize, f64) {
+        (
+            r.branch
+                .non_periodic_points(self.system.aft.periodicity_tolerance),
+            crate::dynamics::aft::worst_periodicity_error(
+                r.branch.points.iter().map(|p| p.periodicity_error),
+            ),
+        )
+    }
+
+    /// Write the command's files into the output set `out` (declared by [`output_set`]; step 4
+    /// of the [module documentation](self)).
+    pub fn write(&self, out: &mut OutputSet) -> Result<()> {
+        let (model, system) = (self.model, &self.system);
+        let header = format!(
+            "asperity {} response: model {}; {:?} formulation, {} unknowns; harmonics {:?}, {} samples per period",
+            env!("CARGO_PKG_VERSION"),
+            model.path.display(),
+            system.formulation(),
+            system.unknowns(),
+            system.harmonics.orders(),
+            system.harmonics.n_time()
+        );
+        let mut level_summaries = Vec::new();
+        for (number, r) in self.numbers.iter().zip(&self.results) {
+            let csv = out.path(&format!("response_level_{number}.csv"))?;
+            report::write_level_csv(&csv, system, &model.responses, r, &header)?;
+            let el = out.path(&format!("elements_level_{number}.csv"))?;
+            report::write_elements_csv(&el, system, r)?;
+            let (non_periodic, worst) = self.periodicity(r);
+            let pk = r.interpolated_peak;
+            level_summaries.push(serde_json::json!({
+                "level_N": r.level_n,
+                "csv": out.final_path(&csv).display().to_string(),
+                "elements_csv": out.final_path(&el).display().to_string(),
+                "points": r.branch.points.len(),
+                "complete": r.branch.stopped.is_none(),
+                "stopped": r.branch.stopped,
+                "peak_frequency_Hz": pk.frequency_hz,
+                "peak_amplitude_m": pk.amplitude_m,
+                "peak_at_sweep_end": pk.at_sweep_end,
+                "largest_point_frequency_Hz": r.branch.points[r.peak].omega / (2.0 * std::f64::consts::PI),
+                "peak_dissipated_energy_J": r.totals[r.peak][0],
+                "peak_slip_fraction": r.totals[r.peak][2],
+                "peak_separation_fraction": r.totals[r.peak][3],
+                "rejected_steps": r.branch.rejected_steps,
+                "turning_points": r.branch.turning_points,
+                "kinks": r.branch.kinks,
+                "jacobians": r.branch.jacobians,
+                "max_relative_residual": r.branch.points.iter().map(|p| p.residual).fold(0.0, f64::max),
+                "max_periodicity_error": worst,
+                "points_not_periodic": non_periodic,
+                "wall_time_s": r.branch.wall_time_s,
+            }));
+        }
+        for (k, (label, row)) in model.responses.iter().enumerate() {
+            let png = out.path(&format!("frf_{}.png", file_safe(label)))?;
+            report::plot_frf_family(&png, system, label, row, &self.results, k == 0)?;
+        }
+        let inputs: Vec<InputFile> = model
+            .inputs
+            .iter()
+            .map(|(role, p)| InputFile::new(role, p))
+            .collect::<Result<_>>()?;
+        let json = provenance_json(
+            "response",
+            &inputs,
+            serde_json::json!({
+                "model": serde_json::to_value(&model.file).map_err(|e| Error::Data(e.to_string()))?,
+                "harmonics": system.harmonics.orders(),
+                "time_samples": system.harmonics.n_time(),
+                "formulation": system.formulation(),
+                "unknowns": system.unknowns(),
+                "coordinates": model.structure.kind,
+                "newton": system.newton,
+                "aft": system.aft,
+                "continuation": self.settings.continuation,
+            }),
+            serde_json::json!({
+                "elements": model.structure.elements.len(),
+                "elements_out_of_calibration_range": model.out_of_range,
+                "levels": level_summaries,
+                "failed_levels": self.failures,
+            }),
+        );
+        write_string_atomic(
+            &out.path("response.json")?,
+            &serde_json::to_string_pretty(&json).map_err(|e| Error::Data(e.to_string()))?,
+        )
+    }
+}
