@@ -194,8 +194,7 @@ fn run_pyharm(case: &PeerCase, hmax: usize, nt: usize) -> Option<PyHarmRun> {
         println!("pyHarm failed: {}", String::from_utf8_lossy(&o.stderr));
         return None;
     }
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).ok()?).ok()?;
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).ok()?).ok()?;
     let column = |name: &str| -> Vec<f64> {
         r[name]
             .as_array()
