@@ -6,7 +6,10 @@
 //!     cargo bench --bench response -- --costs      # costs of one evaluation only
 //!     cargo bench --bench response -- --skip-peers --levels 0.05,0.5  # chosen levels only
 //!
-//! The pyHarm comparison runs when the venv of benches/peers/setup_pyharm.sh exists.
+//! The pyHarm comparison runs when the venv of benches/peers/setup_pyharm.sh exists. It is at
+//! equal work: pyHarm runs first, and asperity's `points` is scaled until its branch has
+//! pyHarm's number of points (within 3 %); both are timed in-process (pyHarm's second
+//! `operate()`, after its JIT compilation; asperity's sweep, best of 3), models built beforehand.
 //!
 //! Case: a synthetic reduced modal model of two blades and an underplatform damper (30 modes,
 //! 0.6–8 kHz, 0.3 % modal damping; seeded, see `model()`), 146 Valanis microslip contact
@@ -88,20 +91,37 @@ fn peer(case: &PeerCase) {
         FormulationChoice::Coordinates,
     )
     .unwrap();
+    // pyHarm first (when its venv exists): its point count sets asperity's, so that both codes
+    // are timed at equal work — the same number of converged points over the same span, both
+    // in-process (pyHarm: its second `operate()`, after JIT compilation; asperity: the sweep,
+    // best of 3), with the model built beforehand in both.
+    let pyharm = run_pyharm(case, hmax, nt);
+    let target_points = pyharm.as_ref().map(|p| p.frequencies.len());
     let mut settings = ContinuationSettings::new(case.f0, case.f1);
     settings.points = 100;
+    let mut b = sweep(&sys, case.force, &settings, &mut |_| {}).unwrap();
+    if let Some(target) = target_points {
+        // The step control puts more points at the peak than `points`: scale `points` until
+        // the branch has pyHarm's number of points (within 3 %, at most 6 tries).
+        for _ in 0..6 {
+            let got = b.points.len();
+            if (got as f64 / target as f64 - 1.0).abs() <= 0.03 {
+                break;
+            }
+            let next = ((settings.points as f64) * target as f64 / got as f64).round() as usize;
+            settings.points = next.max(2);
+            b = sweep(&sys, case.force, &settings, &mut |_| {}).unwrap();
+        }
+    }
     let mut best = f64::INFINITY;
     let mut best_cpu = f64::INFINITY;
-    let mut branch = None;
     for _ in 0..3 {
         let c0 = cpu_time();
         let t = Instant::now();
-        let b = sweep(&sys, case.force, &settings, &mut |_| {}).unwrap();
+        b = sweep(&sys, case.force, &settings, &mut |_| {}).unwrap();
         best = best.min(t.elapsed().as_secs_f64());
         best_cpu = best_cpu.min(cpu_time() - c0);
-        branch = Some(b);
     }
-    let b = branch.unwrap();
     let (ci, si) = sys.harmonics.index_of(1).unwrap();
     let fr: Vec<f64> = b
         .points
@@ -114,11 +134,41 @@ fn peer(case: &PeerCase) {
         "## {} vs pyHarm (masses {:?} kg, ground springs {:?} N/m, dashpots {:?} N·s/m, coupling {} N/m / {} N·s/m, Jenkins kt {} N/m, slip force {} N, F {} N on mass 1, harmonics 0..7, 256 samples, {}–{} Hz)",
         case.name, case.m, case.k, case.c, case.k12, case.c12, case.kt, case.fs, case.force, case.f0, case.f1
     );
-    println!("asperity: {} points, peak {apk:.6e} m at {fpk:.4} Hz (mass 1); sweep wall {best:.4} s, CPU {best_cpu:.4} s (best of 3)", b.points.len());
+    println!("asperity: {} points (sweep.points = {}), peak {apk:.6e} m at {fpk:.4} Hz (mass 1); sweep wall {best:.4} s, CPU {best_cpu:.4} s (best of 3, in-process)", b.points.len(), settings.points);
+    let Some(r) = pyharm else {
+        println!("pyHarm venv not found (run benches/peers/setup_pyharm.sh) or pyHarm failed: peer skipped");
+        return;
+    };
+    let (pfpk, papk) = refined_peak(&r.frequencies, &r.amplitudes);
+    println!("pyHarm:   {} points, peak {papk:.6e} m at {pfpk:.4} Hz; analysis wall {:.4} s, CPU {:.4} s (second run, after JIT, in-process)", r.frequencies.len(), r.wall, r.cpu);
+    let (np, na) = (r.frequencies.len() as f64, b.points.len() as f64);
+    println!(
+        "peak amplitude {:+.3} %, peak frequency {:+.3} %; points {} vs {}; time ratio pyHarm/asperity: wall {:.1}×, CPU {:.1}×; per point: wall {:.1}×, CPU {:.1}×\n",
+        (apk / papk - 1.0) * 100.0,
+        (fpk / pfpk - 1.0) * 100.0,
+        r.frequencies.len(),
+        b.points.len(),
+        r.wall / best,
+        r.cpu / best_cpu.max(1e-9),
+        (r.wall / np) / (best / na),
+        (r.cpu / np) / (best_cpu.max(1e-9) / na),
+    );
+}
+
+/// pyHarm's branch and timings on a case.
+struct PyHarmRun {
+    frequencies: Vec<f64>,
+    amplitudes: Vec<f64>,
+    wall: f64,
+    cpu: f64,
+}
+
+/// Run pyHarm on `case` (benches/peers/pyharm_jenkins.py in the venv of
+/// benches/peers/setup_pyharm.sh); `None` when the venv is missing or the run fails.
+fn run_pyharm(case: &PeerCase, hmax: usize, nt: usize) -> Option<PyHarmRun> {
     let python = std::path::Path::new("/tmp/asperity-pyharm-venv/bin/python");
     if !python.exists() {
-        println!("pyHarm venv not found (run benches/peers/setup_pyharm.sh): peer skipped");
-        return;
+        return None;
     }
     let dir = tempfile::tempdir().unwrap();
     let case_json = dir.path().join("case.json");
@@ -139,36 +189,26 @@ fn peer(case: &PeerCase) {
         .arg(&case_json)
         .arg(&out)
         .output()
-        .unwrap();
+        .ok()?;
     if !o.status.success() {
         println!("pyHarm failed: {}", String::from_utf8_lossy(&o.stderr));
-        return;
+        return None;
     }
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    let pf: Vec<f64> = r["frequency_Hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let pa: Vec<f64> = r["amplitude_m"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let (pfpk, papk) = refined_peak(&pf, &pa);
-    let (pw, pc) = (r["wall_s"].as_f64().unwrap(), r["cpu_s"].as_f64().unwrap());
-    println!("pyHarm:   {} points, peak {papk:.6e} m at {pfpk:.4} Hz; analysis wall {pw:.4} s, CPU {pc:.4} s (second run, after JIT)", pf.len());
-    println!(
-        "peak amplitude {:+.3} %, peak frequency {:+.3} %; time ratio pyHarm/asperity: wall {:.1}×, CPU {:.1}×, per point (wall) {:.1}×\n",
-        (apk / papk - 1.0) * 100.0,
-        (fpk / pfpk - 1.0) * 100.0,
-        pw / best,
-        pc / best_cpu.max(1e-9),
-        (pw / pf.len() as f64) / (best / b.points.len() as f64)
-    );
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).ok()?).ok()?;
+    let column = |name: &str| -> Vec<f64> {
+        r[name]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    Some(PyHarmRun {
+        frequencies: column("frequency_Hz"),
+        amplitudes: column("amplitude_m"),
+        wall: r["wall_s"].as_f64()?,
+        cpu: r["cpu_s"].as_f64()?,
+    })
 }
 
 /// CPU time of this process (s; `CLOCK_PROCESS_CPUTIME_ID`: all its threads, rayon workers

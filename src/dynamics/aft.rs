@@ -296,6 +296,48 @@ impl Default for AftSettings {
     }
 }
 
+/// Where an element's search for its periodic state starts at displacement harmonics `U`: the
+/// periodic start state `s0` found at `U_w`, extrapolated to first order with the sensitivity
+/// `ds0/dU` of the last evaluation that formed a Jacobian, `s0 + (ds0/dU)·(U − U_w)` (the
+/// linear predictor of a Newton continuation, here of the cycle's start; Seydel, *Practical
+/// Bifurcation and Stability Analysis*, 3rd ed., §4.4). Without a sensitivity, `s0` itself.
+#[derive(Debug, Clone, Default)]
+pub struct WarmStart {
+    /// Periodic start state (`m`).
+    pub state: Vec<f64>,
+    /// Displacement harmonics it was found at (`d·len`, component-major; may be empty).
+    pub u: Vec<f64>,
+    /// `ds0/dU` (`m × d·len`, row-major; empty when unknown).
+    pub ds0_du: Vec<f64>,
+}
+
+impl WarmStart {
+    /// A warm start from a state alone.
+    pub fn from_state(state: &[f64]) -> Self {
+        Self {
+            state: state.to_vec(),
+            ..Self::default()
+        }
+    }
+
+    /// The predicted start state at displacement harmonics `u` (into `out`, length `m`).
+    fn predict(&self, u: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(&self.state);
+        let (m, nu) = (self.state.len(), u.len());
+        if self.u.len() != nu || self.ds0_du.len() != m * nu {
+            return;
+        }
+        for (r, o) in out.iter_mut().enumerate() {
+            let row = &self.ds0_du[r * nu..(r + 1) * nu];
+            *o += row
+                .iter()
+                .zip(u.iter().zip(&self.u))
+                .map(|(g, (a, b))| g * (a - b))
+                .sum::<f64>();
+        }
+    }
+}
+
 /// Force harmonics of one element (and optionally their Jacobian).
 #[derive(Debug, Clone)]
 pub struct ElementHarmonics {
@@ -303,12 +345,14 @@ pub struct ElementHarmonics {
     pub forces: Vec<f64>,
     /// `(d·len) × (d·len)` Jacobian `∂forces/∂u`, row-major (empty when not requested).
     pub jacobian: Vec<f64>,
-    /// State at the start of the periodic cycle (a warm start for [`evaluate_from`]).
-    pub start_state: Vec<f64>,
+    /// The periodic cycle's start state with its displacement harmonics and sensitivity: a
+    /// warm start for [`evaluate_from`] at nearby displacements.
+    pub warm_start: WarmStart,
     /// Periods integrated.
     pub periods: usize,
     /// Largest relative periodicity error of the state in the last period (the larger of
-    /// `|s_N − s0|` and of the Newton correction of `s0`, per state scale).
+    /// `|s_N − s0|` and of the Newton correction of `s0`, per state scale; `|s_N − s0|` alone
+    /// once it is at the rounding level of the state, where the correction is noise).
     pub periodicity_error: f64,
     /// `periodicity_error ≤ tolerance`.
     pub periodic: bool,
@@ -415,10 +459,18 @@ struct Reversal<'a> {
     dtheta: &'a [f64],
 }
 
-/// Basis `φ_k(θ)` of the retained orders and its first two phase derivatives.
+/// Basis `φ_k(θ)` of the retained orders and its first two phase derivatives. `cos kθ` and
+/// `sin kθ` by the angle-addition recurrence from one `sin_cos` (error growing like `k·ε`,
+/// negligible for the harmonic counts used).
 fn basis_at(orders: &[usize], theta: f64, phi: &mut [f64], d1: &mut [f64], d2: &mut [f64]) {
+    let (s1, c1) = theta.sin_cos();
+    let (mut k_now, mut ck, mut sk) = (0usize, 1.0f64, 0.0f64);
     let mut c = 0;
     for &k in orders {
+        while k_now < k {
+            (ck, sk) = (ck * c1 - sk * s1, sk * c1 + ck * s1);
+            k_now += 1;
+        }
         if k == 0 {
             phi[c] = 1.0;
             d1[c] = 0.0;
@@ -426,13 +478,12 @@ fn basis_at(orders: &[usize], theta: f64, phi: &mut [f64], d1: &mut [f64], d2: &
             c += 1;
         } else {
             let kf = k as f64;
-            let (s, co) = (kf * theta).sin_cos();
-            phi[c] = co;
-            phi[c + 1] = s;
-            d1[c] = -kf * s;
-            d1[c + 1] = kf * co;
-            d2[c] = -kf * kf * co;
-            d2[c + 1] = -kf * kf * s;
+            phi[c] = ck;
+            phi[c + 1] = sk;
+            d1[c] = -kf * sk;
+            d1[c + 1] = kf * ck;
+            d2[c] = -kf * kf * ck;
+            d2[c + 1] = -kf * kf * sk;
             c += 2;
         }
     }
@@ -441,6 +492,17 @@ fn basis_at(orders: &[usize], theta: f64, phi: &mut [f64], d1: &mut [f64], d2: &
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
+
+/// Entries `d·len × len` of an element Jacobian's block per component from which its analysis
+/// `J_c = D·T_c` is one matrix product (below it, a sum over samples).
+const JACOBIAN_PRODUCT_MIN: usize = 100;
+
+/// A periodicity residual `s_N − s0` within this many units in the last place of the state or
+/// of its scale (the slip force bounds the forces a period integrates), in every component, is
+/// at the rounding level of one period's integration: the Newton
+/// correction `(I − Φ)⁺·(s_N − s0)` computed from it is noise, not a distance to the periodic
+/// state, and the state is as periodic as the arithmetic resolves.
+const PERIODICITY_ROUNDING_ULPS: f64 = 32.0;
 
 /// Components whose largest sampled velocity is below this fraction of the largest of all
 /// components are not searched for reversals (a component at rest but for rounding noise would
@@ -569,14 +631,15 @@ fn find_reversals<'a>(
 }
 
 /// Run one period from `s0` without sensitivities; fills `p.f` and `p.s_end`; calls
-/// `visit(i, s_i, u_i, f_i)` at every sample (state after the increment ending there).
+/// `visit(i, s_i, u_i, f_i)` at every sample (state after the increment ending there) and stops
+/// early, returning `false`, when it returns `false` (`p.f` and `p.s_end` are then incomplete).
 fn run_plain(
     el: &dyn HystereticElement,
     n: usize,
     p: &mut Period,
     arena: &Bump,
-    mut visit: impl FnMut(usize, &[f64], &[f64], &[f64]),
-) {
+    mut visit: impl FnMut(usize, &[f64], &[f64], &[f64]) -> bool,
+) -> bool {
     let (m, d) = (el.state_len(), el.dofs());
     let mut s = arena.alloc_slice_copy(p.s0);
     let mut s1 = zeros(arena, m);
@@ -600,9 +663,12 @@ fn run_plain(
             p.f[c * n + i1] = f1[c];
         }
         std::mem::swap(&mut s, &mut s1);
-        visit(i1, s, ub, f1);
+        if !visit(i1, s, ub, f1) {
+            return false;
+        }
     }
     p.s_end.copy_from_slice(s);
+    true
 }
 
 /// Sensitivities over one period with respect to `ncol` columns: the first `nu` are the
@@ -1140,7 +1206,7 @@ fn periodic_cycle<'a>(
         *s = s.abs().max(f64::MIN_POSITIVE);
     }
     if m == 0 {
-        run_plain(el, n, &mut p, arena, |_, _, _, _| {});
+        run_plain(el, n, &mut p, arena, |_, _, _, _| true);
         return Cycle {
             period: p,
             periods: 1,
@@ -1172,7 +1238,7 @@ fn periodic_cycle<'a>(
         periods += 1;
         let (pinv, proj) = match newton.take() {
             Some(np) => {
-                run_plain(el, n, &mut p, arena, |_, _, _, _| {});
+                run_plain(el, n, &mut p, arena, |_, _, _, _| true);
                 np
             }
             None => {
@@ -1201,8 +1267,25 @@ fn periodic_cycle<'a>(
         for j in 0..m {
             correction[j] = (0..m).map(|k| pinv[j * m + k] * r[k]).sum::<f64>();
         }
+        // A residual at the rounding level of the state everywhere cannot be reduced further:
+        // the correction computed from it is rounding noise amplified by (I − Φ)⁺ and is not
+        // counted (a slowly contracting element would otherwise chase that noise to the
+        // period cap).
+        let at_rounding = (0..m).all(|j| {
+            r[j].abs()
+                <= PERIODICITY_ROUNDING_ULPS
+                    * f64::EPSILON
+                    * scales[j].max(p.s0[j].abs()).max(p.s_end[j].abs())
+        });
         error = (0..m)
-            .map(|j| r[j].abs().max(correction[j].abs()) / scales[j])
+            .map(|j| {
+                let e = if at_rounding {
+                    r[j].abs()
+                } else {
+                    r[j].abs().max(correction[j].abs())
+                };
+                e / scales[j]
+            })
             .fold(0.0, f64::max);
         // The neutral part is not a periodicity error (any value is periodic) but must equal the
         // virgin start's to rounding: a state scale (e.g. a slip force far above the forces of
@@ -1234,10 +1317,16 @@ fn periodic_cycle<'a>(
             arena.alloc_slice_copy(p.s_end),
         );
         p.s0.copy_from_slice(s_init);
-        run_plain(el, n, &mut p, arena, |_, _, _, _| {});
+        // Periodic from the virgin start means stuck throughout: stop at the first sample that
+        // slips or separates (a Valanis element in gross slip, a contact that opens).
+        let stuck = run_plain(el, n, &mut p, arena, |_, s, u, f| {
+            el.status(s, u, f) == ContactStatus::Stick
+        });
         periods += 1;
-        let virgin_periodic = (0..m)
-            .all(|j| (p.s_end[j] - s_init[j]).abs() <= settings.periodicity_tolerance * scales[j]);
+        let virgin_periodic = stuck
+            && (0..m).all(|j| {
+                (p.s_end[j] - s_init[j]).abs() <= settings.periodicity_tolerance * scales[j]
+            });
         if !virgin_periodic {
             p.s0.copy_from_slice(found.0);
             p.f.copy_from_slice(found.1);
@@ -1300,16 +1389,16 @@ pub fn evaluate(
     evaluate_from(element, harmonics, u, None, jacobian, settings)
 }
 
-/// [`evaluate`] with the search for the periodic state started from `warm` (a state vector of
-/// the element, e.g. [`ElementHarmonics::start_state`] of a nearby evaluation) instead of the
-/// virgin start. The result is the same cycle within the periodicity tolerance: neutral
+/// [`evaluate`] with the search for the periodic state started from `warm` (e.g.
+/// [`ElementHarmonics::warm_start`] of a nearby evaluation, extrapolated to `u` when it holds a
+/// sensitivity; see [`WarmStart`]) instead of the virgin start. The result is the same cycle within the periodicity tolerance: neutral
 /// directions of the monodromy are still taken from the virgin start. A warm start close to
 /// the periodic state saves periods (typically one Newton update and one check period).
 pub fn evaluate_from(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     u: &[f64],
-    warm: Option<&[f64]>,
+    warm: Option<&WarmStart>,
     jacobian: bool,
     settings: &AftSettings,
 ) -> ElementHarmonics {
@@ -1320,11 +1409,19 @@ pub fn evaluate_from(
         harmonics.len(),
     );
     with_workspace(m, d, |arena, part| {
-        let mut cycle = periodic_cycle(element, harmonics, u, warm, settings, arena, part);
-        let jac = if jacobian {
+        let start: Option<&[f64]> = warm.filter(|w| w.state.len() == m).map(|w| {
+            let s = zeros(arena, m);
+            w.predict(u, s);
+            &*s
+        });
+        let mut cycle = periodic_cycle(element, harmonics, u, start, settings, arena, part);
+        let (jac, ds0_du) = if jacobian {
             element_jacobian(element, harmonics, &mut cycle, arena, part)
         } else {
-            Vec::new()
+            let kept = warm
+                .map(|w| w.ds0_du.clone())
+                .filter(|g| g.len() == m * d * len);
+            (Vec::new(), kept.unwrap_or_default())
         };
         let mut forces = vec![0.0; d * len];
         for c in 0..d {
@@ -1334,7 +1431,11 @@ pub fn evaluate_from(
             );
         }
         ElementHarmonics {
-            start_state: cycle.period.s0.to_vec(),
+            warm_start: WarmStart {
+                state: cycle.period.s0.to_vec(),
+                u: u.to_vec(),
+                ds0_du,
+            },
             forces,
             jacobian: jac,
             periods: cycle.periods,
@@ -1344,14 +1445,15 @@ pub fn evaluate_from(
     })
 }
 
-/// The exact Jacobian `∂forces/∂u` (`d·len × d·len`, row-major) of the periodic cycle found.
+/// The exact Jacobian `∂forces/∂u` (`d·len × d·len`, row-major) of the periodic cycle found,
+/// and the sensitivity of its start state `ds0/dU` (`m × d·len`, row-major).
 fn element_jacobian(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     cycle: &mut Cycle,
     arena: &Bump,
     part: &mut StepPartials,
-) -> Vec<f64> {
+) -> (Vec<f64>, Vec<f64>) {
     let (m, d, n, len) = (
         element.state_len(),
         element.dofs(),
@@ -1385,15 +1487,17 @@ fn element_jacobian(
             }
         }
     }
-    // Total force sensitivity per sample, T = ∂f/∂U + ∂f/∂s0·ds0/dU, and its harmonics
-    // J = D·T (D the analysis matrix), summed sample by sample: the blocks are a few
-    // columns wide (one joint: 4 harmonics × 1 component), too small for a matrix product
-    // to pay for its temporaries.
+    // Total force sensitivity per sample, T_c = ∂f_c/∂U + ∂f_c/∂s0·ds0/dU (`N × nu` per
+    // component `c`), and its harmonics J_c = D·T_c (D the `len × N` analysis matrix). Small
+    // blocks (a joint: 4 harmonics × 1 component) are summed sample by sample, too small for a
+    // matrix product to pay for its packing; larger ones (a contact element, 3 components × 15
+    // harmonics) by one product per component.
     let mut jac = vec![0.0; d * len * nu];
-    let t = zeros(arena, nu);
-    for i in 0..n {
-        for c in 0..d {
+    let tc = zeros(arena, n * nu);
+    for c in 0..d {
+        for i in 0..n {
             let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
+            let t = &mut tc[i * nu..(i + 1) * nu];
             t.copy_from_slice(&row[..nu]);
             for (k, &dfs) in row[nu..].iter().enumerate() {
                 if dfs != 0.0 {
@@ -1402,16 +1506,27 @@ fn element_jacobian(
                     }
                 }
             }
-            for hc in 0..len {
-                let w = harmonics.analysis[hc * n + i];
-                let out = &mut jac[(c * len + hc) * nu..(c * len + hc + 1) * nu];
-                for (o, tv) in out.iter_mut().zip(t.iter()) {
-                    *o += w * tv;
+        }
+        let out = &mut jac[c * len * nu..(c + 1) * len * nu];
+        if nu * len >= JACOBIAN_PRODUCT_MIN {
+            // Row-major buffers read column-major are transposed: J_cᵀ = T_cᵀ·Dᵀ.
+            let t_t = nalgebra::DMatrixView::from_slice(tc, nu, n);
+            let d_t = nalgebra::DMatrixView::from_slice(&harmonics.analysis, n, len);
+            let mut j_t = nalgebra::DMatrixViewMut::from_slice(out, nu, len);
+            j_t.gemm(1.0, &t_t, &d_t, 0.0);
+        } else {
+            for i in 0..n {
+                let t = &tc[i * nu..(i + 1) * nu];
+                for hc in 0..len {
+                    let w = harmonics.analysis[hc * n + i];
+                    for (o, tv) in out[hc * nu..(hc + 1) * nu].iter_mut().zip(t) {
+                        *o += w * tv;
+                    }
                 }
             }
         }
     }
-    jac
+    (jac, ds0.to_vec())
 }
 
 /// Dissipated energy and stick/slip/separation fractions of the periodic cycle.
@@ -1432,6 +1547,7 @@ pub fn cycle_summary(
                 ContactStatus::Separated => 2,
             };
             counts[k] += 1;
+            true
         });
         let p = &cycle.period;
         let mut energy = 0.0;
@@ -1688,7 +1804,7 @@ mod tests {
                         close(name, "forces", &f, p.f);
                         close(name, "end state", &s_end, p.s_end);
                     }
-                    let jac = element_jacobian(el, &h, &mut cycle, arena, part);
+                    let (jac, _) = element_jacobian(el, &h, &mut cycle, arena, part);
                     assert!(jac.iter().any(|v| *v != 0.0), "{name}");
                 });
             }
@@ -1730,9 +1846,14 @@ mod tests {
         for (el, u) in cases {
             let cold = evaluate(el, &h, u, true, &s);
             let near: Vec<f64> = u.iter().map(|x| x * 1.001).collect();
-            let neighbour = evaluate(el, &h, &near, false, &s).start_state;
-            let arbitrary: Vec<f64> = (0..el.state_len()).map(|k| 0.3 * k as f64).collect();
-            for warm in [&neighbour, &arbitrary] {
+            let neighbour = evaluate(el, &h, &near, false, &s).warm_start;
+            let predicted = evaluate(el, &h, &near, true, &s).warm_start;
+            let arbitrary = WarmStart::from_state(
+                &(0..el.state_len())
+                    .map(|k| 0.3 * k as f64)
+                    .collect::<Vec<_>>(),
+            );
+            for warm in [&neighbour, &predicted, &arbitrary] {
                 let w = evaluate_from(el, &h, u, Some(warm), true, &s);
                 assert!(w.periodic);
                 let fscale = cold.forces.iter().fold(0.0f64, |a, b| a.max(b.abs()));

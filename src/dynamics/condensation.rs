@@ -89,7 +89,7 @@ impl Receptance {
         z: &DVector<f64>,
         level: f64,
         jacobian: bool,
-        warm: Option<&[Vec<f64>]>,
+        warm: Option<&[crate::dynamics::aft::WarmStart]>,
     ) -> Evaluation {
         let len = system.harmonics.len();
         let p = stacked(system);

@@ -201,7 +201,7 @@ struct Corrected {
     /// The factorisation the corrector ended with (for the next corrector).
     factorised: Option<Rc<Bordered>>,
     /// Start states of the elements' periodic cycles (warm start of the next AFT).
-    states: Vec<Vec<f64>>,
+    states: Vec<crate::dynamics::aft::WarmStart>,
 }
 
 /// LU factorisation of the bordered matrix `A = [J·z_s, (∂R/∂ω)·ω_s; bᵀ]` at the point where the
@@ -638,14 +638,14 @@ fn correct(
     settings: &ContinuationSettings,
     tol: f64,
     factorised: Option<Rc<Bordered>>,
-    states: &[Vec<f64>],
+    states: &[crate::dynamics::aft::WarmStart],
 ) -> std::result::Result<Corrected, String> {
     let n = system.unknowns();
     let mut y = yp.clone();
     let mut first_residual = f64::NAN;
     let mut prev_residual = f64::INFINITY;
     let mut lu = factorised;
-    let mut warm: Vec<Vec<f64>> = states.to_vec();
+    let mut warm: Vec<crate::dynamics::aft::WarmStart> = states.to_vec();
     let mut jacobians = 0;
     let mut refreshed_at = None;
     for it in 0..=settings.max_corrector_iterations {

@@ -110,9 +110,9 @@ pub struct Evaluation {
     pub periodicity_error: f64,
     /// Elements whose AFT state did not become periodic.
     pub non_periodic: usize,
-    /// Start state of each element's periodic cycle (warm start of a nearby evaluation, see
-    /// [`HbmSystem::evaluate_from`]).
-    pub element_states: Vec<Vec<f64>>,
+    /// Start state of each element's periodic cycle with its sensitivity (warm start of a
+    /// nearby evaluation, see [`HbmSystem::evaluate_from`]).
+    pub element_states: Vec<aft::WarmStart>,
 }
 
 impl Evaluation {
@@ -283,7 +283,7 @@ impl<'a> HbmSystem<'a> {
     pub(crate) fn element_forces(
         &self,
         u: &DMatrix<f64>,
-        warm: Option<&[Vec<f64>]>,
+        warm: Option<&[aft::WarmStart]>,
         jacobian: bool,
     ) -> Vec<aft::ElementHarmonics> {
         let len = self.harmonics.len();
@@ -305,7 +305,7 @@ impl<'a> HbmSystem<'a> {
                     e.element.as_ref(),
                     &self.harmonics,
                     &ue,
-                    warm.and_then(|w| w.get(i)).map(|v| v.as_slice()),
+                    warm.and_then(|w| w.get(i)),
                     jacobian,
                     &self.aft,
                 )
@@ -481,7 +481,7 @@ impl<'a> HbmSystem<'a> {
         omega: f64,
         level: f64,
         jacobian: bool,
-        warm: Option<&[Vec<f64>]>,
+        warm: Option<&[aft::WarmStart]>,
     ) -> Evaluation {
         match self.formulation {
             Formulation::Coordinates => self.evaluate_coordinates(z, omega, level, jacobian, warm),
@@ -497,7 +497,7 @@ impl<'a> HbmSystem<'a> {
         omega: f64,
         level: f64,
         jacobian: bool,
-        warm: Option<&[Vec<f64>]>,
+        warm: Option<&[aft::WarmStart]>,
     ) -> Evaluation {
         let u = self.element_displacements(q);
         let forces = self.element_forces(&u, warm, jacobian);
@@ -838,8 +838,8 @@ pub fn amplitude(
 }
 
 /// Start states of the elements' periodic cycles.
-pub(crate) fn element_states(forces: &[aft::ElementHarmonics]) -> Vec<Vec<f64>> {
-    forces.iter().map(|f| f.start_state.clone()).collect()
+pub(crate) fn element_states(forces: &[aft::ElementHarmonics]) -> Vec<aft::WarmStart> {
+    forces.iter().map(|f| f.warm_start.clone()).collect()
 }
 
 fn periodicity(forces: &[aft::ElementHarmonics]) -> (f64, usize) {
