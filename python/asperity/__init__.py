@@ -69,7 +69,10 @@ from .contact import (
     TangentialMetadata,
     TangentialSolver,
     TangentialStep,
+    TangentialSweepResult,
+    VaryingLoadCheck,
     normal_sweep,
+    tangential_sweep,
 )
 from .dynamics import ResponseModel, SweepResult
 from .film import (
@@ -146,8 +149,11 @@ __all__ = [
     "NormalSolution",
     "Convergence",
     "normal_sweep",
+    "tangential_sweep",
     "TangentialSolver",
     "TangentialStep",
+    "TangentialSweepResult",
+    "VaryingLoadCheck",
     "TangentialMetadata",
     "OscillationResult",
     "CycleEnergy",

@@ -69,8 +69,10 @@ __all__ = [
     "TangentialMetadata",
     "TangentialSolver",
     "TangentialStep",
+    "TangentialSweepResult",
     "ValanisFit",
     "ValanisParams",
+    "VaryingLoadCheck",
     "__version__",
     "calibrate",
     "composite_modulus",
@@ -85,6 +87,7 @@ __all__ = [
     "join_elements",
     "normal_load_history",
     "normal_sweep",
+    "tangential_sweep",
     "predict",
     "read_nodes",
     "read_preloads",
@@ -546,6 +549,92 @@ class OscillationResult:
     def metadata(self) -> TangentialMetadata: ...
     @property
     def wall_time_s(self) -> float: ...
+
+@final
+class VaryingLoadCheck:
+    """The table's element against the contact solver under the varying normal load at one
+    pressure (``element_check.csv``); energies per cycle in J/m²."""
+
+    @property
+    def table_params(self) -> ValanisParams: ...
+    @property
+    def table_fit_r2(self) -> float: ...
+    @property
+    def bem_constant_energy_j_per_m2(self) -> float: ...
+    @property
+    def bem_energy_j_per_m2(self) -> float: ...
+    @property
+    def element_energy_j_per_m2(self) -> float: ...
+    @property
+    def energy_rel_error(self) -> float: ...
+    @property
+    def r2(self) -> float: ...
+    @property
+    def element_shear_pa(self) -> F64Array: ...
+    @property
+    def normal_pressure_pa(self) -> F64Array: ...
+    @property
+    def refit_params(self) -> ValanisParams: ...
+    @property
+    def refit_r2(self) -> float: ...
+    @property
+    def refit_energy_rel_error(self) -> float: ...
+
+@final
+class TangentialSweepResult:
+    """A tangential sweep: one loop history per nominal pressure."""
+
+    @property
+    def source(self) -> str: ...
+    @property
+    def e_star_pa(self) -> float: ...
+    @property
+    def friction_coefficient(self) -> float: ...
+    @property
+    def hardness_pa(self) -> Optional[float]: ...
+    @property
+    def pressures_pa(self) -> List[float]: ...
+    @property
+    def contact_area_ratios(self) -> List[float]: ...
+    @property
+    def plastic_area_ratios(self) -> List[float]: ...
+    @property
+    def amplitude_m(self) -> float: ...
+    @property
+    def amplitude_note(self) -> str: ...
+    @property
+    def results(self) -> List[OscillationResult]: ...
+    @property
+    def element_checks(self) -> List[VaryingLoadCheck]: ...
+    @property
+    def edge_warning(self) -> Optional[str]: ...
+    @property
+    def written(self) -> List[str]: ...
+
+def tangential_sweep(
+    *,
+    pressures_pa: Optional[Sequence[float]] = None,
+    friction_coefficient: float = 0.6,
+    amplitude_m: Optional[float] = None,
+    cycles: int = 3,
+    steps_per_cycle: int = 40,
+    grid: Optional[int] = None,
+    surface: Optional[Sequence[Path]] = None,
+    youngs_modulus_pa: float = 210e9,
+    poisson_ratio: float = 0.3,
+    hardness_pa: Optional[str] = None,
+    normal_amplitude_ratio: float = 0.0,
+    normal_phase_deg: float = 0.0,
+    direction_deg: float = 0.0,
+    path_minor_ratio: float = 0.0,
+    tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    operator: str = "auto",
+    out_dir: Optional[Path] = None,
+) -> TangentialSweepResult:
+    """``asperity contact tangential`` as one call: normal contact at each pressure, then the
+    sinusoidal partial-slip history (hardness-limited, varying normal load, in-plane path as
+    the keywords say). With ``out_dir`` the command's files are written there."""
 
 @final
 class AmplitudeLoop:

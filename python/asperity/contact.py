@@ -14,7 +14,10 @@ from ._native import (
     TangentialMetadata,
     TangentialSolver,
     TangentialStep,
+    TangentialSweepResult,
+    VaryingLoadCheck,
     normal_sweep,
+    tangential_sweep,
 )
 
 __all__ = [
@@ -29,4 +32,7 @@ __all__ = [
     "CycleEnergy",
     "AmplitudeHistory",
     "AmplitudeLoop",
+    "tangential_sweep",
+    "TangentialSweepResult",
+    "VaryingLoadCheck",
 ]

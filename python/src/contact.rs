@@ -809,51 +809,7 @@ impl TangentialSolver {
                 )
             })
             .py()?;
-        let steps = PyDict::new(py);
-        let col = |f: &dyn Fn(&tangential::TangentialStep) -> f64| {
-            PyArray1::from_vec(py, r.steps.iter().map(f).collect::<Vec<f64>>())
-        };
-        steps.set_item("displacement_m", col(&|s| s.shift_m[0]))?;
-        steps.set_item("displacement_y_m", col(&|s| s.shift_m[1]))?;
-        steps.set_item("force_N", col(&|s| s.force_n[0]))?;
-        steps.set_item("force_y_N", col(&|s| s.force_n[1]))?;
-        steps.set_item("mean_shear_stress_Pa", col(&|s| s.mean_shear_pa[0]))?;
-        steps.set_item("mean_shear_stress_y_Pa", col(&|s| s.mean_shear_pa[1]))?;
-        steps.set_item("stick_fraction", col(&|s| s.stick_fraction))?;
-        steps.set_item("accumulated_slip_m", col(&|s| s.accumulated_slip_m))?;
-        steps.set_item("frictional_work_J", col(&|s| s.frictional_work_j))?;
-        steps.set_item(
-            "iterations",
-            PyArray1::from_vec(
-                py,
-                r.steps
-                    .iter()
-                    .map(|s| s.iterations as u64)
-                    .collect::<Vec<u64>>(),
-            ),
-        )?;
-        steps.set_item("residual", col(&|s| s.residual))?;
-        steps.set_item("wall_time_s", col(&|s| s.wall_time_s))?;
-        Ok(OscillationResult {
-            steps: steps.unbind(),
-            cycles: r
-                .cycles
-                .iter()
-                .map(|c| {
-                    Py::new(
-                        py,
-                        CycleEnergy {
-                            cycle: c.cycle,
-                            dissipated_j: c.dissipated_j,
-                            dissipated_j_per_m2: c.dissipated_j_per_m2,
-                            frictional_work_j: c.frictional_work_j,
-                        },
-                    )
-                })
-                .collect::<PyResult<Vec<_>>>()?,
-            metadata: TangentialMetadata::from(&r.metadata),
-            wall_time_s: r.wall_time_s,
-        })
+        oscillation_result(py, &r)
     }
 
     /// The calibration's loading history (`asperity::calibrate::amplitudes`): one history of
@@ -947,4 +903,57 @@ impl TangentialSolver {
     fn metadata(&self) -> TangentialMetadata {
         TangentialMetadata::from(self.inner.metadata())
     }
+}
+
+/// The Python view of a library oscillation result: the step columns as numpy arrays, the
+/// energy per cycle and the solver's set-up facts.
+pub(crate) fn oscillation_result(
+    py: Python<'_>,
+    r: &tangential::OscillationResult,
+) -> PyResult<OscillationResult> {
+    let steps = PyDict::new(py);
+    let col = |f: &dyn Fn(&tangential::TangentialStep) -> f64| {
+        PyArray1::from_vec(py, r.steps.iter().map(f).collect::<Vec<f64>>())
+    };
+    steps.set_item("displacement_m", col(&|s| s.shift_m[0]))?;
+    steps.set_item("displacement_y_m", col(&|s| s.shift_m[1]))?;
+    steps.set_item("force_N", col(&|s| s.force_n[0]))?;
+    steps.set_item("force_y_N", col(&|s| s.force_n[1]))?;
+    steps.set_item("mean_shear_stress_Pa", col(&|s| s.mean_shear_pa[0]))?;
+    steps.set_item("mean_shear_stress_y_Pa", col(&|s| s.mean_shear_pa[1]))?;
+    steps.set_item("stick_fraction", col(&|s| s.stick_fraction))?;
+    steps.set_item("accumulated_slip_m", col(&|s| s.accumulated_slip_m))?;
+    steps.set_item("frictional_work_J", col(&|s| s.frictional_work_j))?;
+    steps.set_item(
+        "iterations",
+        PyArray1::from_vec(
+            py,
+            r.steps
+                .iter()
+                .map(|s| s.iterations as u64)
+                .collect::<Vec<u64>>(),
+        ),
+    )?;
+    steps.set_item("residual", col(&|s| s.residual))?;
+    steps.set_item("wall_time_s", col(&|s| s.wall_time_s))?;
+    Ok(OscillationResult {
+        steps: steps.unbind(),
+        cycles: r
+            .cycles
+            .iter()
+            .map(|c| {
+                Py::new(
+                    py,
+                    CycleEnergy {
+                        cycle: c.cycle,
+                        dissipated_j: c.dissipated_j,
+                        dissipated_j_per_m2: c.dissipated_j_per_m2,
+                        frictional_work_j: c.frictional_work_j,
+                    },
+                )
+            })
+            .collect::<PyResult<Vec<_>>>()?,
+        metadata: TangentialMetadata::from(&r.metadata),
+        wall_time_s: r.wall_time_s,
+    })
 }

@@ -16,6 +16,7 @@ mod errors;
 mod film;
 mod identify;
 mod surface;
+mod tangential_sweep;
 
 use pyo3::prelude::*;
 
@@ -33,6 +34,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<contact::NormalSolution>()?;
     m.add_class::<contact::Convergence>()?;
     m.add_function(wrap_pyfunction!(contact::normal_sweep, m)?)?;
+    m.add_class::<tangential_sweep::VaryingLoadCheck>()?;
+    m.add_class::<tangential_sweep::TangentialSweepResult>()?;
+    m.add_function(wrap_pyfunction!(tangential_sweep::tangential_sweep, m)?)?;
     m.add_class::<contact::TangentialSolver>()?;
     m.add_class::<contact::TangentialStep>()?;
     m.add_class::<contact::CycleEnergy>()?;

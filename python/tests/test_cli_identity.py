@@ -124,6 +124,39 @@ def test_tangential_loops_equal_the_cli(cli, tmp_path):
     assert step.shift_m == (amplitude, 0.0) and step.converged
 
 
+def test_tangential_sweep_is_the_clis(cli, tmp_path):
+    """``tangential_sweep`` runs the library function the command runs: the same files, byte
+    for byte, and typed results equal to them; under a varying normal load the element check
+    too."""
+    args = dict(grid=128, pressures_pa=[2e6, 5e6], cycles=2, steps_per_cycle=8,
+                normal_amplitude_ratio=0.3, normal_phase_deg=90.0)
+    cli("contact", "tangential", "--grid", "128", "--pressures-pa", "2e6,5e6", "--cycles", "2",
+        "--steps-per-cycle", "8", "--normal-amplitude-ratio", "0.3", "--normal-phase-deg", "90",
+        "--out-dir", tmp_path / "cli")
+    r = ap.tangential_sweep(**args, out_dir=tmp_path / "py")
+    assert sorted(p.rsplit("/", 1)[-1] for p in r.written) == sorted(
+        p.name for p in (tmp_path / "cli").iterdir())
+    for name in ("tangential_loops.csv", "tangential_energy.csv", "tangential_element.csv"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    assert r.pressures_pa == [2e6, 5e6] and len(r.results) == 2 and len(r.element_checks) == 2
+    energy = csv_rows(tmp_path / "cli" / "tangential_energy.csv")
+    assert len(energy) == 4
+    for row in energy:
+        res = r.results[r.pressures_pa.index(float(row["pressure_Pa"]))]
+        cycle = res.cycles[int(row["cycle"]) - 1]
+        assert float(row["dissipated_J_per_m2"]) == cycle.dissipated_j_per_m2
+    check = r.element_checks[0]
+    assert check.bem_energy_j_per_m2 > 0 and np.isfinite(check.energy_rel_error)
+    assert len(check.normal_pressure_pa) == len(r.results[0].steps["displacement_m"])
+    # The normal load varies about the nominal pressure by the ratio asked for.
+    p = check.normal_pressure_pa
+    assert abs(p.max() / 2e6 - 1.3) < 0.02 and abs(p.min() / 2e6 - 0.7) < 0.02
+    # Without out_dir nothing is written; bad input names the argument.
+    assert ap.tangential_sweep(grid=128, pressures_pa=[2e6], cycles=1, steps_per_cycle=8).written == []
+    with pytest.raises(Exception, match="operator"):
+        ap.tangential_sweep(grid=128, operator="fast")
+
+
 def test_elements_equal_the_cli(cli, tmp_path, repo):
     table_path = repo / "calib" / "calibration_table.csv"
     table = ap.CalibrationTable.read_csv(table_path)
