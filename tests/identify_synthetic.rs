@@ -11,6 +11,7 @@ use asperity::identify::measured::Sweep;
 use asperity::identify::model::{Drive, Family, Model, ModelSpec};
 use asperity::identify::select::Verdict;
 use asperity::identify::{identify, Options};
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 #[path = "support/synthetic_sweep.rs"]
@@ -130,7 +131,8 @@ fn assert_strength(got: &Model, truth: &Model, effect: Effect, r: u64) {
 #[test]
 fn parameters_come_back_and_no_effect_is_invented() {
     let truth = Model::new(ModelSpec::baseline(Family::Jenkins, SCALES), TRUTH.to_vec()).unwrap();
-    for r in 0..10u64 {
+    // Realisations in parallel: both cores busy even when this test runs alone.
+    (0..10u64).into_par_iter().for_each(|r| {
         let id = identify(sweeps(&truth, 100 * r), &options(CANDIDATES.to_vec()), None).unwrap();
         assert!(
             matches!(id.selection.verdict, Verdict::NoEffectNeeded),
@@ -180,7 +182,7 @@ fn parameters_come_back_and_no_effect_is_invented() {
             (pm / pt - 1.0).abs() < 0.02 && (fm - ft).abs() < 0.01,
             "realisation {r}: predicted level: model {fm:.4} Hz {pm:.4}, truth {ft:.4} Hz {pt:.4}"
         );
-    }
+    });
 }
 
 #[test]
@@ -194,7 +196,8 @@ fn the_effect_put_in_is_chosen() {
         (Effect::QuadraticDamping, 1e-3),
     ]
     .map(|(e, value)| (e, truth_with(e, &[value])));
-    for r in 0..10u64 {
+    // Realisations in parallel: both cores busy even when this test runs alone.
+    (0..10u64).into_par_iter().for_each(|r| {
         let (effect, truth) = &truths[r as usize % 2];
         let id = identify(
             sweeps(truth, 1000 + 100 * r),
@@ -205,7 +208,7 @@ fn the_effect_put_in_is_chosen() {
         assert_chosen(&id.selection.verdict, *effect, r);
         // The effect's strength comes back within 10 %.
         assert_strength(&id.after.model, truth, *effect, r);
-    }
+    });
 }
 
 #[test]
@@ -233,7 +236,8 @@ fn the_damping_law_put_in_is_chosen() {
         let w = TAU * 80.0;
         PowerLawDamper::equivalent_viscous(c, p, 2e-4, w) / (2.0 * m.physical().mass_kg * w)
     };
-    for r in 0..10u64 {
+    // Realisations in parallel: both cores busy even when this test runs alone.
+    (0..10u64).into_par_iter().for_each(|r| {
         let (effect, truth) = &truths[r as usize % 2];
         let mut o = options(candidates.clone());
         o.fit_levels = Some(vec![1, 2, 3]);
@@ -255,7 +259,7 @@ fn the_damping_law_put_in_is_chosen() {
         if *effect == Effect::PowerLawDamping {
             assert!((p - 2.0).abs() < 0.35, "realisation {r}: p = {p}");
         }
-    }
+    });
 }
 
 #[test]
@@ -276,7 +280,8 @@ fn the_stiffness_law_put_in_is_chosen() {
         Effect::QuadraticStiffness,
         Effect::QuadraticDamping,
     ];
-    for r in 0..10u64 {
+    // Realisations in parallel: both cores busy even when this test runs alone.
+    (0..10u64).into_par_iter().for_each(|r| {
         let (effect, truth) = &truths[r as usize % 2];
         let id = identify(
             sweeps(truth, 9000 + 100 * r),
@@ -286,7 +291,7 @@ fn the_stiffness_law_put_in_is_chosen() {
         .unwrap();
         assert_chosen(&id.selection.verdict, *effect, r);
         assert_strength(&id.after.model, truth, *effect, r);
-    }
+    });
 }
 
 #[test]
