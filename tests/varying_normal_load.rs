@@ -523,6 +523,21 @@ fn cli_varying_normal_load_writes_loops_element_check_and_plots() {
         assert!(get(r, "constant_load_fit_R2") > 0.95);
         // The varying load changes the loop by more than the comparison's noise.
         assert!((bem / bem_c - 1.0).abs() > 1e-3, "{bem} {bem_c}");
+        // The load-following element: fitted at the cycle's lowest and highest loads (besides
+        // the mean), its error the relative difference of its energy; a rough contact stiffens
+        // with the load, so E0 grows from the lowest to the highest load.
+        let p = get(r, "pressure_Pa");
+        assert!((get(r, "load_low_Pa") / (p * (1.0 - ratio)) - 1.0).abs() < 1e-12);
+        assert!((get(r, "load_high_Pa") / (p * (1.0 + ratio)) - 1.0).abs() < 1e-12);
+        let (e_low, e_mid, e_high) = (
+            get(r, "E0_low_N_per_m3"),
+            get(r, "E0_N_per_m3"),
+            get(r, "E0_high_N_per_m3"),
+        );
+        assert!(e_low < e_mid && e_mid < e_high, "{e_low} {e_mid} {e_high}");
+        let lf = get(r, "load_following_J_per_m2");
+        assert!((get(r, "load_following_energy_error") - (lf / bem - 1.0)).abs() < 1e-5);
+        assert!(get(r, "load_following_R2") > 0.9);
     }
     for (flags, name) in [
         (

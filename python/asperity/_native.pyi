@@ -552,8 +552,9 @@ class OscillationResult:
 
 @final
 class VaryingLoadCheck:
-    """The table's element against the contact solver under the varying normal load at one
-    pressure (``element_check.csv``); energies per cycle in J/m²."""
+    """The table's element, its refit and the load-following element against the contact solver
+    under the varying normal load at one pressure (``tangential_element.csv``); energies per
+    cycle in J/m²."""
 
     @property
     def table_params(self) -> ValanisParams: ...
@@ -579,6 +580,16 @@ class VaryingLoadCheck:
     def refit_r2(self) -> float: ...
     @property
     def refit_energy_rel_error(self) -> float: ...
+    @property
+    def load_following_loads_pa(self) -> list[float]: ...
+    @property
+    def load_following_params(self) -> list[ValanisParams]: ...
+    @property
+    def load_following_energy_j_per_m2(self) -> float: ...
+    @property
+    def load_following_energy_rel_error(self) -> float: ...
+    @property
+    def load_following_r2(self) -> float: ...
 
 @final
 class TangentialSweepResult:

@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 
 /// The table's element against the contact solver under the varying normal load at one
-/// pressure (`element_check.csv` of the command).
+/// pressure (`tangential_element.csv` of the command).
 #[pyclass(frozen, get_all, module = "asperity")]
 pub struct VaryingLoadCheck {
     /// The element fitted at constant normal load (the calibration table's element).
@@ -42,6 +42,16 @@ pub struct VaryingLoadCheck {
     pub refit_r2: f64,
     /// `(element − BEM)/BEM` of the energy per cycle of the refitted element.
     pub refit_energy_rel_error: f64,
+    /// The constant loads at which the load-following element was fitted (Pa), ascending.
+    pub load_following_loads_pa: Vec<f64>,
+    /// The load-following element's parameters at each of those loads.
+    pub load_following_params: Vec<ValanisParams>,
+    /// Energy per cycle of the load-following element under the varying load (J/m²).
+    pub load_following_energy_j_per_m2: f64,
+    /// `(load-following element − BEM)/BEM` of the energy per cycle.
+    pub load_following_energy_rel_error: f64,
+    /// R² of the load-following element's shear stress against the solver's, last cycle.
+    pub load_following_r2: f64,
 }
 
 /// The result of a tangential sweep: one loop history per nominal pressure.
@@ -193,6 +203,16 @@ pub fn tangential_sweep(
                         },
                         refit_r2: c.refit_r2,
                         refit_energy_rel_error: c.refit_energy_rel_error,
+                        load_following_loads_pa: c.load_following.loads.clone(),
+                        load_following_params: c
+                            .load_following
+                            .params
+                            .iter()
+                            .map(|&inner| ValanisParams { inner })
+                            .collect(),
+                        load_following_energy_j_per_m2: c.load_following_energy_j_per_m2,
+                        load_following_energy_rel_error: c.load_following_energy_rel_error,
+                        load_following_r2: c.load_following_r2,
                     },
                 )
             })

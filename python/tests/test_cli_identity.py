@@ -151,6 +151,13 @@ def test_tangential_sweep_is_the_clis(cli, tmp_path):
     # The normal load varies about the nominal pressure by the ratio asked for.
     p = check.normal_pressure_pa
     assert abs(p.max() / 2e6 - 1.3) < 0.02 and abs(p.min() / 2e6 - 0.7) < 0.02
+    # The load-following element: fitted at the cycle's lowest, mean and highest loads, its
+    # energy error the file's.
+    assert check.load_following_loads_pa == pytest.approx([1.4e6, 2e6, 2.6e6], rel=1e-12)
+    assert [q.e0 for q in check.load_following_params][1] == check.table_params.e0
+    row = csv_rows(tmp_path / "cli" / "tangential_element.csv")[0]
+    assert float(row["load_following_energy_error"]) == pytest.approx(
+        check.load_following_energy_rel_error, abs=1e-6)
     # Without out_dir nothing is written; bad input names the argument.
     assert ap.tangential_sweep(grid=128, pressures_pa=[2e6], cycles=1, steps_per_cycle=8).written == []
     with pytest.raises(Exception, match="operator"):

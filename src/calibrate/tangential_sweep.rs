@@ -446,8 +446,13 @@ pub fn run(
     ));
 
     let steps_per_pressure = (args.cycles * args.steps_per_cycle) as u64;
-    let bar =
-        progress(pressures.len() as u64 * (1 + steps_per_pressure * (1 + u64::from(varying))));
+    // Per pressure: the normal solve and the constant-load loop; under a varying normal load also
+    // the varying loop and the constant-load loops (with their normal solves) at the lowest and
+    // highest load of the cycle, for the load-following element.
+    let bar = progress(
+        pressures.len() as u64
+            * (1 + steps_per_pressure + u64::from(varying) * (2 + 3 * steps_per_pressure)),
+    );
 
     // Normal contact at each pressure (ascending, warm-started).
     let normal_problem = NormalProblem {
@@ -591,8 +596,31 @@ pub fn run(
                 },
                 |i, _| bar.set_position(done + i as u64),
             )?;
+            let mut spanning = Vec::with_capacity(2);
+            for load in [p * (1.0 - ratio), p * (1.0 + ratio)] {
+                bar.set_message(format!(
+                    "{:.2} MPa, constant load {:.3} MPa for the load-following element",
+                    p / 1e6,
+                    load / 1e6
+                ));
+                let sol = normal.solve_load(load, Some(&normals[k]))?;
+                bar.inc(1);
+                let mut s = build(&sol.pressure)?;
+                let done = bar.position();
+                let r = oscillate(
+                    &mut s,
+                    &Oscillation {
+                        amplitude: Control::Displacement([amplitude * e1[0], amplitude * e1[1]]),
+                        cycles: args.cycles,
+                        steps_per_cycle: n,
+                    },
+                    |i, _| bar.set_position(done + i as u64),
+                )?;
+                spanning.push(constant_load_loop(&r, load, n, e1)?);
+            }
             let check = check_element(
                 &constant_load_loop(&results[k], p, n, e1)?,
+                &spanning,
                 &varying_load_loop(&r, n, e1)?,
                 &super::FitOptions {
                     mu,
@@ -859,17 +887,18 @@ impl TangentialSweep {
         let mut csv = head.to_string();
         let _ = writeln!(
             csv,
-            "# element: Valanis, lambda = E0/(mu Fz (1 - k Et/E0)) with Fz = the normal pressure of the step (the 3-D element's law); E0 and k fitted to the constant-load BEM loop at pressure_Pa with the same displacement amplitude (mu fixed, Et = 0), then driven through the varying history; energies per cycle on the last (steady) cycle; element_energy_error = (element - BEM)/BEM; refit = E0 and k fitted to the varying loop itself (the best this law can do)"
+            "# element: Valanis, lambda = E0/(mu Fz (1 - k Et/E0)) with Fz = the normal pressure of the step (the 3-D element's law); E0 and k fitted to the constant-load BEM loop at pressure_Pa with the same displacement amplitude (mu fixed, Et = 0), then driven through the varying history; energies per cycle on the last (steady) cycle; element_energy_error = (element - BEM)/BEM; refit = E0 and k fitted to the varying loop itself (the best this law can do); load_following = E0(Fz) and k(Fz) fitted to constant-load BEM loops at the lowest and highest load of the cycle and at pressure_Pa (same amplitude), interpolated at the instantaneous load (power law in Fz for E0, linear in ln Fz for k), nothing fitted to the varying loop"
         );
         let _ = writeln!(
             csv,
-            "pressure_Pa,bem_constant_load_J_per_m2,bem_J_per_m2,element_J_per_m2,element_energy_error,element_R2,E0_N_per_m3,k,constant_load_fit_R2,refit_E0_N_per_m3,refit_k,refit_R2,refit_energy_error"
+            "pressure_Pa,bem_constant_load_J_per_m2,bem_J_per_m2,element_J_per_m2,element_energy_error,element_R2,E0_N_per_m3,k,constant_load_fit_R2,refit_E0_N_per_m3,refit_k,refit_R2,refit_energy_error,load_following_J_per_m2,load_following_energy_error,load_following_R2,load_low_Pa,E0_low_N_per_m3,k_low,load_high_Pa,E0_high_N_per_m3,k_high"
         );
         for (&p, v) in pressures.iter().zip(element) {
             let c = &v.check;
+            let lf = &c.load_following;
             let _ = writeln!(
                 csv,
-                "{p:e},{:e},{:e},{:e},{:.6},{:.6},{:e},{:.6},{:.6},{:e},{:.6},{:.6},{:.6}",
+                "{p:e},{:e},{:e},{:e},{:.6},{:.6},{:e},{:.6},{:.6},{:e},{:.6},{:.6},{:.6},{:e},{:.6},{:.6},{:e},{:e},{:.6},{:e},{:e},{:.6}",
                 c.bem_constant_energy_j_per_m2,
                 c.bem_energy_j_per_m2,
                 c.element_energy_j_per_m2,
@@ -882,6 +911,15 @@ impl TangentialSweep {
                 c.refit_params.k,
                 c.refit_r2,
                 c.refit_energy_rel_error,
+                c.load_following_energy_j_per_m2,
+                c.load_following_energy_rel_error,
+                c.load_following_r2,
+                lf.loads[0],
+                lf.params[0].e0,
+                lf.params[0].k,
+                lf.loads[lf.loads.len() - 1],
+                lf.params[lf.params.len() - 1].e0,
+                lf.params[lf.params.len() - 1].k,
             );
         }
         crate::core::output::write_string_atomic(&out.path("tangential_element.csv")?, &csv)?;
@@ -952,6 +990,9 @@ impl TangentialSweep {
                 energy("BEM, varying normal load", &|c| c.bem_energy_j_per_m2),
                 energy("element (λ ∝ 1/Fz), varying", &|c| {
                     c.element_energy_j_per_m2
+                }),
+                energy("load-following element (E0, k of Fz), varying", &|c| {
+                    c.load_following_energy_j_per_m2
                 }),
             ],
         )?;

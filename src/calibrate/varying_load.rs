@@ -17,6 +17,10 @@
 //! 3. The **best the law can do**: E0 and k refitted to the varying loop itself. If the refit is
 //!    good where the table's element is not, the law's form holds but its parameters should
 //!    depend on the instantaneous load; if the refit is poor too, the form itself fails.
+//! 4. The **load-following element** ([`LoadDependentValanis`]): E0 and k fitted at constant
+//!    loads spanning the cycle's load range (the lowest and highest load of the varying history
+//!    besides the mean), interpolated at the instantaneous load inside the element. Nothing is
+//!    fitted to the varying loop: it is what a table with rows at those loads predicts.
 //!
 //! Quasi-identical bodies (the BEM's assumption) and the steady cycle (the last one) throughout.
 
@@ -25,7 +29,9 @@ use crate::contact::tangential::varying_load::VaryingLoadResult;
 use crate::contact::tangential::OscillationResult;
 use crate::core::error::{Error, Result};
 use crate::element::dissipated_energy;
-use crate::element::valanis::{integrate_reference, ValanisParams};
+use crate::element::valanis::{
+    integrate_load_dependent, integrate_reference, LoadDependentValanis, ValanisParams,
+};
 
 /// The BEM loop of a constant normal load `pressure_pa` (Pa) as fit data: shear stress and
 /// displacement along the unit vector `direction` (the loading direction) over the whole
@@ -109,22 +115,40 @@ pub struct ElementCheck {
     pub refit_r2: f64,
     /// `(element − BEM)/BEM` of the energy per cycle of the refitted element.
     pub refit_energy_rel_error: f64,
+    /// The load-following element: E0 and k fitted at each constant load given (the mean and
+    /// the spanning loads), interpolated at the instantaneous load.
+    pub load_following: LoadDependentValanis,
+    /// Energy per cycle of the load-following element under the varying load (J/m²).
+    pub load_following_energy_j_per_m2: f64,
+    /// `(load-following element − BEM)/BEM` of the energy per cycle.
+    pub load_following_energy_rel_error: f64,
+    /// R² of the load-following element's shear stress against the BEM's, last cycle.
+    pub load_following_r2: f64,
 }
 
-/// Fit the table's element on `constant`, drive it through `varying`, refit on `varying`.
+/// Fit the table's element on `constant` (the loop at the mean load), drive it through
+/// `varying`, refit on `varying`; fit the element at every load of `spanning` too (constant-load
+/// loops at other loads, same amplitude) and drive the load-following element built from all of
+/// them through `varying` (with `spanning` empty it is the table's element).
 ///
 /// Errors: inconsistent loops, a fit that fails, an element that cannot be integrated.
 pub fn check_element(
     constant: &LoopData,
+    spanning: &[LoopData],
     varying: &LoopData,
     options: &FitOptions,
 ) -> Result<ElementCheck> {
     let table = fit_valanis(constant, options)?;
+    let load_following = load_following_element(constant, &table.params, spanning, options)?;
+    let following_shear =
+        integrate_load_dependent(&load_following, &varying.q, &varying.normal_load)?;
     let element_shear_pa = integrate_reference(&table.params, &varying.q, &varying.normal_load)?;
     let r = varying.steady.clone();
     let bem = dissipated_energy(&varying.q[r.clone()], &varying.force[r.clone()]);
     let element = dissipated_energy(&varying.q[r.clone()], &element_shear_pa[r.clone()]);
     let (r2, _) = goodness_of_fit(&varying.force[r.clone()], &element_shear_pa[r.clone()]);
+    let following = dissipated_energy(&varying.q[r.clone()], &following_shear[r.clone()]);
+    let (following_r2, _) = goodness_of_fit(&varying.force[r.clone()], &following_shear[r.clone()]);
     let rc = constant.steady.clone();
     let bem_constant = dissipated_energy(&constant.q[rc.clone()], &constant.force[rc]);
     let refit = fit_valanis(varying, options)?;
@@ -144,5 +168,39 @@ pub fn check_element(
         refit_params: refit.params,
         refit_r2: refit.r2,
         refit_energy_rel_error: refit_loop.energy_rel_error,
+        load_following,
+        load_following_energy_j_per_m2: following,
+        load_following_energy_rel_error: (following - bem) / bem,
+        load_following_r2: following_r2,
     })
+}
+
+/// The constant normal load of a constant-load loop (its first sample; Pa).
+fn constant_load_of(l: &LoopData) -> Result<f64> {
+    let first = *l
+        .normal_load
+        .first()
+        .ok_or_else(|| Error::Data("a constant-load loop has no samples".into()))?;
+    if l.normal_load.iter().any(|&v| v != first) {
+        return Err(Error::Data(
+            "a loop given as constant-load has a varying normal load".into(),
+        ));
+    }
+    Ok(first)
+}
+
+/// The load-following element from the mean loop's fit and fits at the `spanning` loads.
+fn load_following_element(
+    mean: &LoopData,
+    mean_params: &ValanisParams,
+    spanning: &[LoopData],
+    options: &FitOptions,
+) -> Result<LoadDependentValanis> {
+    let mut rows = vec![(constant_load_of(mean)?, *mean_params)];
+    for l in spanning {
+        rows.push((constant_load_of(l)?, fit_valanis(l, options)?.params));
+    }
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (loads, params) = rows.into_iter().unzip();
+    LoadDependentValanis::new(loads, params)
 }
