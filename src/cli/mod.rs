@@ -5,6 +5,7 @@ pub mod calibrate;
 pub mod contact;
 pub mod contact_normal;
 pub mod contact_tangential;
+pub mod decay;
 pub mod diagnose;
 pub mod elements;
 pub mod film;

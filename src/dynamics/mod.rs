@@ -10,6 +10,7 @@
 //!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
 //!   ──► continuation (pseudo-arclength in frequency, turning points)
 //! time_integration: reference steady state by Newmark time stepping (validation)
+//! transient: free decay by the same time stepping, frequency and damping per period
 //! ```
 
 // Index loops over DOFs, harmonics and samples read like the equations they implement.
@@ -25,3 +26,4 @@ pub mod model_file;
 pub mod report;
 pub mod response;
 pub mod time_integration;
+pub mod transient;

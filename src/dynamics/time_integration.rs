@@ -87,282 +87,21 @@ pub fn steady_state(
     let sampled = Harmonics::new(basis.h_max(), false, Some(settings.steps_per_period))?;
     let len = basis.len();
     let dt = 2.0 * std::f64::consts::PI / omega / settings.steps_per_period as f64;
-    let (m, c, k) = (&structure.mass, &structure.damping, &structure.stiffness);
-    let els = &structure.elements;
-    // Element states, displacements and forces.
-    let mut states: Vec<Vec<f64>> = Vec::with_capacity(els.len());
-    let mut u_prev: Vec<Vec<f64>> = Vec::with_capacity(els.len());
-    let mut partials: Vec<StepPartials> = els
-        .iter()
-        .map(|e| StepPartials::new(e.element.state_len(), e.element.dofs()))
-        .collect();
-    let mut fnl = DVector::zeros(n);
-    for e in els {
-        let (mm, d) = (e.element.state_len(), e.element.dofs());
-        let mut virgin = vec![0.0; mm];
-        e.element.virgin_state(&mut virgin);
-        let u0: Vec<f64> = (&e.map * q0).iter().copied().collect();
-        let mut s = vec![0.0; mm];
-        let mut f = vec![0.0; d];
-        e.element
-            .step(&virgin, &vec![0.0; d], &u0, &mut s, &mut f, None);
-        fnl += e.map.transpose() * DVector::from_vec(f);
-        states.push(s);
-        u_prev.push(u0);
-    }
-    // Plain row-major buffers: the step loop allocates nothing.
-    let row_major = |a: &DMatrix<f64>| -> Vec<f64> {
-        let mut v = vec![0.0; a.nrows() * a.ncols()];
-        for r in 0..a.nrows() {
-            for c in 0..a.ncols() {
-                v[r * a.ncols() + c] = a[(r, c)];
-            }
-        }
-        v
-    };
-    let (mr, cr, kr) = (row_major(m), row_major(c), row_major(k));
-    let maps: Vec<Vec<f64>> = els.iter().map(|e| row_major(&e.map)).collect();
+    let mut newmark = Newmark::new(structure, q0, v0, &(force * level), dt)?;
     let fvec: Vec<f64> = force.iter().copied().collect();
-    let mut q: Vec<f64> = q0.iter().copied().collect();
-    let mut v: Vec<f64> = v0.iter().copied().collect();
-    // Initial acceleration from the equation of motion.
-    let rhs0: DVector<f64> = force * level - c * v0 - k * q0 - &fnl;
-    let mut a: Vec<f64> = m
-        .clone()
-        .lu()
-        .solve(&rhs0)
-        .ok_or_else(|| Error::param("mass", "singular"))?
-        .iter()
-        .copied()
-        .collect();
-    let mut klin = vec![0.0; n * n];
-    for i in 0..n * n {
-        klin[i] = kr[i] + cr[i] * (2.0 / dt) + mr[i] * (4.0 / (dt * dt));
-    }
-    let dmax = els.iter().map(|e| e.element.dofs()).max().unwrap_or(0);
     let mut prev: Option<DVector<f64>> = None;
     let mut samples = vec![vec![0.0; settings.steps_per_period]; n];
-    let mut new_states = states.clone();
     let mut step_count: usize = 0;
-    let mut base_a = vec![0.0; n];
-    let mut q1 = vec![0.0; n];
-    let mut trial = vec![0.0; n];
-    let mut r = vec![0.0; n];
-    let mut rt = vec![0.0; n];
-    let mut kt = vec![0.0; n * n];
-    let mut dq = vec![0.0; n];
-    let mut u1 = vec![0.0; dmax];
-    let mut fe = vec![0.0; dmax];
-    // Residual of the step equation at q1 (and the tangent when `tangent` is set).
-    #[allow(clippy::too_many_arguments)]
-    fn residual(
-        q1: &[f64],
-        out: &mut [f64],
-        tangent: Option<&mut [f64]>,
-        ctx: &StepContext<'_>,
-        states: &[Vec<f64>],
-        u_prev: &[Vec<f64>],
-        new_states: &mut [Vec<f64>],
-        partials: &mut [StepPartials],
-        u1: &mut [f64],
-        fe: &mut [f64],
-    ) {
-        let n = q1.len();
-        let dt = ctx.dt;
-        let mut want = tangent;
-        if let Some(t) = want.as_deref_mut() {
-            t.copy_from_slice(ctx.klin);
-        }
-        for i in 0..n {
-            let mut s = -ctx.f1[i];
-            for j in 0..n {
-                let a1 = q1[j] * (4.0 / (dt * dt)) + ctx.base_a[j];
-                let v1 = ctx.v[j] + (ctx.a[j] + a1) * (0.5 * dt);
-                s += ctx.m[i * n + j] * a1 + ctx.c[i * n + j] * v1 + ctx.k[i * n + j] * q1[j];
-            }
-            out[i] = s;
-        }
-        for (ie, e) in ctx.els.iter().enumerate() {
-            let d = e.element.dofs();
-            let p = &ctx.maps[ie];
-            for c in 0..d {
-                u1[c] = (0..n).map(|j| p[c * n + j] * q1[j]).sum();
-            }
-            let part = if want.is_some() {
-                partials[ie].clear();
-                Some(&mut partials[ie])
-            } else {
-                None
-            };
-            e.element.step(
-                &states[ie],
-                &u_prev[ie],
-                &u1[..d],
-                &mut new_states[ie],
-                &mut fe[..d],
-                part,
-            );
-            for c in 0..d {
-                for i in 0..n {
-                    out[i] += p[c * n + i] * fe[c];
-                }
-            }
-            if let Some(t) = want.as_deref_mut() {
-                let kd = &partials[ie].df_du1;
-                for c in 0..d {
-                    for c2 in 0..d {
-                        let kv = kd[c * d + c2];
-                        if kv == 0.0 {
-                            continue;
-                        }
-                        for i in 0..n {
-                            let pi = p[c * n + i] * kv;
-                            if pi == 0.0 {
-                                continue;
-                            }
-                            for j in 0..n {
-                                t[i * n + j] += pi * p[c2 * n + j];
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    let norm = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>().sqrt();
     for period in 1..=settings.max_periods {
         for i in 0..settings.steps_per_period {
             step_count += 1;
             let t1 = step_count as f64 * dt;
             let cos = (harmonic as f64 * omega * t1).cos();
             let f1: Vec<f64> = fvec.iter().map(|f| f * level * cos).collect();
-            for j in 0..n {
-                base_a[j] = -(q[j] * (4.0 / (dt * dt))) - v[j] * (4.0 / dt) - a[j];
-                q1[j] = q[j] + v[j] * dt + a[j] * (0.25 * dt * dt);
-            }
-            let ctx = StepContext {
-                dt,
-                m: &mr,
-                c: &cr,
-                k: &kr,
-                klin: &klin,
-                base_a: &base_a,
-                v: &v,
-                a: &a,
-                f1: &f1,
-                els,
-                maps: &maps,
-            };
-            let kq: f64 = norm(
-                &(0..n)
-                    .map(|r| (0..n).map(|j| kr[r * n + j] * q[j]).sum::<f64>())
-                    .collect::<Vec<f64>>(),
-            );
-            // Residual scale: the largest term of the step equation (the inertia term
-            // 4/dt²·M·q1 dominates round-off).
-            let mq: f64 = norm(
-                &(0..n)
-                    .map(|r| (0..n).map(|j| mr[r * n + j] * q1[j]).sum::<f64>())
-                    .collect::<Vec<f64>>(),
-            ) * 4.0
-                / (dt * dt);
-            let scale = norm(&f1) + kq + mq + f64::MIN_POSITIVE;
-            let mut converged = false;
-            for _ in 0..60 {
-                residual(
-                    &q1,
-                    &mut r,
-                    Some(&mut kt),
-                    &ctx,
-                    &states,
-                    &u_prev,
-                    &mut new_states,
-                    &mut partials,
-                    &mut u1,
-                    &mut fe,
-                );
-                let r0 = norm(&r);
-                if r0 <= 1e-12 * scale {
-                    converged = true;
-                    break;
-                }
-                for j in 0..n {
-                    dq[j] = -r[j];
-                }
-                if !gauss_solve(&mut kt, &mut dq, n) {
-                    return Err(Error::Data("singular time-step matrix".into()));
-                }
-                if norm(&dq) <= 1e-14 * (norm(&q1) + f64::MIN_POSITIVE) {
-                    converged = true;
-                    break;
-                }
-                let mut lambda = 1.0;
-                let mut accepted = false;
-                for _ in 0..12 {
-                    for j in 0..n {
-                        trial[j] = q1[j] + lambda * dq[j];
-                    }
-                    residual(
-                        &trial,
-                        &mut rt,
-                        None,
-                        &ctx,
-                        &states,
-                        &u_prev,
-                        &mut new_states,
-                        &mut partials,
-                        &mut u1,
-                        &mut fe,
-                    );
-                    if norm(&rt) < r0 {
-                        q1.copy_from_slice(&trial);
-                        accepted = true;
-                        break;
-                    }
-                    lambda *= 0.5;
-                }
-                if !accepted {
-                    for j in 0..n {
-                        q1[j] += dq[j];
-                    }
-                }
-            }
-            residual(
-                &q1,
-                &mut r,
-                None,
-                &ctx,
-                &states,
-                &u_prev,
-                &mut new_states,
-                &mut partials,
-                &mut u1,
-                &mut fe,
-            );
-            if !converged && norm(&r) > 1e-8 * scale {
-                return Err(Error::NonConvergence {
-                    solver: format!("Newmark time step at t = {t1:.6e} s"),
-                    iterations: 60,
-                    residual: norm(&r) / scale,
-                    tolerance: 1e-8,
-                });
-            }
-            for j in 0..n {
-                let a1 = q1[j] * (4.0 / (dt * dt)) + base_a[j];
-                v[j] += (a[j] + a1) * (0.5 * dt);
-                a[j] = a1;
-                q[j] = q1[j];
-            }
-            std::mem::swap(&mut states, &mut new_states);
-            for (ie, e) in els.iter().enumerate() {
-                let d = e.element.dofs();
-                for c in 0..d {
-                    u_prev[ie][c] = (0..n).map(|j| maps[ie][c * n + j] * q[j]).sum();
-                }
-            }
+            newmark.step(&f1, t1)?;
             let idx = (i + 1) % settings.steps_per_period;
-            for r in 0..n {
-                samples[r][idx] = q[r];
+            for (r, &qr) in newmark.q().iter().enumerate() {
+                samples[r][idx] = qr;
             }
         }
         // Harmonics of this period (samples at t_i = i·T/N of the period).
@@ -371,8 +110,7 @@ pub fn steady_state(
         for r in 0..n {
             let mut s = samples[r].clone();
             sampled.to_harmonics(&mut s, &mut full);
-            for (j, &order) in basis.orders().iter().enumerate() {
-                let _ = j;
+            for &order in basis.orders() {
                 if order == 0 {
                     h[r * len] = full[0];
                 } else {
@@ -407,6 +145,366 @@ pub fn steady_state(
         prev = Some(h);
     }
     Err(Error::param("max_periods", "at least 2"))
+}
+
+/// Newmark's average-acceleration scheme on a structure with its elements (see the module
+/// documentation), one time step at a time: the state (`q`, `q̇`, `q̈` and the elements'
+/// history) advances by [`Newmark::step`] under the external force at the end of the step.
+/// [`steady_state`] and the free decay of [`crate::dynamics::transient`] both run on it.
+pub struct Newmark<'a> {
+    els: &'a [crate::dynamics::model::AttachedElement],
+    n: usize,
+    dt: f64,
+    mr: Vec<f64>,
+    cr: Vec<f64>,
+    kr: Vec<f64>,
+    klin: Vec<f64>,
+    maps: Vec<Vec<f64>>,
+    states: Vec<Vec<f64>>,
+    new_states: Vec<Vec<f64>>,
+    u_prev: Vec<Vec<f64>>,
+    partials: Vec<StepPartials>,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    base_a: Vec<f64>,
+    q1: Vec<f64>,
+    trial: Vec<f64>,
+    r: Vec<f64>,
+    rt: Vec<f64>,
+    kt: Vec<f64>,
+    dq: Vec<f64>,
+    u1: Vec<f64>,
+    fe: Vec<f64>,
+}
+
+impl<'a> Newmark<'a> {
+    /// Start at displacement `q0` and velocity `v0` under the external force `f0` (the
+    /// acceleration follows from the equation of motion), time step `dt` (s). The elements are
+    /// loaded from their virgin state at `q = 0` to `q0`.
+    pub fn new(
+        structure: &'a Structure,
+        q0: &DVector<f64>,
+        v0: &DVector<f64>,
+        f0: &DVector<f64>,
+        dt: f64,
+    ) -> Result<Self> {
+        let n = structure.n();
+        if f0.len() != n || q0.len() != n || v0.len() != n {
+            return Err(Error::param(
+                "q0",
+                "initial conditions or force of the wrong length",
+            ));
+        }
+        crate::core::error::require_positive("dt", dt)?;
+        let (m, c, k) = (&structure.mass, &structure.damping, &structure.stiffness);
+        let els = &structure.elements;
+        // Element states, displacements and forces.
+        let mut states: Vec<Vec<f64>> = Vec::with_capacity(els.len());
+        let mut u_prev: Vec<Vec<f64>> = Vec::with_capacity(els.len());
+        let partials: Vec<StepPartials> = els
+            .iter()
+            .map(|e| StepPartials::new(e.element.state_len(), e.element.dofs()))
+            .collect();
+        let mut fnl = DVector::zeros(n);
+        for e in els {
+            let (mm, d) = (e.element.state_len(), e.element.dofs());
+            let mut virgin = vec![0.0; mm];
+            e.element.virgin_state(&mut virgin);
+            let u0: Vec<f64> = (&e.map * q0).iter().copied().collect();
+            let mut s = vec![0.0; mm];
+            let mut f = vec![0.0; d];
+            e.element
+                .step(&virgin, &vec![0.0; d], &u0, &mut s, &mut f, None);
+            fnl += e.map.transpose() * DVector::from_vec(f);
+            states.push(s);
+            u_prev.push(u0);
+        }
+        // Plain row-major buffers: the step loop allocates nothing.
+        let row_major = |a: &DMatrix<f64>| -> Vec<f64> {
+            let mut v = vec![0.0; a.nrows() * a.ncols()];
+            for r in 0..a.nrows() {
+                for c in 0..a.ncols() {
+                    v[r * a.ncols() + c] = a[(r, c)];
+                }
+            }
+            v
+        };
+        let (mr, cr, kr) = (row_major(m), row_major(c), row_major(k));
+        let maps: Vec<Vec<f64>> = els.iter().map(|e| row_major(&e.map)).collect();
+        // Initial acceleration from the equation of motion.
+        let rhs0: DVector<f64> = f0 - c * v0 - k * q0 - &fnl;
+        let a: Vec<f64> = m
+            .clone()
+            .lu()
+            .solve(&rhs0)
+            .ok_or_else(|| Error::param("mass", "singular"))?
+            .iter()
+            .copied()
+            .collect();
+        let mut klin = vec![0.0; n * n];
+        for i in 0..n * n {
+            klin[i] = kr[i] + cr[i] * (2.0 / dt) + mr[i] * (4.0 / (dt * dt));
+        }
+        let dmax = els.iter().map(|e| e.element.dofs()).max().unwrap_or(0);
+        Ok(Self {
+            els,
+            n,
+            dt,
+            mr,
+            cr,
+            kr,
+            klin,
+            maps,
+            new_states: states.clone(),
+            states,
+            u_prev,
+            partials,
+            q: q0.iter().copied().collect(),
+            v: v0.iter().copied().collect(),
+            a,
+            base_a: vec![0.0; n],
+            q1: vec![0.0; n],
+            trial: vec![0.0; n],
+            r: vec![0.0; n],
+            rt: vec![0.0; n],
+            kt: vec![0.0; n * n],
+            dq: vec![0.0; n],
+            u1: vec![0.0; dmax],
+            fe: vec![0.0; dmax],
+        })
+    }
+
+    /// Displacements at the current time (m).
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// Velocities at the current time (m/s).
+    pub fn v(&self) -> &[f64] {
+        &self.v
+    }
+
+    /// The time step (s).
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// One time step to `t1` (used in messages only) under the external force `f1` at its end:
+    /// Newton's method with the elements' tangents and a backtracking line search.
+    pub fn step(&mut self, f1: &[f64], t1: f64) -> Result<()> {
+        let (n, dt) = (self.n, self.dt);
+        let norm = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let Self {
+            els,
+            mr,
+            cr,
+            kr,
+            klin,
+            maps,
+            states,
+            new_states,
+            u_prev,
+            partials,
+            q,
+            v,
+            a,
+            base_a,
+            q1,
+            trial,
+            r,
+            rt,
+            kt,
+            dq,
+            u1,
+            fe,
+            ..
+        } = self;
+        for j in 0..n {
+            base_a[j] = -(q[j] * (4.0 / (dt * dt))) - v[j] * (4.0 / dt) - a[j];
+            q1[j] = q[j] + v[j] * dt + a[j] * (0.25 * dt * dt);
+        }
+        let ctx = StepContext {
+            dt,
+            m: mr,
+            c: cr,
+            k: kr,
+            klin,
+            base_a,
+            v,
+            a,
+            f1,
+            els,
+            maps,
+        };
+        let kq: f64 = norm(
+            &(0..n)
+                .map(|r| (0..n).map(|j| kr[r * n + j] * q[j]).sum::<f64>())
+                .collect::<Vec<f64>>(),
+        );
+        // Residual scale: the largest term of the step equation (the inertia term
+        // 4/dt²·M·q1 dominates round-off).
+        let mq: f64 = norm(
+            &(0..n)
+                .map(|r| (0..n).map(|j| mr[r * n + j] * q1[j]).sum::<f64>())
+                .collect::<Vec<f64>>(),
+        ) * 4.0
+            / (dt * dt);
+        let scale = norm(f1) + kq + mq + f64::MIN_POSITIVE;
+        let mut converged = false;
+        for _ in 0..60 {
+            residual(
+                q1,
+                r,
+                Some(kt),
+                &ctx,
+                states,
+                u_prev,
+                new_states,
+                partials,
+                u1,
+                fe,
+            );
+            let r0 = norm(r);
+            if r0 <= 1e-12 * scale {
+                converged = true;
+                break;
+            }
+            for j in 0..n {
+                dq[j] = -r[j];
+            }
+            if !gauss_solve(kt, dq, n) {
+                return Err(Error::Data("singular time-step matrix".into()));
+            }
+            if norm(dq) <= 1e-14 * (norm(q1) + f64::MIN_POSITIVE) {
+                converged = true;
+                break;
+            }
+            let mut lambda = 1.0;
+            let mut accepted = false;
+            for _ in 0..12 {
+                for j in 0..n {
+                    trial[j] = q1[j] + lambda * dq[j];
+                }
+                residual(
+                    trial, rt, None, &ctx, states, u_prev, new_states, partials, u1, fe,
+                );
+                if norm(rt) < r0 {
+                    q1.copy_from_slice(trial);
+                    accepted = true;
+                    break;
+                }
+                lambda *= 0.5;
+            }
+            if !accepted {
+                for j in 0..n {
+                    q1[j] += dq[j];
+                }
+            }
+        }
+        residual(
+            q1, r, None, &ctx, states, u_prev, new_states, partials, u1, fe,
+        );
+        if !converged && norm(r) > 1e-8 * scale {
+            return Err(Error::NonConvergence {
+                solver: format!("Newmark time step at t = {t1:.6e} s"),
+                iterations: 60,
+                residual: norm(r) / scale,
+                tolerance: 1e-8,
+            });
+        }
+        for j in 0..n {
+            let a1 = q1[j] * (4.0 / (dt * dt)) + base_a[j];
+            v[j] += (a[j] + a1) * (0.5 * dt);
+            a[j] = a1;
+            q[j] = q1[j];
+        }
+        std::mem::swap(states, new_states);
+        for (ie, e) in els.iter().enumerate() {
+            let d = e.element.dofs();
+            for c in 0..d {
+                u_prev[ie][c] = (0..n).map(|j| maps[ie][c * n + j] * q[j]).sum();
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Residual of the step equation at `q1` (and the tangent when `tangent` is set).
+#[allow(clippy::too_many_arguments)]
+fn residual(
+    q1: &[f64],
+    out: &mut [f64],
+    tangent: Option<&mut [f64]>,
+    ctx: &StepContext<'_>,
+    states: &[Vec<f64>],
+    u_prev: &[Vec<f64>],
+    new_states: &mut [Vec<f64>],
+    partials: &mut [StepPartials],
+    u1: &mut [f64],
+    fe: &mut [f64],
+) {
+    let n = q1.len();
+    let dt = ctx.dt;
+    let mut want = tangent;
+    if let Some(t) = want.as_deref_mut() {
+        t.copy_from_slice(ctx.klin);
+    }
+    for i in 0..n {
+        let mut s = -ctx.f1[i];
+        for j in 0..n {
+            let a1 = q1[j] * (4.0 / (dt * dt)) + ctx.base_a[j];
+            let v1 = ctx.v[j] + (ctx.a[j] + a1) * (0.5 * dt);
+            s += ctx.m[i * n + j] * a1 + ctx.c[i * n + j] * v1 + ctx.k[i * n + j] * q1[j];
+        }
+        out[i] = s;
+    }
+    for (ie, e) in ctx.els.iter().enumerate() {
+        let d = e.element.dofs();
+        let p = &ctx.maps[ie];
+        for c in 0..d {
+            u1[c] = (0..n).map(|j| p[c * n + j] * q1[j]).sum();
+        }
+        let part = if want.is_some() {
+            partials[ie].clear();
+            Some(&mut partials[ie])
+        } else {
+            None
+        };
+        e.element.step(
+            &states[ie],
+            &u_prev[ie],
+            &u1[..d],
+            &mut new_states[ie],
+            &mut fe[..d],
+            part,
+        );
+        for c in 0..d {
+            for i in 0..n {
+                out[i] += p[c * n + i] * fe[c];
+            }
+        }
+        if let Some(t) = want.as_deref_mut() {
+            let kd = &partials[ie].df_du1;
+            for c in 0..d {
+                for c2 in 0..d {
+                    let kv = kd[c * d + c2];
+                    if kv == 0.0 {
+                        continue;
+                    }
+                    for i in 0..n {
+                        let pi = p[c * n + i] * kv;
+                        if pi == 0.0 {
+                            continue;
+                        }
+                        for j in 0..n {
+                            t[i * n + j] += pi * p[c2 * n + j];
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// What the step residual needs besides the unknowns.
