@@ -412,3 +412,132 @@ fn an_adequate_baseline_does_not_claim_no_effect_is_needed() {
     assert!(!conclusion.contains("no effect needed"), "{conclusion}");
     assert!(!text.contains("no effect needed"), "{text}");
 }
+
+/// Loops from accelerations: the record of `an_adequate_baseline_does_not_claim_no_effect_is_needed`
+/// (a drive with a third harmonic here) written as the relative acceleration across the joint
+/// (the exact second derivative of the drive) and the acceleration of a 2.5 kg mass whose
+/// inertia is the force. Diagnosed from those columns it gives the baseline, errors and verdict
+/// of the displacement and force columns, and the report says how the columns were derived.
+/// Columns in g, a mass ≤ 0 and an inertia column without its mass are refused by flag.
+#[test]
+fn loops_from_accelerations_match_loops_from_displacement_and_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = std::f64::consts::TAU;
+    let drive = |t: f64| 1e-3 * (w * t).sin() + 1e-4 * (3.0 * w * t + 0.3).sin();
+    let accel = |t: f64| -w * w * (1e-3 * (w * t).sin() + 9e-4 * (3.0 * w * t + 0.3).sin());
+    let rows = valanis_rows(6.5, |_| 100.0, 1);
+    // valanis_rows drives with 1 mm·sin(2πt); recompute the force on this drive, same noise.
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+    let noise = Normal::new(0.0, 0.5).unwrap();
+    let (mut f, mut x_prev) = (0.0_f64, 0.0_f64);
+    let mass = 2.5;
+    let mut text =
+        String::from("time_s,displacement_m,friction_force_N,a_rel_m_per_s2,a_mass_m_per_s2\n");
+    for i in 0..rows.len() {
+        let t = i as f64 / 200.0;
+        let x = drive(t);
+        if i > 0 {
+            let dq = x - x_prev;
+            let s = if dq > 0.0 { 1.0 } else { -1.0 };
+            f = s * (100.0 - (100.0 - s * f) * (-2e6 * dq.abs() / 100.0).exp());
+        }
+        x_prev = x;
+        let force = f + noise.sample(&mut rng);
+        text += &format!("{t},{x},{force},{},{}\n", accel(t), force / mass);
+    }
+    let p = dir.path().join("acc.csv");
+    std::fs::write(&p, text).unwrap();
+    let diag = |name: &str, extra: &[&str]| -> (serde_json::Value, String) {
+        let out = dir.path().join(name);
+        let mut args = vec![p.to_str().unwrap(), "--out-dir", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            serde_json::from_str(&std::fs::read_to_string(out.join("diagnose.json")).unwrap())
+                .unwrap(),
+            std::fs::read_to_string(out.join("diagnose.txt")).unwrap(),
+        )
+    };
+    let (direct, _) = diag("direct", &[]);
+    let (from_acc, report) = diag(
+        "acc",
+        &[
+            "--relative-acceleration-column",
+            "a_rel_m_per_s2",
+            "--inertia-acceleration-column",
+            "a_mass_m_per_s2",
+            "--mass-kg",
+            "2.5",
+        ],
+    );
+    assert_eq!(direct["verdict"], from_acc["verdict"]);
+    for key in ["e0_n_per_m", "k", "slip_force_n"] {
+        let (a, b) = (
+            direct["baseline"][key].as_f64().unwrap(),
+            from_acc["baseline"][key].as_f64().unwrap(),
+        );
+        assert!(
+            (a - b).abs() <= 1e-6 * a.abs().max(1e-12),
+            "{key}: {a} vs {b}"
+        );
+    }
+    for needle in [
+        "double integral of `a_rel_m_per_s2`",
+        "1.000000 Hz",
+        "force = 2.5 kg × `a_mass_m_per_s2`",
+    ] {
+        assert!(report.contains(needle), "`{needle}` not in {report}");
+    }
+    for (extra, flag) in [
+        (
+            vec!["--inertia-acceleration-column", "a_mass_m_per_s2"],
+            "--mass-kg",
+        ),
+        (
+            vec![
+                "--inertia-acceleration-column",
+                "a_mass_m_per_s2",
+                "--mass-kg",
+                "-1",
+            ],
+            "--mass-kg",
+        ),
+    ] {
+        let out = dir.path().join("bad");
+        let mut args = vec![p.to_str().unwrap(), "--out-dir", out.to_str().unwrap()];
+        args.extend(extra.iter().copied());
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(flag),
+            "{extra:?}: {err}"
+        );
+        assert!(!out.join("diagnose.json").exists());
+    }
+    let g = dir.path().join("g.csv");
+    std::fs::write(
+        &g,
+        std::fs::read_to_string(&p)
+            .unwrap()
+            .replacen("a_rel_m_per_s2", "a_rel_g", 1),
+    )
+    .unwrap();
+    let out = dir.path().join("bad_g");
+    let o = run(&[
+        g.to_str().unwrap(),
+        "--relative-acceleration-column",
+        "a_rel_g",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("--relative-acceleration-column")
+            && err.contains("m/s²"),
+        "{err}"
+    );
+}

@@ -199,7 +199,11 @@ fn cli_decay_writes_the_ring_down_and_refuses_bad_input() {
     let cycles = rows("decay_cycles.csv");
     assert!(cycles.len() >= 30);
     let (w, z) = describing(cycles[0][1]);
-    assert!((cycles[0][2] / (w / (2.0 * PI)) - 1.0).abs() < 5e-4, "{:?}", cycles[0]);
+    assert!(
+        (cycles[0][2] / (w / (2.0 * PI)) - 1.0).abs() < 5e-4,
+        "{:?}",
+        cycles[0]
+    );
     assert!((cycles[0][3] / z - 1.0).abs() < 0.02, "{:?}", cycles[0]);
     let text = String::from_utf8_lossy(&o.stdout);
     let f_stick = ((K + KT) / M).sqrt() / (2.0 * PI);
@@ -227,7 +231,12 @@ fn cli_decay_writes_the_ring_down_and_refuses_bad_input() {
     // An output directory that is the model file is refused; the model is untouched.
     let model = d.join("model.toml");
     let before = std::fs::read(&model).unwrap();
-    let o = run(&["--amplitude-m", "1e-3", "--out-dir", model.to_str().unwrap()]);
+    let o = run(&[
+        "--amplitude-m",
+        "1e-3",
+        "--out-dir",
+        model.to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
     assert_eq!(std::fs::read(&model).unwrap(), before);
 }

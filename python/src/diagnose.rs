@@ -58,6 +58,7 @@ pub fn read_record(
         displacement: displacement_column.into(),
         force: force_column.into(),
         normal_force: normal_force_column,
+        ..Columns::default()
     };
     let r = RecordData::read_csv(&path, &columns).py()?;
     Ok(Record {
@@ -213,6 +214,7 @@ pub fn diagnose<'py>(
         InputInfo {
             file: source.to_string(),
             columns,
+            derived: record.derived.clone(),
             baseline_source,
         },
     );

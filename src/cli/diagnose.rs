@@ -33,6 +33,21 @@ pub struct Flags {
     /// Normal force column (N), when the normal load was measured.
     #[arg(long)]
     pub normal_force_column: Option<String>,
+    /// Relative acceleration across the joint (column in m/s²) instead of a displacement column:
+    /// the displacement is its double integral in the frequency domain (said in the report).
+    #[arg(long)]
+    pub relative_acceleration_column: Option<String>,
+    /// Acceleration of the mass whose inertia is the joint force (column in m/s²) instead of a
+    /// force column: F = m·a with --mass-kg.
+    #[arg(long, requires = "mass_kg")]
+    pub inertia_acceleration_column: Option<String>,
+    /// The mass (kg) of --inertia-acceleration-column.
+    #[arg(
+        long,
+        requires = "inertia_acceleration_column",
+        allow_hyphen_values = true
+    )]
+    pub mass_kg: Option<f64>,
     /// Calibration table (CSV, per unit area) giving the baseline element instead of fitting it.
     #[arg(long, requires_all = ["pressure_pa", "area_m2"])]
     pub table: Option<PathBuf>,
@@ -121,9 +136,17 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
     asperity::core::limits::check_count("--max-effects", args.max_effects, 8)?;
     let columns = Columns {
         time: args.time_column.clone(),
-        displacement: args.displacement_column.clone(),
-        force: args.force_column.clone(),
+        displacement: args
+            .relative_acceleration_column
+            .clone()
+            .unwrap_or_else(|| args.displacement_column.clone()),
+        force: args
+            .inertia_acceleration_column
+            .clone()
+            .unwrap_or_else(|| args.force_column.clone()),
         normal_force: args.normal_force_column.clone(),
+        displacement_is_acceleration: args.relative_acceleration_column.is_some(),
+        force_mass_kg: args.mass_kg,
     };
     let record = Record::read_csv(&args.record, &columns)?;
     let (baseline, source) = match (&args.table, args.pressure_pa, args.area_m2) {
@@ -161,6 +184,7 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
         InputInfo {
             file: args.record.display().to_string(),
             columns: cols,
+            derived: record.derived.clone(),
             baseline_source: source,
         },
     );

@@ -12,6 +12,7 @@
 //!               ──► report (text, JSON, CSV, PNG)
 //! ```
 
+pub mod acceleration;
 pub mod cycles;
 pub mod effects;
 pub mod noise;

@@ -24,6 +24,13 @@ pub struct Columns {
     pub force: String,
     /// Optional normal force column (N).
     pub normal_force: Option<String>,
+    /// The `displacement` column holds the relative acceleration across the joint (m/s²): the
+    /// displacement is its double integral in the frequency domain
+    /// ([`super::acceleration::displacement_from_acceleration`]).
+    pub displacement_is_acceleration: bool,
+    /// The `force` column holds the acceleration (m/s²) of a mass (kg) whose inertia is the
+    /// joint force: `F = m·a`.
+    pub force_mass_kg: Option<f64>,
 }
 
 impl Default for Columns {
@@ -33,8 +40,35 @@ impl Default for Columns {
             displacement: "displacement_m".into(),
             force: "friction_force_N".into(),
             normal_force: None,
+            displacement_is_acceleration: false,
+            force_mass_kg: None,
         }
     }
+}
+
+/// Largest |acceleration| an acceleration column may hold (10⁷ m/s², about 10⁶ g).
+pub const MAX_ACCELERATION_M_PER_S2: f64 = 1e7;
+
+/// An acceleration column must be in m/s²: a name with a unit suffix says which (`_g` is refused:
+/// no column is converted).
+fn check_acceleration_unit(path: &Path, name: &str, flag: &str) -> Result<()> {
+    let lower = name.to_ascii_lowercase();
+    let si = ["m_per_s2", "m_per_s^2", "m_s2", "m_s-2", "mps2"];
+    if si.iter().any(|u| lower.ends_with(u)) {
+        return Ok(());
+    }
+    if let Some((_, suffix)) = name.rsplit_once('_') {
+        if ["g", "mm_per_s2", "in_per_s2", "ft_per_s2"].contains(&suffix) || lower.ends_with("_g") {
+            return Err(Error::param(
+                flag,
+                format!(
+                    "{}: column `{name}` is not in m/s² (no column is converted: write it in m/s²)",
+                    path.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A measured (or synthetic) record, SI units, all columns of equal length.
@@ -48,6 +82,9 @@ pub struct Record {
     pub force_n: Vec<f64>,
     /// Normal force (N), when measured.
     pub normal_force_n: Option<Vec<f64>>,
+    /// How columns were derived from what was measured (e.g. a displacement integrated from an
+    /// acceleration), one line each; empty when every column was read as it is.
+    pub derived: Vec<String>,
 }
 
 impl Record {
@@ -112,6 +149,7 @@ impl Record {
             displacement_m,
             force_n,
             normal_force_n,
+            derived: Vec::new(),
         })
     }
 
@@ -164,15 +202,40 @@ impl Record {
         let ix = find(&columns.displacement)?;
         let iff = find(&columns.force)?;
         let inf = columns.normal_force.as_deref().map(find).transpose()?;
+        let (x_flag, x_unit, x_max) = if columns.displacement_is_acceleration {
+            (
+                "--relative-acceleration-column",
+                "m/s²",
+                MAX_ACCELERATION_M_PER_S2,
+            )
+        } else {
+            ("--displacement-column", "m", MAX_DISPLACEMENT_M)
+        };
+        let (f_flag, f_unit, f_max) = if columns.force_mass_kg.is_some() {
+            (
+                "--inertia-acceleration-column",
+                "m/s²",
+                MAX_ACCELERATION_M_PER_S2,
+            )
+        } else {
+            ("--force-column", "N", MAX_FORCE_N)
+        };
         let roles = [
             (Some(&columns.time), "--time-column", "s"),
-            (Some(&columns.displacement), "--displacement-column", "m"),
-            (Some(&columns.force), "--force-column", "N"),
+            (Some(&columns.displacement), x_flag, x_unit),
+            (Some(&columns.force), f_flag, f_unit),
             (columns.normal_force.as_ref(), "--normal-force-column", "N"),
         ];
+        if let Some(m) = columns.force_mass_kg {
+            crate::core::error::require_positive("--mass-kg", m)?;
+        }
         for (k, (name, flag, unit)) in roles.iter().enumerate() {
             let Some(name) = name else { continue };
-            check_column_unit(path, name, flag, unit)?;
+            if *unit == "m/s²" {
+                check_acceleration_unit(path, name, flag)?;
+            } else {
+                check_column_unit(path, name, flag, unit)?;
+            }
             if let Some((_, other, _)) = roles[..k]
                 .iter()
                 .find(|(n, _, _)| n.is_some_and(|n| n == *name))
@@ -253,8 +316,8 @@ impl Record {
                 }
             }
             t.push(time);
-            x.push(bounded(ix, &columns.displacement, MAX_DISPLACEMENT_M, "m")?);
-            f.push(bounded(iff, &columns.force, MAX_FORCE_N, "N")?);
+            x.push(bounded(ix, &columns.displacement, x_max, x_unit)?);
+            f.push(bounded(iff, &columns.force, f_max, f_unit)?);
             if let (Some(i), Some(v)) = (inf, nf.as_mut()) {
                 let name = columns.normal_force.as_deref().unwrap_or("");
                 let n = bounded(i, name, MAX_FORCE_N, "N")?;
@@ -273,10 +336,39 @@ impl Record {
             lines.push(line);
         }
         check_uniform_sampling(path, &columns.time, &t, &lines)?;
-        let record = Record::new(t, x, f, nf).map_err(|e| match e {
+        let mut derived = Vec::new();
+        if columns.displacement_is_acceleration {
+            let r = super::acceleration::displacement_from_acceleration(&t, &x, x_flag).map_err(
+                |e| match e {
+                    Error::InvalidParameter { name, message } => Error::InvalidParameter {
+                        name,
+                        message: format!(
+                            "{}: column `{}`: {message}",
+                            path.display(),
+                            columns.displacement
+                        ),
+                    },
+                    other => other,
+                },
+            )?;
+            derived.push(r.describe(&columns.displacement));
+            x = r.displacement_m;
+        }
+        if let Some(m) = columns.force_mass_kg {
+            for v in &mut f {
+                *v *= m;
+            }
+            derived.push(format!(
+                "force = {} kg × `{}` (m/s²): the joint force from the inertia of the mass",
+                crate::core::error::num(m),
+                columns.force
+            ));
+        }
+        let mut record = Record::new(t, x, f, nf).map_err(|e| match e {
             Error::Data(m) => Error::parse(path, 0, m),
             other => other,
         })?;
+        record.derived = derived;
         check_dissipation(path, &columns.force, &record)?;
         Ok(record)
     }
@@ -565,7 +657,7 @@ mod tests {
                     time: time.into(),
                     displacement: displacement.into(),
                     force: force.into(),
-                    normal_force: None,
+                    ..Columns::default()
                 },
             )
             .map(|_| ())

@@ -27,6 +27,9 @@ pub struct InputInfo {
     pub file: String,
     /// Names of the record's columns used (time, displacement, force, and normal force if any).
     pub columns: Vec<String>,
+    /// How columns were derived from what was measured (acceleration integrated, force from a
+    /// mass), one line each; empty when read as they are.
+    pub derived: Vec<String>,
     /// Baseline description, e.g. "fitted to the training cycles" or the table and pressure.
     pub baseline_source: String,
 }
@@ -430,6 +433,9 @@ impl Report {
             self.input.file,
             self.input.columns.join(", ")
         );
+        for d in &self.input.derived {
+            s += &format!("  {d}\n");
+        }
         s += &format!(
             "analysed: {} samples (block average ×{}), {} complete cycles, period {:.4} s, \
              amplitude {}, force amplitude {:.4e} N\n",
