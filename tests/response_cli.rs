@@ -76,6 +76,72 @@ fn response_writes_every_output_and_the_peak_falls_with_the_level() {
     assert!(r[1] < 0.9 * r[0], "peak receptance {r:?}");
     let csv = std::fs::read_to_string(out.join("response_level_2.csv")).unwrap();
     assert!(csv.contains("frequency_Hz,m1.x_h1_amplitude_m,m1.x_h1_phase_rad"));
+    check_loops(&out, &levels[1]);
+}
+
+/// The per-element loops of a level at its largest point: one period of every component; the
+/// energy `∮f·du` of each element's loop is the one `elements_level_2.csv` reports; the
+/// acceleration is the displacement's second time derivative (its harmonics `−(kω)²` times the
+/// displacement's, by a DFT of the samples); the two plots exist.
+fn check_loops(out: &Path, level: &serde_json::Value) {
+    for f in [
+        "loops_level_2.csv",
+        "loops_level_2_displacement.png",
+        "loops_level_2_acceleration.png",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let w = 2.0 * std::f64::consts::PI * level["largest_point_frequency_Hz"].as_f64().unwrap();
+    let text = std::fs::read_to_string(out.join("loops_level_2.csv")).unwrap();
+    // element -> component -> (u, a, f)
+    let mut loops: std::collections::BTreeMap<(String, usize), Vec<[f64; 3]>> = Default::default();
+    for line in text.lines().filter(|l| !l.starts_with('#')).skip(1) {
+        let c: Vec<&str> = line.split(',').collect();
+        let v = |i: usize| c[i].parse::<f64>().unwrap();
+        loops
+            .entry((c[1].to_string(), c[3].parse().unwrap()))
+            .or_default()
+            .push([v(6), v(7), v(8)]);
+    }
+    assert_eq!(loops.len(), 2 * 3, "two 3-D contact elements");
+    let elements = std::fs::read_to_string(out.join("elements_level_2.csv")).unwrap();
+    for row in elements.lines().filter(|l| !l.starts_with('#')).skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        let reported: f64 = c[2].parse().unwrap();
+        let energy: f64 = (0..3)
+            .map(|k| {
+                let s = &loops[&(c[0].to_string(), k)];
+                let n = s.len();
+                (0..n)
+                    .map(|i| 0.5 * (s[i][2] + s[(i + 1) % n][2]) * (s[(i + 1) % n][0] - s[i][0]))
+                    .sum::<f64>()
+            })
+            .sum();
+        assert!(reported > 0.0);
+        assert!(
+            (energy / reported - 1.0).abs() < 1e-5,
+            "{}: {energy} vs {reported}",
+            c[0]
+        );
+    }
+    for s in loops.values() {
+        let n = s.len() as f64;
+        for k in [1.0, 3.0] {
+            let dft = |j: usize| -> (f64, f64) {
+                s.iter().enumerate().fold((0.0, 0.0), |(re, im), (i, v)| {
+                    let th = k * std::f64::consts::TAU * i as f64 / n;
+                    (re + v[j] * th.cos(), im + v[j] * th.sin())
+                })
+            };
+            let ((ur, ui), (ar, ai)) = (dft(0), dft(1));
+            let scale = (k * w).powi(2) * ur.hypot(ui) + 1e-30;
+            assert!(
+                (ar + (k * w).powi(2) * ur).abs() <= 1e-9 * scale
+                    && (ai + (k * w).powi(2) * ui).abs() <= 1e-9 * scale,
+                "harmonic {k}: acceleration ({ar}, {ai}), displacement ({ur}, {ui})"
+            );
+        }
+    }
 }
 
 fn assert_fails(dir: &Path, needles: &[&str]) {

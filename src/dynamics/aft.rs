@@ -1529,6 +1529,33 @@ fn element_jacobian(
     (jac, ds0.to_vec())
 }
 
+/// The periodic cycle's samples of one element: displacement and force per component over one
+/// period (`d × N`, component-major, at `t_i = i·T/N`), as the AFT evaluates them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElementSamples {
+    /// Element displacement components (m), `d × N`.
+    pub u: Vec<f64>,
+    /// Element force components (N), `d × N`.
+    pub f: Vec<f64>,
+}
+
+/// The samples of the element's periodic cycle at displacement harmonics `u`.
+pub fn cycle_samples(
+    element: &dyn HystereticElement,
+    harmonics: &Harmonics,
+    u: &[f64],
+    settings: &AftSettings,
+) -> ElementSamples {
+    let (m, d) = (element.state_len(), element.dofs());
+    with_workspace(m, d, |arena, part| {
+        let cycle = periodic_cycle(element, harmonics, u, None, settings, arena, part);
+        ElementSamples {
+            u: cycle.period.u.to_vec(),
+            f: cycle.period.f.to_vec(),
+        }
+    })
+}
+
 /// Dissipated energy and stick/slip/separation fractions of the periodic cycle.
 pub fn cycle_summary(
     element: &dyn HystereticElement,

@@ -566,6 +566,18 @@ impl<'a> HbmSystem<'a> {
             .collect()
     }
 
+    /// The periodic cycle's displacement and force samples of every element at a solution.
+    pub fn element_samples(&self, point: &HbmPoint) -> Vec<aft::ElementSamples> {
+        let us = self.element_displacement_harmonics(point);
+        self.structure
+            .elements
+            .par_iter()
+            .zip(us.par_iter())
+            .with_min_len(PARALLEL_MIN_ELEMENTS)
+            .map(|(e, u)| aft::cycle_samples(e.element.as_ref(), &self.harmonics, u, &self.aft))
+            .collect()
+    }
+
     /// Dissipated energy per cycle and contact-state fractions of every element at a solution.
     pub fn element_cycles(&self, point: &HbmPoint) -> Vec<ElementCycle> {
         let us = self.element_displacement_harmonics(point);

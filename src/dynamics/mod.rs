@@ -21,6 +21,7 @@ pub mod condensation;
 pub mod contact;
 pub mod continuation;
 pub mod hbm;
+pub mod loops;
 pub mod model;
 pub mod model_file;
 pub mod report;

@@ -77,6 +77,8 @@ pub fn output_set(model: &Path, out_dir: &Path, flag: &str) -> Result<OutputSet>
         ("response_level_", ".csv"),
         ("elements_level_", ".csv"),
         ("frf_", ".png"),
+        ("loops_level_", ".csv"),
+        ("loops_level_", ".png"),
     ] {
         out.owns(prefix, suffix)?;
     }
@@ -256,12 +258,29 @@ impl ForcedResponse<'_> {
             report::write_level_csv(&csv, system, &model.responses, r, &header)?;
             let el = out.path(&format!("elements_level_{number}.csv"))?;
             report::write_elements_csv(&el, system, r)?;
+            // Every element's loop at the level's largest computed point.
+            let peak_point = &r.branch.points[r.peak];
+            let loops = super::loops::element_loops(system, peak_point);
+            let loops_csv = out.path(&format!("loops_level_{number}.csv"))?;
+            super::loops::write_loops_csv(&loops_csv, &loops, peak_point, &header)?;
+            super::loops::plot_loops(
+                &out.path(&format!("loops_level_{number}_displacement.png"))?,
+                &out.path(&format!("loops_level_{number}_acceleration.png"))?,
+                &loops,
+                6,
+                &format!(
+                    "Level {} N at {:.2} Hz: the six elements dissipating most",
+                    r.level_n,
+                    peak_point.omega / std::f64::consts::TAU
+                ),
+            )?;
             let (non_periodic, worst) = self.periodicity(r);
             let pk = r.interpolated_peak;
             level_summaries.push(serde_json::json!({
                 "level_N": r.level_n,
                 "csv": out.final_path(&csv).display().to_string(),
                 "elements_csv": out.final_path(&el).display().to_string(),
+                "loops_csv": out.final_path(&loops_csv).display().to_string(),
                 "points": r.branch.points.len(),
                 "complete": r.branch.stopped.is_none(),
                 "stopped": r.branch.stopped,
