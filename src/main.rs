@@ -31,6 +31,9 @@ enum Command {
     Diagnose(cli::diagnose::DiagnoseArgs),
     /// Nonlinear forced response (harmonic balance, AFT, continuation) driven by element tables.
     Response(cli::response::ResponseArgs),
+    /// Nonlinear modes (extended periodic motion concept): backbone and modal damping against
+    /// amplitude, for the same model file.
+    Modes(cli::modes::ModesArgs),
     /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
     Merge(cli::merge::MergeArgs),
     /// Identify a jointed structure's nonlinear mode from measured frequency responses at
@@ -72,6 +75,7 @@ fn main() {
         Command::Elements(a) => cli::elements::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
         Command::Response(a) => cli::response::run(a),
+        Command::Modes(a) => cli::modes::run(a),
         Command::Merge(a) => cli::merge::run(a),
         Command::Identify(a) => cli::identify::run_identify(*a),
         Command::Predict(a) => cli::identify::run_predict(a),
