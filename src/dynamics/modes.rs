@@ -103,8 +103,8 @@ fn modal_force(
 
 /// Default amplitude range: from 1/1000 of the modal amplitude of the linear mode's resonance
 /// at the lowest excitation level, `|φᵀF|·F_min/(2ζω²)`, to that at the highest level (an upper
-/// bound of the forced response's when the elements add damping). Errors (naming
-/// `--amplitude-min`) when the excitation does not drive the mode or the mode is undamped.
+/// bound of the forced response's when the elements add damping). Errors name `--mode` when
+/// the excitation does not drive the mode, `--amplitude-min-m-sqrt-kg` when it is undamped.
 pub fn default_amplitude_range(
     model: &LoadedModel,
     linear: &nonlinear_modes::LinearMode,
@@ -116,12 +116,29 @@ pub fn default_amplitude_range(
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
     let resonance = |level: f64| phi_f * level / (2.0 * zeta * linear.omega * linear.omega);
-    if !(phi_f > 0.0 && zeta > 0.0 && resonance(hi).is_finite()) {
+    let frequencies: Vec<String> = linear
+        .frequencies_hz
+        .iter()
+        .map(|f| format!("{f:.6}"))
+        .collect();
+    // The excitation drives the mode when its modal force is more than rounding of φ·F.
+    let driven = phi_f > 1e-9 * linear.shape.norm() * model.force.norm();
+    if !driven {
         return Err(Error::param(
-            "--amplitude-min",
+            "--mode",
             format!(
-                "no default amplitude range: the excitation {} linear mode {} (modal force {phi_f:.3e} N/N, damping ratio {zeta:.3e}); give --amplitude-min-m-sqrt-kg and --amplitude-max-m-sqrt-kg",
-                if phi_f > 0.0 { "drives the undamped" } else { "does not drive" },
+                "the model's excitation does not drive linear mode {} ({:.6} Hz; modal force {phi_f:.3e} N per N): choose the mode it drives (linear frequencies with the elements stuck: {} Hz) or give --amplitude-min-m-sqrt-kg and --amplitude-max-m-sqrt-kg",
+                linear.index,
+                linear.frequency_hz(),
+                frequencies.join(", ")
+            ),
+        ));
+    }
+    if !(zeta > 0.0 && resonance(hi).is_finite()) {
+        return Err(Error::param(
+            "--amplitude-min-m-sqrt-kg",
+            format!(
+                "no default amplitude range: linear mode {} is undamped (damping ratio {zeta:.3e}); give --amplitude-min-m-sqrt-kg and --amplitude-max-m-sqrt-kg",
                 linear.index
             ),
         ));

@@ -312,7 +312,7 @@ pub fn linear_mode(system: &HbmSystem<'_>, mode: usize) -> Result<LinearMode> {
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
     let lambda = eig.eigenvalues[order[mode - 1]];
-    if !(lambda > 0.0) {
+    if lambda.is_nan() || lambda <= 0.0 {
         return Err(Error::param(
             "mode",
             format!(
@@ -506,7 +506,7 @@ impl<'s, 'a> Epmc<'s, 'a> {
                 break;
             }
             if measure <= self.settings.tolerance {
-                if !(x[nn] > 0.0) {
+                if x[nn].is_nan() || x[nn] <= 0.0 {
                     return Err(Error::Data(format!(
                         "the solve at modal amplitude {a:.4e} converged to a non-positive frequency"
                     )));
@@ -537,7 +537,7 @@ impl<'s, 'a> Epmc<'s, 'a> {
                 (xt, e)
             };
             let (mut xn, mut en) = trial(1.0, true);
-            if !(en.0.norm() < merit0) {
+            if en.0.norm().is_nan() || en.0.norm() >= merit0 {
                 let mut lambda = 0.5;
                 for _ in 0..8 {
                     let (_, e) = trial(lambda, false);
@@ -597,7 +597,7 @@ impl<'s, 'a> Epmc<'s, 'a> {
                 let t = (a / p1.amplitude).ln() / (p1.amplitude / p0.amplitude).ln();
                 let mut secant = &v1 + (&v1 - &v0) * t;
                 // A predictor with a non-positive frequency is no start.
-                if !(secant[nn] > 0.0) {
+                if secant[nn].is_nan() || secant[nn] <= 0.0 {
                     secant[nn] = v1[nn];
                 }
                 vec![scaled(secant), scaled(v1)]
