@@ -86,13 +86,16 @@ pub struct ModeSettings {
 }
 
 impl ModeSettings {
-    /// Mode `mode` at the given amplitudes, tolerance 1e-9, 40 iterations, 6 subdivisions.
+    /// Mode `mode` at the given amplitudes; tolerance 1e-7 (that of the forced response's
+    /// Newton solves, [`crate::dynamics::hbm::NewtonSettings`]), 20 iterations (a solve from a
+    /// good predictor takes 2–6; a failing one is cut short and the step halved), 6
+    /// subdivisions.
     pub fn new(mode: usize, amplitudes: Vec<f64>) -> Self {
         Self {
             mode,
             amplitudes,
-            tolerance: 1e-9,
-            max_iterations: 40,
+            tolerance: 1e-7,
+            max_iterations: 20,
             max_subdivisions: 6,
         }
     }
@@ -501,8 +504,10 @@ impl<'s, 'a> Epmc<'s, 'a> {
         let nn = self.n * self.len;
         let mut x = x0;
         let (mut res, mut j, mut measure, mut ev) = self.evaluate(&x, a, true, None);
+        let start = measure;
         for it in 0..=self.settings.max_iterations {
-            if !measure.is_finite() {
+            // Not finite, or diverging far from the predictor: no point in going on.
+            if !measure.is_finite() || measure > 1e3 * start.max(1.0) {
                 break;
             }
             if measure <= self.settings.tolerance {

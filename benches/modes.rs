@@ -1,0 +1,106 @@
+//! Benchmark: the EPMC backbone (nonlinear mode) at underplatform-damper size.
+//!
+//!     cargo bench --bench modes                 # 100 amplitudes
+//!     cargo bench --bench modes -- --quick      # 10 amplitudes
+//!
+//! Case: the synthetic reduced modal model of `benches/response.rs` (30 modes, 0.6–8 kHz, 0.3 %
+//! modal damping, seeded; tests/support/upd_model.rs), 146 Valanis microslip contact elements
+//! (438 contact DOFs), harmonics 0..7 with 128 samples per period, coordinates formulation (30 ×
+//! 15 = 450 harmonic unknowns + ω + ξ). The mode continued is the one the benchmark's excitation
+//! drives most in the response bench's span (550–1100 Hz) with the elements stuck; the amplitudes
+//! are log-spaced from 1/1000 of its linear resonance amplitude at 0.05 N to that at 8 N (the
+//! response bench's levels), the default range of `asperity modes`. Prints the wall and CPU time
+//! (all threads), the Newton iterations, retries and the backbone's ends. Goal: under 60 s wall
+//! on 2 cores for 100 amplitudes. Units: SI, times in seconds.
+
+use asperity::dynamics::aft::Harmonics;
+use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
+use asperity::dynamics::nonlinear_modes::{linear_mode, log_spaced, Epmc, ModeSettings};
+use nalgebra::DVector;
+use std::time::Instant;
+
+#[path = "../tests/support/upd_model.rs"]
+#[allow(dead_code)]
+mod upd_model;
+use upd_model::{model, MODES};
+
+fn cpu_time() -> f64 {
+    cpu_time::ProcessTime::now().as_duration().as_secs_f64()
+}
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let (s, force, _) = model();
+    let sys = HbmSystem::new(
+        &s,
+        Harmonics::new(7, false, Some(128)).unwrap(),
+        Excitation {
+            force: DVector::zeros(MODES),
+            harmonic: 1,
+        },
+        FormulationChoice::Coordinates,
+    )
+    .unwrap();
+    let first = linear_mode(&sys, 1).unwrap();
+    // The mode in 550–1100 Hz that the excitation drives most.
+    let (index, lin) = (1..=MODES)
+        .filter(|&i| (550.0..1100.0).contains(&first.frequencies_hz[i - 1]))
+        .map(|i| (i, linear_mode(&sys, i).unwrap()))
+        .max_by(|a, b| {
+            a.1.shape
+                .dot(&force)
+                .abs()
+                .total_cmp(&b.1.shape.dot(&force).abs())
+        })
+        .expect("a mode in the span");
+    let a_lin = |level: f64| {
+        lin.shape.dot(&force).abs() * level / (2.0 * lin.damping_ratio() * lin.omega.powi(2))
+    };
+    let n = if quick { 10 } else { 100 };
+    let amplitudes = log_spaced(a_lin(0.05) / 1000.0, a_lin(8.0), n).unwrap();
+    println!(
+        "## EPMC backbone, underplatform-damper size: {MODES} modes, {} elements ({} contact DOFs), harmonics 0..7, {} samples/period, {} unknowns + 2",
+        s.elements.len(),
+        s.contact_dofs(),
+        sys.harmonics.n_time(),
+        sys.unknowns()
+    );
+    println!(
+        "mode {index}: {:.3} Hz stuck, damping ratio {:.4e}; {n} amplitudes {:.3e}–{:.3e} m·kg^½; rayon threads {}; load average {}",
+        lin.frequency_hz(),
+        lin.damping_ratio(),
+        amplitudes[0],
+        amplitudes[n - 1],
+        rayon::current_num_threads(),
+        std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
+    );
+    let mut settings = ModeSettings::new(index, amplitudes);
+    if let Ok(t) = std::env::var("EPMC_TOL") {
+        settings.tolerance = t.parse().unwrap();
+    }
+    let epmc = Epmc::new(&sys, settings).unwrap();
+    let (t0, c0) = (Instant::now(), cpu_time());
+    let mode = epmc.backbone(&mut |_| {}).unwrap();
+    let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_time() - c0);
+    let (p0, p1) = (&mode.points[0], mode.points.last().unwrap());
+    println!(
+        "{} of {n} points{}; Newton iterations {} (final solves), retries {}, subdivisions {}; {:.3} Hz → {:.3} Hz, damping ratio {:.4e} → {:.4e} (largest {:.4e}); largest energy-balance error {:.2e}",
+        mode.points.len(),
+        mode.stopped.as_ref().map(|w| format!(" (stopped {w})")).unwrap_or_default(),
+        mode.points.iter().map(|p| p.iterations).sum::<usize>(),
+        mode.retries,
+        mode.subdivisions,
+        p0.frequency_hz(),
+        p1.frequency_hz(),
+        p0.damping_ratio(),
+        p1.damping_ratio(),
+        mode.points.iter().map(|p| p.damping_ratio()).fold(0.0, f64::max),
+        mode.points.iter().map(|p| p.energy_balance_error()).fold(0.0, f64::max),
+    );
+    println!(
+        "wall {wall:.2} s, CPU {cpu:.2} s (all threads); load average at the end {}",
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
+}
