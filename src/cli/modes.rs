@@ -20,7 +20,7 @@ pub struct ModesArgs {
     #[arg(long, default_value_t = 1)]
     mode: usize,
     /// Smallest modal amplitude (m·kg^½: the mass-normalised amplitude of the first harmonic);
-    /// default: 1/1000 of the linear mode's resonance amplitude at the lowest excitation level.
+    /// default: 1/100 of the linear mode's resonance amplitude at the lowest excitation level.
     #[arg(long)]
     amplitude_min_m_sqrt_kg: Option<f64>,
     /// Largest modal amplitude (m·kg^½); default: the linear mode's resonance amplitude at the

@@ -8,7 +8,7 @@
 //!    condition needs every coordinate's harmonics; the frequency span, points and
 //!    `formulation` of `[sweep]` are not used).
 //! 2. **Amplitudes**: log-spaced modal amplitudes between the given ends, by default
-//!    ([`default_amplitude_range`]) from 1/1000 of the linear resonance amplitude of the mode at
+//!    ([`default_amplitude_range`]) from 1/100 of the linear resonance amplitude of the mode at
 //!    the model's lowest excitation level to that at its highest.
 //! 3. **Backbone** ([`crate::dynamics::nonlinear_modes::Epmc::backbone`]).
 //! 4. **Synthesis**: the forced response of each excitation level predicted from the backbone
@@ -101,7 +101,7 @@ fn modal_force(
     re.hypot(im) / amplitude
 }
 
-/// Default amplitude range: from 1/1000 of the modal amplitude of the linear mode's resonance
+/// Default amplitude range: from 1/100 of the modal amplitude of the linear mode's resonance
 /// at the lowest excitation level, `|φᵀF|·F_min/(2ζω²)`, to that at the highest level (an upper
 /// bound of the forced response's when the elements add damping). Errors name `--mode` when
 /// the excitation does not drive the mode, `--amplitude-min-m-sqrt-kg` when it is undamped.
@@ -143,7 +143,7 @@ pub fn default_amplitude_range(
             ),
         ));
     }
-    Ok((resonance(lo) / 1000.0, resonance(hi)))
+    Ok((resonance(lo) / 100.0, resonance(hi)))
 }
 
 /// The single-nonlinear-mode synthesis of the forced response at one excitation level: for a
