@@ -93,6 +93,39 @@ fn main() {
         mode.points.iter().map(|p| p.damping_ratio()).fold(0.0, f64::max),
         mode.points.iter().map(|p| p.energy_balance_error()).fold(0.0, f64::max),
     );
+    // Harmonic content of the last points, ‖Q₃‖/‖Q₁‖ over the coordinates (an internal
+    // resonance of the third harmonic with a higher mode shows as its growth), and the
+    // stuck structure's modes near three times the last frequency.
+    let len = sys.harmonics.len();
+    let norm_of = |z: &DVector<f64>, k: usize| {
+        let (ci, si) = sys.harmonics.index_of(k).unwrap();
+        (0..MODES)
+            .map(|r| z[r * len + ci].powi(2) + z[r * len + si].powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    for p in mode.points.iter().rev().take(6).rev() {
+        println!(
+            "a {:.4e} m·kg^½: {:.3} Hz, ζ {:.4e}, ‖Q3‖/‖Q1‖ {:.3e}, ‖Q5‖/‖Q1‖ {:.3e}, element-averaged slip {:.3}, separation {:.3}",
+            p.amplitude,
+            p.frequency_hz(),
+            p.damping_ratio(),
+            norm_of(&p.z, 3) / norm_of(&p.z, 1),
+            norm_of(&p.z, 5) / norm_of(&p.z, 1),
+            p.elements.iter().map(|c| c.slip_fraction).sum::<f64>() / p.elements.len() as f64,
+            p.elements.iter().map(|c| c.separation_fraction).sum::<f64>() / p.elements.len() as f64
+        );
+    }
+    let f3 = 3.0 * p1.frequency_hz();
+    println!(
+        "stuck modes within 25 % of 3 × {:.1} Hz: {:?} Hz",
+        p1.frequency_hz(),
+        lin.frequencies_hz
+            .iter()
+            .filter(|f| (**f / f3 - 1.0).abs() < 0.25)
+            .map(|f| (f * 10.0).round() / 10.0)
+            .collect::<Vec<f64>>()
+    );
     println!(
         "wall {wall:.2} s, CPU {cpu:.2} s (all threads); load average at the end {}",
         std::fs::read_to_string("/proc/loadavg")
