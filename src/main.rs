@@ -34,6 +34,9 @@ enum Command {
     /// Free decay (ring-down) of a model's structure by time integration: frequency and damping
     /// ratio per period against amplitude.
     Decay(cli::decay::DecayArgs),
+    /// Nonlinear modes (extended periodic motion concept): backbone and modal damping against
+    /// amplitude, for the same model file.
+    Modes(cli::modes::ModesArgs),
     /// Merge the shard files of a sharded sweep (`--shard i/n`) into the single-run outputs.
     Merge(cli::merge::MergeArgs),
     /// Identify a jointed structure's nonlinear mode from measured frequency responses at
@@ -76,6 +79,7 @@ fn main() {
         Command::Diagnose(a) => cli::diagnose::run(a),
         Command::Response(a) => cli::response::run(a),
         Command::Decay(a) => cli::decay::run(a),
+        Command::Modes(a) => cli::modes::run(a),
         Command::Merge(a) => cli::merge::run(a),
         Command::Identify(a) => cli::identify::run_identify(*a),
         Command::Predict(a) => cli::identify::run_predict(a),

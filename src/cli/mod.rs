@@ -11,6 +11,7 @@ pub mod elements;
 pub mod film;
 pub mod identify;
 pub mod merge;
+pub mod modes;
 pub mod progress;
 pub mod response;
 pub mod surface;

@@ -814,6 +814,12 @@ impl HbmSystem<'_> {
         }
         out
     }
+
+    /// `Z(ω)`, the linear structure's dynamic stiffness in the harmonic basis (coordinate-major,
+    /// the layout of [`Formulation::Coordinates`]); see the [module documentation](self).
+    pub fn linear_dynamic_stiffness(&self, omega: f64) -> DMatrix<f64> {
+        self.dynamic_stiffness(omega)
+    }
 }
 
 /// Backtracking on a merit: `trial(λ, jacobian)` evaluates the point at step fraction `λ`

@@ -9,6 +9,7 @@
 //!   ──► aft (harmonics ⇄ time, periodic state)
 //!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
 //!   ──► continuation (pseudo-arclength in frequency, turning points)
+//!   ──► nonlinear_modes (EPMC: backbone and modal damping against modal amplitude)
 //! time_integration: reference steady state by Newmark time stepping (validation)
 //! transient: free decay by the same time stepping, frequency and damping per period
 //! ```
@@ -24,6 +25,8 @@ pub mod hbm;
 pub mod loops;
 pub mod model;
 pub mod model_file;
+pub mod modes;
+pub mod nonlinear_modes;
 pub mod report;
 pub mod response;
 pub mod time_integration;
