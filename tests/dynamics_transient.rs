@@ -240,3 +240,77 @@ fn cli_decay_writes_the_ring_down_and_refuses_bad_input() {
     assert!(!o.status.success());
     assert_eq!(std::fs::read(&model).unwrap(), before);
 }
+
+/// The same ring-down against the nonlinear mode computed by the extended periodic motion
+/// concept (`dynamics::nonlinear_modes`, harmonics 0..7, 1024 samples): the envelope of the
+/// averaging equation with the EPMC's `ω(a)`, `ζ(a)` (interpolated in ln a), and the damping
+/// ratio per period, within 2 % while the damping is light (a ≥ 4 a_y).
+#[test]
+fn jenkins_free_decay_follows_the_epmc_backbone() {
+    use asperity::dynamics::aft::Harmonics;
+    use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
+    use asperity::dynamics::nonlinear_modes::{log_spaced, nonlinear_mode, ModeSettings};
+    let s = structure();
+    let sys = HbmSystem::new(
+        &s,
+        Harmonics::new(7, false, Some(1024)).unwrap(),
+        Excitation {
+            force: DVector::zeros(1),
+            harmonic: 1,
+        },
+        FormulationChoice::Coordinates,
+    )
+    .unwrap();
+    let ay = FS / KT;
+    // m = 1 kg: the modal amplitude (m·kg^½) is the displacement amplitude.
+    let amps = log_spaced(0.5 * ay, 25.0 * ay, 60).unwrap();
+    let mode = nonlinear_mode(&sys, ModeSettings::new(1, amps), &mut |_| {}).unwrap();
+    assert!(mode.stopped.is_none(), "{:?}", mode.stopped);
+    let la: Vec<f64> = mode.points.iter().map(|p| p.amplitude.ln()).collect();
+    let at = |a: f64, v: &dyn Fn(usize) -> f64| -> f64 {
+        let x = a.ln();
+        let i = la.partition_point(|&l| l <= x).clamp(1, la.len() - 1);
+        let t = (x - la[i - 1]) / (la[i] - la[i - 1]);
+        v(i - 1) + t * (v(i) - v(i - 1))
+    };
+    let omega = |a: f64| at(a, &|i| mode.points[i].omega);
+    let zeta = |a: f64| at(a, &|i| mode.points[i].damping_ratio());
+    let settings = DecaySettings {
+        mode: 1,
+        amplitude_m: 2e-3,
+        periods: 120,
+        steps_per_period: 256,
+    };
+    let r = free_decay(&s, &DVector::from_element(1, 1.0), &settings, &mut |_| {}).unwrap();
+    let first = r.cycles[0];
+    // RK4 of da/dt = −ζ(a)·ω(a)·a from the first period.
+    let envelope = |t1: f64| {
+        let n = 2000;
+        let h = (t1 - first.time_s) / n as f64;
+        let rate = |a: f64| -zeta(a) * omega(a) * a;
+        let mut a = first.amplitude_m;
+        for _ in 0..n {
+            let k1 = rate(a);
+            let k2 = rate(a + 0.5 * h * k1);
+            let k3 = rate(a + 0.5 * h * k2);
+            let k4 = rate(a + h * k3);
+            a += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        a
+    };
+    let (mut env, mut damp, mut freq, mut n) = (0.0f64, 0.0f64, 0.0f64, 0);
+    for c in r.cycles.iter().filter(|c| c.amplitude_m >= 4.0 * ay) {
+        n += 1;
+        env = env.max((c.amplitude_m / envelope(c.time_s) - 1.0).abs());
+        damp = damp.max((c.damping_ratio / zeta(c.amplitude_m) - 1.0).abs());
+        freq = freq.max((c.frequency_hz * 2.0 * PI / omega(c.amplitude_m) - 1.0).abs());
+    }
+    eprintln!(
+        "against EPMC ({n} periods): envelope {env:.2e}, damping {damp:.2e}, frequency {freq:.2e}"
+    );
+    assert!(n >= 20);
+    assert!(
+        env < 0.02 && damp < 0.02 && freq < 1e-3,
+        "{env} {damp} {freq}"
+    );
+}
