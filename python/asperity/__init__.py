@@ -74,7 +74,7 @@ from .contact import (
     normal_sweep,
     tangential_sweep,
 )
-from .dynamics import ResponseModel, SweepResult
+from .dynamics import DecayResult, ResponseModel, SweepResult
 from .film import (
     ClassCounts,
     FilmMap,
@@ -204,6 +204,7 @@ __all__ = [
     "reduce_preloads",
     "ResponseModel",
     "SweepResult",
+    "DecayResult",
     "read_record",
     "Record",
     "diagnose",

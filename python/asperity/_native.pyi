@@ -1481,6 +1481,39 @@ class ResponseModel:
         """Force-controlled frequency sweep at ``level_n`` (N) over [start, end] Hz (unset
         values: the model file's [sweep]; for array models harmonics 5, points 200, formulation
         "auto")."""
+    def free_decay(
+        self,
+        amplitude_m: float,
+        *,
+        mode: int = 1,
+        periods: int = 100,
+        steps_per_period: int = 256,
+    ) -> "DecayResult":
+        """Free decay (ring-down) by Newmark time integration with the elements, from rest in
+        the linearised (stuck) mode ``mode``, the first response starting at ``amplitude_m``
+        (m); frequency and damping ratio per period (``asperity decay``)."""
+
+@final
+class DecayResult:
+    """A free decay (``asperity decay``): the first response at every step, and frequency and
+    damping ratio per period (one estimate per half period)."""
+
+    @property
+    def linear_frequency_hz(self) -> float: ...
+    @property
+    def time_s(self) -> F64Array: ...
+    @property
+    def response_m(self) -> F64Array: ...
+    @property
+    def cycle_time_s(self) -> F64Array: ...
+    @property
+    def cycle_amplitude_m(self) -> F64Array: ...
+    @property
+    def cycle_frequency_hz(self) -> F64Array: ...
+    @property
+    def cycle_damping_ratio(self) -> F64Array: ...
+    @property
+    def wall_time_s(self) -> float: ...
 
 @final
 class SweepResult:

@@ -4,6 +4,6 @@ balance and time integration of a linear structure with nonlinear joints.
 Frequencies in Hz, forces in N, displacements in m.
 """
 
-from ._native import ResponseModel, SweepResult
+from ._native import DecayResult, ResponseModel, SweepResult
 
-__all__ = ["ResponseModel", "SweepResult"]
+__all__ = ["DecayResult", "ResponseModel", "SweepResult"]

@@ -144,6 +144,28 @@ impl ResponseModel {
     }
 }
 
+/// A free decay of a `ResponseModel` (`asperity decay`): the first response at every time
+/// step, and frequency and damping ratio per period (one estimate per half period).
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct DecayResult {
+    /// Natural frequency of the linearised (stuck) mode it started in (Hz).
+    pub linear_frequency_hz: f64,
+    /// Time of every step (s).
+    pub time_s: Py<PyArray1<f64>>,
+    /// The first response at every step (m).
+    pub response_m: Py<PyArray1<f64>>,
+    /// Mid-time of each period (s).
+    pub cycle_time_s: Py<PyArray1<f64>>,
+    /// Amplitude of each period (m).
+    pub cycle_amplitude_m: Py<PyArray1<f64>>,
+    /// Frequency of each period (Hz).
+    pub cycle_frequency_hz: Py<PyArray1<f64>>,
+    /// Damping ratio of each period (logarithmic decrement).
+    pub cycle_damping_ratio: Py<PyArray1<f64>>,
+    /// Wall-clock time of the integration (s).
+    pub wall_time_s: f64,
+}
+
 /// A force-controlled frequency sweep of a `ResponseModel` (the results of one level of
 /// `asperity response`).
 #[pyclass(frozen, get_all, module = "asperity")]
@@ -506,6 +528,50 @@ impl ResponseModel {
             turning_points: result.branch.turning_points,
             jacobians: result.branch.jacobians,
             wall_time_s: result.branch.wall_time_s,
+        })
+    }
+
+    /// Free decay (ring-down) by Newmark time integration with the elements, from rest in the
+    /// linearised (stuck) mode `mode`, the first response starting at `amplitude_m` (m);
+    /// frequency and damping ratio per period by peak picking (`asperity decay`).
+    #[pyo3(signature = (amplitude_m, *, mode=1, periods=100, steps_per_period=256))]
+    fn free_decay(
+        &self,
+        py: Python<'_>,
+        amplitude_m: f64,
+        mode: usize,
+        periods: usize,
+        steps_per_period: usize,
+    ) -> PyResult<DecayResult> {
+        let settings = asperity::dynamics::transient::DecaySettings {
+            mode,
+            amplitude_m,
+            periods,
+            steps_per_period,
+        };
+        let row = &self
+            .responses
+            .first()
+            .ok_or_else(|| parameter(py, "responses", "the model observes no response".into()))?
+            .1;
+        let structure = &self.structure;
+        let r = py
+            .detach(|| {
+                asperity::dynamics::transient::free_decay(structure, row, &settings, &mut |_| {})
+            })
+            .py()?;
+        let col = |f: &dyn Fn(&asperity::dynamics::transient::DecayCycle) -> f64| {
+            PyArray1::from_vec(py, r.cycles.iter().map(f).collect()).unbind()
+        };
+        Ok(DecayResult {
+            linear_frequency_hz: r.linear_frequency_hz,
+            time_s: PyArray1::from_slice(py, &r.time_s).unbind(),
+            response_m: PyArray1::from_slice(py, &r.response_m).unbind(),
+            cycle_time_s: col(&|c| c.time_s),
+            cycle_amplitude_m: col(&|c| c.amplitude_m),
+            cycle_frequency_hz: col(&|c| c.frequency_hz),
+            cycle_damping_ratio: col(&|c| c.damping_ratio),
+            wall_time_s: r.wall_time_s,
         })
     }
 

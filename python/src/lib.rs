@@ -69,6 +69,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_class::<dynamics::ResponseModel>()?;
     m.add_class::<dynamics::SweepResult>()?;
+    m.add_class::<dynamics::DecayResult>()?;
     m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::write_preloads, m)?)?;
     m.add_class::<film::FilmMap>()?;

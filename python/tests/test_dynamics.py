@@ -146,3 +146,24 @@ def test_bad_model_input_raises_named_errors(tmp_path):
         ap.ResponseModel.read(path)
     with pytest.raises(ap.FileError):
         ap.ResponseModel.read(tmp_path / "absent.toml")
+
+
+def test_free_decay_is_the_clis(cli, tmp_path):
+    """`ResponseModel.free_decay` is `asperity decay`: the same history and periods, bit for bit
+    after the CLI's formatting; the stuck structure's frequency; bad input named."""
+    path = write_model(tmp_path)
+    cli("decay", path, "--amplitude-m", "1e-4", "--periods", "20", "--out-dir", tmp_path / "out")
+    r = ap.ResponseModel.read(path).free_decay(1e-4, periods=20)
+    rows = [
+        line.split(",")
+        for line in (tmp_path / "out" / "decay_cycles.csv").read_text().splitlines()
+        if not line.startswith("#")
+    ][1:]
+    assert len(rows) == len(r.cycle_frequency_hz) > 10
+    for row, f, z in zip(rows, r.cycle_frequency_hz, r.cycle_damping_ratio):
+        assert float(row[2]) == pytest.approx(f, rel=1e-9)
+        assert float(row[3]) == pytest.approx(z, rel=1e-6)
+    assert r.response_m[0] == pytest.approx(1e-4, rel=1e-12)
+    assert len(r.time_s) == 20 * 256 + 1
+    with pytest.raises(Exception, match="amplitude"):
+        ap.ResponseModel.read(path).free_decay(-1.0)
