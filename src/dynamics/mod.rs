@@ -9,6 +9,7 @@
 //!   ──► aft (harmonics ⇄ time, periodic state)
 //!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
 //!   ──► continuation (pseudo-arclength in frequency, turning points)
+//!   ──► stability (Hill's method at every point, bifurcations named)
 //! time_integration: reference steady state by Newmark time stepping (validation)
 //! ```
 
@@ -24,4 +25,5 @@ pub mod model;
 pub mod model_file;
 pub mod report;
 pub mod response;
+pub mod stability;
 pub mod time_integration;
