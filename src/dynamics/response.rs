@@ -28,6 +28,7 @@ use crate::dynamics::continuation::{sweep_partial, ContinuationSettings};
 use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use crate::dynamics::model_file::{self, LoadedModel, SweepSection};
 use crate::dynamics::report::{self, LevelResult};
+use crate::dynamics::stability;
 use crate::elements::{provenance_json, InputFile};
 use nalgebra::DVector;
 use rayon::prelude::*;
@@ -98,7 +99,9 @@ pub fn sweep_level(
     progress: &mut dyn FnMut(f64),
 ) -> Result<LevelResult> {
     let branch = sweep_partial(system, level_n, settings, progress)?;
-    Ok(report::summarise(system, level_n, branch, peak_row))
+    let mut result = report::summarise(system, level_n, branch, peak_row);
+    result.stability = Some(stability::branch_stability(system, &result.branch)?);
+    Ok(result)
 }
 
 /// What `asperity response` computed: the system and a result per level that has points.
@@ -209,6 +212,18 @@ pub fn run<'a>(
     })
 }
 
+/// A level's stability summary in `response.json`: the method, the unstable points, the
+/// bifurcations named between points, the eigen-solves' largest backward error and the time.
+fn stability_json(st: &stability::BranchStability) -> serde_json::Value {
+    serde_json::json!({
+        "method": "Hill (harmonic balance Jacobian, smallest |Im| sorting)",
+        "unstable_points": st.unstable_points(),
+        "bifurcations": st.bifurcations,
+        "max_schur_residual": st.max_schur_residual(),
+        "wall_time_s": st.wall_time_s,
+    })
+}
+
 /// A response label as a file-name part: ASCII letters, digits, `.` and `-` kept, anything
 /// else `_`.
 fn file_safe(label: &str) -> String {
@@ -280,6 +295,7 @@ impl ForcedResponse<'_> {
                 "max_periodicity_error": worst,
                 "points_not_periodic": non_periodic,
                 "wall_time_s": r.branch.wall_time_s,
+                "stability": r.stability.as_ref().map(stability_json),
             }));
         }
         for (k, (label, row)) in model.responses.iter().enumerate() {

@@ -85,7 +85,7 @@
 
 use crate::core::error::{Error, Result};
 use crate::dynamics::aft::Harmonics;
-use crate::dynamics::continuation::Branch;
+use crate::dynamics::continuation::{point_arclengths, point_between, Branch};
 use crate::dynamics::hbm::{Formulation, FormulationChoice, HbmPoint, HbmSystem};
 use nalgebra::{Complex, DMatrix};
 use rayon::prelude::*;
@@ -386,8 +386,8 @@ pub struct Bifurcation {
     pub kind: BifurcationKind,
     /// Index of the point before it (the bifurcation lies between this point and the next).
     pub after_point: usize,
-    /// Frequency estimate (Hz): linear interpolation of the largest real part's zero, or the
-    /// turning point's frequency.
+    /// Frequency (Hz): located on the branch where the largest real part crosses the stability
+    /// limit; otherwise a fold's turning point or the midpoint (module documentation).
     pub frequency_hz: f64,
     /// Whether a Floquet exponent's crossing was seen (a fold found only from the turning of
     /// the continuation has `false`).
@@ -429,13 +429,83 @@ pub fn branch_stability(system: &HbmSystem<'_>, branch: &Branch) -> Result<Branc
         .par_iter()
         .map(|p| hill.point(p))
         .collect::<Result<Vec<_>>>()?;
-    let omegas: Vec<f64> = branch.points.iter().map(|p| p.omega).collect();
-    let bifurcations = bifurcations(&omegas, &points);
+    let mut bifurcations = bifurcations(&branch.points, &points);
+    for b in bifurcations.iter_mut().filter(|b| b.exponent_crossing) {
+        if let Some(w) = locate_crossing(&hill, branch, &points, b.after_point) {
+            b.frequency_hz = w / (2.0 * std::f64::consts::PI);
+        }
+    }
     Ok(BranchStability {
         points,
         bifurcations,
         wall_time_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// Most solves spent locating one bifurcation ([`locate_crossing`]).
+const LOCATE_SOLVES: usize = 10;
+
+/// A located crossing is accepted when the largest real part there is within this fraction of
+/// `ω` of the stability limit ([`locate_crossing`]).
+const LOCATED_MARGIN: f64 = 1e-4;
+
+/// `Re s − tolerance` of the largest real part: zero where the point's verdict changes.
+fn margin(st: &Stability) -> f64 {
+    st.max_real_part - UNSTABLE_TOLERANCE * st.omega
+}
+
+/// Frequency (rad/s) on the branch where the largest real part of the Floquet exponents crosses
+/// the stability limit between points `i` and `i + 1`: regula falsi (Illinois) along the
+/// arclength, each abscissa solved on the branch ([`point_between`], the parabola through three
+/// consecutive points and the bordered corrector) and assessed, until the margin is below
+/// `1e-9·ω` or after [`LOCATE_SOLVES`] solves. `None` when the margin does not change sign
+/// between the two points (another exponent crossed on an unstable branch), the branch has
+/// fewer than three points, a solve fails, or no solved point came within
+/// [`LOCATED_MARGIN`]`·ω` of the limit (the caller keeps its estimate).
+pub fn locate_crossing(
+    hill: &HillAnalysis<'_, '_>,
+    branch: &Branch,
+    stability: &[Stability],
+    i: usize,
+) -> Option<f64> {
+    let pts = &branch.points;
+    if pts.len() < 3 || i + 1 >= pts.len() {
+        return None;
+    }
+    let (fa0, fb0) = (margin(&stability[i]), margin(&stability[i + 1]));
+    if fa0 * fb0 >= 0.0 {
+        return None;
+    }
+    // Frame of three points containing i and i + 1, arclength measured from the middle one.
+    let mid = if i >= 1 { i } else { i + 1 };
+    let frame = [&pts[mid - 1], &pts[mid], &pts[mid + 1]];
+    let (_, _, s) = point_arclengths(frame);
+    let (mut a, mut b) = if mid == i { (0.0, s[2]) } else { (s[0], 0.0) };
+    let (mut fa, mut fb) = (fa0, fb0);
+    let mut best = (f64::INFINITY, None);
+    for _ in 0..LOCATE_SOLVES {
+        let x = b - fb * (b - a) / (fb - fa);
+        let p = point_between(hill.system, branch.level, frame, x)?;
+        let st = hill.point(&p).ok()?;
+        let fx = margin(&st);
+        if fx.abs() < best.0 {
+            best = (fx.abs(), Some(p.omega));
+        }
+        if fx.abs() <= 1e-9 * p.omega {
+            break;
+        }
+        if fx * fb < 0.0 {
+            (a, fa) = (b, fb);
+        } else {
+            fa *= 0.5;
+        }
+        (b, fb) = (x, fx);
+    }
+    // A corrector that lands away from its abscissa (a sharp turn between widely spaced
+    // points) makes the margin erratic: only a point close to the limit is taken.
+    (best.0 <= LOCATED_MARGIN * pts[i].omega)
+        .then_some(best.1)
+        .flatten()
 }
 
 /// Indices `i` of the points where the path turns: `(ω_i − ω_{i−1})·(ω_{i+1} − ω_i) < 0`.
@@ -445,15 +515,32 @@ pub fn turning_points(omegas: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-/// The bifurcations between consecutive points of a branch with frequencies `omegas` (rad/s)
-/// and assessments `points` (module documentation).
-pub fn bifurcations(omegas: &[f64], points: &[Stability]) -> Vec<Bifurcation> {
+/// Frequency (rad/s) of the turning point near point `i`: the vertex of the parabola through
+/// the frequencies of points `i − 1, i, i + 1` over their arclength
+/// ([`point_arclengths`]; exact for a quadratic path, where `dω/ds = 0`).
+pub fn turning_frequency(points: &[HbmPoint], i: usize) -> f64 {
+    let (_, _, s) = point_arclengths([&points[i - 1], &points[i], &points[i + 1]]);
+    let w = [points[i - 1].omega, points[i].omega, points[i + 1].omega];
+    let d01 = (w[1] - w[0]) / (s[1] - s[0]);
+    let d12 = (w[2] - w[1]) / (s[2] - s[1]);
+    let c = (d12 - d01) / (s[2] - s[0]);
+    if !(c.is_finite() && c != 0.0) {
+        return w[1];
+    }
+    let x = (0.5 * (s[0] + s[1]) - d01 / (2.0 * c)).clamp(s[0], s[2]);
+    w[0] + d01 * (x - s[0]) + c * (x - s[0]) * (x - s[1])
+}
+
+/// The bifurcations between consecutive points of a branch (`points`) with their assessments
+/// `stability` (module documentation).
+pub fn bifurcations(points: &[HbmPoint], stability: &[Stability]) -> Vec<Bifurcation> {
     const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
-    let turns = turning_points(omegas);
+    let omegas: Vec<f64> = points.iter().map(|p| p.omega).collect();
+    let turns = turning_points(&omegas);
     let mut used_turns = vec![false; turns.len()];
     let mut out = Vec::new();
-    for i in 0..points.len().saturating_sub(1) {
-        let (a, b) = (&points[i], &points[i + 1]);
+    for i in 0..stability.len().saturating_sub(1) {
+        let (a, b) = (&stability[i], &stability[i + 1]);
         let (ca, cb) = (a.unstable_counts(), b.unstable_counts());
         // Where the largest real part changes sign, interpolate; otherwise the midpoint.
         let (ra, rb) = (
@@ -465,40 +552,32 @@ pub fn bifurcations(omegas: &[f64], points: &[Stability]) -> Vec<Bifurcation> {
         } else {
             0.5 * (omegas[i] + omegas[i + 1])
         };
+        let mut push = |kind, omega: f64| {
+            out.push(Bifurcation {
+                kind,
+                after_point: i,
+                frequency_hz: omega / TWO_PI,
+                exponent_crossing: true,
+            })
+        };
         if ca.0 != cb.0 {
             let turn = turns
                 .iter()
                 .position(|&t| t == i || t == i + 1)
                 .filter(|&k| !used_turns[k]);
-            let kind = match turn {
+            match turn {
                 Some(k) => {
                     used_turns[k] = true;
-                    BifurcationKind::Fold
+                    push(BifurcationKind::Fold, turning_frequency(points, turns[k]));
                 }
-                None => BifurcationKind::BranchPoint,
-            };
-            out.push(Bifurcation {
-                kind,
-                after_point: i,
-                frequency_hz: crossing / TWO_PI,
-                exponent_crossing: true,
-            });
+                None => push(BifurcationKind::BranchPoint, crossing),
+            }
         }
         if ca.1 != cb.1 {
-            out.push(Bifurcation {
-                kind: BifurcationKind::PeriodDoubling,
-                after_point: i,
-                frequency_hz: crossing / TWO_PI,
-                exponent_crossing: true,
-            });
+            push(BifurcationKind::PeriodDoubling, crossing);
         }
         if ca.2 != cb.2 {
-            out.push(Bifurcation {
-                kind: BifurcationKind::NeimarkSacker,
-                after_point: i,
-                frequency_hz: crossing / TWO_PI,
-                exponent_crossing: true,
-            });
+            push(BifurcationKind::NeimarkSacker, crossing);
         }
     }
     for (k, &t) in turns.iter().enumerate() {
@@ -506,7 +585,7 @@ pub fn bifurcations(omegas: &[f64], points: &[Stability]) -> Vec<Bifurcation> {
             out.push(Bifurcation {
                 kind: BifurcationKind::Fold,
                 after_point: t.saturating_sub(1),
-                frequency_hz: omegas[t] / TWO_PI,
+                frequency_hz: turning_frequency(points, t) / TWO_PI,
                 exponent_crossing: false,
             });
         }
@@ -636,7 +715,21 @@ mod tests {
             st(&stable, omegas[5]),
             st(&complex_unstable, omegas[6]),
         ];
-        let b = bifurcations(&omegas, &pts);
+        let points: Vec<HbmPoint> = omegas
+            .iter()
+            .enumerate()
+            .map(|(i, &omega)| HbmPoint {
+                omega,
+                level: 1.0,
+                z: DVector::from_element(1, i as f64),
+                iterations: 0,
+                residual: 0.0,
+                converged: true,
+                periodicity_error: 0.0,
+                wall_time_s: 0.0,
+            })
+            .collect();
+        let b = bifurcations(&points, &pts);
         let kinds: Vec<BifurcationKind> = b.iter().map(|b| b.kind).collect();
         assert_eq!(
             kinds,
