@@ -17,6 +17,7 @@ use asperity::dynamics::aft::Harmonics;
 use asperity::dynamics::continuation::{sweep, ContinuationSettings};
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmPoint, HbmSystem};
 use asperity::dynamics::model::Structure;
+use asperity::dynamics::report::{plot_frf_family, summarise};
 use asperity::dynamics::stability::{branch_stability, BifurcationKind, HillAnalysis};
 use asperity::element::cubic::CubicSpring;
 use nalgebra::{Complex, DMatrix, DVector, Matrix2};
@@ -171,6 +172,14 @@ fn duffing_branch_between_the_folds_is_unstable() {
         b.points.len()
     );
     assert!(unstable >= 5, "{unstable} unstable points");
+    // The FRF plot draws the unstable piece dashed (its drawing must not fail).
+    let row = DVector::from_element(1, 1.0);
+    let mut level = summarise(&sys, d.force, b.clone(), &row);
+    level.stability = Some(st.clone());
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("frf.png");
+    plot_frf_family(&png, &sys, "x", &row, &[level], true).unwrap();
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
     let folds = d.folds(TWO_PI * 8.0, TWO_PI * 14.0);
     assert_eq!(folds.len(), 2, "{folds:?}");
     assert_eq!(st.bifurcations.len(), 2, "{:?}", st.bifurcations);

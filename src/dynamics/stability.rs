@@ -101,6 +101,41 @@ pub const DUPLICATE_TOLERANCE: f64 = 1e-3;
 /// A Floquet multiplier is taken as real when `|Im μ| ≤ REAL_MULTIPLIER_TOLERANCE·|μ|`.
 pub const REAL_MULTIPLIER_TOLERANCE: f64 = 1e-3;
 
+/// Whether `asperity response` assesses the stability of its points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StabilityChoice {
+    /// When Hill's companion matrix has at most [`AUTO_MAX_COMPANION`] rows.
+    Auto,
+    /// Always.
+    On,
+    /// Never.
+    Off,
+}
+
+/// Largest companion matrix (`2·n·len` rows) assessed by [`StabilityChoice::Auto`]: its
+/// eigen-solve costs about as much as the Jacobian at the point, so that the assessment adds
+/// about half the sweep's time (BENCHMARKS.md); the eigen-solve's cost grows as the cube of the
+/// size (about 1.5 s per point at 900 rows, twenty times the sweep's time per point).
+pub const AUTO_MAX_COMPANION: usize = 256;
+
+impl StabilityChoice {
+    /// Whether the points of `system` are assessed.
+    pub fn assesses(self, system: &HbmSystem<'_>) -> bool {
+        match self {
+            Self::On => true,
+            Self::Off => false,
+            Self::Auto => companion_size(system) <= AUTO_MAX_COMPANION,
+        }
+    }
+}
+
+/// Rows of Hill's companion matrix for `system`: `2·n·len` (the full model's coordinates, whatever
+/// the formulation of the solve).
+pub fn companion_size(system: &HbmSystem<'_>) -> usize {
+    2 * system.structure.n() * system.harmonics.len()
+}
+
 /// Stability of one periodic solution.
 #[derive(Debug, Clone)]
 pub struct Stability {
@@ -377,6 +412,18 @@ pub enum BifurcationKind {
     /// A complex pair of multipliers crosses the unit circle (secondary Hopf, quasi-periodic
     /// motion nearby).
     NeimarkSacker,
+}
+
+impl BifurcationKind {
+    /// The name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fold => "fold",
+            Self::BranchPoint => "branch point",
+            Self::PeriodDoubling => "period doubling",
+            Self::NeimarkSacker => "Neimark–Sacker",
+        }
+    }
 }
 
 /// A bifurcation located between two consecutive points of a branch.
