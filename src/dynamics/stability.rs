@@ -337,11 +337,18 @@ pub fn floquet_exponents(
 
 /// Stability of the solution with Floquet exponents `exponents` (1/s) at `omega`.
 pub fn verdict(exponents: &[Complex<f64>], omega: f64) -> (f64, bool) {
+    // A NaN exponent (a failed assessment) makes the largest real part NaN: not called stable.
     let max_re = exponents
         .iter()
         .map(|s| s.re)
-        .fold(f64::NEG_INFINITY, f64::max);
-    (max_re, !(max_re > UNSTABLE_TOLERANCE * omega))
+        .fold(f64::NEG_INFINITY, |m, r| {
+            if m.is_nan() || r.is_nan() {
+                f64::NAN
+            } else {
+                m.max(r)
+            }
+        });
+    (max_re, max_re <= UNSTABLE_TOLERANCE * omega)
 }
 
 /// Hill's method for the points of a harmonic-balance system: holds the coordinates
