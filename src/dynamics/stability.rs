@@ -84,7 +84,7 @@
 //! 2019). A slip phase contributes a zero tangent, a stick phase the stick stiffness.
 
 use crate::core::error::{Error, Result};
-use crate::dynamics::aft::Harmonics;
+use crate::dynamics::aft::{Harmonics, WarmStart};
 use crate::dynamics::continuation::{point_arclengths, point_between, Branch};
 use crate::dynamics::hbm::{Formulation, FormulationChoice, HbmPoint, HbmSystem};
 use nalgebra::{Complex, DMatrix};
@@ -381,6 +381,17 @@ impl<'s, 'a> HillAnalysis<'s, 'a> {
 
     /// Stability of one point of the system (module documentation).
     pub fn point(&self, point: &HbmPoint) -> Result<Stability> {
+        Ok(self.point_from(point, None)?.0)
+    }
+
+    /// [`HillAnalysis::point`] with the elements' periodic states searched from `warm` (the
+    /// states of a nearby point, as [`HbmSystem::evaluate_from`]: the same Jacobian within the
+    /// AFT's periodicity tolerance, in fewer periods); returns the point's states too.
+    pub fn point_from(
+        &self,
+        point: &HbmPoint,
+        warm: Option<&[WarmStart]>,
+    ) -> Result<(Stability, Vec<WarmStart>)> {
         let t0 = Instant::now();
         let (full, q) = match &self.full {
             None => (self.system, point.z.clone()),
@@ -388,21 +399,25 @@ impl<'s, 'a> HillAnalysis<'s, 'a> {
         };
         let s = full.structure;
         let omega = point.omega;
-        let delta0 = full.evaluate(&q, omega, point.level, true).jacobian;
+        let ev = full.evaluate_from(&q, omega, point.level, true, warm);
+        let (delta0, states) = (ev.jacobian, ev.element_states);
         let nabla = derivative_operator(&full.harmonics, omega);
         let a = companion_matrix(&delta0, &s.mass, &s.damping, &nabla, omega)?;
         let (sigma, schur_residual) = eigenvalues(&a)?;
         let values: Vec<Complex<f64>> = sigma.iter().map(|v| v * omega).collect();
         let exponents = floquet_exponents(&values, omega, 2 * s.n());
         let (max_real_part, stable) = verdict(&exponents, omega);
-        Ok(Stability {
-            exponents,
-            max_real_part,
-            stable,
-            schur_residual,
-            omega,
-            wall_time_s: t0.elapsed().as_secs_f64(),
-        })
+        Ok((
+            Stability {
+                exponents,
+                max_real_part,
+                stable,
+                schur_residual,
+                omega,
+                wall_time_s: t0.elapsed().as_secs_f64(),
+            },
+            states,
+        ))
     }
 }
 
@@ -478,11 +493,28 @@ impl BranchStability {
 pub fn branch_stability(system: &HbmSystem<'_>, branch: &Branch) -> Result<BranchStability> {
     let t0 = Instant::now();
     let hill = HillAnalysis::new(system)?;
+    // One contiguous run of points per thread, each point's element states warm-starting the
+    // next one's.
+    let per_thread = branch
+        .points
+        .len()
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(1);
     let points = branch
         .points
-        .par_iter()
-        .map(|p| hill.point(p))
-        .collect::<Result<Vec<_>>>()?;
+        .par_chunks(per_thread)
+        .map(|run| {
+            let mut warm: Option<Vec<WarmStart>> = None;
+            run.iter()
+                .map(|p| {
+                    let (st, states) = hill.point_from(p, warm.as_deref())?;
+                    warm = Some(states);
+                    Ok(st)
+                })
+                .collect::<Result<Vec<_>>>()
+        })
+        .collect::<Result<Vec<_>>>()?
+        .concat();
     let mut bifurcations = bifurcations(&branch.points, &points);
     for b in bifurcations.iter_mut().filter(|b| b.exponent_crossing) {
         if let Some(w) = locate_crossing(&hill, branch, &points, b.after_point) {
