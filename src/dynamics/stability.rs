@@ -113,10 +113,11 @@ pub enum StabilityChoice {
     Off,
 }
 
-/// Largest companion matrix (`2·n·len` rows) assessed by [`StabilityChoice::Auto`]: its
-/// eigen-solve costs about as much as the Jacobian at the point, so that the assessment adds
-/// about half the sweep's time (BENCHMARKS.md); the eigen-solve's cost grows as the cube of the
-/// size (about 1.5 s per point at 900 rows, twenty times the sweep's time per point).
+/// Largest companion matrix (`2·n·len` rows) assessed by [`StabilityChoice::Auto`]. The
+/// eigen-solve's cost grows as the cube of the size: about 10 ms per point at the blade–damper
+/// example's 132 rows (where the assessment adds half the sweep's CPU time, most of it the
+/// Jacobian at the point), some 50 ms at 256, 1.6 s at 900 (some twenty times the sweep's time
+/// per point; BENCHMARKS.md).
 pub const AUTO_MAX_COMPANION: usize = 256;
 
 impl StabilityChoice {
