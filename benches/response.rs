@@ -5,6 +5,7 @@
 //!     cargo bench --bench response -- --peer-only  # the Jenkins SDOF against pyHarm only
 //!     cargo bench --bench response -- --costs      # costs of one evaluation only
 //!     cargo bench --bench response -- --skip-peers --levels 0.05,0.5  # chosen levels only
+//!     cargo bench --bench response -- --stability  # cost of Hill's stability per point
 //!
 //! The pyHarm comparison runs when the venv of benches/peers/setup_pyharm.sh exists. It is at
 //! equal work: pyHarm runs first, and asperity's `points` is scaled until its branch has
@@ -232,6 +233,10 @@ fn timed(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let only_costs = std::env::args().any(|a| a == "--costs");
+    if std::env::args().any(|a| a == "--stability") {
+        stability_costs(quick);
+        return;
+    }
     if !only_costs && !std::env::args().any(|a| a == "--skip-peers") {
         peers();
     }
@@ -459,5 +464,91 @@ fn costs(sys: &HbmSystem<'_>, s: &Structure, p: &asperity::dynamics::hbm::HbmPoi
         sys.unknowns(),
         lu_w * 1e3,
         lu_c * 1e3
+    );
+}
+
+/// Cost of Hill's stability assessment per point relative to the sweep that computed the points,
+/// levels one after the other (so that neither overlaps another level), wall and CPU time:
+/// the shipped blade–damper example (`calib/response/model.toml`, its four levels) and the
+/// underplatform-damper-size model (one level, 0.5 N, over 850–900 Hz: `quick` 10 points).
+fn stability_costs(quick: bool) {
+    use asperity::dynamics::response::ResponseSettings;
+    use asperity::dynamics::stability::branch_stability;
+    let run = |name: &str, sys: &HbmSystem<'_>, levels: &[f64], settings: &ContinuationSettings| {
+        let n = sys.structure.n();
+        println!(
+            "## {name}: {} coordinates, harmonics {:?}, {} samples, {:?} formulation ({} unknowns); Hill companion matrix {} × {}; rayon threads {}; load average {}",
+            n,
+            sys.harmonics.orders(),
+            sys.harmonics.n_time(),
+            sys.formulation(),
+            sys.unknowns(),
+            2 * n * sys.harmonics.len(),
+            2 * n * sys.harmonics.len(),
+            rayon::current_num_threads(),
+            std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim()
+        );
+        println!("| level (N) | points | sweep wall (s) | sweep CPU (s) | stability wall (s) | stability CPU (s) | stability/sweep wall | stability/sweep CPU | unstable points | bifurcations |\n|---|---|---|---|---|---|---|---|---|---|");
+        let (mut sw, mut sc, mut tw, mut tc) = (0.0, 0.0, 0.0, 0.0);
+        for &level in levels {
+            let (c0, t0) = (cpu_time(), Instant::now());
+            let b =
+                asperity::dynamics::continuation::sweep_partial(sys, level, settings, &mut |_| {})
+                    .unwrap();
+            let (w1, c1) = (t0.elapsed().as_secs_f64(), cpu_time() - c0);
+            let (c0, t0) = (cpu_time(), Instant::now());
+            let st = branch_stability(sys, &b).unwrap();
+            let (w2, c2) = (t0.elapsed().as_secs_f64(), cpu_time() - c0);
+            println!(
+                "| {level} | {} | {w1:.2} | {c1:.2} | {w2:.2} | {c2:.2} | {:.2} | {:.2} | {} | {} |",
+                b.points.len(),
+                w2 / w1,
+                c2 / c1,
+                st.unstable_points(),
+                st.bifurcations.len()
+            );
+            (sw, sc, tw, tc) = (sw + w1, sc + c1, tw + w2, tc + c2);
+        }
+        println!(
+            "all levels: stability/sweep wall {:.2}, CPU {:.2}\n",
+            tw / sw,
+            tc / sc
+        );
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("calib/response/model.toml");
+    let m = asperity::dynamics::model_file::load(&path).unwrap();
+    let rs = ResponseSettings::of_model_file(&m.file.sweep).unwrap();
+    let sys = HbmSystem::new(
+        &m.structure,
+        rs.harmonics.clone(),
+        Excitation {
+            force: m.force.clone(),
+            harmonic: m.file.excitation.harmonic,
+        },
+        rs.formulation,
+    )
+    .unwrap();
+    run(
+        "blade–damper example (calib/response/model.toml)",
+        &sys,
+        &m.file.excitation.levels_n,
+        &rs.continuation,
+    );
+    let (s, force, _) = model();
+    let h = Harmonics::new(7, false, Some(128)).unwrap();
+    let sys = HbmSystem::new(
+        &s,
+        h,
+        Excitation { force, harmonic: 1 },
+        FormulationChoice::Auto,
+    )
+    .unwrap();
+    let mut settings = ContinuationSettings::new(850.0, 900.0);
+    settings.points = if quick { 10 } else { 40 };
+    run(
+        "underplatform-damper size (30 modes, 146 Valanis elements)",
+        &sys,
+        &[0.5],
+        &settings,
     );
 }

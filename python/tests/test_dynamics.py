@@ -54,11 +54,11 @@ def cli_format(name, x):
     """The CLI's formatting of a column value (src/dynamics/report.rs, write_level_csv)."""
     if name.endswith("_phase_rad"):
         return f"{x:.6f}"
-    if name == "newton_iterations":
+    if name in ("newton_iterations", "stable"):
         return str(int(x))
     if name in ("relative_residual", "aft_periodicity_error"):
         return rust_exp(x, 3)
-    if name.endswith("_fraction") or name == "dissipated_energy_J":
+    if name.endswith("_fraction") or name in ("dissipated_energy_J", "floquet_max_real_part_per_s"):
         return rust_exp(x, 6)
     return rust_exp(x, 9)
 

@@ -2,6 +2,7 @@
 
 use asperity::dynamics::model_file;
 use asperity::dynamics::response;
+use asperity::dynamics::stability::StabilityChoice;
 use asperity::{Error, Result};
 use std::path::PathBuf;
 
@@ -15,6 +16,12 @@ pub struct ResponseArgs {
     /// Output directory (CSV per level, element CSV at each peak, FRF PNG, response.json).
     #[arg(long, default_value = "out/response")]
     out_dir: PathBuf,
+    /// Stability of every point by Hill's method: `auto` assesses it when Hill's companion
+    /// matrix (2 × coordinates × harmonic coefficients rows) has at most 256 rows, where it adds
+    /// about half the sweep's time; `on` always (its eigen-solve grows as the cube of the size);
+    /// `off` never.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "on", "off"])]
+    stability: String,
 }
 
 pub fn run(args: ResponseArgs) -> Result<()> {
@@ -22,8 +29,14 @@ pub fn run(args: ResponseArgs) -> Result<()> {
     // would be the model file or a file it names, is refused now.
     let mut out = response::output_set(&args.model, &args.out_dir, "--out-dir")?;
     let model = model_file::load(&args.model)?;
+    let stability = match args.stability.as_str() {
+        "on" => StabilityChoice::On,
+        "off" => StabilityChoice::Off,
+        _ => StabilityChoice::Auto,
+    };
     let run = response::run(
         &model,
+        stability,
         &|len| super::progress_bar("response", len),
         &mut |m| println!("{m}"),
     )?;
@@ -57,6 +70,24 @@ pub fn run(args: ResponseArgs) -> Result<()> {
             r.branch.wall_time_s,
             if r.branch.stopped.is_some() { "; INCOMPLETE" } else { "" }
         );
+        if let Some(st) = &r.stability {
+            let named: Vec<String> = st
+                .bifurcations
+                .iter()
+                .map(|b| format!("{} at {:.4} Hz", b.kind.name(), b.frequency_hz))
+                .collect();
+            println!(
+                "level {} N: stability (Hill): {} of {} points unstable; bifurcations: {}",
+                r.level_n,
+                st.unstable_points(),
+                st.points.len(),
+                if named.is_empty() {
+                    "none".to_string()
+                } else {
+                    named.join(", ")
+                }
+            );
+        }
         if pk.at_sweep_end {
             println!(
                 "warning: level {} N: the largest amplitude is at the end of the sweep ({:.4} Hz): the peak may lie outside the span; widen it",

@@ -19,6 +19,8 @@ pub struct Series {
     pub band: bool,
     /// Colour index into [`series_colour`]; by default the series' position in the plot.
     pub colour: Option<usize>,
+    /// Draw the line dashed (e.g. the unstable part of a branch).
+    pub dashed: bool,
 }
 
 impl Series {
@@ -30,6 +32,7 @@ impl Series {
             markers: false,
             band: false,
             colour: None,
+            dashed: false,
         }
     }
 
@@ -41,6 +44,7 @@ impl Series {
             markers: true,
             band: false,
             colour: None,
+            dashed: false,
         }
     }
 
@@ -55,12 +59,20 @@ impl Series {
             markers: false,
             band: true,
             colour: None,
+            dashed: false,
         }
     }
 
     /// The same series drawn in colour `i` of [`series_colour`] (e.g. a band and its mean line).
     pub fn with_colour(mut self, i: usize) -> Self {
         self.colour = Some(i);
+        self
+    }
+
+    /// The same line drawn dashed. A series with an empty label has no legend entry (e.g. the
+    /// further pieces of a curve drawn in parts).
+    pub fn dashed(mut self) -> Self {
+        self.dashed = true;
         self
     }
 }
@@ -197,11 +209,21 @@ where
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))?
                 .label(s.label.clone())
                 .legend(move |(x, y)| Circle::new((x + 10, y), 3, colour.filled()));
+        } else if s.dashed {
+            let drawn =
+                chart.draw_series(DashedLineSeries::new(pts, 6, 4, colour.stroke_width(2)))?;
+            if !s.label.is_empty() {
+                drawn.label(s.label.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 7, y)], colour.stroke_width(2))
+                });
+            }
         } else {
-            chart
-                .draw_series(LineSeries::new(pts, colour.stroke_width(2)))?
-                .label(s.label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+            let drawn = chart.draw_series(LineSeries::new(pts, colour.stroke_width(2)))?;
+            if !s.label.is_empty() {
+                drawn
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+            }
         }
     }
     chart

@@ -10,6 +10,7 @@
 //!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
 //!   ──► continuation (pseudo-arclength in frequency, turning points)
 //!   ──► nonlinear_modes (EPMC: backbone and modal damping against modal amplitude)
+//!   ──► stability (Hill's method at every point, bifurcations named)
 //! time_integration: reference steady state by Newmark time stepping (validation)
 //! transient: free decay by the same time stepping, frequency and damping per period
 //! ```
@@ -29,5 +30,6 @@ pub mod modes;
 pub mod nonlinear_modes;
 pub mod report;
 pub mod response;
+pub mod stability;
 pub mod time_integration;
 pub mod transient;

@@ -7,6 +7,7 @@ use crate::core::plot::{line_plot, LinePlot, Scale, Series};
 use crate::dynamics::aft::ElementCycle;
 use crate::dynamics::continuation::Branch;
 use crate::dynamics::hbm::{HbmPoint, HbmSystem};
+use crate::dynamics::stability::BranchStability;
 use nalgebra::DVector;
 use std::path::Path;
 
@@ -27,6 +28,8 @@ pub struct LevelResult {
     pub interpolated_peak: Peak,
     /// Element cycles at the peak.
     pub peak_elements: Vec<ElementCycle>,
+    /// Stability of every point by Hill's method (`None`: not assessed).
+    pub stability: Option<BranchStability>,
 }
 
 /// The resonance peak of a branch: amplitude (at the excitation's harmonic) and frequency.
@@ -252,6 +255,7 @@ pub fn summarise(
         totals,
         peak,
         peak_elements,
+        stability: None,
     }
 }
 
@@ -261,8 +265,10 @@ pub fn summarise(
 /// elements), the element-averaged `stick_fraction`, `slip_fraction`, `separation_fraction`,
 /// `newton_iterations`, `relative_residual` and `aft_periodicity_error` (the largest relative
 /// periodicity error of an element's AFT state at the point; above the AFT tolerance, 1e-12 by
-/// default, an element did not reach its periodic state within the period cap). One value per
-/// branch point.
+/// default, an element did not reach its periodic state within the period cap); when the
+/// stability was assessed, `stable` (1 or 0, Hill's method,
+/// [`crate::dynamics::stability`]) and `floquet_max_real_part_per_s` (the largest real part of
+/// the kept Floquet exponents, 1/s). One value per branch point.
 pub fn level_columns(
     system: &HbmSystem<'_>,
     responses: &[(String, DVector<f64>)],
@@ -326,6 +332,19 @@ pub fn level_columns(
         "aft_periodicity_error".to_string(),
         points.iter().map(|p| p.periodicity_error).collect(),
     ));
+    if let Some(st) = &result.stability {
+        cols.push((
+            "stable".to_string(),
+            st.points
+                .iter()
+                .map(|s| f64::from(u8::from(s.stable)))
+                .collect(),
+        ));
+        cols.push((
+            "floquet_max_real_part_per_s".to_string(),
+            st.points.iter().map(|s| s.max_real_part).collect(),
+        ));
+    }
     cols
 }
 
@@ -372,6 +391,9 @@ pub fn write_level_csv(
         writeln!(w, "# units: frequency_Hz in Hz; amplitudes in m (h0: mean displacement); phase_rad = arg(a − i·b) of x = a·cos(kωt) + b·sin(kωt), relative to the force cos(ωt);").map_err(io)?;
         writeln!(w, "#   dissipated_energy_J: sum over elements of ∮f·du per cycle; stick/slip/separation: element-averaged fractions of the period;").map_err(io)?;
         writeln!(w, "#   relative_residual: harmonic-balance residual / its scale; aft_periodicity_error: largest relative periodicity error of an element's AFT state (above {:.0e}: not periodic within {} periods)", system.aft.periodicity_tolerance, system.aft.max_periods).map_err(io)?;
+        if result.stability.is_some() {
+            writeln!(w, "#   stable: 1 if no Floquet exponent of Hill's method has a real part above {:.0e}·ω, else 0; floquet_max_real_part_per_s: the largest real part of the kept exponents (1/s)", crate::dynamics::stability::UNSTABLE_TOLERANCE).map_err(io)?;
+        }
         let names: Vec<&str> = cols.iter().map(|(n, _)| n.as_str()).collect();
         writeln!(w, "{}", names.join(",")).map_err(io)?;
         for i in 0..result.branch.points.len() {
@@ -381,11 +403,14 @@ pub fn write_level_csv(
                     let x = values[i];
                     if name.ends_with("_phase_rad") {
                         format!("{x:.6}")
-                    } else if name == "newton_iterations" {
+                    } else if name == "newton_iterations" || name == "stable" {
                         format!("{}", x as usize)
                     } else if name == "relative_residual" || name == "aft_periodicity_error" {
                         format!("{x:.3e}")
-                    } else if name.ends_with("_fraction") || name == "dissipated_energy_J" {
+                    } else if name.ends_with("_fraction")
+                        || name == "dissipated_energy_J"
+                        || name == "floquet_max_real_part_per_s"
+                    {
                         format!("{x:.6e}")
                     } else {
                         format!("{x:.9e}")
@@ -437,9 +462,26 @@ pub fn write_elements_csv(path: &Path, system: &HbmSystem<'_>, result: &LevelRes
     })
 }
 
+/// A branch's polyline cut into pieces by stability: a segment is drawn dashed when either of
+/// its points is unstable; consecutive segments of one style form one piece (`(points, dashed)`).
+fn stability_pieces(pts: &[(f64, f64)], stable: &[bool]) -> Vec<(Vec<(f64, f64)>, bool)> {
+    if pts.len() < 2 {
+        return vec![(pts.to_vec(), stable.first().is_some_and(|s| !s))];
+    }
+    let mut pieces: Vec<(Vec<(f64, f64)>, bool)> = Vec::new();
+    for i in 0..pts.len() - 1 {
+        let dashed = !(stable[i] && stable[i + 1]);
+        match pieces.last_mut() {
+            Some((piece, d)) if *d == dashed => piece.push(pts[i + 1]),
+            _ => pieces.push((vec![pts[i], pts[i + 1]], dashed)),
+        }
+    }
+    pieces
+}
+
 /// PNG of the FRF family: the receptance at the excitation's harmonic `e`, `|X_e|/F` (m/N), of
 /// one response DOF versus frequency, one curve per level (`e = 1` unless the drive is at a
-/// higher harmonic); with `row_is_peak_row` (the DOF the peaks are found on) a marker at each
+/// higher harmonic), dashed where Hill's method finds the points unstable; with `row_is_peak_row` (the DOF the peaks are found on) a marker at each
 /// level's interpolated peak.
 pub fn plot_frf_family(
     path: &Path,
@@ -449,25 +491,43 @@ pub fn plot_frf_family(
     results: &[LevelResult],
     row_is_peak_row: bool,
 ) -> Result<()> {
-    let series: Vec<Series> = results
-        .iter()
-        .map(|r| {
-            let pts = r
-                .branch
-                .points
-                .iter()
-                .map(|p| {
-                    let x = system.coordinates(p);
-                    let (a, _) = harmonic_of(system, &x, row, system.excitation.harmonic);
-                    (p.omega / TWO_PI, a / r.level_n)
-                })
-                .collect();
-            Series::line(format!("F = {} N", r.level_n), pts)
-        })
-        .collect();
+    let mut series = Vec::new();
+    let mut any_unstable = false;
+    for (i, r) in results.iter().enumerate() {
+        let pts: Vec<(f64, f64)> = r
+            .branch
+            .points
+            .iter()
+            .map(|p| {
+                let x = system.coordinates(p);
+                let (a, _) = harmonic_of(system, &x, row, system.excitation.harmonic);
+                (p.omega / TWO_PI, a / r.level_n)
+            })
+            .collect();
+        let stable: Vec<bool> = match &r.stability {
+            Some(st) => st.points.iter().map(|s| s.stable).collect(),
+            None => vec![true; pts.len()],
+        };
+        any_unstable |= stable.iter().any(|s| !s);
+        for (k, (piece, dashed)) in stability_pieces(&pts, &stable).into_iter().enumerate() {
+            let label = if k == 0 {
+                format!("F = {} N", r.level_n)
+            } else {
+                String::new()
+            };
+            let s = Series::line(label, piece).with_colour(i);
+            series.push(if dashed { s.dashed() } else { s });
+        }
+    }
+    if any_unstable {
+        series.push(
+            Series::line("unstable (Hill's method)", Vec::new())
+                .with_colour(7)
+                .dashed(),
+        );
+    }
     // On the first response DOF's plot, the interpolated peaks: one marker per level in its
     // colour.
-    let mut series = series;
     if row_is_peak_row {
         for (i, r) in results.iter().enumerate() {
             let pk = &r.interpolated_peak;

@@ -12,7 +12,9 @@
 //!    excitation ([`HbmSystem`]); described to the caller's log.
 //! 3. **Sweeps**: every level is an independent pseudo-arclength continuation over the span
 //!    ([`sweep_partial`]), run concurrently, and summarised: element cycles along the branch and
-//!    the peak of the first response ([`report::summarise`]); [`sweep_level`] is one of them.
+//!    the peak of the first response ([`report::summarise`]), and the stability of every point
+//!    with the bifurcations between them ([`stability::branch_stability`], Hill's method; as
+//!    the [`StabilityChoice`] says); [`sweep_level`] is one of them.
 //!    A level whose sweep stops early keeps its points (reported with the reason); one whose
 //!    first point fails has nothing to report. Either way the other levels are reported; the
 //!    run fails only when no level has a point.
@@ -28,6 +30,7 @@ use crate::dynamics::continuation::{sweep_partial, ContinuationSettings};
 use crate::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use crate::dynamics::model_file::{self, LoadedModel, SweepSection};
 use crate::dynamics::report::{self, LevelResult};
+use crate::dynamics::stability::{self, StabilityChoice};
 use crate::elements::{provenance_json, InputFile};
 use nalgebra::DVector;
 use rayon::prelude::*;
@@ -91,7 +94,8 @@ pub fn output_set(model: &Path, out_dir: &Path, flag: &str) -> Result<OutputSet>
 
 /// One level: the continuation over the settings' span at excitation `level_n` (N), kept up to
 /// where it stopped ([`sweep_partial`]), summarised with the peak of the response `peak_row`
-/// ([`report::summarise`]). `progress(fraction)` follows the span covered.
+/// ([`report::summarise`]), with the stability of its points when Hill's problem is small
+/// ([`StabilityChoice::Auto`]). `progress(fraction)` follows the span covered.
 pub fn sweep_level(
     system: &HbmSystem<'_>,
     level_n: f64,
@@ -99,8 +103,32 @@ pub fn sweep_level(
     peak_row: &DVector<f64>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<LevelResult> {
+    sweep_level_with(
+        system,
+        level_n,
+        settings,
+        peak_row,
+        StabilityChoice::Auto,
+        progress,
+    )
+}
+
+/// [`sweep_level`] with the stability of every point assessed as `stability` says
+/// ([`crate::dynamics::stability`]; in [`LevelResult::stability`]).
+pub fn sweep_level_with(
+    system: &HbmSystem<'_>,
+    level_n: f64,
+    settings: &ContinuationSettings,
+    peak_row: &DVector<f64>,
+    stability: StabilityChoice,
+    progress: &mut dyn FnMut(f64),
+) -> Result<LevelResult> {
     let branch = sweep_partial(system, level_n, settings, progress)?;
-    Ok(report::summarise(system, level_n, branch, peak_row))
+    let mut result = report::summarise(system, level_n, branch, peak_row);
+    if stability.assesses(system) {
+        result.stability = Some(stability::branch_stability(system, &result.branch)?);
+    }
+    Ok(result)
 }
 
 /// What `asperity response` computed: the system and a result per level that has points.
@@ -118,14 +146,18 @@ pub struct ForcedResponse<'a> {
     /// Levels that stopped early (their points are in [`Self::results`]) or have no point,
     /// with the reason.
     pub failures: Vec<String>,
+    /// How the stability was to be assessed, and whether it was.
+    pub stability: serde_json::Value,
 }
 
-/// Sweep every excitation level of `model` (steps in the [module documentation](self)).
+/// Sweep every excitation level of `model` (steps in the [module documentation](self)), with the
+/// stability of the points assessed as `stability` says.
 /// `progress` makes the progress bar for a length (1000 per level); `log` takes the description
 /// of the system before the sweeps. Errors: invalid settings or system, or no level with a
 /// point (naming each level's failure).
 pub fn run<'a>(
     model: &'a LoadedModel,
+    stability: StabilityChoice,
     progress: &dyn Fn(u64) -> indicatif::ProgressBar,
     log: &mut dyn FnMut(&str),
 ) -> Result<ForcedResponse<'a>> {
@@ -156,6 +188,16 @@ pub fn run<'a>(
         system.formulation(),
         system.unknowns()
     ));
+    let assessed = stability.assesses(&system);
+    log(&format!(
+        "stability (Hill's method, {0} × {0} companion matrix per point): {1}",
+        stability::companion_size(&system),
+        match (stability, assessed) {
+            (_, true) => "assessed at every point",
+            (StabilityChoice::Off, false) => "not assessed (--stability off)",
+            _ => "not assessed: the matrix is large and its eigen-solve would dominate the run (--stability on to assess)",
+        }
+    ));
     let levels = &f.excitation.levels_n;
     let bar = progress((levels.len() * 1000) as u64);
     bar.set_message(format!("{} levels", levels.len()));
@@ -168,11 +210,16 @@ pub fn run<'a>(
         .par_iter()
         .enumerate()
         .map(|(i, &level)| {
-            sweep_level(
+            sweep_level_with(
                 &system,
                 level,
                 &settings.continuation,
                 &model.responses[0].1,
+                if assessed {
+                    StabilityChoice::On
+                } else {
+                    StabilityChoice::Off
+                },
                 &mut |frac| {
                     covered[i].store((frac * 1000.0) as u64, Ordering::Relaxed);
                     bar.set_position(covered.iter().map(|p| p.load(Ordering::Relaxed)).sum());
@@ -204,10 +251,29 @@ pub fn run<'a>(
     Ok(ForcedResponse {
         model,
         settings,
+        stability: serde_json::json!({
+            "choice": stability,
+            "assessed": assessed,
+            "companion_size": stability::companion_size(&system),
+            "auto_max_companion": stability::AUTO_MAX_COMPANION,
+            "unstable_tolerance_per_omega": stability::UNSTABLE_TOLERANCE,
+        }),
         system,
         results,
         numbers,
         failures,
+    })
+}
+
+/// A level's stability summary in `response.json`: the method, the unstable points, the
+/// bifurcations named between points, the eigen-solves' largest backward error and the time.
+fn stability_json(st: &stability::BranchStability) -> serde_json::Value {
+    serde_json::json!({
+        "method": "Hill (harmonic balance Jacobian, smallest |Im| sorting)",
+        "unstable_points": st.unstable_points(),
+        "bifurcations": st.bifurcations,
+        "max_schur_residual": st.max_schur_residual(),
+        "wall_time_s": st.wall_time_s,
     })
 }
 
@@ -299,6 +365,7 @@ impl ForcedResponse<'_> {
                 "max_periodicity_error": worst,
                 "points_not_periodic": non_periodic,
                 "wall_time_s": r.branch.wall_time_s,
+                "stability": r.stability.as_ref().map(stability_json),
             }));
         }
         for (k, (label, row)) in model.responses.iter().enumerate() {
@@ -323,6 +390,7 @@ impl ForcedResponse<'_> {
                 "newton": system.newton,
                 "aft": system.aft,
                 "continuation": self.settings.continuation,
+                "stability": self.stability,
             }),
             serde_json::json!({
                 "elements": model.structure.elements.len(),
