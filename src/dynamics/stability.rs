@@ -545,10 +545,10 @@ fn margin(st: &Stability) -> f64 {
 /// the stability limit between points `i` and `i + 1`: regula falsi (Illinois) along the
 /// arclength, each abscissa solved on the branch ([`point_between`], the parabola through three
 /// consecutive points and the bordered corrector) and assessed, until the margin is below
-/// `1e-9·ω` or after [`LOCATE_SOLVES`] solves. `None` when the margin does not change sign
+/// `1e-9·ω` or after `LOCATE_SOLVES` solves. `None` when the margin does not change sign
 /// between the two points (another exponent crossed on an unstable branch), the branch has
 /// fewer than three points, a solve fails, or no solved point came within
-/// [`LOCATED_MARGIN`]`·ω` of the limit (the caller keeps its estimate).
+/// `LOCATED_MARGIN·ω` of the limit (the caller keeps its estimate).
 pub fn locate_crossing(
     hill: &HillAnalysis<'_, '_>,
     branch: &Branch,
