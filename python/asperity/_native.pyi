@@ -29,6 +29,7 @@ __all__ = [
     "Convergence",
     "ConvergenceCheck",
     "CycleEnergy",
+    "DecayResult",
     "DiagnoseErrors",
     "DiagnoseReport",
     "ElementSummary",
