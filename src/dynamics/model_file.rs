@@ -632,6 +632,15 @@ impl Kinematics {
     }
 }
 
+/// Declare the model file's referenced files ([`referenced_files`]) as inputs of `out`: no
+/// output of a command that reads the model may be one of them.
+pub fn declare_inputs(out: &mut crate::core::output::OutputSet, model: &Path) -> Result<()> {
+    for (role, p) in referenced_files(model)? {
+        out.input(&p, &format!("{role} of {}", model.display()))?;
+    }
+    Ok(())
+}
+
 /// `(role, path)` of the model file and of every file it names (matrices or modes and shapes,
 /// element tables, node pairs), paths resolved against the model file's directory, without
 /// reading those files: the inputs a command declares before it writes anything.

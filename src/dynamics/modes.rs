@@ -48,9 +48,7 @@ pub const FILES: [&str; 6] = [
 pub fn output_set(model: &Path, out_dir: &Path, flag: &str) -> Result<OutputSet> {
     let mut out = OutputSet::in_dir(out_dir, flag)?;
     out.writes(&FILES)?;
-    for (role, p) in model_file::referenced_files(model)? {
-        out.input(&p, &format!("{role} of {}", model.display()))?;
-    }
+    model_file::declare_inputs(&mut out, model)?;
     Ok(out)
 }
 

@@ -86,9 +86,7 @@ pub fn output_set(model: &Path, out_dir: &Path, flag: &str) -> Result<OutputSet>
         out.owns(prefix, suffix)?;
     }
     out.writes(&["response.json"])?;
-    for (role, p) in model_file::referenced_files(model)? {
-        out.input(&p, &format!("{role} of {}", model.display()))?;
-    }
+    model_file::declare_inputs(&mut out, model)?;
     Ok(out)
 }
 

@@ -322,9 +322,7 @@ pub fn output_set(
 ) -> Result<OutputSet> {
     let mut out = OutputSet::in_dir(out_dir, flag)?;
     out.writes(&OUTPUTS)?;
-    for (role, p) in model_file::referenced_files(model)? {
-        out.input(&p, &format!("{role} of {}", model.display()))?;
-    }
+    model_file::declare_inputs(&mut out, model)?;
     Ok(out)
 }
 

@@ -779,21 +779,10 @@ fn check_history(q: &[f64], fz: &[f64]) -> Result<()> {
 /// `fz[i]` (same length; `fz ≤ 0` is separation). `F[0] = 0`.
 pub fn integrate(p: &ValanisParams, q: &[f64], fz: &[f64], method: Integrator) -> Result<Vec<f64>> {
     p.validate()?;
-    check_history(q, fz)?;
-    let mut out = Vec::with_capacity(q.len());
-    let Some((&q_first, &fz_first)) = q.first().zip(fz.first()) else {
-        return Ok(out);
-    };
-    let mut state = ValanisState::virgin(q_first, fz_first);
-    out.push(state.force);
-    for (&qi, &fzi) in q.iter().zip(fz).skip(1) {
-        state = match method {
-            Integrator::ImplicitEuler => implicit_euler_step(p, &state, qi, fzi),
-            Integrator::Reference => reference_step(p, &state, qi, fzi)?,
-        };
-        out.push(state.force);
-    }
-    Ok(out)
+    drive(q, fz, |state, qi, fzi| match method {
+        Integrator::ImplicitEuler => Ok(implicit_euler_step(p, state, qi, fzi)),
+        Integrator::Reference => reference_step(p, state, qi, fzi),
+    })
 }
 
 /// [`integrate`] with [`Integrator::ImplicitEuler`].
@@ -949,6 +938,18 @@ pub fn integrate_load_dependent(
     q: &[f64],
     fz: &[f64],
 ) -> Result<Vec<f64>> {
+    drive(q, fz, |state, qi, fzi| {
+        load_dependent_reference_step(element, state, qi, fzi)
+    })
+}
+
+/// Force history of a virgin element driven by `q[i]` under `fz[i]`, one increment at a time by
+/// `step` (the history checked first); `F[0] = 0`.
+fn drive(
+    q: &[f64],
+    fz: &[f64],
+    mut step: impl FnMut(&ValanisState, f64, f64) -> Result<ValanisState>,
+) -> Result<Vec<f64>> {
     check_history(q, fz)?;
     let mut out = Vec::with_capacity(q.len());
     let Some((&q_first, &fz_first)) = q.first().zip(fz.first()) else {
@@ -957,7 +958,7 @@ pub fn integrate_load_dependent(
     let mut state = ValanisState::virgin(q_first, fz_first);
     out.push(state.force);
     for (&qi, &fzi) in q.iter().zip(fz).skip(1) {
-        state = load_dependent_reference_step(element, &state, qi, fzi)?;
+        state = step(&state, qi, fzi)?;
         out.push(state.force);
     }
     Ok(out)
