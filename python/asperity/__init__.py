@@ -74,7 +74,7 @@ from .contact import (
     normal_sweep,
     tangential_sweep,
 )
-from .dynamics import DecayResult, ResponseModel, SweepResult
+from .dynamics import DecayResult, NonlinearModeResult, ResponseModel, SweepResult
 from .film import (
     ClassCounts,
     FilmMap,
@@ -205,6 +205,7 @@ __all__ = [
     "ResponseModel",
     "SweepResult",
     "DecayResult",
+    "NonlinearModeResult",
     "read_record",
     "Record",
     "diagnose",

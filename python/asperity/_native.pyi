@@ -43,6 +43,7 @@ __all__ = [
     "NodeClassReading",
     "NodePlacement",
     "NodeSummary",
+    "NonlinearModeResult",
     "NormalSolution",
     "NormalSolver",
     "NotFitted",
@@ -1493,6 +1494,54 @@ class ResponseModel:
         """Free decay (ring-down) by Newmark time integration with the elements, from rest in
         the linearised (stuck) mode ``mode``, the first response starting at ``amplitude_m``
         (m); frequency and damping ratio per period (``asperity decay``)."""
+    def nonlinear_mode(
+        self,
+        amplitude_min_m_sqrt_kg: float,
+        amplitude_max_m_sqrt_kg: float,
+        *,
+        mode: int = 1,
+        points: int = 60,
+        harmonics: Optional[int] = None,
+        odd_only: Optional[bool] = None,
+        time_samples: Optional[int] = None,
+    ) -> "NonlinearModeResult":
+        """Nonlinear mode ``mode`` by the extended periodic motion concept (``asperity
+        modes``): ``points`` modal amplitudes log-spaced between the two bounds (m·kg^½),
+        continued from the linear mode with the elements stuck; harmonics as in ``sweep``."""
+
+@final
+class NonlinearModeResult:
+    """A nonlinear mode (``asperity modes``): frequency, modal damping ratio, element energies
+    and coordinate harmonics per modal amplitude."""
+
+    @property
+    def mode(self) -> int: ...
+    @property
+    def linear_frequency_hz(self) -> float: ...
+    @property
+    def linear_damping_ratio(self) -> float: ...
+    @property
+    def modal_amplitude_m_sqrt_kg(self) -> F64Array: ...
+    @property
+    def frequency_hz(self) -> F64Array: ...
+    @property
+    def damping_ratio(self) -> F64Array: ...
+    @property
+    def element_energy_j(self) -> F64Array:
+        """Energy all elements dissipate per cycle (J)."""
+    @property
+    def energy_per_element_j(self) -> F64Array:
+        """(points, elements) energy per cycle of every element (J)."""
+    @property
+    def coordinate_harmonics(self) -> F64Array:
+        """(points, n, coefficients) harmonic coefficients of every coordinate (m)."""
+    @property
+    def harmonic_orders(self) -> List[int]: ...
+    @property
+    def stopped(self) -> Optional[str]:
+        """Why the continuation stopped before the last amplitude; None when complete."""
+    @property
+    def wall_time_s(self) -> float: ...
 
 @final
 class DecayResult:

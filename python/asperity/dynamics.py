@@ -1,9 +1,9 @@
 """Structural dynamics with the calibrated contact elements: forced response by harmonic
-balance and time integration of a linear structure with nonlinear joints.
+balance, nonlinear modes (EPMC) and time integration of a linear structure with nonlinear joints.
 
 Frequencies in Hz, forces in N, displacements in m.
 """
 
-from ._native import DecayResult, ResponseModel, SweepResult
+from ._native import DecayResult, NonlinearModeResult, ResponseModel, SweepResult
 
-__all__ = ["DecayResult", "ResponseModel", "SweepResult"]
+__all__ = ["DecayResult", "NonlinearModeResult", "ResponseModel", "SweepResult"]

@@ -166,6 +166,50 @@ pub struct DecayResult {
     pub wall_time_s: f64,
 }
 
+/// A nonlinear mode of a `ResponseModel` by the extended periodic motion concept (`asperity
+/// modes`): the backbone per modal amplitude.
+#[pyclass(frozen, get_all, module = "asperity")]
+pub struct NonlinearModeResult {
+    /// The linear mode continued (1-based, ascending frequency with the elements stuck).
+    pub mode: usize,
+    /// Its frequency with the elements stuck (Hz).
+    pub linear_frequency_hz: f64,
+    /// Its damping ratio with the elements stuck.
+    pub linear_damping_ratio: f64,
+    /// Modal amplitude of every converged point (m·kg^½).
+    pub modal_amplitude_m_sqrt_kg: Py<PyArray1<f64>>,
+    /// Frequency of every point (Hz).
+    pub frequency_hz: Py<PyArray1<f64>>,
+    /// Modal damping ratio `ξ/(2ω)` of every point.
+    pub damping_ratio: Py<PyArray1<f64>>,
+    /// Energy all elements dissipate per cycle at every point (J).
+    pub element_energy_j: Py<PyArray1<f64>>,
+    /// Energy per cycle of every element, shape (points, elements) (J).
+    pub energy_per_element_j: Py<PyArray2<f64>>,
+    /// Harmonic coefficients of every coordinate, shape (points, n, coefficients) (m).
+    pub coordinate_harmonics: Py<PyArray3<f64>>,
+    /// Harmonic orders of the coefficients.
+    pub harmonic_orders: Vec<usize>,
+    /// Why the continuation stopped before the last amplitude (`None`: complete).
+    pub stopped: Option<String>,
+    /// Wall-clock time of the continuation (s).
+    pub wall_time_s: f64,
+}
+
+#[pymethods]
+impl NonlinearModeResult {
+    fn __repr__(&self) -> String {
+        format!(
+            "NonlinearModeResult(mode {}, linear {:.6} Hz{})",
+            self.mode,
+            self.linear_frequency_hz,
+            self.stopped
+                .as_ref()
+                .map_or(String::new(), |w| format!(", stopped {w}"))
+        )
+    }
+}
+
 /// A force-controlled frequency sweep of a `ResponseModel` (the results of one level of
 /// `asperity response`).
 #[pyclass(frozen, get_all, module = "asperity")]
@@ -206,6 +250,25 @@ impl SweepResult {
             "SweepResult(level {} N, {} formulation, peak at point {})",
             self.level_n, self.formulation, self.peak
         )
+    }
+}
+
+impl ResponseModel {
+    /// The harmonic basis: the arguments, else the model file's `[sweep]`, else harmonics 5,
+    /// all orders, the default sampling.
+    fn harmonics(
+        &self,
+        harmonics: Option<usize>,
+        odd_only: Option<bool>,
+        time_samples: Option<usize>,
+    ) -> PyResult<Harmonics> {
+        let s = self.file.as_ref().map(|(_, f)| &f.sweep);
+        Harmonics::new(
+            harmonics.or(s.map(|s| s.harmonics)).unwrap_or(5),
+            odd_only.or(s.map(|s| s.odd_only)).unwrap_or(false),
+            time_samples.or(s.and_then(|s| s.time_samples)),
+        )
+        .py()
     }
 }
 
@@ -440,12 +503,7 @@ impl ResponseModel {
             s.map(|s| s.frequency_end_hz),
             "frequency_end_hz",
         )?;
-        let h = Harmonics::new(
-            harmonics.or(s.map(|s| s.harmonics)).unwrap_or(5),
-            odd_only.or(s.map(|s| s.odd_only)).unwrap_or(false),
-            time_samples.or(s.and_then(|s| s.time_samples)),
-        )
-        .py()?;
+        let h = self.harmonics(harmonics, odd_only, time_samples)?;
         let choice = match &formulation {
             Some(f) => self::formulation(f)?,
             None => s.map_or(FormulationChoice::Auto, |s| s.formulation),
@@ -572,6 +630,94 @@ impl ResponseModel {
             cycle_frequency_hz: col(&|c| c.frequency_hz),
             cycle_damping_ratio: col(&|c| c.damping_ratio),
             wall_time_s: r.wall_time_s,
+        })
+    }
+
+    /// The nonlinear mode `mode` by the extended periodic motion concept (`asperity modes`):
+    /// `points` modal amplitudes log-spaced from `amplitude_min_m_sqrt_kg` to
+    /// `amplitude_max_m_sqrt_kg` (m·kg^½), continued from the linear mode with the elements
+    /// stuck. Harmonics as in `sweep`. A continuation that stops early returns the points before
+    /// it and says why in `stopped`.
+    #[pyo3(signature = (amplitude_min_m_sqrt_kg, amplitude_max_m_sqrt_kg, *, mode=1, points=60, harmonics=None, odd_only=None, time_samples=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn nonlinear_mode(
+        &self,
+        py: Python<'_>,
+        amplitude_min_m_sqrt_kg: f64,
+        amplitude_max_m_sqrt_kg: f64,
+        mode: usize,
+        points: usize,
+        harmonics: Option<usize>,
+        odd_only: Option<bool>,
+        time_samples: Option<usize>,
+    ) -> PyResult<NonlinearModeResult> {
+        use asperity::dynamics::nonlinear_modes::{self, ModeSettings};
+        let h = self.harmonics(harmonics, odd_only, time_samples)?;
+        let amplitudes =
+            nonlinear_modes::log_spaced(amplitude_min_m_sqrt_kg, amplitude_max_m_sqrt_kg, points)
+                .map_err(|e| match e {
+                    asperity::Error::InvalidParameter { name, message } => asperity::Error::param(
+                        match name.as_str() {
+                            "amplitude_min" => "amplitude_min_m_sqrt_kg",
+                            "amplitude_max" => "amplitude_max_m_sqrt_kg",
+                            _ => "points",
+                        },
+                        message,
+                    ),
+                    other => other,
+                })
+                .py()?;
+        let structure = &self.structure;
+        let (system, result) = py
+            .detach(|| {
+                let system = HbmSystem::new(
+                    structure,
+                    h,
+                    Excitation {
+                        force: DVector::zeros(structure.n()),
+                        harmonic: 1,
+                    },
+                    FormulationChoice::Coordinates,
+                )?;
+                let r = nonlinear_modes::nonlinear_mode(
+                    &system,
+                    ModeSettings::new(mode, amplitudes),
+                    &mut |_| {},
+                )?;
+                Ok::<_, asperity::Error>((system, r))
+            })
+            .py()?;
+        let pts = &result.points;
+        let col = |f: &dyn Fn(&nonlinear_modes::ModePoint) -> f64| {
+            PyArray1::from_vec(py, pts.iter().map(f).collect()).unbind()
+        };
+        let ne = structure.elements.len();
+        let mut energy = ndarray::Array2::<f64>::zeros((pts.len(), ne));
+        let (n, len) = (structure.n(), system.harmonics.len());
+        let mut x = Array3::<f64>::zeros((pts.len(), n, len));
+        for (i, p) in pts.iter().enumerate() {
+            for (j, c) in p.elements.iter().enumerate() {
+                energy[(i, j)] = c.dissipated_energy_j;
+            }
+            for r in 0..n {
+                for j in 0..len {
+                    x[(i, r, j)] = p.z[r * len + j];
+                }
+            }
+        }
+        Ok(NonlinearModeResult {
+            mode,
+            linear_frequency_hz: result.linear.frequency_hz(),
+            linear_damping_ratio: result.linear.damping_ratio(),
+            modal_amplitude_m_sqrt_kg: col(&|p| p.amplitude),
+            frequency_hz: col(&|p| p.frequency_hz()),
+            damping_ratio: col(&|p| p.damping_ratio()),
+            element_energy_j: col(&|p| p.element_energy_j()),
+            energy_per_element_j: PyArray2::from_owned_array(py, energy).unbind(),
+            coordinate_harmonics: PyArray3::from_owned_array(py, x).unbind(),
+            harmonic_orders: system.harmonics.orders().to_vec(),
+            stopped: result.stopped,
+            wall_time_s: result.wall_time_s,
         })
     }
 

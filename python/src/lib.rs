@@ -70,6 +70,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<dynamics::ResponseModel>()?;
     m.add_class::<dynamics::SweepResult>()?;
     m.add_class::<dynamics::DecayResult>()?;
+    m.add_class::<dynamics::NonlinearModeResult>()?;
     m.add_function(wrap_pyfunction!(calibrate::read_preloads, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::write_preloads, m)?)?;
     m.add_class::<film::FilmMap>()?;

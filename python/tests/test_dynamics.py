@@ -167,3 +167,52 @@ def test_free_decay_is_the_clis(cli, tmp_path):
     assert len(r.time_s) == 20 * 256 + 1
     with pytest.raises(Exception, match="amplitude"):
         ap.ResponseModel.read(path).free_decay(-1.0)
+
+
+def test_nonlinear_mode_is_the_clis(cli, tmp_path):
+    """`ResponseModel.nonlinear_mode` is `asperity modes`: the same backbone after the CLI's
+    formatting; bad amplitudes named."""
+    path = write_model(tmp_path)
+    cli(
+        "modes", path, "--mode", "1", "--amplitude-min-m-sqrt-kg", "1e-6",
+        "--amplitude-max-m-sqrt-kg", "1e-4", "--points", "12", "--out-dir", tmp_path / "out",
+    )
+    r = ap.ResponseModel.read(path).nonlinear_mode(1e-6, 1e-4, mode=1, points=12)
+    rows = list(
+        csv.DictReader(
+            line
+            for line in (tmp_path / "out" / "modes.csv").read_text().splitlines()
+            if not line.startswith("#")
+        )
+    )
+    assert r.stopped is None and len(rows) == len(r.frequency_hz) == 12
+    for row, a, f, z in zip(rows, r.modal_amplitude_m_sqrt_kg, r.frequency_hz, r.damping_ratio):
+        assert float(row["modal_amplitude_m_sqrt_kg"]) == pytest.approx(a, rel=1e-9)
+        assert float(row["frequency_Hz"]) == pytest.approx(f, rel=1e-9)
+        assert float(row["damping_ratio"]) == pytest.approx(z, rel=1e-9)
+    # The contacts slip along the backbone: the frequency falls, the energy grows.
+    assert r.frequency_hz[-1] < r.frequency_hz[0]
+    assert np.all(np.diff(r.element_energy_j) > 0)
+    assert r.energy_per_element_j.shape == (12, 2)
+    assert r.coordinate_harmonics.shape == (12, 2, len(r.harmonic_orders) * 2)
+    with pytest.raises(Exception, match="amplitude_min_m_sqrt_kg"):
+        ap.ResponseModel.read(path).nonlinear_mode(-1.0, 1e-4)
+
+
+def test_nonlinear_mode_of_a_duffing_oscillator_is_its_backbone():
+    """Duffing SDOF, one harmonic: ω² = k/m + ¾·k3·X²/m (the first-harmonic backbone), X = a/√m,
+    and the modal damping ratio c/(2mω) (mass-proportional damping leaves the backbone
+    undamped); within 1e-6 (the Newton solves stop at a relative residual of 1e-7)."""
+    m, k, c, k3 = 2.0, 8.0e3, 0.4, 1.0e10
+    model = ap.ResponseModel.lumped(
+        ["x.x"], np.array([[m]]), np.array([[c]]), np.array([[k]]), np.array([1.0])
+    )
+    model.attach_cubic_spring("duffing", k3, np.array([[1.0]]))
+    r = model.nonlinear_mode(1e-5, 2e-3, points=20, harmonics=1, odd_only=True)
+    assert r.stopped is None
+    x = r.modal_amplitude_m_sqrt_kg / np.sqrt(m)
+    omega = np.sqrt(k / m + 0.75 * k3 * x**2 / m)
+    np.testing.assert_allclose(r.frequency_hz, omega / (2 * np.pi), rtol=1e-6)
+    np.testing.assert_allclose(r.damping_ratio, c / (2 * m * omega), rtol=1e-6)
+    # The backbone hardens far beyond the linear frequency.
+    assert r.frequency_hz[-1] > 1.5 * r.linear_frequency_hz
