@@ -255,6 +255,48 @@ impl Structure {
     }
 }
 
+/// Undamped modes of `K·φ = ω²·M·φ` for symmetric `K` (its symmetric part is used) and
+/// symmetric positive-definite `M`: by the Cholesky factor `M = L·Lᵀ`, the symmetric standard
+/// problem `L⁻¹·K·L⁻ᵀ·y = ω²·y`, `φ = L⁻ᵀ·y` (Bathe, *Finite Element Procedures*, §10.2.5).
+/// Returns the eigenvalues `ω²` (rad²/s², ascending; a rigid-body or unstable mode gives
+/// `ω² ≤ 0`) and the mass-normalised shapes `φᵀ·M·φ = 1` in the same order. Errors name `mass`.
+pub fn undamped_modes(
+    mass: &DMatrix<f64>,
+    stiffness: &DMatrix<f64>,
+) -> Result<(Vec<f64>, Vec<DVector<f64>>)> {
+    let n = mass.nrows();
+    let l = mass
+        .clone()
+        .cholesky()
+        .ok_or_else(|| {
+            Error::param(
+                "mass",
+                "must be positive definite (a mass at every coordinate)",
+            )
+        })?
+        .l();
+    let sym = |a: &DMatrix<f64>| (a + a.transpose()) * 0.5;
+    let li_k = l
+        .solve_lower_triangular(&sym(stiffness))
+        .ok_or_else(|| Error::param("mass", "singular Cholesky factor"))?;
+    let a = l
+        .solve_lower_triangular(&li_k.transpose())
+        .ok_or_else(|| Error::param("mass", "singular Cholesky factor"))?;
+    let eig = sym(&a).symmetric_eigen();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+    let lt = l.transpose();
+    let mut shapes = Vec::with_capacity(n);
+    for &i in &order {
+        let y = eig.eigenvectors.column(i).into_owned();
+        shapes.push(
+            lt.solve_upper_triangular(&y)
+                .ok_or_else(|| Error::param("mass", "singular Cholesky factor"))?,
+        );
+    }
+    Ok((order.iter().map(|&i| eig.eigenvalues[i]).collect(), shapes))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -63,6 +63,7 @@
 use crate::core::error::{Error, Result};
 use crate::dynamics::aft::{ElementCycle, WarmStart};
 use crate::dynamics::hbm::{Evaluation, Formulation, HbmPoint, HbmSystem};
+use crate::dynamics::model::undamped_modes;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
 
@@ -298,23 +299,8 @@ pub fn linear_mode(system: &HbmSystem<'_>, mode: usize) -> Result<LinearMode> {
     let sym = |a: DMatrix<f64>| (&a + a.transpose()) * 0.5;
     let k = &s.stiffness + sym(k_el);
     let c = &s.damping + sym(c_el);
-    let chol = s
-        .mass
-        .clone()
-        .cholesky()
-        .ok_or_else(|| Error::param("mass", "must be positive definite"))?;
-    let l = chol.l();
-    // A = L⁻¹·K·L⁻ᵀ (symmetric), φ = L⁻ᵀ·y.
-    let li_k = l
-        .solve_lower_triangular(&k)
-        .ok_or_else(|| Error::param("mass", "singular Cholesky factor"))?;
-    let a = l
-        .solve_lower_triangular(&li_k.transpose())
-        .ok_or_else(|| Error::param("mass", "singular Cholesky factor"))?;
-    let eig = sym(a).symmetric_eigen();
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
-    let lambda = eig.eigenvalues[order[mode - 1]];
+    let (eigenvalues, mut shapes) = undamped_modes(&s.mass, &k)?;
+    let lambda = eigenvalues[mode - 1];
     if lambda.is_nan() || lambda <= 0.0 {
         return Err(Error::param(
             "mode",
@@ -324,13 +310,7 @@ pub fn linear_mode(system: &HbmSystem<'_>, mode: usize) -> Result<LinearMode> {
             ),
         ));
     }
-    let y = eig.eigenvectors.column(order[mode - 1]).into_owned();
-    let mut phi = l
-        .transpose()
-        .solve_upper_triangular(&y)
-        .ok_or_else(|| Error::param("mass", "singular Cholesky factor"))?;
-    let norm = (phi.transpose() * &s.mass * &phi)[(0, 0)].sqrt();
-    phi /= norm;
+    let mut phi = shapes.swap_remove(mode - 1);
     let reference = (0..n)
         .max_by(|&x, &y| {
             let w = |r: usize| phi[r].abs() * s.mass[(r, r)].sqrt();
@@ -341,9 +321,9 @@ pub fn linear_mode(system: &HbmSystem<'_>, mode: usize) -> Result<LinearMode> {
         phi = -phi;
     }
     let xi = (phi.transpose() * &c * &phi)[(0, 0)];
-    let frequencies_hz = order
+    let frequencies_hz = eigenvalues
         .iter()
-        .map(|&i| eig.eigenvalues[i].max(0.0).sqrt() / TWO_PI)
+        .map(|&l| l.max(0.0).sqrt() / TWO_PI)
         .collect();
     Ok(LinearMode {
         index: mode,

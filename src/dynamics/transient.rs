@@ -32,7 +32,7 @@
 use crate::core::error::{Error, Result};
 use crate::core::output::OutputSet;
 use crate::core::plot::{line_plot, LinePlot, Scale, Series};
-use crate::dynamics::model::Structure;
+use crate::dynamics::model::{undamped_modes, Structure};
 use crate::dynamics::model_file;
 use crate::dynamics::time_integration::Newmark;
 use crate::element::StepPartials;
@@ -134,32 +134,15 @@ pub fn linear_mode(
             format!("{index}: the structure has modes 1 to {n}"),
         ));
     }
-    let chol = mass.clone().cholesky().ok_or_else(|| {
-        Error::param(
-            "mass",
-            "not positive definite (a free decay needs a mass at every coordinate)",
-        )
-    })?;
-    let l = chol.l();
-    let l_inv = l
-        .clone()
-        .try_inverse()
-        .ok_or_else(|| Error::param("mass", "singular"))?;
-    let ks = (stiffness + stiffness.transpose()) * 0.5;
-    let a = &l_inv * ks * l_inv.transpose();
-    let eig = nalgebra::SymmetricEigen::new((&a + a.transpose()) * 0.5);
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
-    let i = order[index - 1];
-    let lambda = eig.eigenvalues[i];
+    let (eigenvalues, mut shapes) = undamped_modes(mass, stiffness)?;
+    let lambda = eigenvalues[index - 1];
     if lambda <= 0.0 {
         return Err(Error::param(
             "--mode",
             format!("mode {index} has ω² = {lambda:e} ≤ 0: the stuck structure is not stable"),
         ));
     }
-    let phi = l_inv.transpose() * eig.eigenvectors.column(i);
-    Ok((lambda.sqrt(), phi))
+    Ok((lambda.sqrt(), shapes.swap_remove(index - 1)))
 }
 
 /// Free decay of `structure` from the linearised mode `settings.mode`, scaled so that the
