@@ -1620,6 +1620,10 @@ class Record:
     @property
     def normal_force_n(self) -> Optional[F64Array]:
         """Normal force (N); None without a normal-force column."""
+    @property
+    def derived(self) -> List[str]:
+        """How columns were derived from accelerations, one line each; empty when read as
+        they are."""
 
 def read_record(
     path: Path,
@@ -1628,8 +1632,14 @@ def read_record(
     displacement_column: str = "displacement_m",
     force_column: str = "friction_force_N",
     normal_force_column: Optional[str] = None,
+    relative_acceleration_column: Optional[str] = None,
+    inertia_acceleration_column: Optional[str] = None,
+    mass_kg: Optional[float] = None,
 ) -> Record:
-    """Record CSV → time (s), displacement (m), force (N)[, normal force (N)]."""
+    """Record CSV → time (s), displacement (m), force (N)[, normal force (N)].
+    ``relative_acceleration_column`` (m/s²) instead of the displacement column: its double
+    integral in the frequency domain; ``inertia_acceleration_column`` (m/s²) with ``mass_kg``
+    instead of the force column: F = m·a (``asperity diagnose``'s flags of the same names)."""
 
 @final
 class DiagnoseErrors:

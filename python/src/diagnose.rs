@@ -25,6 +25,9 @@ pub struct Record {
     pub force_n: Py<PyArray1<f64>>,
     /// Normal force (N), or `None` without a normal-force column.
     pub normal_force_n: Option<Py<PyArray1<f64>>>,
+    /// How columns were derived from what was measured (a displacement integrated from an
+    /// acceleration, a force from a mass's inertia), one line each; empty when read as they are.
+    pub derived: Vec<String>,
 }
 
 #[pymethods]
@@ -44,7 +47,8 @@ impl Record {
 
 /// Read the chosen columns of a record CSV into a `Record` (float64 arrays).
 #[pyfunction]
-#[pyo3(signature = (path, *, time_column="time_s", displacement_column="displacement_m", force_column="friction_force_N", normal_force_column=None))]
+#[pyo3(signature = (path, *, time_column="time_s", displacement_column="displacement_m", force_column="friction_force_N", normal_force_column=None, relative_acceleration_column=None, inertia_acceleration_column=None, mass_kg=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn read_record(
     py: Python<'_>,
     path: PathBuf,
@@ -52,6 +56,9 @@ pub fn read_record(
     displacement_column: &str,
     force_column: &str,
     normal_force_column: Option<String>,
+    relative_acceleration_column: Option<String>,
+    inertia_acceleration_column: Option<String>,
+    mass_kg: Option<f64>,
 ) -> PyResult<Record> {
     let columns = Columns {
         time: time_column.into(),
@@ -59,7 +66,13 @@ pub fn read_record(
         force: force_column.into(),
         normal_force: normal_force_column,
         ..Columns::default()
-    };
+    }
+    .with_accelerations(
+        relative_acceleration_column,
+        inertia_acceleration_column,
+        mass_kg,
+    )
+    .py()?;
     let r = RecordData::read_csv(&path, &columns).py()?;
     Ok(Record {
         time_s: PyArray1::from_vec(py, r.time_s).unbind(),
@@ -68,6 +81,7 @@ pub fn read_record(
         normal_force_n: r
             .normal_force_n
             .map(|nf| PyArray1::from_vec(py, nf).unbind()),
+        derived: r.derived,
     })
 }
 

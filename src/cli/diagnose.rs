@@ -136,18 +136,17 @@ pub fn run(args: DiagnoseArgs) -> Result<()> {
     asperity::core::limits::check_count("--max-effects", args.max_effects, 8)?;
     let columns = Columns {
         time: args.time_column.clone(),
-        displacement: args
-            .relative_acceleration_column
-            .clone()
-            .unwrap_or_else(|| args.displacement_column.clone()),
-        force: args
-            .inertia_acceleration_column
-            .clone()
-            .unwrap_or_else(|| args.force_column.clone()),
+        displacement: args.displacement_column.clone(),
+        force: args.force_column.clone(),
         normal_force: args.normal_force_column.clone(),
-        displacement_is_acceleration: args.relative_acceleration_column.is_some(),
-        force_mass_kg: args.mass_kg,
-    };
+        ..Columns::default()
+    }
+    .with_accelerations(
+        args.relative_acceleration_column.clone(),
+        args.inertia_acceleration_column.clone(),
+        args.mass_kg,
+    )
+    .map_err(|e| e.renamed_param("--mass-kg"))?;
     let record = Record::read_csv(&args.record, &columns)?;
     let (baseline, source) = match (&args.table, args.pressure_pa, args.area_m2) {
         (Some(table), Some(p), Some(a)) => {

@@ -46,6 +46,45 @@ impl Default for Columns {
     }
 }
 
+impl Columns {
+    /// The columns with measured accelerations in place of the displacement and/or force:
+    /// `relative_acceleration` (m/s², across the joint) replaces the displacement column,
+    /// `inertia_acceleration` (m/s², of a mass `mass_kg` whose inertia is the joint force)
+    /// replaces the force column. The acceleration column and its mass come together; errors
+    /// name `mass_kg` or `inertia_acceleration_column`.
+    pub fn with_accelerations(
+        mut self,
+        relative_acceleration: Option<String>,
+        inertia_acceleration: Option<String>,
+        mass_kg: Option<f64>,
+    ) -> Result<Self> {
+        if let Some(c) = relative_acceleration {
+            self.displacement = c;
+            self.displacement_is_acceleration = true;
+        }
+        match (inertia_acceleration, mass_kg) {
+            (Some(c), Some(m)) => {
+                self.force = c;
+                self.force_mass_kg = Some(m);
+            }
+            (Some(_), None) => {
+                return Err(Error::param(
+                    "mass_kg",
+                    "required with an inertia acceleration column (F = m·a)",
+                ))
+            }
+            (None, Some(_)) => {
+                return Err(Error::param(
+                    "inertia_acceleration_column",
+                    "required with mass_kg (the acceleration whose inertia is the joint force)",
+                ))
+            }
+            (None, None) => {}
+        }
+        Ok(self)
+    }
+}
+
 /// Largest |acceleration| an acceleration column may hold (10⁷ m/s², about 10⁶ g).
 pub const MAX_ACCELERATION_M_PER_S2: f64 = 1e7;
 
