@@ -11,6 +11,7 @@
 //! | [`bouc_wen`] | Bouc–Wen | [`BoucWen`] |
 //! | [`cubic`] | cubic (Duffing) spring | [`CubicSpring`] (memoryless) |
 //! | [`quadratic_spring`] | quadratic spring `k2·|q|·q` | [`QuadraticSpring`] (memoryless) |
+//! | [`hunt_crossley`] | Hunt–Crossley normal contact `k·δⁿ·(1 + χ·δ̇)` with gap, separation and impact; exact `χ(e, v_in)` | [`HuntCrossley`] |
 //! | [`power_law_damper`] | power-law damper `c·|u̇|^p·u̇` | [`PowerLawDamper`] |
 //! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring | [`MicroslipContact`], [`JenkinsContact`] |
 //! | [`unilateral`] | unilateral normal contact `N = max(0, N0 + kn·un)`, re-contact point | – |
@@ -26,6 +27,7 @@ pub mod bouc_wen;
 pub mod contact3d;
 pub mod cubic;
 pub mod gaul_lenz;
+pub mod hunt_crossley;
 pub mod hysteretic;
 pub mod iwan;
 pub mod jenkins;
@@ -39,6 +41,7 @@ pub use bouc_wen::{BoucWen, BoucWenParams};
 pub use contact3d::{JenkinsContact, MicroslipContact};
 pub use cubic::CubicSpring;
 pub use gaul_lenz::{GaulLenz, GaulLenzParams};
+pub use hunt_crossley::{HuntCrossley, HuntCrossleyParams};
 pub use hysteretic::{
     check_partials, ContactStatus, HystereticElement, MemorylessSpring, StepPartials,
 };
