@@ -8,6 +8,7 @@
 //! | [`gaul_lenz`] | Valanis with a constant stick limit `σ0` | [`GaulLenz`] |
 //! | [`jenkins`] | spring + Coulomb slider (1-D, and 2-D with a circular limit) | [`Jenkins`] |
 //! | [`iwan`] | Segalman's four-parameter Iwan element, parallel Jenkins sliders | [`IwanElement`] |
+//! | [`bilinear`] | bilinear normal contact: stiffness `k1` then `k2` beyond an indentation, gap, separation | [`BilinearContact`] (memoryless) |
 //! | [`bouc_wen`] | Bouc–Wen | [`BoucWen`] |
 //! | [`cubic`] | cubic (Duffing) spring | [`CubicSpring`] (memoryless) |
 //! | [`quadratic_spring`] | quadratic spring `k2·|q|·q` | [`QuadraticSpring`] (memoryless) |
@@ -23,6 +24,7 @@
 //! Units: either per unit nominal area (displacement m, force Pa, stiffness N/m³) or per element
 //! (m, N, N/m) — the mathematics is the same; see [`valanis`]. The solvers use per-element units.
 
+pub mod bilinear;
 pub mod bouc_wen;
 pub mod contact3d;
 pub mod cubic;
@@ -37,6 +39,7 @@ pub mod quadratic_spring;
 pub mod unilateral;
 pub mod valanis;
 
+pub use bilinear::BilinearContact;
 pub use bouc_wen::{BoucWen, BoucWenParams};
 pub use contact3d::{JenkinsContact, MicroslipContact};
 pub use cubic::CubicSpring;
