@@ -125,7 +125,7 @@ pub fn damping_factor(e: f64, v_in: f64) -> Result<f64> {
     while f(lo) <= 0.0 && lo > 1e-300 {
         lo *= 0.5;
     }
-    Ok(bisect(|x| f(x), lo, hi * (1.0 - 1e-15)) / v_in)
+    Ok(bisect(f, lo, hi * (1.0 - 1e-15)) / v_in)
 }
 
 /// Hunt & Crossley's damping factor `χ = 3(1 − e)/(2·v_in)` (s/m), accurate for `e` near 1.
