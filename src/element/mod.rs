@@ -13,6 +13,7 @@
 //! | [`cubic`] | cubic (Duffing) spring | [`CubicSpring`] (memoryless) |
 //! | [`quadratic_spring`] | quadratic spring `k2·|q|·q` | [`QuadraticSpring`] (memoryless) |
 //! | [`hunt_crossley`] | Hunt–Crossley normal contact `k·δⁿ·(1 + χ·δ̇)` with gap, separation and impact; exact `χ(e, v_in)` | [`HuntCrossley`] |
+//! | [`lugre`] | LuGre friction (bristle state, Stribeck curve), exact exponential update at the increment's velocity | [`LuGre`] |
 //! | [`power_law_damper`] | power-law damper `c·|u̇|^p·u̇` | [`PowerLawDamper`] |
 //! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring | [`MicroslipContact`], [`JenkinsContact`] |
 //! | [`unilateral`] | unilateral normal contact `N = max(0, N0 + kn·un)`, re-contact point | – |
@@ -33,6 +34,7 @@ pub mod hunt_crossley;
 pub mod hysteretic;
 pub mod iwan;
 pub mod jenkins;
+pub mod lugre;
 pub mod params;
 pub mod power_law_damper;
 pub mod quadratic_spring;
@@ -50,6 +52,7 @@ pub use hysteretic::{
 };
 pub use iwan::{IwanElement, IwanParams};
 pub use jenkins::{Jenkins, JenkinsParams};
+pub use lugre::{LuGre, LuGreParams};
 pub use params::{ContactParams, ContactParamsPerArea};
 pub use power_law_damper::PowerLawDamper;
 pub use quadratic_spring::QuadraticSpring;
