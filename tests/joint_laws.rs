@@ -365,78 +365,102 @@ fn lugre_steady_sliding_is_the_stribeck_curve() {
     }
 }
 
+/// The oscillator `m·ẍ + c·ẋ + k·x + f(x) = level·cos ωt` with the rate-dependent element
+/// `joint(sample_rate)` against ground, solved by the harmonic balance (`harmonics`, `samples`
+/// per period, continued in level from a sixth of it) and by Newmark's average-acceleration
+/// integration with `samples` steps per period (the element's velocity then comes from the same
+/// sample interval); the first-harmonic amplitudes `(HBM, Newmark)` and the HBM samples.
+fn rate_dependent_hbm_and_newmark(
+    joint: impl Fn(f64) -> Arc<dyn asperity::element::HystereticElement>,
+    f_hz: f64,
+    level: f64,
+    harmonics: usize,
+    samples: usize,
+) -> (f64, f64, Vec<f64>) {
+    let k = k_lin();
+    let c = 2.0 * ZETA * (k * M).sqrt();
+    let w = 2.0 * PI * f_hz;
+    let mut s = Structure::lumped(
+        vec!["x".into()],
+        DMatrix::from_element(1, 1, M),
+        DMatrix::from_element(1, 1, c),
+        DMatrix::from_element(1, 1, k),
+    )
+    .unwrap();
+    s.attach(
+        "joint",
+        joint(w * samples as f64 / (2.0 * PI)),
+        DMatrix::from_element(1, 1, 1.0),
+    )
+    .unwrap();
+    let h = Harmonics::new(harmonics, false, Some(samples)).unwrap();
+    let sys = HbmSystem::new(
+        &s,
+        h,
+        Excitation {
+            force: DVector::from_element(1, 1.0),
+            harmonic: 1,
+        },
+        FormulationChoice::Coordinates,
+    )
+    .unwrap();
+    let mut guess: Option<DVector<f64>> = None;
+    let mut p = None;
+    for i in 1..=6 {
+        let q = sys
+            .solve(w, level * i as f64 / 6.0, guess.as_ref())
+            .unwrap();
+        assert!(q.converged, "{f_hz} Hz: HBM did not converge");
+        guess = Some(q.z.clone());
+        p = Some(q);
+    }
+    let p = p.unwrap();
+    let x = sys.coordinates(&p);
+    let (q0, v0) = initial_conditions(&x, &sys.harmonics, 1, p.omega);
+    let ti = steady_state(
+        &s,
+        &sys.excitation.force,
+        1,
+        p.level,
+        p.omega,
+        &sys.harmonics,
+        &q0,
+        &v0,
+        &TimeIntegrationSettings {
+            steps_per_period: samples,
+            max_periods: 400,
+            tolerance: 1e-9,
+        },
+    )
+    .unwrap();
+    assert!(ti.converged, "Newmark not steady: {:.1e}", ti.change);
+    let mut t = vec![0.0; samples];
+    sys.harmonics.to_time(x.as_slice(), &mut t);
+    (
+        amplitude(&x, &sys.harmonics),
+        amplitude(&ti.harmonics, &sys.harmonics),
+        t,
+    )
+}
+
 /// A mass on a spring rubbing on a LuGre contact, driven through stick and slip: the harmonic
-/// balance (H = 15, 1024 samples) and Newmark's average-acceleration integration (1024 steps per
+/// balance (H = 25, 1024 samples) and Newmark's average-acceleration integration (1024 steps per
 /// period, the element's velocity from the same sample interval) agree on the first harmonic
 /// within 1e-4.
 #[test]
 fn lugre_harmonic_balance_matches_newmark() {
-    const HARMONICS: usize = 25;
-    let k = k_lin();
-    let c = 2.0 * ZETA * (k * M).sqrt();
-    let samples = 1024;
     for (f_hz, level) in [(7.0, 6.0), (12.0, 8.0)] {
-        let w = 2.0 * PI * f_hz;
-        let mut s = Structure::lumped(
-            vec!["x".into()],
-            DMatrix::from_element(1, 1, M),
-            DMatrix::from_element(1, 1, c),
-            DMatrix::from_element(1, 1, k),
-        )
-        .unwrap();
-        s.attach(
-            "lugre",
-            Arc::new(LuGre {
-                params: lugre_params(),
-                sample_rate: w * samples as f64 / (2.0 * PI),
-            }),
-            DMatrix::from_element(1, 1, 1.0),
-        )
-        .unwrap();
-        let h = Harmonics::new(HARMONICS, false, Some(samples)).unwrap();
-        let sys = HbmSystem::new(
-            &s,
-            h,
-            Excitation {
-                force: DVector::from_element(1, 1.0),
-                harmonic: 1,
+        let (a_hbm, a_ti, _) = rate_dependent_hbm_and_newmark(
+            |rate| {
+                Arc::new(LuGre {
+                    params: lugre_params(),
+                    sample_rate: rate,
+                })
             },
-            FormulationChoice::Coordinates,
-        )
-        .unwrap();
-        let mut guess: Option<DVector<f64>> = None;
-        let mut p = None;
-        for i in 1..=6 {
-            let q = sys
-                .solve(w, level * i as f64 / 6.0, guess.as_ref())
-                .unwrap();
-            assert!(q.converged, "{f_hz} Hz: HBM did not converge");
-            guess = Some(q.z.clone());
-            p = Some(q);
-        }
-        let p = p.unwrap();
-        let x = sys.coordinates(&p);
-        let (q0, v0) = initial_conditions(&x, &sys.harmonics, 1, p.omega);
-        let ti = steady_state(
-            &s,
-            &sys.excitation.force,
-            1,
-            p.level,
-            p.omega,
-            &sys.harmonics,
-            &q0,
-            &v0,
-            &TimeIntegrationSettings {
-                steps_per_period: samples,
-                max_periods: 400,
-                tolerance: 1e-9,
-            },
-        )
-        .unwrap();
-        assert!(ti.converged, "Newmark not steady: {:.1e}", ti.change);
-        let (a_hbm, a_ti) = (
-            amplitude(&x, &sys.harmonics),
-            amplitude(&ti.harmonics, &sys.harmonics),
+            f_hz,
+            level,
+            25,
+            1024,
         );
         // Gross sliding for part of the cycle: the amplitude is many presliding lengths Fs/σ0.
         let presliding = 1.5 / lugre_params().sigma0;
@@ -446,3 +470,39 @@ fn lugre_harmonic_balance_matches_newmark() {
         assert!(err < 1e-4, "{f_hz} Hz: {err:.2e}");
     }
 }
+
+/// A mass on a spring striking a Hunt–Crossley stop across a gap (a vibro-impact oscillator):
+/// the harmonic balance and Newmark agree on the first harmonic within 1e-4, with the stop
+/// closing and opening every cycle.
+#[test]
+fn hunt_crossley_harmonic_balance_matches_newmark() {
+    use asperity::element::HuntCrossley;
+    let gap = 1e-3;
+    let chi = damping_factor(0.7, 0.05).unwrap();
+    for (f_hz, level) in [(7.0, 5.0), (12.0, 4.0)] {
+        let (a_hbm, a_ti, x) = rate_dependent_hbm_and_newmark(
+            |rate| {
+                Arc::new(HuntCrossley {
+                    params: HuntCrossleyParams {
+                        stiffness: 2e5,
+                        exponent: 1.5,
+                        damping_factor: chi,
+                        gap,
+                    },
+                    sample_rate: rate,
+                })
+            },
+            f_hz,
+            level,
+            HC_HARMONICS,
+            2048,
+        );
+        let hi = x.iter().fold(f64::MIN, |a, &b| a.max(b));
+        assert!(hi > gap * 1.05, "{f_hz} Hz: the stop is not struck ({hi})");
+        let err = (a_hbm - a_ti).abs() / a_ti;
+        eprintln!("Hunt–Crossley {f_hz} Hz: HBM {a_hbm:.6e}, Newmark {a_ti:.6e}, relative {err:.1e}, max x {hi:.3e}");
+        assert!(err < 1e-4, "{f_hz} Hz: {err:.2e}");
+    }
+}
+
+const HC_HARMONICS: usize = 40;
