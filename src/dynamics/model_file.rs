@@ -26,6 +26,9 @@
 //! k2_n_per_m = 8.0e6            # stiffness beyond it
 //! threshold_m = 1.0e-5          # indentation where the stiffness changes (> 0)
 //! static_indentation_m = -2.0e-6   # indentation at the static equilibrium (< 0: an open gap)
+//! # law = "thin-layer"          # elastic–plastic virtual layer (element::thin_layer) with
+//! # elastic_modulus_pa, plastic_modulus_pa, yield_stress_pa, transition_exponent, area_m2,
+//! # thickness_m
 //!
 //! [excitation]
 //! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)
@@ -103,6 +106,9 @@ pub enum JointLaw {
     /// [`crate::element::BilinearContact`]: `k1_n_per_m`, `k2_n_per_m`, `threshold_m`,
     /// `static_indentation_m`.
     Bilinear,
+    /// [`crate::element::ThinLayer`]: `elastic_modulus_pa`, `plastic_modulus_pa`,
+    /// `yield_stress_pa`, `transition_exponent`, `area_m2`, `thickness_m`.
+    ThinLayer,
 }
 
 impl JointLaw {
@@ -110,6 +116,7 @@ impl JointLaw {
     pub fn name(self) -> &'static str {
         match self {
             JointLaw::Bilinear => "bilinear",
+            JointLaw::ThinLayer => "thin-layer",
         }
     }
 
@@ -121,6 +128,14 @@ impl JointLaw {
                 "k2_n_per_m",
                 "threshold_m",
                 "static_indentation_m",
+            ],
+            JointLaw::ThinLayer => &[
+                "elastic_modulus_pa",
+                "plastic_modulus_pa",
+                "yield_stress_pa",
+                "transition_exponent",
+                "area_m2",
+                "thickness_m",
             ],
         }
     }
@@ -149,16 +164,34 @@ pub struct JointSection {
     pub threshold_m: Option<f64>,
     /// Bilinear: indentation at the static equilibrium (m; negative: an open gap).
     pub static_indentation_m: Option<f64>,
+    /// Thin layer: elastic modulus of the virtual material (Pa).
+    pub elastic_modulus_pa: Option<f64>,
+    /// Thin layer: plastic (hardening) modulus (Pa), below the elastic one.
+    pub plastic_modulus_pa: Option<f64>,
+    /// Thin layer: yield stress (Pa).
+    pub yield_stress_pa: Option<f64>,
+    /// Thin layer: exponent of the smooth elastic–plastic transition (–; larger: sharper).
+    pub transition_exponent: Option<f64>,
+    /// Thin layer: area of the layer (m²).
+    pub area_m2: Option<f64>,
+    /// Thin layer: thickness of the layer (m); its strain is the approach over it.
+    pub thickness_m: Option<f64>,
 }
 
 impl JointSection {
     /// Every parameter key with its value, if given.
-    fn parameters(&self) -> [(&'static str, Option<f64>); 4] {
+    fn parameters(&self) -> [(&'static str, Option<f64>); 10] {
         [
             ("k1_n_per_m", self.k1_n_per_m),
             ("k2_n_per_m", self.k2_n_per_m),
             ("threshold_m", self.threshold_m),
             ("static_indentation_m", self.static_indentation_m),
+            ("elastic_modulus_pa", self.elastic_modulus_pa),
+            ("plastic_modulus_pa", self.plastic_modulus_pa),
+            ("yield_stress_pa", self.yield_stress_pa),
+            ("transition_exponent", self.transition_exponent),
+            ("area_m2", self.area_m2),
+            ("thickness_m", self.thickness_m),
         ]
     }
 
@@ -213,6 +246,29 @@ impl JointSection {
                             ("k2", "k2_n_per_m"),
                             ("threshold", "threshold_m"),
                             ("static_indentation", "static_indentation_m"),
+                        ],
+                    )
+                })?,
+            ),
+            JointLaw::ThinLayer => std::sync::Arc::new(
+                crate::element::ThinLayer::new(
+                    self.elastic_modulus_pa.expect("checked"),
+                    self.plastic_modulus_pa.expect("checked"),
+                    self.yield_stress_pa.expect("checked"),
+                    self.transition_exponent.expect("checked"),
+                    self.area_m2.expect("checked"),
+                    self.thickness_m.expect("checked"),
+                )
+                .map_err(|e| {
+                    rename(
+                        e,
+                        &[
+                            ("elastic_modulus", "elastic_modulus_pa"),
+                            ("plastic_modulus", "plastic_modulus_pa"),
+                            ("yield_stress", "yield_stress_pa"),
+                            ("exponent", "transition_exponent"),
+                            ("area", "area_m2"),
+                            ("thickness", "thickness_m"),
                         ],
                     )
                 })?,

@@ -16,6 +16,7 @@
 //! | [`lugre`] | LuGre friction (bristle state, Stribeck curve), exact exponential update at the increment's velocity | [`LuGre`] |
 //! | [`power_law_damper`] | power-law damper `c·|u̇|^p·u̇` | [`PowerLawDamper`] |
 //! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring | [`MicroslipContact`], [`JenkinsContact`] |
+//! | [`thin_layer`] | thin-layer interface: elastic–plastic virtual material (Ee, Ep, Sy, smooth transition n; Menegotto–Pinto) | [`ThinLayer`] |
 //! | [`unilateral`] | unilateral normal contact `N = max(0, N0 + kn·un)`, re-contact point | – |
 //! | [`params`] | the contact-element record `(kn, E0, k, μ, Et)` per area and per element | – |
 //!
@@ -38,6 +39,7 @@ pub mod lugre;
 pub mod params;
 pub mod power_law_damper;
 pub mod quadratic_spring;
+pub mod thin_layer;
 pub mod unilateral;
 pub mod valanis;
 
@@ -56,6 +58,7 @@ pub use lugre::{LuGre, LuGreParams};
 pub use params::{ContactParams, ContactParamsPerArea};
 pub use power_law_damper::PowerLawDamper;
 pub use quadratic_spring::QuadraticSpring;
+pub use thin_layer::ThinLayer;
 pub use valanis::{Integrator, ValanisParams, ValanisState};
 
 /// Energy dissipated over a closed cycle, `W = ∮ F dq` (trapezoidal rule over consecutive
