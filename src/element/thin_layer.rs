@@ -186,16 +186,14 @@ impl HystereticElement for ThinLayer {
         };
         f1[0] = self.area * stress;
         if let Some(p) = partials {
-            for r in 0..2 {
-                for c in 0..2 {
-                    p.ds_ds0[r * 3 + c] = jac_s[r][c];
-                }
-                p.ds_du0[r] = jac_u0[r];
+            for (r, (row, du0)) in jac_s.iter().zip(jac_u0).enumerate() {
+                p.ds_ds0[r * 3..r * 3 + 2].copy_from_slice(row);
+                p.ds_du0[r] = du0;
             }
             p.ds_ds0[8] = if s0[2] == 0.0 { 0.0 } else { 1.0 };
             let a = self.area;
-            for c in 0..2 {
-                p.df_ds0[c] = a * (d_er * jac_s[0][c] + d_sr * jac_s[1][c]);
+            for (c, df) in p.df_ds0[..2].iter_mut().enumerate() {
+                *df = a * (d_er * jac_s[0][c] + d_sr * jac_s[1][c]);
             }
             p.df_du0[0] = a * (d_er * jac_u0[0] + d_sr * jac_u0[1]);
             p.df_du1[0] = a * d_e / t;
