@@ -645,3 +645,27 @@ fn thin_layer_with_a_sharp_transition_dissipates_like_bilinear_plasticity() {
     assert!((w - exact).abs() < 5e-3 * exact, "{w} vs {exact}");
     assert!(energy(&layer(2.0), a) < 0.9 * exact);
 }
+
+/// The layer's loading direction is a discrete state: in the AFT the periodic cycle may arrive at
+/// its first sample moving the other way than the initial loading reached it (here descending
+/// after loading upwards), and the period must still close (periodicity error 1e-12).
+#[test]
+fn thin_layer_cycle_is_periodic_whichever_way_it_reaches_the_first_sample() {
+    use asperity::dynamics::aft::{evaluate, AftSettings};
+    let l = layer(2.0);
+    let a = 4.0 * l.yield_strain() * l.thickness;
+    let h = Harmonics::new(3, false, Some(64)).unwrap();
+    for phase in [0.3f64, 2.0, 4.0, 5.5] {
+        // u = a·sin(θ + phase): [a0, a1, b1, …] = [0, a·sin φ, a·cos φ, 0, …].
+        let mut u = vec![0.0; h.len()];
+        u[1] = a * phase.sin();
+        u[2] = a * phase.cos();
+        let r = evaluate(&l, &h, &u, false, &AftSettings::default());
+        assert!(
+            r.periodic && r.periodicity_error < 1e-12,
+            "phase {phase}: error {:.2e} after {} periods",
+            r.periodicity_error,
+            r.periods
+        );
+    }
+}

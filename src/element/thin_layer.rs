@@ -190,7 +190,9 @@ impl HystereticElement for ThinLayer {
                 p.ds_ds0[r * 3..r * 3 + 2].copy_from_slice(row);
                 p.ds_du0[r] = du0;
             }
-            p.ds_ds0[8] = if s0[2] == 0.0 { 0.0 } else { 1.0 };
+            // The direction is a discrete function of the path (∂d1/∂d0 = 0 almost everywhere):
+            // as a neutral direction of the AFT's periodicity Newton it would keep the direction
+            // of the initial loading even where the periodic cycle arrives the other way.
             let a = self.area;
             for (c, df) in p.df_ds0[..2].iter_mut().enumerate() {
                 *df = a * (d_er * jac_s[0][c] + d_sr * jac_s[1][c]);
