@@ -17,7 +17,7 @@
 //! Units: `u`, `δ0`, `δt` in m, `N` in N, `k1`, `k2` in N/m.
 
 use crate::core::error::{Error, Result};
-use crate::element::hysteretic::MemorylessSpring;
+use crate::element::hysteretic::{ContactStatus, HystereticElement, StepPartials};
 
 /// Contact force `N(δ)` and its slope `dN/dδ` at indentation `δ` (module documentation; the
 /// slope at a kink is the one of the side towards larger `δ`).
@@ -81,11 +81,9 @@ impl BilinearContact {
     }
 }
 
-impl MemorylessSpring for BilinearContact {
-    fn law_name(&self) -> &'static str {
-        "bilinear"
-    }
-    fn force_and_stiffness(&self, u: f64) -> (f64, f64) {
+impl BilinearContact {
+    /// Force change `N(δ0 + u) − N(δ0)` and tangent `dN/dδ` at the approach `u`.
+    pub fn force_and_stiffness(&self, u: f64) -> (f64, f64) {
         let (n, k) = contact_force(
             self.k1,
             self.k2,
@@ -94,8 +92,53 @@ impl MemorylessSpring for BilinearContact {
         );
         (n - self.preload(), k)
     }
-    fn scale(&self) -> f64 {
+}
+
+impl HystereticElement for BilinearContact {
+    fn name(&self) -> &'static str {
+        "bilinear"
+    }
+    fn dofs(&self) -> usize {
+        1
+    }
+    fn state_len(&self) -> usize {
+        0
+    }
+    fn virgin_state(&self, _s: &mut [f64]) {}
+    fn state_scales(&self, _scales: &mut [f64]) {}
+    fn force_scale(&self) -> f64 {
         self.k1 * self.threshold
+    }
+    fn step(
+        &self,
+        _s0: &[f64],
+        _u0: &[f64],
+        u1: &[f64],
+        _s1: &mut [f64],
+        f1: &mut [f64],
+        partials: Option<&mut StepPartials>,
+    ) {
+        let (f, k) = self.force_and_stiffness(u1[0]);
+        f1[0] = f;
+        if let Some(p) = partials {
+            p.df_du1[0] = k;
+        }
+    }
+    /// [`ContactStatus::Separated`] where the contact is open, [`ContactStatus::Stick`] (closed)
+    /// otherwise.
+    fn status(&self, _s: &[f64], u: &[f64], _f: &[f64]) -> ContactStatus {
+        if contact_force(
+            self.k1,
+            self.k2,
+            self.threshold,
+            self.static_indentation + u[0],
+        )
+        .0 > 0.0
+        {
+            ContactStatus::Stick
+        } else {
+            ContactStatus::Separated
+        }
     }
 }
 
@@ -117,6 +160,8 @@ mod tests {
         let g = BilinearContact::new(2.0, 5.0, 1.0, -0.25).unwrap();
         assert_eq!(g.force_and_stiffness(0.2), (0.0, 0.0));
         assert_eq!(g.force_and_stiffness(0.75), (1.0, 2.0));
+        assert_eq!(g.status(&[], &[0.2], &[0.0]), ContactStatus::Separated);
+        assert_eq!(g.status(&[], &[0.75], &[1.0]), ContactStatus::Stick);
         // A softening branch that would pull is cut.
         assert_eq!(contact_force(2.0, -1.0, 1.0, 4.0), (0.0, 0.0));
         assert!(BilinearContact::new(2.0, -1.0, 1.0, 4.0).is_err());

@@ -8,7 +8,7 @@
 //! | [`gaul_lenz`] | Valanis with a constant stick limit `σ0` | [`GaulLenz`] |
 //! | [`jenkins`] | spring + Coulomb slider (1-D, and 2-D with a circular limit) | [`Jenkins`] |
 //! | [`iwan`] | Segalman's four-parameter Iwan element, parallel Jenkins sliders | [`IwanElement`] |
-//! | [`bilinear`] | bilinear normal contact: stiffness `k1` then `k2` beyond an indentation, gap, separation | [`BilinearContact`] (memoryless) |
+//! | [`bilinear`] | bilinear normal contact: stiffness `k1` then `k2` beyond an indentation, gap, separation | [`BilinearContact`] (memoryless; separated status where open) |
 //! | [`bouc_wen`] | Bouc–Wen | [`BoucWen`] |
 //! | [`cubic`] | cubic (Duffing) spring | [`CubicSpring`] (memoryless) |
 //! | [`quadratic_spring`] | quadratic spring `k2·|q|·q` | [`QuadraticSpring`] (memoryless) |
