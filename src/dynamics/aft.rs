@@ -43,7 +43,9 @@
 //! `u(θ*)` and on from there (`Reversal`). Every sub-step is then monotone in the reversing
 //! component, and the state at every sample exact (Jenkins: exactly; Valanis: to the rounding
 //! of its closed-form branch). Elements without state (springs, the difference-quotient damper
-//! of an identification) are stepped from sample to sample as before.
+//! of an identification) and rate-dependent elements, which read their velocity from a whole
+//! sample interval (LuGre, [`HystereticElement::rate_dependent`]), are stepped from sample to
+//! sample.
 //!
 //! What remains is the quadrature of the force's harmonics from its samples. The force is
 //! continuous with a continuous slope at a reversal (`u' = 0` there) but its curvature jumps,
@@ -1156,8 +1158,9 @@ fn periodic_cycle<'a>(
     }
     // Reversals between samples matter to an element with memory only (a stateless element,
     // e.g. a spring or the difference-quotient damper of an identification, is stepped from
-    // sample to sample).
-    if m > 0 {
+    // sample to sample), and to a rate-independent one only (a rate-dependent element reads its
+    // velocity from a whole sample interval).
+    if m > 0 && !el.rate_dependent() {
         p.reversals = find_reversals(h, u_coeffs, d, arena);
     }
     // Virgin element at u = 0 loaded to the mean displacement, then to the first sample (the

@@ -17,6 +17,19 @@
 //! normal = [0.0, 0.0, 1.0]      # from node_a towards node_b
 //! tangent = [1.0, 0.0, 0.0]
 //!
+//! [[joint]]                     # zero or more joints on one direction each
+//! law = "bilinear"              # bilinear normal contact (element::bilinear)
+//! node_a = "tip"                # `ground` for a fixed side
+//! node_b = "ground"
+//! direction = [0.0, 0.0, 1.0]   # u = direction·(x_a − x_b), u > 0 closing
+//! k1_n_per_m = 2.0e6            # stiffness up to the threshold indentation
+//! k2_n_per_m = 8.0e6            # stiffness beyond it
+//! threshold_m = 1.0e-5          # indentation where the stiffness changes (> 0)
+//! static_indentation_m = -2.0e-6   # indentation at the static equilibrium (< 0: an open gap)
+//! # law = "thin-layer"          # elastic–plastic virtual layer (element::thin_layer) with
+//! # elastic_modulus_pa, plastic_modulus_pa, yield_stress_pa, transition_exponent, area_m2,
+//! # thickness_m
+//!
 //! [excitation]
 //! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)
 //! weights = [1.0, -1.0]         # optional (default 1 each): out-of-phase forcing
@@ -84,6 +97,184 @@ pub struct ContactSection {
     pub normal: [f64; 3],
     /// First tangential direction in the structure's axes (orthogonalised against `normal`).
     pub tangent: [f64; 3],
+}
+
+/// Constitutive law of a `[[joint]]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum JointLaw {
+    /// [`crate::element::BilinearContact`]: `k1_n_per_m`, `k2_n_per_m`, `threshold_m`,
+    /// `static_indentation_m`.
+    Bilinear,
+    /// [`crate::element::ThinLayer`]: `elastic_modulus_pa`, `plastic_modulus_pa`,
+    /// `yield_stress_pa`, `transition_exponent`, `area_m2`, `thickness_m`.
+    ThinLayer,
+}
+
+impl JointLaw {
+    /// The law's name in the model file.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointLaw::Bilinear => "bilinear",
+            JointLaw::ThinLayer => "thin-layer",
+        }
+    }
+
+    /// The parameter keys the law needs (every other parameter key is refused).
+    fn keys(self) -> &'static [&'static str] {
+        match self {
+            JointLaw::Bilinear => &[
+                "k1_n_per_m",
+                "k2_n_per_m",
+                "threshold_m",
+                "static_indentation_m",
+            ],
+            JointLaw::ThinLayer => &[
+                "elastic_modulus_pa",
+                "plastic_modulus_pa",
+                "yield_stress_pa",
+                "transition_exponent",
+                "area_m2",
+                "thickness_m",
+            ],
+        }
+    }
+}
+
+/// `[[joint]]`: one joint law between two nodes (or a node and ground) along one direction,
+/// acting on the approach `u = direction·(x_a − x_b)` (`u > 0` closing) with the force `f`
+/// applied as `−f·direction` on `node_a` and `+f·direction` on `node_b`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSection {
+    /// The joint's law.
+    pub law: JointLaw,
+    /// First node (`ground` for a fixed side).
+    pub node_a: String,
+    /// Second node (`ground` for a fixed side).
+    pub node_b: String,
+    /// Direction of the joint in the structure's axes, from `node_a` towards `node_b`
+    /// (normalised on load).
+    pub direction: [f64; 3],
+    /// Bilinear: stiffness up to the threshold indentation (N/m).
+    pub k1_n_per_m: Option<f64>,
+    /// Bilinear: stiffness beyond the threshold indentation (N/m).
+    pub k2_n_per_m: Option<f64>,
+    /// Bilinear: indentation where the stiffness changes (m).
+    pub threshold_m: Option<f64>,
+    /// Bilinear: indentation at the static equilibrium (m; negative: an open gap).
+    pub static_indentation_m: Option<f64>,
+    /// Thin layer: elastic modulus of the virtual material (Pa).
+    pub elastic_modulus_pa: Option<f64>,
+    /// Thin layer: plastic (hardening) modulus (Pa), below the elastic one.
+    pub plastic_modulus_pa: Option<f64>,
+    /// Thin layer: yield stress (Pa).
+    pub yield_stress_pa: Option<f64>,
+    /// Thin layer: exponent of the smooth elastic–plastic transition (–; larger: sharper).
+    pub transition_exponent: Option<f64>,
+    /// Thin layer: area of the layer (m²).
+    pub area_m2: Option<f64>,
+    /// Thin layer: thickness of the layer (m); its strain is the approach over it.
+    pub thickness_m: Option<f64>,
+}
+
+impl JointSection {
+    /// Every parameter key with its value, if given.
+    fn parameters(&self) -> [(&'static str, Option<f64>); 10] {
+        [
+            ("k1_n_per_m", self.k1_n_per_m),
+            ("k2_n_per_m", self.k2_n_per_m),
+            ("threshold_m", self.threshold_m),
+            ("static_indentation_m", self.static_indentation_m),
+            ("elastic_modulus_pa", self.elastic_modulus_pa),
+            ("plastic_modulus_pa", self.plastic_modulus_pa),
+            ("yield_stress_pa", self.yield_stress_pa),
+            ("transition_exponent", self.transition_exponent),
+            ("area_m2", self.area_m2),
+            ("thickness_m", self.thickness_m),
+        ]
+    }
+
+    /// The joint's element. Errors name the key (`joint.<key>`).
+    pub fn element(&self) -> Result<std::sync::Arc<dyn crate::element::HystereticElement>> {
+        let needed = self.law.keys();
+        let law = self.law.name();
+        for (key, value) in self.parameters() {
+            match (needed.contains(&key), value) {
+                (true, None) => {
+                    return Err(Error::param(
+                        format!("joint.{key}"),
+                        format!("the `{law}` law needs `{key}`"),
+                    ))
+                }
+                (false, Some(_)) => {
+                    return Err(Error::param(
+                        format!("joint.{key}"),
+                        format!(
+                            "is not a parameter of the `{law}` law (it takes {})",
+                            needed.join(", ")
+                        ),
+                    ))
+                }
+                _ => {}
+            }
+        }
+        let rename = |e: Error, keys: &[(&str, &str)]| match e {
+            Error::InvalidParameter { name, message } => {
+                let key = keys
+                    .iter()
+                    .find(|(n, _)| *n == name)
+                    .map(|(_, k)| *k)
+                    .unwrap_or("law");
+                Error::param(format!("joint.{key}"), message)
+            }
+            o => o,
+        };
+        Ok(match self.law {
+            JointLaw::Bilinear => std::sync::Arc::new(
+                crate::element::BilinearContact::new(
+                    self.k1_n_per_m.expect("checked"),
+                    self.k2_n_per_m.expect("checked"),
+                    self.threshold_m.expect("checked"),
+                    self.static_indentation_m.expect("checked"),
+                )
+                .map_err(|e| {
+                    rename(
+                        e,
+                        &[
+                            ("k1", "k1_n_per_m"),
+                            ("k2", "k2_n_per_m"),
+                            ("threshold", "threshold_m"),
+                            ("static_indentation", "static_indentation_m"),
+                        ],
+                    )
+                })?,
+            ),
+            JointLaw::ThinLayer => std::sync::Arc::new(
+                crate::element::ThinLayer::new(
+                    self.elastic_modulus_pa.expect("checked"),
+                    self.plastic_modulus_pa.expect("checked"),
+                    self.yield_stress_pa.expect("checked"),
+                    self.transition_exponent.expect("checked"),
+                    self.area_m2.expect("checked"),
+                    self.thickness_m.expect("checked"),
+                )
+                .map_err(|e| {
+                    rename(
+                        e,
+                        &[
+                            ("elastic_modulus", "elastic_modulus_pa"),
+                            ("plastic_modulus", "plastic_modulus_pa"),
+                            ("yield_stress", "yield_stress_pa"),
+                            ("exponent", "transition_exponent"),
+                            ("area", "area_m2"),
+                            ("thickness", "thickness_m"),
+                        ],
+                    )
+                })?,
+            ),
+        })
+    }
 }
 
 /// `[excitation]`: the harmonic force `F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)`.
@@ -157,6 +348,9 @@ pub struct ModelFile {
     /// The element tables (none: a linear response).
     #[serde(default)]
     pub contact: Vec<ContactSection>,
+    /// The joints (none: no joint law).
+    #[serde(default)]
+    pub joint: Vec<JointSection>,
     /// The forcing.
     pub excitation: ExcitationSection,
     /// The reported DOFs.
@@ -244,6 +438,32 @@ impl ModelFile {
             contact_frame(c.normal, c.tangent).map_err(|e| match e {
                 Error::InvalidParameter { name, message } => {
                     Error::param(format!("contact.{name}"), message)
+                }
+                o => o,
+            })?;
+        }
+        for (i, j) in self.joint.iter().enumerate() {
+            let n = j.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if !(n.is_finite() && n > 0.0) {
+                return Err(Error::param(
+                    "joint.direction",
+                    format!("joint {}: must be a non-zero finite vector", i + 1),
+                ));
+            }
+            if j.node_a == j.node_b {
+                return Err(Error::param(
+                    "joint.node_b",
+                    format!(
+                        "joint {}: node_a and node_b are the same node `{}` (a joint needs two \
+                         nodes, or `ground` for one side)",
+                        i + 1,
+                        j.node_a
+                    ),
+                ));
+            }
+            j.element().map_err(|e| match e {
+                Error::InvalidParameter { name, message } => {
+                    Error::param(name, format!("joint {}: {message}", i + 1))
                 }
                 o => o,
             })?;
@@ -808,6 +1028,25 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             element_rows.push((c.law, e.clone()));
         }
         inputs.push((format!("contact {} elements", ci + 1), ep));
+    }
+    for (ji, j) in file.joint.iter().enumerate() {
+        let norm = j.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let d = j.direction.map(|v| v / norm);
+        let frame = [d, [0.0; 3], [0.0; 3]];
+        let map = kin.pair_map(&j.node_a, &j.node_b, &frame).map_err(|node| {
+            let what = if structure.is_modal() {
+                "has no mode shape"
+            } else {
+                "is not a node of the lumped model"
+            };
+            Error::parse(
+                path,
+                key_line(&text, if node == j.node_a { "node_a" } else { "node_b" }),
+                format!("joint {}: node `{node}` {what}", ji + 1),
+            )
+        })?;
+        let el = j.element().expect("validated by parse");
+        structure.attach(format!("joint {}", ji + 1), el, map.rows(0, 1).into_owned())?;
     }
     let dof_err = |key: &str, label: &str| {
         Error::parse(

@@ -131,7 +131,8 @@ impl StepPartials {
     }
 }
 
-/// A rate-independent element with memory, advanced from sample to sample.
+/// An element with memory, advanced from sample to sample (rate-independent unless it says
+/// otherwise, [`HystereticElement::rate_dependent`]).
 pub trait HystereticElement: Send + Sync + std::fmt::Debug {
     /// Short name of the constitutive law (`"valanis"`, `"jenkins"`, ...).
     fn name(&self) -> &'static str;
@@ -159,6 +160,13 @@ pub trait HystereticElement: Send + Sync + std::fmt::Debug {
     );
     /// Contact status at a sample with state `s`, displacement `u` and force `f`.
     fn status(&self, s: &[f64], u: &[f64], f: &[f64]) -> ContactStatus;
+    /// Whether the step reads a velocity from the increment, `(u1 − u0)·sample_rate` (a
+    /// rate-dependent law at a fixed sample rate, e.g. LuGre or Hunt–Crossley): such an element
+    /// is stepped from sample to sample only, never to a reversal between samples (an increment
+    /// shorter than a sample would give it a wrong velocity). Rate-independent by default.
+    fn rate_dependent(&self) -> bool {
+        false
+    }
 }
 
 /// A memoryless spring `f(u)` on one displacement component: an elastic nonlinearity as a

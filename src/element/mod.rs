@@ -8,11 +8,15 @@
 //! | [`gaul_lenz`] | Valanis with a constant stick limit `σ0` | [`GaulLenz`] |
 //! | [`jenkins`] | spring + Coulomb slider (1-D, and 2-D with a circular limit) | [`Jenkins`] |
 //! | [`iwan`] | Segalman's four-parameter Iwan element, parallel Jenkins sliders | [`IwanElement`] |
+//! | [`bilinear`] | bilinear normal contact: stiffness `k1` then `k2` beyond an indentation, gap, separation | [`BilinearContact`] (memoryless; separated status where open) |
 //! | [`bouc_wen`] | Bouc–Wen | [`BoucWen`] |
 //! | [`cubic`] | cubic (Duffing) spring | [`CubicSpring`] (memoryless) |
 //! | [`quadratic_spring`] | quadratic spring `k2·|q|·q` | [`QuadraticSpring`] (memoryless) |
+//! | [`hunt_crossley`] | Hunt–Crossley normal contact `k·δⁿ·(1 + χ·δ̇)` with gap, separation and impact; exact `χ(e, v_in)` | [`HuntCrossley`] |
+//! | [`lugre`] | LuGre friction (bristle state, Stribeck curve), exact exponential update at the increment's velocity | [`LuGre`] |
 //! | [`power_law_damper`] | power-law damper `c·|u̇|^p·u̇` | [`PowerLawDamper`] |
 //! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring | [`MicroslipContact`], [`JenkinsContact`] |
+//! | [`thin_layer`] | thin-layer interface: elastic–plastic virtual material (Ee, Ep, Sy, smooth transition n; Menegotto–Pinto) | [`ThinLayer`] |
 //! | [`unilateral`] | unilateral normal contact `N = max(0, N0 + kn·un)`, re-contact point | – |
 //! | [`params`] | the contact-element record `(kn, E0, k, μ, Et)` per area and per element | – |
 //!
@@ -22,31 +26,39 @@
 //! Units: either per unit nominal area (displacement m, force Pa, stiffness N/m³) or per element
 //! (m, N, N/m) — the mathematics is the same; see [`valanis`]. The solvers use per-element units.
 
+pub mod bilinear;
 pub mod bouc_wen;
 pub mod contact3d;
 pub mod cubic;
 pub mod gaul_lenz;
+pub mod hunt_crossley;
 pub mod hysteretic;
 pub mod iwan;
 pub mod jenkins;
+pub mod lugre;
 pub mod params;
 pub mod power_law_damper;
 pub mod quadratic_spring;
+pub mod thin_layer;
 pub mod unilateral;
 pub mod valanis;
 
+pub use bilinear::BilinearContact;
 pub use bouc_wen::{BoucWen, BoucWenParams};
 pub use contact3d::{JenkinsContact, MicroslipContact};
 pub use cubic::CubicSpring;
 pub use gaul_lenz::{GaulLenz, GaulLenzParams};
+pub use hunt_crossley::{HuntCrossley, HuntCrossleyParams};
 pub use hysteretic::{
     check_partials, ContactStatus, HystereticElement, MemorylessSpring, StepPartials,
 };
 pub use iwan::{IwanElement, IwanParams};
 pub use jenkins::{Jenkins, JenkinsParams};
+pub use lugre::{LuGre, LuGreParams};
 pub use params::{ContactParams, ContactParamsPerArea};
 pub use power_law_damper::PowerLawDamper;
 pub use quadratic_spring::QuadraticSpring;
+pub use thin_layer::ThinLayer;
 pub use valanis::{Integrator, ValanisParams, ValanisState};
 
 /// Energy dissipated over a closed cycle, `W = ∮ F dq` (trapezoidal rule over consecutive

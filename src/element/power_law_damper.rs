@@ -47,6 +47,9 @@ impl HystereticElement for PowerLawDamper {
     fn state_len(&self) -> usize {
         0
     }
+    fn rate_dependent(&self) -> bool {
+        true
+    }
     fn virgin_state(&self, _s: &mut [f64]) {}
     fn state_scales(&self, _scales: &mut [f64]) {}
     fn force_scale(&self) -> f64 {
