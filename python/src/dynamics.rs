@@ -460,6 +460,7 @@ impl ResponseModel {
                     Excitation {
                         force: self.force.clone(),
                         harmonic: self.harmonic,
+                        force_sin: None,
                     },
                     choice,
                 )?;

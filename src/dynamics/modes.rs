@@ -78,6 +78,7 @@ pub fn system(model: &LoadedModel) -> Result<HbmSystem<'_>> {
         Excitation {
             force: DVector::zeros(model.structure.n()),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )

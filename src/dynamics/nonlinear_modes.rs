@@ -366,6 +366,12 @@ impl<'s, 'a> Epmc<'s, 'a> {
                  condition needs every coordinate's harmonics)",
             ));
         }
+        if system.cyclic().is_some() {
+            return Err(Error::param(
+                "cyclic",
+                "nonlinear modes of a cyclic sector are not implemented",
+            ));
+        }
         if settings.amplitudes.is_empty() {
             return Err(Error::param("amplitudes", "give at least one amplitude"));
         }

@@ -167,6 +167,7 @@ pub fn run<'a>(
         Excitation {
             force: model.force.clone(),
             harmonic: f.excitation.harmonic,
+            force_sin: None,
         },
         settings.formulation,
     )?;
