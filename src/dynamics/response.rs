@@ -187,6 +187,21 @@ pub fn run<'a>(
         system.formulation(),
         system.unknowns()
     ));
+    if let Some(c) = system.cyclic() {
+        log(&format!(
+            "cyclic sector: {} sectors, engine order {}, inter-sector phase {:.4} rad; harmonic index per harmonic {}",
+            c.sectors,
+            c.engine_order,
+            c.phase(),
+            system
+                .harmonics
+                .orders()
+                .iter()
+                .map(|&h| format!("{h}→{}", c.harmonic_index(h)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     let assessed = stability.assesses(&system);
     log(&format!(
         "stability (Hill's method, {0} × {0} companion matrix per point): {1}",
@@ -390,6 +405,17 @@ impl ForcedResponse<'_> {
                 "aft": system.aft,
                 "continuation": self.settings.continuation,
                 "stability": self.stability,
+                "cyclic": system.cyclic().map(|c| serde_json::json!({
+                    "sectors": c.sectors,
+                    "engine_order": c.engine_order,
+                    "inter_sector_phase_rad": c.phase(),
+                    "harmonic_index": system
+                        .harmonics
+                        .orders()
+                        .iter()
+                        .map(|&h| serde_json::json!({"harmonic": h, "index": c.harmonic_index(h)}))
+                        .collect::<Vec<_>>(),
+                })),
             }),
             serde_json::json!({
                 "elements": model.structure.elements.len(),
