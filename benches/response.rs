@@ -529,7 +529,7 @@ fn stability_costs(quick: bool) {
         Excitation {
             force: m.force.clone(),
             harmonic: m.file.excitation.harmonic,
-            force_sin: None,
+            force_sin: m.force_sin.clone(),
         },
         rs.formulation,
     )

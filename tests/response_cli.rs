@@ -294,9 +294,9 @@ fn levels(out: &Path) -> Vec<serde_json::Value> {
 }
 
 /// `[cyclic]` end to end: a sector with a friction damper to the next sector's blade against
-/// the full assembly of its `N` sectors at the standing engine orders (EO = 0 and N/2, the
-/// real-weighted forcings a model file can state for the full structure), at a level in partial
-/// slip and one in gross slip. The two systems give the same solution at a frequency to rounding
+/// the full assembly of its `N` sectors under the travelling wave (`phases_deg`) at engine orders
+/// 0 (standing), 1 (travelling) and N/2 (standing), at a level in partial slip and one in gross
+/// slip. The two systems give the same solution at a frequency to rounding
 /// (tests/dynamics_cyclic.rs, with the travelling engine orders); here the sweeps' points
 /// differ, and the located peaks agree to the parabolic refinement's accuracy on a branch with
 /// kinks where the slip onset crosses a time sample: amplitudes within 3e-4 in partial slip
@@ -305,7 +305,7 @@ fn levels(out: &Path) -> Vec<serde_json::Value> {
 #[test]
 fn cyclic_sector_gives_the_full_assemblys_peaks() {
     let sectors = 4;
-    for eo in [0, 2] {
+    for eo in [0, 1, 2] {
         let dir = tempfile::tempdir().unwrap();
         let (ds, df) = (dir.path().join("sector"), dir.path().join("full"));
         std::fs::create_dir_all(&ds).unwrap();
@@ -326,7 +326,7 @@ fn cyclic_sector_gives_the_full_assemblys_peaks() {
                 .unwrap();
         let cyc = &json["parameters"]["cyclic"];
         assert_eq!(cyc["sectors"], sectors, "{json}");
-        // Harmonics 1 and 3 of engine order 2 of 4: both of index 2; of engine order 0: 0.
+        // Harmonics 1 and 3 of engine order EO of 4 are both of index EO (3·1 mod 4 = 3 → 1).
         let index: Vec<u64> = cyc["harmonic_index"]
             .as_array()
             .unwrap()
@@ -390,6 +390,14 @@ fn bad_cyclic_inputs_fail_clearly_and_write_nothing() {
         "odd_only = true\nformulation = \"receptance\"",
     );
     assert_fails(p, &["model.toml", "sweep.formulation", "coordinates"]);
+    edit(
+        "dofs = [\"blade.x\"]",
+        "dofs = [\"blade.x\"]\nphases_deg = [0.0, 90.0]",
+    );
+    assert_fails(
+        p,
+        &["model.toml", "excitation.phases_deg", "one finite phase"],
+    );
     edit("node_b = \"next:blade\"", "node_b = \"next:blad\"");
     assert_fails(p, &["damper.csv:3", "next:blad", "not a node"]);
     // A node of the next sector in a model without [cyclic].

@@ -25,8 +25,9 @@
 //! tangent = [1.0, 0.0, 0.0]
 //!
 //! [excitation]
-//! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)
+//! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t + θ_i)
 //! weights = [1.0, -1.0]         # optional (default 1 each): out-of-phase forcing
+//! # phases_deg = [0.0, 90.0]    # optional phase θ_i of each DOF's force (default 0)
 //! harmonic = 1
 //! levels_n = [0.5, 2.0, 8.0]    # force amplitudes (N)
 //!
@@ -124,7 +125,7 @@ pub struct CyclicSection {
 /// Prefix of a contact node of the next sector in a `[cyclic]` model (`next:<node>`).
 pub const NEXT_SECTOR: &str = "next:";
 
-/// `[excitation]`: the harmonic force `F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)`.
+/// `[excitation]`: the harmonic force `F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t + θ_i)`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExcitationSection {
@@ -133,6 +134,10 @@ pub struct ExcitationSection {
     /// Weight `w_i` of each DOF (dimensionless; default 1 each, e.g. `[1, -1]` for out-of-phase
     /// forcing).
     pub weights: Option<Vec<f64>>,
+    /// Phase `θ_i` of each DOF's force (degrees; default 0 each): the force leads
+    /// `cos(harmonic·ω·t)` by `θ_i`, the convention of the response's `phase_rad`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phases_deg: Option<Vec<f64>>,
     /// Harmonic of the sweep frequency the force acts at (default 1).
     #[serde(default = "one")]
     pub harmonic: usize,
@@ -216,8 +221,10 @@ pub struct LoadedModel {
     pub path: PathBuf,
     /// The structure with its elements attached.
     pub structure: Structure,
-    /// Force on the coordinates per newton of excitation.
+    /// Force on the coordinates per newton of excitation, in phase with `cos(harmonic·ω·t)`.
     pub force: DVector<f64>,
+    /// Quadrature part (on `sin(harmonic·ω·t)`) when `[excitation]` gives phases.
+    pub force_sin: Option<DVector<f64>>,
     /// One observation row per response DOF (label, row).
     pub responses: Vec<(String, DVector<f64>)>,
     /// `(role, path)` of every input file.
@@ -379,6 +386,14 @@ impl ModelFile {
                 return Err(Error::param(
                     "excitation.weights",
                     "one finite weight per excitation DOF",
+                ));
+            }
+        }
+        if let Some(p) = &e.phases_deg {
+            if p.len() != e.dofs.len() || p.iter().any(|v| !v.is_finite()) {
+                return Err(Error::param(
+                    "excitation.phases_deg",
+                    "one finite phase (degrees) per excitation DOF",
                 ));
             }
         }
@@ -976,6 +991,8 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         )
     };
     let mut force = DVector::zeros(structure.n());
+    let phases = file.excitation.phases_deg.as_ref();
+    let mut force_sin = phases.map(|_| DVector::zeros(structure.n()));
     for (i, d) in file.excitation.dofs.iter().enumerate() {
         let w = file
             .excitation
@@ -983,9 +1000,15 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             .as_ref()
             .map(|w| w[i])
             .unwrap_or(1.0);
-        force += DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?) * w;
+        let row = DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?);
+        // w·cos(eωt + θ) = w·cos θ·cos eωt − w·sin θ·sin eωt.
+        let (s, c) = phases.map_or(0.0, |p| p[i].to_radians()).sin_cos();
+        force += &row * (w * c);
+        if let Some(fs) = force_sin.as_mut() {
+            *fs -= &row * (w * s);
+        }
     }
-    if force.amax() == 0.0 {
+    if force.amax() == 0.0 && force_sin.as_ref().is_none_or(|f| f.amax() == 0.0) {
         // Weights that cancel, or mode shapes that vanish at every excitation DOF: the
         // structure would not be excited and every response would be zero.
         return Err(Error::parse(
@@ -1005,6 +1028,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         path: path.to_path_buf(),
         structure,
         force,
+        force_sin,
         responses,
         inputs,
         out_of_range,

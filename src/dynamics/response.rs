@@ -167,7 +167,7 @@ pub fn run<'a>(
         Excitation {
             force: model.force.clone(),
             harmonic: f.excitation.harmonic,
-            force_sin: None,
+            force_sin: model.force_sin.clone(),
         },
         settings.formulation,
     )?;

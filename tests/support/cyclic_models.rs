@@ -95,7 +95,7 @@ normal = [0.0, 0.0, 1.0]\ntangent = [1.0, 0.0, 0.0]\n\n\
 }
 
 /// The same `N` sectors assembled (boundary nodes merged) with a damper per sector and the
-/// standing engine-order forcing `(±1)^j` on the blades (EO = 0 or N/2).
+/// travelling-wave forcing of engine order `eo` on the blades (`phases_deg`).
 pub fn write_full_model(dir: &Path, sectors: usize, eo: usize) -> PathBuf {
     let index = |j: usize, i: usize| match i {
         0 => 3 * j,
@@ -120,20 +120,18 @@ pub fn write_full_model(dir: &Path, sectors: usize, eo: usize) -> PathBuf {
     std::fs::write(dir.join("damper.csv"), table).unwrap();
     std::fs::write(dir.join("pairs.csv"), pairs).unwrap();
     let dofs: Vec<String> = (0..sectors).map(|j| format!("\"s{j}_blade.x\"")).collect();
-    let weights: Vec<String> = (0..sectors)
-        .map(|j| {
-            let phase = std::f64::consts::TAU * (eo * j) as f64 / sectors as f64;
-            format!("{:.1}", phase.cos())
-        })
+    // The travelling wave F·cos(ωt + j·φ), φ = 360°·EO/N.
+    let phases: Vec<String> = (0..sectors)
+        .map(|j| format!("{:e}", 360.0 * (eo * j) as f64 / sectors as f64))
         .collect();
     let model = format!(
         "[linear]\nmass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"\n\n\
 [[contact]]\nelements = \"damper.csv\"\nlaw = \"jenkins\"\npairs = \"pairs.csv\"\n\
 normal = [0.0, 0.0, 1.0]\ntangent = [1.0, 0.0, 0.0]\n\n\
-[excitation]\ndofs = [{}]\nweights = [{}]\nlevels_n = [2.0, 20.0]\n\n\
+[excitation]\ndofs = [{}]\nphases_deg = [{}]\nlevels_n = [2.0, 20.0]\n\n\
 [response]\ndofs = [\"s0_blade.x\"]\n\n{SWEEP}",
         dofs.join(", "),
-        weights.join(", ")
+        phases.join(", ")
     );
     std::fs::write(dir.join("model.toml"), model).unwrap();
     dir.join("model.toml")
