@@ -21,6 +21,12 @@
 //!   (see [`crate::dynamics::condensation`]): `U − G(ω)·(level·F̂ − f̂(U)) = 0`,
 //!   `G_k = P·H(kω)·Pᵀ`. The problem size is set by the contact DOFs, not by the model.
 //!
+//! A cyclic sector ([`crate::dynamics::cyclic`]) is solved in the coordinates formulation on the
+//! harmonics `z` of its coordinates off the right boundary: `Q = T·z`, the balance projected by
+//! `Tᵀ`, and elements across the boundary evaluated on `A·z` (this sector's and the next sector's
+//! harmonics), Jacobian `Tᵀ·Z·T + Aᵀ·J·A`. The products are dense: meant for lumped sectors of
+//! tens to a few hundred DOFs.
+//!
 //! [`FormulationChoice::Auto`] takes the one with fewer unknowns and says which
 //! ([`HbmSystem::formulation`]). Newton's method with a backtracking line search;
 //! convergence when `‖R‖ ≤ tolerance·(‖level·F̂‖ + ‖f̂_nl‖)` (coordinates) or
