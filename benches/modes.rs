@@ -37,6 +37,7 @@ fn main() {
         Excitation {
             force: DVector::zeros(MODES),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )

@@ -88,6 +88,7 @@ fn peer(case: &PeerCase) {
         Excitation {
             force: f,
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )
@@ -283,7 +284,11 @@ fn upd_size(quick: bool) {
     let sys = HbmSystem::new(
         &s,
         h,
-        Excitation { force, harmonic: 1 },
+        Excitation {
+            force,
+            harmonic: 1,
+            force_sin: None,
+        },
         FormulationChoice::Auto,
     )
     .unwrap();
@@ -524,6 +529,7 @@ fn stability_costs(quick: bool) {
         Excitation {
             force: m.force.clone(),
             harmonic: m.file.excitation.harmonic,
+            force_sin: m.force_sin.clone(),
         },
         rs.formulation,
     )
@@ -539,7 +545,11 @@ fn stability_costs(quick: bool) {
     let sys = HbmSystem::new(
         &s,
         h,
-        Excitation { force, harmonic: 1 },
+        Excitation {
+            force,
+            harmonic: 1,
+            force_sin: None,
+        },
         FormulationChoice::Auto,
     )
     .unwrap();

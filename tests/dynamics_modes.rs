@@ -29,6 +29,7 @@ fn system(s: &Structure, harmonics: Harmonics) -> HbmSystem<'_> {
         Excitation {
             force: DVector::zeros(s.n()),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )
@@ -312,7 +313,11 @@ fn single_mode_synthesis_matches_the_full_forced_response() {
     let forced = HbmSystem::new(
         &s,
         harmonics,
-        Excitation { force, harmonic: 1 },
+        Excitation {
+            force,
+            harmonic: 1,
+            force_sin: None,
+        },
         FormulationChoice::Coordinates,
     )
     .unwrap();

@@ -123,6 +123,7 @@ fn system<'a>(s: &'a Structure, harmonics: usize, samples: usize) -> HbmSystem<'
         Excitation {
             force: DVector::from_fn(s.n(), |r, _| if r == 0 { 1.0 } else { 0.0 }),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )

@@ -113,6 +113,7 @@ fn duffing_with_seven_harmonics_matches_time_integration() {
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )
@@ -164,6 +165,7 @@ fn jenkins_sdof_with_fifteen_harmonics_matches_time_integration() {
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )
@@ -205,6 +207,7 @@ fn valanis_sdof_matches_time_integration() {
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )
@@ -254,6 +257,7 @@ fn two_mass_resonator_with_a_valanis_joint_matches_time_integration() {
         Excitation {
             force: DVector::from_vec(vec![1.0, 0.0]),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )

@@ -257,6 +257,7 @@ fn jenkins_free_decay_follows_the_epmc_backbone() {
         Excitation {
             force: DVector::zeros(1),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )

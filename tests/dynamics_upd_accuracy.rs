@@ -56,6 +56,7 @@ fn fast_settings_keep_the_peak_of_the_tight_solution() {
         Excitation {
             force: force.clone(),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )
@@ -67,7 +68,11 @@ fn fast_settings_keep_the_peak_of_the_tight_solution() {
     let mut tight = HbmSystem::new(
         &s,
         h,
-        Excitation { force, harmonic: 1 },
+        Excitation {
+            force,
+            harmonic: 1,
+            force_sin: None,
+        },
         FormulationChoice::Auto,
     )
     .unwrap();

@@ -73,6 +73,7 @@ fn linear_frf_is_exact_in_both_formulations() {
             Excitation {
                 force: f.clone(),
                 harmonic: 1,
+                force_sin: None,
             },
             choice,
         )
@@ -119,6 +120,7 @@ fn modal_model_frf_matches_the_modal_sum() {
         Excitation {
             force: DVector::from_row_slice(&phi_drive),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )
@@ -173,6 +175,7 @@ fn duffing_first_harmonic_closed_form_through_the_fold() {
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )
@@ -245,6 +248,7 @@ fn jenkins_sdof_matches_caughey_describing_function() {
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Auto,
     )

@@ -140,6 +140,7 @@ fn bilinear_contact_on_one_branch_is_the_linear_oscillator() {
             Excitation {
                 force: DVector::from_element(1, 1.0),
                 harmonic: 1,
+                force_sin: None,
             },
             FormulationChoice::Coordinates,
         )
@@ -186,6 +187,7 @@ fn bilinear_contact_harmonic_balance_matches_newmark() {
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )
@@ -421,6 +423,7 @@ fn rate_dependent_hbm_and_newmark(
         Excitation {
             force: DVector::from_element(1, 1.0),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )
@@ -566,6 +569,7 @@ fn thin_layer_harmonic_balance_matches_newmark() {
                 Excitation {
                     force: DVector::from_element(1, 1.0),
                     harmonic: 1,
+                    force_sin: None,
                 },
                 FormulationChoice::Coordinates,
             )

@@ -49,6 +49,8 @@ fn vector(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<DVector<f6
 pub struct ResponseModel {
     structure: Structure,
     force: DVector<f64>,
+    /// Quadrature part of the excitation (a model file's `phases_deg`).
+    force_sin: Option<DVector<f64>>,
     harmonic: usize,
     responses: Vec<(String, DVector<f64>)>,
     /// The model file and its path, when read from one (sweep defaults and levels).
@@ -123,6 +125,7 @@ impl ResponseModel {
         Ok(Self {
             structure,
             force,
+            force_sin: None,
             harmonic,
             responses,
             file: None,
@@ -281,6 +284,7 @@ impl ResponseModel {
         Ok(Self {
             structure: m.structure,
             force: m.force,
+            force_sin: m.force_sin,
             harmonic: m.file.excitation.harmonic,
             responses: m.responses,
             file: Some((m.path, m.file)),
@@ -518,6 +522,7 @@ impl ResponseModel {
                     Excitation {
                         force: self.force.clone(),
                         harmonic: self.harmonic,
+                        force_sin: self.force_sin.clone(),
                     },
                     choice,
                 )?;
@@ -676,6 +681,7 @@ impl ResponseModel {
                     Excitation {
                         force: DVector::zeros(structure.n()),
                         harmonic: 1,
+                        force_sin: None,
                     },
                     FormulationChoice::Coordinates,
                 )?;

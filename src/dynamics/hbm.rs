@@ -21,6 +21,12 @@
 //!   (see [`crate::dynamics::condensation`]): `U − G(ω)·(level·F̂ − f̂(U)) = 0`,
 //!   `G_k = P·H(kω)·Pᵀ`. The problem size is set by the contact DOFs, not by the model.
 //!
+//! A cyclic sector ([`crate::dynamics::cyclic`]) is solved in the coordinates formulation on the
+//! harmonics `z` of its coordinates off the right boundary: `Q = T·z`, the balance projected by
+//! `Tᵀ`, and elements across the boundary evaluated on `A·z` (this sector's and the next sector's
+//! harmonics), Jacobian `Tᵀ·Z·T + Aᵀ·J·A`. The products are dense: meant for lumped sectors of
+//! tens to a few hundred DOFs.
+//!
 //! [`FormulationChoice::Auto`] takes the one with fewer unknowns and says which
 //! ([`HbmSystem::formulation`]). Newton's method with a backtracking line search;
 //! convergence when `‖R‖ ≤ tolerance·(‖level·F̂‖ + ‖f̂_nl‖)` (coordinates) or
@@ -29,6 +35,7 @@
 use crate::core::error::{Error, Result};
 use crate::dynamics::aft::{self, AftSettings, ElementCycle, Harmonics};
 use crate::dynamics::condensation::Receptance;
+use crate::dynamics::cyclic;
 use crate::dynamics::model::Structure;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -42,14 +49,20 @@ const JACOBIAN_BLOCK_ELEMENTS: usize = 8;
 /// one level of an identification).
 const PARALLEL_MIN_ELEMENTS: usize = 4;
 
-/// Harmonic force `F(t) = level·force·cos(harmonic·ω·t)` on the coordinates (`force` in N per
-/// unit level for physical DOFs; `Φᵀ·f` for modal coordinates).
+/// Harmonic force `F(t) = level·(force·cos(e·ω·t) + force_sin·sin(e·ω·t))` on the coordinates,
+/// `e` the excitation's harmonic (N per unit level for physical DOFs; `Φᵀ·f` for modal
+/// coordinates). A force with a phase per DOF, `f_i·cos(eωt − θ_i)`, has
+/// `force_i = f_i·cos θ_i` and `force_sin_i = f_i·sin θ_i`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Excitation {
-    /// Force on each coordinate per unit level (N for physical DOFs; `Φᵀ·f` for modal coordinates).
+    /// In-phase (cosine) force on each coordinate per unit level (N for physical DOFs; `Φᵀ·f` for
+    /// modal coordinates).
     pub force: DVector<f64>,
-    /// Harmonic order of the excitation (usually 1).
+    /// Harmonic order `e` of the excitation (usually 1).
     pub harmonic: usize,
+    /// Quadrature (sine) force per unit level, like `force`; `None`: none (a force in phase on
+    /// every coordinate).
+    pub force_sin: Option<DVector<f64>>,
 }
 
 /// Which unknowns to solve for.
@@ -156,10 +169,24 @@ pub struct HbmSystem<'a> {
     /// Settings of the Newton solve.
     pub newton: NewtonSettings,
     formulation: Formulation,
-    /// All element maps stacked (`n_c × n`).
+    /// All element maps stacked (`n_c × w`): `[P_e]`, or `[P_e | P'_e]` (`w = 2n`) when an
+    /// element joins a cyclic sector to the next one.
     stacked_map: DMatrix<f64>,
     /// First row of each element in the stack.
     offsets: Vec<usize>,
+    /// Coordinates the element maps act on: `n`, or `2n` (this sector's and the next's).
+    width: usize,
+    /// The cyclic sector's operators (`None`: a structure on its own).
+    cyclic: Option<CyclicOperators>,
+}
+
+/// The operators of a cyclic sector (see [`crate::dynamics::cyclic`]).
+struct CyclicOperators {
+    /// `T` (`n·len × m·len`): the sector's harmonics from the unknowns.
+    expansion: DMatrix<f64>,
+    /// `A` (`w·len × m·len`): the harmonics the element maps act on from the unknowns, `T`
+    /// stacked with `(I ⊗ S(φ))·T` (the next sector) when `w = 2n`.
+    element_expansion: DMatrix<f64>,
 }
 
 /// Jacobian storage (bytes) below which [`HbmSystem::new`] does not consult the available
@@ -185,6 +212,20 @@ impl<'a> HbmSystem<'a> {
                 ),
             ));
         }
+        if excitation
+            .force_sin
+            .as_ref()
+            .is_some_and(|f| f.len() != structure.n())
+        {
+            return Err(Error::param(
+                "excitation",
+                format!(
+                    "quadrature force vector has {} entries for {} coordinates",
+                    excitation.force_sin.as_ref().map_or(0, |f| f.len()),
+                    structure.n()
+                ),
+            ));
+        }
         if harmonics.index_of(excitation.harmonic).is_none() {
             return Err(Error::param(
                 "excitation.harmonic",
@@ -197,21 +238,56 @@ impl<'a> HbmSystem<'a> {
         }
         let n = structure.n();
         let nc = structure.contact_dofs();
-        let mut stacked_map = DMatrix::zeros(nc, n);
+        let across = structure.has_elements_across();
+        if across && structure.cyclic.is_none() {
+            return Err(Error::param(
+                "map",
+                "an element joins a next sector, but the structure is not cyclic",
+            ));
+        }
+        let width = if across { 2 * n } else { n };
+        let mut stacked_map = DMatrix::zeros(nc, width);
         let mut offsets = Vec::with_capacity(structure.elements.len());
         let mut row = 0;
         for e in &structure.elements {
             offsets.push(row);
-            stacked_map
-                .rows_mut(row, e.element.dofs())
-                .copy_from(&e.map);
-            row += e.element.dofs();
+            let d = e.element.dofs();
+            stacked_map.view_mut((row, 0), (d, n)).copy_from(&e.map);
+            if let Some(p) = &e.neighbour_map {
+                stacked_map.view_mut((row, n), (d, n)).copy_from(p);
+            }
+            row += d;
+        }
+        let cyclic = structure.cyclic.as_ref().map(|c| {
+            let expansion = c.expansion(n, &harmonics);
+            let element_expansion = if across {
+                let next = cyclic::shift_all(n, &cyclic::shift_operator(&harmonics, c.phase()))
+                    * &expansion;
+                let mut a = DMatrix::zeros(2 * expansion.nrows(), expansion.ncols());
+                a.rows_mut(0, expansion.nrows()).copy_from(&expansion);
+                a.rows_mut(expansion.nrows(), expansion.nrows())
+                    .copy_from(&next);
+                a
+            } else {
+                expansion.clone()
+            };
+            CyclicOperators {
+                expansion,
+                element_expansion,
+            }
+        });
+        if cyclic.is_some() && choice == FormulationChoice::Receptance {
+            return Err(Error::param(
+                "formulation",
+                "a cyclic sector is solved in the coordinates formulation (the receptance \
+                 condensation of the sector's boundary conditions is not implemented)",
+            ));
         }
         let formulation = match choice {
             FormulationChoice::Coordinates => Formulation::Coordinates,
             FormulationChoice::Receptance => Formulation::Receptance,
             FormulationChoice::Auto => {
-                if nc < n {
+                if nc < n && cyclic.is_none() {
                     Formulation::Receptance
                 } else {
                     Formulation::Coordinates
@@ -227,6 +303,8 @@ impl<'a> HbmSystem<'a> {
             formulation,
             stacked_map,
             offsets,
+            width,
+            cyclic,
         };
         // The Newton iteration holds the dense Jacobian, its LU factors and a copy. Checked
         // against the available memory only when large: the identification builds a system per
@@ -251,10 +329,16 @@ impl<'a> HbmSystem<'a> {
     /// Number of unknowns of the Newton problem.
     pub fn unknowns(&self) -> usize {
         let len = self.harmonics.len();
-        match self.formulation {
-            Formulation::Coordinates => self.structure.n() * len,
-            Formulation::Receptance => self.structure.contact_dofs() * len,
+        match (self.formulation, &self.cyclic) {
+            (Formulation::Coordinates, Some(c)) => c.expansion.ncols(),
+            (Formulation::Coordinates, None) => self.structure.n() * len,
+            (Formulation::Receptance, _) => self.structure.contact_dofs() * len,
         }
+    }
+
+    /// The cyclic symmetry the system is solved with (`None`: a structure on its own).
+    pub fn cyclic(&self) -> Option<&crate::dynamics::cyclic::CyclicSymmetry> {
+        self.cyclic.as_ref().and(self.structure.cyclic.as_ref())
     }
 
     /// Harmonics of the excitation per coordinate (`n × len`, coordinate-major), per unit level.
@@ -268,13 +352,27 @@ impl<'a> HbmSystem<'a> {
         for r in 0..self.structure.n() {
             f[r * len + ci] = self.excitation.force[r];
         }
+        if let Some(fs) = &self.excitation.force_sin {
+            let si = ci + 1;
+            for r in 0..self.structure.n() {
+                f[r * len + si] = fs[r];
+            }
+        }
         f
     }
 
-    /// Element displacement harmonics `(P_e ⊗ I)·Q` of every element (`n_c × len`).
+    /// Element displacement harmonics `(P_e ⊗ I)·Q` of every element (`n_c × len`); for a
+    /// cyclic sector `[P_e | P'_e]·A·z` (the unknowns `z` expanded to this sector's and the next
+    /// sector's harmonics).
     fn element_displacements(&self, q: &DVector<f64>) -> DMatrix<f64> {
         let len = self.harmonics.len();
-        let qm = DMatrix::from_row_slice(self.structure.n(), len, q.as_slice());
+        let qm = match &self.cyclic {
+            None => DMatrix::from_row_slice(self.structure.n(), len, q.as_slice()),
+            Some(c) => {
+                let x = &c.element_expansion * q;
+                DMatrix::from_row_slice(self.width, len, x.as_slice())
+            }
+        };
         &self.stacked_map * qm
     }
 
@@ -403,7 +501,9 @@ impl<'a> HbmSystem<'a> {
     /// per thread (contiguous groups of blocks; summed at the end). The `n·len × n·len` Jacobian is that product read
     /// row-major: `J[(r,h),(s,h')] = Σ_c P[c,r]·W[(c,h),(s,h')]`.
     fn element_jacobian(&self, forces: &[aft::ElementHarmonics]) -> DMatrix<f64> {
-        let (n, len) = (self.structure.n(), self.harmonics.len());
+        // `n` here is the width of the element maps: the coordinates, or this sector's and the
+        // next sector's for elements across a cyclic sector's boundary.
+        let (n, len) = (self.width, self.harmonics.len());
         let nc = self.stacked_map.nrows();
         let wlen = len * n * len;
         let n_el = self.structure.elements.len();
@@ -436,7 +536,7 @@ impl<'a> HbmSystem<'a> {
                                 for cp in 0..d {
                                     let jblock = &jrow[cp * len..(cp + 1) * len];
                                     for s in 0..n {
-                                        let p = el.map[(cp, s)];
+                                        let p = self.stacked_map[(self.offsets[e] + cp, s)];
                                         if p == 0.0 {
                                             continue;
                                         }
@@ -484,6 +584,9 @@ impl<'a> HbmSystem<'a> {
         warm: Option<&[aft::WarmStart]>,
     ) -> Evaluation {
         match self.formulation {
+            Formulation::Coordinates if self.cyclic.is_some() => {
+                self.evaluate_cyclic(z, omega, level, jacobian, warm)
+            }
             Formulation::Coordinates => self.evaluate_coordinates(z, omega, level, jacobian, warm),
             Formulation::Receptance => {
                 Receptance::new(self, omega).evaluate(self, z, level, jacobian, warm)
@@ -530,10 +633,66 @@ impl<'a> HbmSystem<'a> {
         }
     }
 
-    /// Harmonics of the coordinates (`n × len`, coordinate-major) of a solution.
+    /// The balance of a cyclic sector on the unknowns `z` (the harmonics of the coordinates off
+    /// the right boundary): `Tᵀ·(Z(ω)·T·z − level·F̂) + Aᵀ·[P | P']ᵀ·f̂([P | P']·A·z)`, Jacobian
+    /// `Tᵀ·Z·T + Aᵀ·J·A` with `J` the elements' Jacobian on the width of their maps
+    /// ([`crate::dynamics::cyclic`]).
+    fn evaluate_cyclic(
+        &self,
+        z: &DVector<f64>,
+        omega: f64,
+        level: f64,
+        jacobian: bool,
+        warm: Option<&[aft::WarmStart]>,
+    ) -> Evaluation {
+        let c = self.cyclic.as_ref().expect("cyclic system");
+        let len = self.harmonics.len();
+        let u = self.element_displacements(z);
+        let forces = self.element_forces(&u, warm, jacobian);
+        let fex = c.expansion.tr_mul(&self.excitation_harmonics());
+        let q = &c.expansion * z;
+        let (lin, dlin) = self.linear_forces(&q, omega);
+        let (lin, dlin) = (c.expansion.tr_mul(&lin), c.expansion.tr_mul(&dlin));
+        // Σ_e [P_e | P'_e]ᵀ f̂_e on this sector's and the next sector's coordinates, then Aᵀ.
+        let fw = self.stacked_map.transpose() * self.stacked_forces(&forces);
+        debug_assert_eq!(fw.shape(), (self.width, len));
+        let fnl = c
+            .element_expansion
+            .tr_mul(&DVector::from_row_slice(fw.transpose().as_slice()));
+        let residual = &lin + &fnl - &fex * level;
+        let scale = (&fex * level).norm() + fnl.norm();
+        let jac = if jacobian {
+            let t = &c.expansion;
+            let mut j = t.tr_mul(&(self.dynamic_stiffness(omega) * t));
+            if !self.structure.elements.is_empty() {
+                let a = &c.element_expansion;
+                j += a.tr_mul(&(self.element_jacobian(&forces) * a));
+            }
+            j
+        } else {
+            DMatrix::zeros(0, 0)
+        };
+        let (perr, nonper) = periodicity(&forces);
+        Evaluation {
+            residual,
+            jacobian: jac,
+            d_omega: dlin,
+            d_level: -fex,
+            scale,
+            periodicity_error: perr,
+            non_periodic: nonper,
+            element_states: element_states(&forces),
+        }
+    }
+
+    /// Harmonics of the coordinates (`n × len`, coordinate-major) of a solution; for a cyclic
+    /// sector, of every coordinate of the sector (the right boundary's from the left's).
     pub fn coordinates(&self, point: &HbmPoint) -> DVector<f64> {
         match self.formulation {
-            Formulation::Coordinates => point.z.clone(),
+            Formulation::Coordinates => match &self.cyclic {
+                Some(c) => &c.expansion * &point.z,
+                None => point.z.clone(),
+            },
             Formulation::Receptance => {
                 Receptance::new(self, point.omega).coordinates(self, &point.z, point.level)
             }
@@ -680,6 +839,12 @@ impl<'a> HbmSystem<'a> {
             return Err(Error::param(
                 "formulation",
                 "response control is implemented for the coordinates formulation",
+            ));
+        }
+        if self.cyclic.is_some() {
+            return Err(Error::param(
+                "cyclic",
+                "response control is not implemented for a cyclic sector",
             ));
         }
         crate::core::error::require_positive("target amplitude", target)?;
@@ -909,6 +1074,7 @@ mod tests {
             Excitation {
                 force: DVector::from_element(1, 1.0),
                 harmonic: 1,
+                force_sin: None,
             },
             FormulationChoice::Coordinates,
         )
@@ -967,7 +1133,11 @@ mod tests {
         let sys = HbmSystem::new(
             &s,
             h,
-            Excitation { force, harmonic: 1 },
+            Excitation {
+                force,
+                harmonic: 1,
+                force_sin: None,
+            },
             FormulationChoice::Coordinates,
         )
         .unwrap();

@@ -5,6 +5,7 @@
 //!
 //! ```text
 //! model (linear part: lumped M, C, K or a reduced modal model; elements on node pairs)
+//!   ──► cyclic (one sector of a cyclic structure: travelling-wave boundary conditions)
 //!   ──► crate::element (the laws, as time-discrete hysteretic elements)
 //!   ──► aft (harmonics ⇄ time, periodic state)
 //!   ──► hbm (residual, Jacobian, Newton; coordinates or receptance-condensed contact DOFs)
@@ -22,6 +23,7 @@ pub mod aft;
 pub mod condensation;
 pub mod contact;
 pub mod continuation;
+pub mod cyclic;
 pub mod hbm;
 pub mod loops;
 pub mod model;

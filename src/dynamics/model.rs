@@ -10,6 +10,7 @@
 //! normalised shapes in kg^-½).
 
 use crate::core::error::{Error, Result};
+use crate::dynamics::cyclic::CyclicSymmetry;
 use crate::element::HystereticElement;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
@@ -31,8 +32,11 @@ pub struct AttachedElement {
     pub label: String,
     /// The element law with its parameters.
     pub element: Arc<dyn HystereticElement>,
-    /// `P_e`, `d × n`: `u_e = P_e·q`.
+    /// `P_e`, `d × n`: `u_e = P_e·q` (plus `P'_e·q_next` for an element across sectors).
     pub map: DMatrix<f64>,
+    /// `P'_e`, `d × n`, of an element joining a cyclic sector to the next sector: the map of the
+    /// next sector's coordinates `q_next` ([`crate::dynamics::cyclic`]); `None` inside a sector.
+    pub neighbour_map: Option<DMatrix<f64>>,
 }
 
 /// Linear structure in generalised coordinates with nonlinear elements attached.
@@ -50,6 +54,9 @@ pub struct Structure {
     pub stiffness: DMatrix<f64>,
     /// The nonlinear elements with their maps.
     pub elements: Vec<AttachedElement>,
+    /// Cyclic symmetry when the structure is one sector of a cyclic structure
+    /// ([`Structure::make_cyclic`]); `None` for a structure on its own.
+    pub cyclic: Option<CyclicSymmetry>,
 }
 
 fn check_square(name: &str, a: &DMatrix<f64>, n: usize) -> Result<()> {
@@ -149,6 +156,7 @@ impl Structure {
             damping,
             stiffness,
             elements: Vec::new(),
+            cyclic: None,
         })
     }
 
@@ -197,6 +205,7 @@ impl Structure {
             )),
             stiffness: DMatrix::from_diagonal(&DVector::from_iterator(n, w.iter().map(|w| w * w))),
             elements: Vec::new(),
+            cyclic: None,
         })
     }
 
@@ -245,8 +254,79 @@ impl Structure {
             label,
             element,
             map,
+            neighbour_map: None,
         });
         Ok(())
+    }
+
+    /// Declare the structure one sector of `sectors` identical sectors under an excitation of
+    /// engine order `engine_order`, with the left boundary coordinates `left` paired with their
+    /// images `right` in the next sector (indices into the coordinates;
+    /// [`crate::dynamics::cyclic`]). Lumped models only: the boundary conditions act on
+    /// physical DOFs. Errors name `cyclic.*`.
+    pub fn make_cyclic(
+        &mut self,
+        sectors: usize,
+        engine_order: usize,
+        left: Vec<usize>,
+        right: Vec<usize>,
+    ) -> Result<()> {
+        if self.is_modal() {
+            return Err(Error::param(
+                "cyclic",
+                "cyclic symmetry needs the sector's physical DOFs (a lumped model): the \
+                 boundary conditions pair DOFs of the left and right boundaries",
+            ));
+        }
+        self.cyclic = Some(CyclicSymmetry::new(
+            sectors,
+            engine_order,
+            left,
+            right,
+            self.n(),
+        )?);
+        Ok(())
+    }
+
+    /// Attach an element joining this cyclic sector to the next one: `u_e = P_e·q + P'_e·q_next`
+    /// with `map = P_e` and `neighbour_map = P'_e` (each `d × n`, `q_next` the next sector's
+    /// coordinates in this sector's numbering). The structure must be cyclic
+    /// ([`Structure::make_cyclic`]).
+    pub fn attach_across(
+        &mut self,
+        label: impl Into<String>,
+        element: Arc<dyn HystereticElement>,
+        map: DMatrix<f64>,
+        neighbour_map: DMatrix<f64>,
+    ) -> Result<()> {
+        let label = label.into();
+        if self.cyclic.is_none() {
+            return Err(Error::param(
+                "map",
+                format!("element {label}: joins a next sector, but the structure is not cyclic"),
+            ));
+        }
+        if neighbour_map.shape() != map.shape() || neighbour_map.iter().any(|v| !v.is_finite()) {
+            return Err(Error::param(
+                "map",
+                format!(
+                    "element {label}: the next sector's map must be finite and {} × {}",
+                    map.nrows(),
+                    map.ncols()
+                ),
+            ));
+        }
+        self.attach(label, element, map)?;
+        self.elements
+            .last_mut()
+            .expect("just attached")
+            .neighbour_map = Some(neighbour_map);
+        Ok(())
+    }
+
+    /// Whether an element joins the sector to the next one.
+    pub fn has_elements_across(&self) -> bool {
+        self.elements.iter().any(|e| e.neighbour_map.is_some())
     }
 
     /// Total number of element displacement components (the size of the contact problem).

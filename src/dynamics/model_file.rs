@@ -8,11 +8,18 @@
 //! # modes = "modes.csv"         # ... or a reduced modal model: mode,frequency_Hz,damping_ratio
 //! # shapes = "shapes.csv"       #   node,direction,mode_1_per_sqrt_kg,… (mass-normalised)
 //!
+//! # [cyclic]                    # optional: the model is one sector of a cyclic structure
+//! # sectors = 24                #   (lumped models); N identical sectors
+//! # engine_order = 3            #   EO of the excitation: inter-sector phase 2π·EO/N
+//! # left = ["disk_l.x", "disk_l.y"]   # left boundary DOFs, paired in order with
+//! # right = ["disk_r.x", "disk_r.y"]  #   their images on the right boundary
+//!
 //! [[contact]]                   # one or more element tables
 //! elements = "elements.csv"     # written by `asperity elements`
 //! law = "valanis"               # valanis (3-D microslip) | jenkins (2-D circular + normal)
 //! node_a = "damper"             # one node pair for every row ...
-//! node_b = "blade1"             #   (`ground` for a fixed side)
+//! node_b = "blade1"             #   (`ground` for a fixed side; `next:<node>` for a node of
+//!                               #   the next sector of a [cyclic] model)
 //! # pairs = "pairs.csv"         # ... or element_id,node_a,node_b
 //! normal = [0.0, 0.0, 1.0]      # from node_a towards node_b
 //! tangent = [1.0, 0.0, 0.0]
@@ -31,8 +38,9 @@
 //! # thickness_m
 //!
 //! [excitation]
-//! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)
+//! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t + θ_i)
 //! weights = [1.0, -1.0]         # optional (default 1 each): out-of-phase forcing
+//! # phases_deg = [0.0, 90.0]    # optional phase θ_i of each DOF's force (default 0)
 //! harmonic = 1
 //! levels_n = [0.5, 2.0, 8.0]    # force amplitudes (N)
 //!
@@ -51,6 +59,18 @@
 //! ```
 //!
 //! Paths are relative to the model file. Every error names the file, line and key or column.
+//!
+//! **Cyclic symmetry** (`[cyclic]`; [`crate::dynamics::cyclic`]): the lumped matrices are one
+//! sector of `sectors` identical ones, whose right boundary DOFs `right[i]` are the next sector's
+//! left boundary DOFs `left[i]` (the sector's matrices hold both boundaries, as an FE sector
+//! mesh does; assembling the sectors merges them). The excitation is the travelling wave of
+//! engine order `engine_order`: the `[excitation]` force acts on this sector, and sector `j`
+//! receives it delayed by `j·2π·EO/(N·ω)`. Harmonic `h` of the response has the inter-sector
+//! phase `h·2π·EO/N` (its harmonic index is reported in `response.json`). A contact node
+//! `next:<node>` is `<node>` of the next sector (e.g. a damper between adjacent blades:
+//! `node_a = "damper"`, `node_b = "next:platform_left"`); it moves like `<node>` of this sector
+//! advanced by the inter-sector phase. The sector is solved in the coordinates formulation;
+//! the stability of its points is not assessed.
 
 use crate::core::error::{Error, Result};
 use crate::dynamics::contact::ContactLaw;
@@ -277,7 +297,26 @@ impl JointSection {
     }
 }
 
-/// `[excitation]`: the harmonic force `F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t)`.
+/// `[cyclic]`: the lumped model is one sector of a cyclic structure under an engine-order
+/// excitation ([`crate::dynamics::cyclic`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CyclicSection {
+    /// Number of identical sectors `N` of the full structure (≥ 2).
+    pub sectors: usize,
+    /// Engine order `EO` of the excitation (≥ 0): inter-sector phase `2π·EO/N`.
+    pub engine_order: usize,
+    /// DOF labels of the sector's left boundary.
+    pub left: Vec<String>,
+    /// DOF labels of the right boundary, `right[i]` the image of `left[i]` (the next sector's
+    /// `left[i]`).
+    pub right: Vec<String>,
+}
+
+/// Prefix of a contact node of the next sector in a `[cyclic]` model (`next:<node>`).
+pub const NEXT_SECTOR: &str = "next:";
+
+/// `[excitation]`: the harmonic force `F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t + θ_i)`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExcitationSection {
@@ -286,6 +325,10 @@ pub struct ExcitationSection {
     /// Weight `w_i` of each DOF (dimensionless; default 1 each, e.g. `[1, -1]` for out-of-phase
     /// forcing).
     pub weights: Option<Vec<f64>>,
+    /// Phase `θ_i` of each DOF's force (degrees; default 0 each): the force leads
+    /// `cos(harmonic·ω·t)` by `θ_i`, the convention of the response's `phase_rad`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phases_deg: Option<Vec<f64>>,
     /// Harmonic of the sweep frequency the force acts at (default 1).
     #[serde(default = "one")]
     pub harmonic: usize,
@@ -345,6 +388,9 @@ fn default_formulation() -> FormulationChoice {
 pub struct ModelFile {
     /// The linear structure.
     pub linear: LinearSection,
+    /// Cyclic symmetry of a sector model (none: the structure on its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cyclic: Option<CyclicSection>,
     /// The element tables (none: a linear response).
     #[serde(default)]
     pub contact: Vec<ContactSection>,
@@ -369,8 +415,10 @@ pub struct LoadedModel {
     pub path: PathBuf,
     /// The structure with its elements attached.
     pub structure: Structure,
-    /// Force on the coordinates per newton of excitation.
+    /// Force on the coordinates per newton of excitation, in phase with `cos(harmonic·ω·t)`.
     pub force: DVector<f64>,
+    /// Quadrature part (on `sin(harmonic·ω·t)`) when `[excitation]` gives phases.
+    pub force_sin: Option<DVector<f64>>,
     /// One observation row per response DOF (label, row).
     pub responses: Vec<(String, DVector<f64>)>,
     /// `(role, path)` of every input file.
@@ -427,7 +475,58 @@ impl ModelFile {
                 "give either mass, damping and stiffness (lumped) or modes and shapes (modal)",
             ));
         }
+        if let Some(c) = &self.cyclic {
+            if !lumped {
+                return Err(Error::param(
+                    "cyclic.sectors",
+                    "cyclic symmetry needs a lumped model (mass, damping, stiffness): the \
+                     boundary conditions pair physical DOFs",
+                ));
+            }
+            if c.sectors < 2 {
+                return Err(Error::param(
+                    "cyclic.sectors",
+                    format!(
+                        "a cyclic structure has at least 2 sectors, got {}",
+                        c.sectors
+                    ),
+                ));
+            }
+            if c.left.len() != c.right.len() {
+                return Err(Error::param(
+                    "cyclic.right",
+                    format!(
+                        "{} right boundary DOFs for {} left ones (pair each left DOF with its \
+                         image on the right, in order)",
+                        c.right.len(),
+                        c.left.len()
+                    ),
+                ));
+            }
+            if self.sweep.formulation == FormulationChoice::Receptance {
+                return Err(Error::param(
+                    "sweep.formulation",
+                    "a [cyclic] sector is solved in the coordinates formulation (auto or \
+                     coordinates)",
+                ));
+            }
+        }
         for (i, c) in self.contact.iter().enumerate() {
+            if self.cyclic.is_none() {
+                for (key, node) in [("contact.node_a", &c.node_a), ("contact.node_b", &c.node_b)] {
+                    if node.as_deref().is_some_and(|n| n.starts_with(NEXT_SECTOR)) {
+                        return Err(Error::param(
+                            key,
+                            format!(
+                                "contact {}: `{}` names a node of the next sector, but the model \
+                                 has no [cyclic] section",
+                                i + 1,
+                                node.as_deref().unwrap_or("")
+                            ),
+                        ));
+                    }
+                }
+            }
             let pair = c.node_a.is_some() && c.node_b.is_some();
             if pair == c.pairs.is_some() || (c.node_a.is_some() != c.node_b.is_some()) {
                 return Err(Error::param(
@@ -507,6 +606,14 @@ impl ModelFile {
                 return Err(Error::param(
                     "excitation.weights",
                     "one finite weight per excitation DOF",
+                ));
+            }
+        }
+        if let Some(p) = &e.phases_deg {
+            if p.len() != e.dofs.len() || p.iter().any(|v| !v.is_finite()) {
+                return Err(Error::param(
+                    "excitation.phases_deg",
+                    "one finite phase (degrees) per excitation DOF",
                 ));
             }
         }
@@ -825,30 +932,37 @@ impl Kinematics {
         let (node, axis) = split_dof(label)?;
         self.nodes.get(node)?[axis].clone()
     }
-    /// `R·(x_a − x_b)` as a `3 × n` map; `Err(node)` if a node is unknown.
+    /// `R·(x_a − x_b)` as a `3 × n` map of this sector's coordinates and, when a node is
+    /// `next:<node>` (of the next sector), a `3 × n` map of the next sector's; `Err(node)` if a
+    /// node is unknown.
     fn pair_map(
         &self,
         a: &str,
         b: &str,
         r: &[[f64; 3]; 3],
-    ) -> std::result::Result<DMatrix<f64>, String> {
+    ) -> std::result::Result<(DMatrix<f64>, Option<DMatrix<f64>>), String> {
         let mut p = DMatrix::zeros(3, self.n);
+        let mut next: Option<DMatrix<f64>> = None;
         for (node, sign) in [(a, 1.0), (b, -1.0)] {
             if node == "ground" {
                 continue;
             }
-            let rows = self.nodes.get(node).ok_or_else(|| node.to_string())?;
+            let (target, name) = match node.strip_prefix(NEXT_SECTOR) {
+                Some(name) => (next.get_or_insert_with(|| DMatrix::zeros(3, self.n)), name),
+                None => (&mut p, node),
+            };
+            let rows = self.nodes.get(name).ok_or_else(|| node.to_string())?;
             for (axis, row) in rows.iter().enumerate() {
                 if let Some(row) = row {
                     for c in 0..3 {
                         for j in 0..self.n {
-                            p[(c, j)] += sign * r[c][axis] * row[j];
+                            target[(c, j)] += sign * r[c][axis] * row[j];
                         }
                     }
                 }
             }
         }
-        Ok(p)
+        Ok((p, next))
     }
 }
 
@@ -957,6 +1071,47 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             let n = f.len();
             (s, Kinematics { n, nodes })
         };
+    if let Some(c) = &file.cyclic {
+        let index = |key: &str, label: &str| {
+            structure
+                .labels
+                .iter()
+                .position(|l| l == label)
+                .ok_or_else(|| {
+                    Error::parse(
+                        path,
+                        key_line(&text, key),
+                        format!(
+                            "`cyclic.{key}`: unknown DOF `{label}` (expected node.x|y|z of the \
+                             sector's matrices)"
+                        ),
+                    )
+                })
+        };
+        let left = c
+            .left
+            .iter()
+            .map(|l| index("left", l))
+            .collect::<Result<Vec<_>>>()?;
+        let right = c
+            .right
+            .iter()
+            .map(|l| index("right", l))
+            .collect::<Result<Vec<_>>>()?;
+        structure
+            .make_cyclic(c.sectors, c.engine_order, left, right)
+            .map_err(|e| match e {
+                Error::InvalidParameter { name, message } => {
+                    let key = name.rsplit('.').next().unwrap_or(&name).to_string();
+                    Error::parse(
+                        path,
+                        key_line(&text, &key),
+                        format!("invalid `{name}`: {message}"),
+                    )
+                }
+                o => o,
+            })?;
+    }
     let mut out_of_range = 0;
     let mut element_rows = Vec::new();
     for (ci, c) in file.contact.iter().enumerate() {
@@ -1007,7 +1162,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
                     _ => unreachable!(),
                 });
             }
-            let map = kin.pair_map(&a, &b, &frame).map_err(|node| {
+            let (map, next) = kin.pair_map(&a, &b, &frame).map_err(|node| {
                 let what = if structure.is_modal() {
                     "has no mode shape"
                 } else {
@@ -1024,7 +1179,26 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             })?;
             let el = contact::element_for(c.law, e)
                 .map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
-            structure.attach(format!("{}", e.id), el, map)?;
+            match next {
+                Some(next) if structure.cyclic.is_some() => {
+                    structure.attach_across(format!("{}", e.id), el, map, next)?
+                }
+                Some(_) => {
+                    return Err(match &where_ {
+                        Error::Parse { path, line, .. } => Error::parse(
+                            path,
+                            *line,
+                            format!(
+                                "element {}: a node of the next sector (`{NEXT_SECTOR}…`) needs \
+                                 a [cyclic] section in the model file",
+                                e.id
+                            ),
+                        ),
+                        _ => unreachable!(),
+                    })
+                }
+                None => structure.attach(format!("{}", e.id), el, map)?,
+            }
             element_rows.push((c.law, e.clone()));
         }
         inputs.push((format!("contact {} elements", ci + 1), ep));
@@ -1033,7 +1207,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         let norm = j.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
         let d = j.direction.map(|v| v / norm);
         let frame = [d, [0.0; 3], [0.0; 3]];
-        let map = kin.pair_map(&j.node_a, &j.node_b, &frame).map_err(|node| {
+        let (map, next) = kin.pair_map(&j.node_a, &j.node_b, &frame).map_err(|node| {
             let what = if structure.is_modal() {
                 "has no mode shape"
             } else {
@@ -1046,7 +1220,27 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             )
         })?;
         let el = j.element().expect("validated by parse");
-        structure.attach(format!("joint {}", ji + 1), el, map.rows(0, 1).into_owned())?;
+        let label = format!("joint {}", ji + 1);
+        match next {
+            Some(next) if structure.cyclic.is_some() => structure.attach_across(
+                label,
+                el,
+                map.rows(0, 1).into_owned(),
+                next.rows(0, 1).into_owned(),
+            )?,
+            Some(_) => {
+                return Err(Error::parse(
+                    path,
+                    key_line(&text, "node_a"),
+                    format!(
+                        "joint {}: a node of the next sector (`{NEXT_SECTOR}…`) needs a [cyclic] \
+                         section in the model file",
+                        ji + 1
+                    ),
+                ))
+            }
+            None => structure.attach(label, el, map.rows(0, 1).into_owned())?,
+        }
     }
     let dof_err = |key: &str, label: &str| {
         Error::parse(
@@ -1056,6 +1250,8 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         )
     };
     let mut force = DVector::zeros(structure.n());
+    let phases = file.excitation.phases_deg.as_ref();
+    let mut force_sin = phases.map(|_| DVector::zeros(structure.n()));
     for (i, d) in file.excitation.dofs.iter().enumerate() {
         let w = file
             .excitation
@@ -1063,9 +1259,15 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             .as_ref()
             .map(|w| w[i])
             .unwrap_or(1.0);
-        force += DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?) * w;
+        let row = DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?);
+        // w·cos(eωt + θ) = w·cos θ·cos eωt − w·sin θ·sin eωt.
+        let (s, c) = phases.map_or(0.0, |p| p[i].to_radians()).sin_cos();
+        force += &row * (w * c);
+        if let Some(fs) = force_sin.as_mut() {
+            *fs -= &row * (w * s);
+        }
     }
-    if force.amax() == 0.0 {
+    if force.amax() == 0.0 && force_sin.as_ref().is_none_or(|f| f.amax() == 0.0) {
         // Weights that cancel, or mode shapes that vanish at every excitation DOF: the
         // structure would not be excited and every response would be zero.
         return Err(Error::parse(
@@ -1085,6 +1287,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         path: path.to_path_buf(),
         structure,
         force,
+        force_sin,
         responses,
         inputs,
         out_of_range,

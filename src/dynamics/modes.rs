@@ -69,6 +69,14 @@ pub struct ModesRequest {
 /// The harmonic-balance system of the model file for the EPMC: its harmonic basis, the
 /// coordinates formulation, no excitation.
 pub fn system(model: &LoadedModel) -> Result<HbmSystem<'_>> {
+    if model.structure.cyclic.is_some() {
+        return Err(Error::parse(
+            &model.path,
+            0,
+            "[cyclic]: nonlinear modes of a cyclic sector are not implemented (asperity response \
+             solves its forced response)",
+        ));
+    }
     let sw = &model.file.sweep;
     let harmonics = Harmonics::new(sw.harmonics, sw.odd_only, sw.time_samples)
         .map_err(|e| e.renamed_param("sweep.harmonics / sweep.time_samples"))?;
@@ -78,6 +86,7 @@ pub fn system(model: &LoadedModel) -> Result<HbmSystem<'_>> {
         Excitation {
             force: DVector::zeros(model.structure.n()),
             harmonic: 1,
+            force_sin: None,
         },
         FormulationChoice::Coordinates,
     )

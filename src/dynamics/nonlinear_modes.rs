@@ -269,6 +269,12 @@ fn per_harmonic(a: &DMatrix<f64>, z: &DVector<f64>, len: usize) -> DVector<f64> 
 pub fn linear_mode(system: &HbmSystem<'_>, mode: usize) -> Result<LinearMode> {
     let s = system.structure;
     let (n, len) = (s.n(), system.harmonics.len());
+    if system.cyclic().is_some() {
+        return Err(Error::param(
+            "cyclic",
+            "nonlinear modes of a cyclic sector are not implemented",
+        ));
+    }
     if mode == 0 || mode > n {
         return Err(Error::param(
             "mode",
@@ -344,6 +350,12 @@ impl<'s, 'a> Epmc<'s, 'a> {
                 "formulation",
                 "nonlinear modes are computed in the coordinates formulation (the amplitude \
                  condition needs every coordinate's harmonics)",
+            ));
+        }
+        if system.cyclic().is_some() {
+            return Err(Error::param(
+                "cyclic",
+                "nonlinear modes of a cyclic sector are not implemented",
             ));
         }
         if settings.amplitudes.is_empty() {

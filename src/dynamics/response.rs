@@ -167,6 +167,7 @@ pub fn run<'a>(
         Excitation {
             force: model.force.clone(),
             harmonic: f.excitation.harmonic,
+            force_sin: model.force_sin.clone(),
         },
         settings.formulation,
     )?;
@@ -186,12 +187,31 @@ pub fn run<'a>(
         system.formulation(),
         system.unknowns()
     ));
+    if let Some(c) = system.cyclic() {
+        log(&format!(
+            "cyclic sector: {} sectors, engine order {}, inter-sector phase {:.4} rad; harmonic index per harmonic {}",
+            c.sectors,
+            c.engine_order,
+            c.phase(),
+            system
+                .harmonics
+                .orders()
+                .iter()
+                .map(|&h| format!("{h}→{}", c.harmonic_index(h)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     let assessed = stability.assesses(&system);
     log(&format!(
         "stability (Hill's method, {0} × {0} companion matrix per point): {1}",
         stability::companion_size(&system),
         match (stability, assessed) {
             (_, true) => "assessed at every point",
+            _ if system.cyclic().is_some() => {
+                "not assessed: not implemented for a cyclic sector (Hill's method would see \
+                 perturbations of the solution's harmonic indices only)"
+            }
             (StabilityChoice::Off, false) => "not assessed (--stability off)",
             _ => "not assessed: the matrix is large and its eigen-solve would dominate the run (--stability on to assess)",
         }
@@ -375,21 +395,35 @@ impl ForcedResponse<'_> {
             .iter()
             .map(|(role, p)| InputFile::new(role, p))
             .collect::<Result<_>>()?;
+        let mut parameters = serde_json::json!({
+            "model": serde_json::to_value(&model.file).map_err(|e| Error::Data(e.to_string()))?,
+            "harmonics": system.harmonics.orders(),
+            "time_samples": system.harmonics.n_time(),
+            "formulation": system.formulation(),
+            "unknowns": system.unknowns(),
+            "coordinates": model.structure.kind,
+            "newton": system.newton,
+            "aft": system.aft,
+            "continuation": self.settings.continuation,
+            "stability": self.stability,
+        });
+        if let Some(c) = system.cyclic() {
+            parameters["cyclic"] = serde_json::json!({
+                "sectors": c.sectors,
+                "engine_order": c.engine_order,
+                "inter_sector_phase_rad": c.phase(),
+                "harmonic_index": system
+                    .harmonics
+                    .orders()
+                    .iter()
+                    .map(|&h| serde_json::json!({"harmonic": h, "index": c.harmonic_index(h)}))
+                    .collect::<Vec<_>>(),
+            });
+        }
         let json = provenance_json(
             "response",
             &inputs,
-            serde_json::json!({
-                "model": serde_json::to_value(&model.file).map_err(|e| Error::Data(e.to_string()))?,
-                "harmonics": system.harmonics.orders(),
-                "time_samples": system.harmonics.n_time(),
-                "formulation": system.formulation(),
-                "unknowns": system.unknowns(),
-                "coordinates": model.structure.kind,
-                "newton": system.newton,
-                "aft": system.aft,
-                "continuation": self.settings.continuation,
-                "stability": self.stability,
-            }),
+            parameters,
             serde_json::json!({
                 "elements": model.structure.elements.len(),
                 "elements_out_of_calibration_range": model.out_of_range,

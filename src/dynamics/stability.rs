@@ -123,6 +123,11 @@ pub const AUTO_MAX_COMPANION: usize = 256;
 impl StabilityChoice {
     /// Whether the points of `system` are assessed.
     pub fn assesses(self, system: &HbmSystem<'_>) -> bool {
+        if system.cyclic().is_some() {
+            // Hill's method on a cyclic sector would assess perturbations of the solution's
+            // harmonic index only: not implemented (HillAnalysis refuses it).
+            return false;
+        }
         match self {
             Self::On => true,
             Self::Off => false,
@@ -363,6 +368,13 @@ impl<'s, 'a> HillAnalysis<'s, 'a> {
     /// Set up for `system`'s points (the full model's system is built when its formulation is
     /// the receptance's).
     pub fn new(system: &'s HbmSystem<'a>) -> Result<Self> {
+        if system.cyclic().is_some() {
+            return Err(Error::param(
+                "cyclic",
+                "Hill's method is not implemented for a cyclic sector (its perturbations of other \
+                 harmonic indices are not in the sector's balance)",
+            ));
+        }
         let full = match system.formulation() {
             Formulation::Coordinates => None,
             Formulation::Receptance => {
@@ -722,6 +734,7 @@ mod tests {
                 Excitation {
                     force: DVector::from_vec(vec![1.0, 0.0]),
                     harmonic: 1,
+                    force_sin: None,
                 },
                 choice,
             )

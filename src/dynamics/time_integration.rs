@@ -74,6 +74,12 @@ pub fn steady_state(
 ) -> Result<SteadyState> {
     let t_start = Instant::now();
     let n = structure.n();
+    if structure.cyclic.is_some() {
+        return Err(Error::param(
+            "cyclic",
+            "time integration of a cyclic sector is not implemented (integrate the full structure)",
+        ));
+    }
     if force.len() != n || q0.len() != n || v0.len() != n {
         return Err(Error::param(
             "q0",
@@ -190,6 +196,12 @@ impl<'a> Newmark<'a> {
         dt: f64,
     ) -> Result<Self> {
         let n = structure.n();
+        if structure.cyclic.is_some() {
+            return Err(Error::param(
+            "cyclic",
+            "time integration of a cyclic sector is not implemented (integrate the full structure)",
+        ));
+        }
         if f0.len() != n || q0.len() != n || v0.len() != n {
             return Err(Error::param(
                 "q0",

@@ -158,6 +158,12 @@ pub fn free_decay(
 ) -> Result<DecayResult> {
     let t0 = Instant::now();
     let n = structure.n();
+    if structure.cyclic.is_some() {
+        return Err(Error::param(
+            "cyclic",
+            "time integration of a cyclic sector is not implemented (integrate the full structure)",
+        ));
+    }
     crate::core::error::require_positive("--amplitude-m", settings.amplitude_m)?;
     if settings.steps_per_period < 16 {
         return Err(Error::param(

@@ -663,6 +663,7 @@ impl Model {
                 Excitation {
                     force: DVector::from_element(1, *phi),
                     harmonic: 1,
+                    force_sin: None,
                 },
                 FormulationChoice::Coordinates,
             )?;
@@ -735,6 +736,7 @@ impl Model {
             Excitation {
                 force: DVector::from_element(1, phi),
                 harmonic: 1,
+                force_sin: None,
             },
             FormulationChoice::Coordinates,
         )?;

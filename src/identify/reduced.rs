@@ -395,6 +395,7 @@ impl ReducedModel {
             Excitation {
                 force: l.force.clone(),
                 harmonic: 1,
+                force_sin: None,
             },
             formulation,
         )
