@@ -314,59 +314,64 @@ fn interacting_stiffness_laws_are_found_together() {
         Effect::QuadraticStiffness,
         Effect::QuadraticDamping,
     ];
-    let mut jointly = 0;
-    for r in 0..10u64 {
-        let mut o = options(candidates.clone());
-        o.fit_levels = Some(vec![1, 2, 3]);
-        o.select.max_effects = 2;
-        let id = identify(sweeps(&truth, 13000 + 100 * r), &o, None).unwrap();
-        for (k, round) in id.selection.rounds.iter().enumerate() {
-            for c in &round.candidates {
-                eprintln!(
-                    "  round {k}: {}{} ΔBIC {:.1}, every level {}",
-                    c.effect.id(),
-                    c.jointly_with
-                        .map_or(String::new(), |w| format!(" + {}", w.id())),
-                    c.delta_bic,
-                    c.improves_every_level
+    // Realisations in parallel: both cores busy even when this test runs alone. Each returns
+    // whether its effects were accepted as a pair.
+    let pairs: Vec<bool> = (0..10u64)
+        .into_par_iter()
+        .map(|r| {
+            let mut o = options(candidates.clone());
+            o.fit_levels = Some(vec![1, 2, 3]);
+            o.select.max_effects = 2;
+            let id = identify(sweeps(&truth, 13000 + 100 * r), &o, None).unwrap();
+            for (k, round) in id.selection.rounds.iter().enumerate() {
+                for c in &round.candidates {
+                    eprintln!(
+                        "  round {k}: {}{} ΔBIC {:.1}, every level {}",
+                        c.effect.id(),
+                        c.jointly_with
+                            .map_or(String::new(), |w| format!(" + {}", w.id())),
+                        c.delta_bic,
+                        c.improves_every_level
+                    );
+                }
+            }
+            let found = match &id.selection.verdict {
+                Verdict::EffectsFound { effects, .. } => effects.clone(),
+                v => panic!("realisation {r}: {v:?}"),
+            };
+            let pair = id
+                .selection
+                .rounds
+                .iter()
+                .any(|k| k.accepted_with.is_some());
+            let m = &id.after.model;
+            let (k3, k2) = (m.cubic_stiffness(), m.quadratic_stiffness());
+            eprintln!(
+                "realisation {r}: {:?}{}, k3 {:+.1}%, k2 {:+.1}%",
+                found.iter().map(|e| e.id()).collect::<Vec<_>>(),
+                if pair { " (as a pair)" } else { "" },
+                100.0 * (k3.unwrap_or(0.0) / truth.cubic_stiffness().unwrap() - 1.0),
+                100.0 * (k2.unwrap_or(0.0) / truth.quadratic_stiffness().unwrap() - 1.0),
+            );
+            assert!(
+                found.len() == 2
+                    && found.contains(&Effect::AmplitudeStiffness)
+                    && found.contains(&Effect::QuadraticStiffness),
+                "realisation {r}: {found:?}"
+            );
+            for (got, want) in [
+                (k3.unwrap(), truth.cubic_stiffness().unwrap()),
+                (k2.unwrap(), truth.quadratic_stiffness().unwrap()),
+            ] {
+                assert!(
+                    (got / want - 1.0).abs() < 0.1,
+                    "realisation {r}: {got:.4e} vs {want:.4e}"
                 );
             }
-        }
-        let found = match &id.selection.verdict {
-            Verdict::EffectsFound { effects, .. } => effects.clone(),
-            v => panic!("realisation {r}: {v:?}"),
-        };
-        let pair = id
-            .selection
-            .rounds
-            .iter()
-            .any(|k| k.accepted_with.is_some());
-        jointly += pair as usize;
-        let m = &id.after.model;
-        let (k3, k2) = (m.cubic_stiffness(), m.quadratic_stiffness());
-        eprintln!(
-            "realisation {r}: {:?}{}, k3 {:+.1}%, k2 {:+.1}%",
-            found.iter().map(|e| e.id()).collect::<Vec<_>>(),
-            if pair { " (as a pair)" } else { "" },
-            100.0 * (k3.unwrap_or(0.0) / truth.cubic_stiffness().unwrap() - 1.0),
-            100.0 * (k2.unwrap_or(0.0) / truth.quadratic_stiffness().unwrap() - 1.0),
-        );
-        assert!(
-            found.len() == 2
-                && found.contains(&Effect::AmplitudeStiffness)
-                && found.contains(&Effect::QuadraticStiffness),
-            "realisation {r}: {found:?}"
-        );
-        for (got, want) in [
-            (k3.unwrap(), truth.cubic_stiffness().unwrap()),
-            (k2.unwrap(), truth.quadratic_stiffness().unwrap()),
-        ] {
-            assert!(
-                (got / want - 1.0).abs() < 0.1,
-                "realisation {r}: {got:.4e} vs {want:.4e}"
-            );
-        }
-    }
+            pair
+        })
+        .collect();
+    let jointly = pairs.iter().filter(|&&p| p).count();
     eprintln!("found as a pair in {jointly} of 10 realisations");
     assert!(jointly > 0, "the pair step was never needed");
 }
@@ -392,9 +397,12 @@ fn prediction_band_covers_the_truth_at_its_stated_rate() {
         local_iterations: 600,
         ..options(vec![]).select.baseline_fit
     };
-    let (mut inside, mut half_widths, mut errors) = (0, Vec::new(), Vec::new());
-    let mut truth_peak = f64::NAN;
-    for r in 0..20u64 {
+    // Realisations in parallel: both cores busy even when this test runs alone. Each returns
+    // whether the band holds the truth's peak, the band's half-width, the predicted peak's
+    // error and the truth's peak.
+    let results: Vec<(bool, f64, f64, f64)> = (0..20u64)
+        .into_par_iter()
+        .map(|r| {
         let sw = sweeps(&truth, 5000 + 10 * r);
         let conv = PhaseConvention::detect(&sw).unwrap();
         let levels: Vec<LevelData> = sw.iter().map(|s| LevelData::new(s, &conv)).collect();
@@ -428,7 +436,7 @@ fn prediction_band_covers_the_truth_at_its_stated_rate() {
         let (y, _) = levels[1].model_frf(&truth).unwrap();
         let f: Vec<f64> = levels[1].drives.iter().map(|d| d.omega / TAU).collect();
         let a: Vec<f64> = y.iter().map(|v| v.norm()).collect();
-        truth_peak = resonance(&f, &a).1;
+        let truth_peak = resonance(&f, &a).1;
         let b = bands[0].peak;
         let truth_cost =
             asperity::identify::select::cost_all_rows(&truth.spec, &truth, &fit_levels);
@@ -444,10 +452,18 @@ fn prediction_band_covers_the_truth_at_its_stated_rate() {
             ensemble.acceptance_rate,
             bands[0].r_hat
         );
-        inside += usize::from(b.contains(truth_peak));
-        half_widths.push(0.5 * (b.hi_95 - b.lo_95));
-        errors.push(b.value - truth_peak);
-    }
+        (
+            b.contains(truth_peak),
+            0.5 * (b.hi_95 - b.lo_95),
+            b.value - truth_peak,
+            truth_peak,
+        )
+        })
+        .collect();
+    let inside = results.iter().filter(|r| r.0).count();
+    let half_widths: Vec<f64> = results.iter().map(|r| r.1).collect();
+    let errors: Vec<f64> = results.iter().map(|r| r.2).collect();
+    let truth_peak = results[19].3;
     // Robust spread of the predicted peaks about the truth: median |error| / 0.6745 (the
     // standard deviation for Gaussian errors; the Jenkins slider's stick–slip kink gives the
     // estimates heavier tails, which the coverage count sees).
