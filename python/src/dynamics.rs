@@ -51,6 +51,8 @@ pub struct ResponseModel {
     force: DVector<f64>,
     /// Quadrature part of the excitation (a model file's `phases_deg`).
     force_sin: Option<DVector<f64>>,
+    /// Static force (a model file's `[static]`, N), the same at every level.
+    static_force: Option<DVector<f64>>,
     harmonic: usize,
     responses: Vec<(String, DVector<f64>)>,
     /// The model file and its path, when read from one (sweep defaults and levels).
@@ -126,6 +128,7 @@ impl ResponseModel {
             structure,
             force,
             force_sin: None,
+            static_force: None,
             harmonic,
             responses,
             file: None,
@@ -257,6 +260,21 @@ impl SweepResult {
 }
 
 impl ResponseModel {
+    /// `method` does not solve a static preload: refused for a model file with `[static]`.
+    fn refuse_static(&self, py: Python<'_>, method: &str) -> PyResult<()> {
+        if self.static_force.is_some() {
+            return Err(parameter(
+                py,
+                "static",
+                format!(
+                    "{method} does not solve the model file's [static] preload (sweep balances \
+                     it)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// The harmonic basis: the arguments, else the model file's `[sweep]`, else harmonics 5,
     /// all orders, the default sampling.
     fn harmonics(
@@ -285,6 +303,7 @@ impl ResponseModel {
             structure: m.structure,
             force: m.force,
             force_sin: m.force_sin,
+            static_force: m.static_force,
             harmonic: m.file.excitation.harmonic,
             responses: m.responses,
             file: Some((m.path, m.file)),
@@ -512,11 +531,16 @@ impl ResponseModel {
             Some(f) => self::formulation(f)?,
             None => s.map_or(FormulationChoice::Auto, |s| s.formulation),
         };
+        // A static force is balanced in the coordinates formulation (as `asperity response`).
+        let choice = match (&self.static_force, choice) {
+            (Some(_), FormulationChoice::Auto) => FormulationChoice::Coordinates,
+            (_, c) => c,
+        };
         let mut settings = ContinuationSettings::new(start, end);
         settings.points = points.or(s.map(|s| s.points)).unwrap_or(200);
         let (system, result) = py
             .detach(|| {
-                let system = HbmSystem::new(
+                let mut system = HbmSystem::new(
                     &self.structure,
                     h,
                     Excitation {
@@ -526,6 +550,9 @@ impl ResponseModel {
                     },
                     choice,
                 )?;
+                if let Some(f0) = &self.static_force {
+                    system = system.with_static_force(f0)?;
+                }
                 let r = response::sweep_level(
                     &system,
                     level_n,
@@ -606,6 +633,7 @@ impl ResponseModel {
         periods: usize,
         steps_per_period: usize,
     ) -> PyResult<DecayResult> {
+        self.refuse_static(py, "free_decay")?;
         let settings = asperity::dynamics::transient::DecaySettings {
             mode,
             amplitude_m,
@@ -657,6 +685,7 @@ impl ResponseModel {
         time_samples: Option<usize>,
     ) -> PyResult<NonlinearModeResult> {
         use asperity::dynamics::nonlinear_modes::{self, ModeSettings};
+        self.refuse_static(py, "nonlinear_mode")?;
         let h = self.harmonics(harmonics, odd_only, time_samples)?;
         let amplitudes =
             nonlinear_modes::log_spaced(amplitude_min_m_sqrt_kg, amplitude_max_m_sqrt_kg, points)

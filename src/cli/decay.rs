@@ -33,6 +33,7 @@ pub struct DecayArgs {
 pub fn run(args: DecayArgs) -> Result<()> {
     let mut out = transient::output_set(&args.model, &args.out_dir, "--out-dir")?;
     let model = model_file::load(&args.model)?;
+    model.refuse_static("asperity decay")?;
     let (label, row) = &model.responses[0];
     let settings = DecaySettings {
         mode: args.mode,

@@ -178,6 +178,9 @@ pub struct HbmSystem<'a> {
     width: usize,
     /// The cyclic sector's operators (`None`: a structure on its own).
     cyclic: Option<CyclicOperators>,
+    /// Harmonics (`n × len`, coordinate-major) of a static force that does not scale with the
+    /// level (a preload: harmonic 0 only); `None`: none.
+    static_force: Option<DVector<f64>>,
 }
 
 /// The operators of a cyclic sector (see [`crate::dynamics::cyclic`]).
@@ -305,6 +308,7 @@ impl<'a> HbmSystem<'a> {
             offsets,
             width,
             cyclic,
+            static_force: None,
         };
         // The Newton iteration holds the dense Jacobian, its LU factors and a copy. Checked
         // against the available memory only when large: the identification builds a system per
@@ -319,6 +323,45 @@ impl<'a> HbmSystem<'a> {
             )?;
         }
         Ok(system)
+    }
+
+    /// The system with a static force `f0` (N per coordinate) on top of the harmonic
+    /// excitation: a preload that does not scale with the level, balanced by the harmonic-0
+    /// (mean) part of the response, `Z₀·Q₀ + f̂_nl,0 = f0` (the static equilibrium about which the
+    /// structure vibrates, solved with the vibration). Needs harmonic 0 in the basis (`odd_only =
+    /// false`) and the coordinates formulation. Errors name `static` or `formulation`.
+    pub fn with_static_force(mut self, f0: &DVector<f64>) -> Result<Self> {
+        let n = self.structure.n();
+        if f0.len() != n {
+            return Err(Error::param(
+                "static",
+                format!("force vector has {} entries for {n} coordinates", f0.len()),
+            ));
+        }
+        if self.harmonics.orders().first() != Some(&0) {
+            return Err(Error::param(
+                "static",
+                "a static force needs harmonic 0 (the mean) in the basis: set odd_only = false",
+            ));
+        }
+        if self.formulation != Formulation::Coordinates {
+            return Err(Error::param(
+                "formulation",
+                "a static force is solved in the coordinates formulation",
+            ));
+        }
+        let len = self.harmonics.len();
+        let mut f = DVector::zeros(n * len);
+        for r in 0..n {
+            f[r * len] = f0[r];
+        }
+        self.static_force = Some(f);
+        Ok(self)
+    }
+
+    /// The static force's harmonics (`n × len`), if any ([`HbmSystem::with_static_force`]).
+    pub fn static_force_harmonics(&self) -> Option<&DVector<f64>> {
+        self.static_force.as_ref()
     }
 
     /// The formulation in use.
@@ -609,8 +652,12 @@ impl<'a> HbmSystem<'a> {
         // Σ_e P_eᵀ f̂_e.
         let fnl = self.stacked_map.transpose() * self.stacked_forces(&forces);
         let fnl = DVector::from_row_slice(fnl.transpose().as_slice());
-        let residual = &lin + &fnl - &fex * level;
-        let scale = (&fex * level).norm() + fnl.norm();
+        let mut residual = &lin + &fnl - &fex * level;
+        let mut scale = (&fex * level).norm() + fnl.norm();
+        if let Some(f0) = &self.static_force {
+            residual -= f0;
+            scale += f0.norm();
+        }
         let jac = if jacobian {
             let mut j = self.dynamic_stiffness(omega);
             if !self.structure.elements.is_empty() {
@@ -659,8 +706,13 @@ impl<'a> HbmSystem<'a> {
         let fnl = c
             .element_expansion
             .tr_mul(&DVector::from_row_slice(fw.transpose().as_slice()));
-        let residual = &lin + &fnl - &fex * level;
-        let scale = (&fex * level).norm() + fnl.norm();
+        let mut residual = &lin + &fnl - &fex * level;
+        let mut scale = (&fex * level).norm() + fnl.norm();
+        if let Some(f0) = &self.static_force {
+            let f0 = c.expansion.tr_mul(f0);
+            residual -= &f0;
+            scale += f0.norm();
+        }
         let jac = if jacobian {
             let t = &c.expansion;
             let mut j = t.tr_mul(&(self.dynamic_stiffness(omega) * t));

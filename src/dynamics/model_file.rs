@@ -37,6 +37,10 @@
 //! # elastic_modulus_pa, plastic_modulus_pa, yield_stress_pa, transition_exponent, area_m2,
 //! # thickness_m
 //!
+//! # [static]                    # optional preload, the same at every level (needs
+//! # dofs = ["damper.z"]         #   odd_only = false: balanced by the response's mean)
+//! # forces_n = [-120.0]
+//!
 //! [excitation]
 //! dofs = ["blade1.x", "blade2.x"]  # force F(t) = level·Σ w_i·e_i·cos(harmonic·ω·t + θ_i)
 //! weights = [1.0, -1.0]         # optional (default 1 each): out-of-phase forcing
@@ -313,6 +317,18 @@ pub struct CyclicSection {
     pub right: Vec<String>,
 }
 
+/// `[static]`: constant forces `F0 = Σ f_i·e_i` (N) on top of the harmonic excitation, the same
+/// at every level (a preload, e.g. a centrifugal load), balanced by the response's mean
+/// (harmonic 0: `odd_only = false`; coordinates formulation).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StaticSection {
+    /// DOFs loaded (`node.x|y|z`).
+    pub dofs: Vec<String>,
+    /// Force on each DOF (N).
+    pub forces_n: Vec<f64>,
+}
+
 /// Prefix of a contact node of the next sector in a `[cyclic]` model (`next:<node>`).
 pub const NEXT_SECTOR: &str = "next:";
 
@@ -397,6 +413,9 @@ pub struct ModelFile {
     /// The joints (none: no joint law).
     #[serde(default)]
     pub joint: Vec<JointSection>,
+    /// A static force (a preload that does not scale with the excitation level; none: none).
+    #[serde(default, rename = "static", skip_serializing_if = "Option::is_none")]
+    pub static_load: Option<StaticSection>,
     /// The forcing.
     pub excitation: ExcitationSection,
     /// The reported DOFs.
@@ -419,6 +438,8 @@ pub struct LoadedModel {
     pub force: DVector<f64>,
     /// Quadrature part (on `sin(harmonic·ω·t)`) when `[excitation]` gives phases.
     pub force_sin: Option<DVector<f64>>,
+    /// The `[static]` force on the coordinates (N), the same at every level.
+    pub static_force: Option<DVector<f64>>,
     /// One observation row per response DOF (label, row).
     pub responses: Vec<(String, DVector<f64>)>,
     /// `(role, path)` of every input file.
@@ -428,6 +449,24 @@ pub struct LoadedModel {
     /// The law and table row of every attached element, in the order of
     /// `structure.elements` (to rebuild them with updated parameters).
     pub element_rows: Vec<(ContactLaw, TableElement)>,
+}
+
+impl LoadedModel {
+    /// Refuse a `[static]` force for `command`, which does not solve the static equilibrium
+    /// (only `asperity response` balances it).
+    pub fn refuse_static(&self, command: &str) -> Result<()> {
+        if self.static_force.is_some() {
+            return Err(Error::parse(
+                &self.path,
+                0,
+                format!(
+                    "[static]: {command} does not solve a static preload (asperity response \
+                     balances it with the response's mean); remove the section for {command}"
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// 1-based line of `key = …` in TOML text (first occurrence), or 0.
@@ -1277,6 +1316,44 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
              cancel, or mode shapes that are zero at every excitation DOF)",
         ));
     }
+    let static_force = match &file.static_load {
+        None => None,
+        Some(st) => {
+            if st.dofs.len() != st.forces_n.len() || st.dofs.is_empty() {
+                return Err(Error::parse(
+                    path,
+                    key_line(&text, "forces_n"),
+                    format!(
+                        "`static`: {} DOFs and {} forces_n (one force per DOF, at least one)",
+                        st.dofs.len(),
+                        st.forces_n.len()
+                    ),
+                ));
+            }
+            if let Some(f) = st.forces_n.iter().find(|f| !f.is_finite()) {
+                return Err(Error::parse(
+                    path,
+                    key_line(&text, "forces_n"),
+                    format!("`static.forces_n`: {f} is not finite"),
+                ));
+            }
+            if !file.sweep.odd_only {
+                let mut f0 = DVector::zeros(structure.n());
+                for (d, &f) in st.dofs.iter().zip(&st.forces_n) {
+                    let row = DVector::from_vec(kin.row(d).ok_or_else(|| dof_err("dofs", d))?);
+                    f0 += &row * f;
+                }
+                Some(f0)
+            } else {
+                return Err(Error::parse(
+                    path,
+                    key_line(&text, "odd_only"),
+                    "`[static]` needs the mean (harmonic 0) in the balance: set `sweep.odd_only = \
+                     false`",
+                ));
+            }
+        }
+    };
     let mut responses = Vec::new();
     for d in &file.response.dofs {
         let row = kin.row(d).ok_or_else(|| dof_err("dofs", d))?;
@@ -1288,6 +1365,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         structure,
         force,
         force_sin,
+        static_force,
         responses,
         inputs,
         out_of_range,

@@ -69,6 +69,7 @@ pub struct ModesRequest {
 /// The harmonic-balance system of the model file for the EPMC: its harmonic basis, the
 /// coordinates formulation, no excitation.
 pub fn system(model: &LoadedModel) -> Result<HbmSystem<'_>> {
+    model.refuse_static("asperity modes")?;
     if model.structure.cyclic.is_some() {
         return Err(Error::parse(
             &model.path,

@@ -161,7 +161,12 @@ pub fn run<'a>(
 ) -> Result<ForcedResponse<'a>> {
     let f = &model.file;
     let settings = ResponseSettings::of_model_file(&f.sweep)?;
-    let system = HbmSystem::new(
+    // A static force is balanced in the coordinates formulation.
+    let formulation = match (&model.static_force, settings.formulation) {
+        (Some(_), FormulationChoice::Auto) => FormulationChoice::Coordinates,
+        (_, choice) => choice,
+    };
+    let mut system = HbmSystem::new(
         &model.structure,
         settings.harmonics.clone(),
         Excitation {
@@ -169,8 +174,13 @@ pub fn run<'a>(
             harmonic: f.excitation.harmonic,
             force_sin: model.force_sin.clone(),
         },
-        settings.formulation,
+        formulation,
     )?;
+    if let Some(f0) = &model.static_force {
+        system = system
+            .with_static_force(f0)
+            .map_err(|e| e.renamed_param("static (sweep.formulation = \"receptance\")"))?;
+    }
     log(&format!(
         "{} coordinates ({:?}), {} elements ({} contact DOFs{}); harmonics {:?}, {} samples per period; formulation: {:?} with {} unknowns",
         model.structure.n(),
