@@ -216,3 +216,26 @@ def test_nonlinear_mode_of_a_duffing_oscillator_is_its_backbone():
     np.testing.assert_allclose(r.damping_ratio, c / (2 * m * omega), rtol=1e-6)
     # The backbone hardens far beyond the linear frequency.
     assert r.frequency_hz[-1] > 1.5 * r.linear_frequency_hz
+
+
+def test_a_static_preload_is_balanced_by_the_mean(tmp_path):
+    """A model file's `[static]` force: `sweep` balances it with the response's mean (F0/k for a
+    linear oscillator); `free_decay` and `nonlinear_mode`, which do not solve it, refuse it."""
+    (tmp_path / "mass.csv").write_text("# unit: kg\nm.x\n1.0\n")
+    (tmp_path / "stiffness.csv").write_text("# unit: N/m\nm.x\n1e4\n")
+    (tmp_path / "damping.csv").write_text("# unit: N*s/m\nm.x\n2.0\n")
+    path = tmp_path / "model.toml"
+    path.write_text(
+        '[linear]\nmass = "mass.csv"\ndamping = "damping.csv"\nstiffness = "stiffness.csv"\n\n'
+        '[static]\ndofs = ["m.x"]\nforces_n = [30.0]\n\n'
+        '[excitation]\ndofs = ["m.x"]\nlevels_n = [1.0]\n\n[response]\ndofs = ["m.x"]\n\n'
+        "[sweep]\nfrequency_start_hz = 10.0\nfrequency_end_hz = 20.0\npoints = 10\n"
+        "harmonics = 1\nodd_only = false\n"
+    )
+    model = ap.ResponseModel.read(path)
+    r = model.sweep(1.0)
+    np.testing.assert_allclose(r.columns["m.x_h0_mean_m"], 3e-3, rtol=1e-9)
+    with pytest.raises(Exception, match="static"):
+        model.free_decay(1e-4)
+    with pytest.raises(Exception, match="static"):
+        model.nonlinear_mode(1e-6, 1e-4)
