@@ -115,13 +115,14 @@ fn oscillator(joint: BilinearContact, harmonics: usize, samples: usize) -> (Stru
     (s, Harmonics::new(harmonics, false, Some(samples)).unwrap())
 }
 /// The HBM point at `level` reached by a ramp in six steps from the linear regime, and the
-/// Newmark steady state (2048 steps per period) started from it: `(coordinates, HBM first-
+/// Newmark steady state (`steps_per_period`) started from it: `(coordinates, HBM first-
 /// harmonic amplitude, Newmark's)`.
 fn ramped_hbm_against_newmark(
     sys: &HbmSystem<'_>,
     w: f64,
     level: f64,
     f_hz: f64,
+    steps_per_period: usize,
 ) -> (DVector<f64>, f64, f64) {
     let mut guess: Option<DVector<f64>> = None;
     let mut p = None;
@@ -146,7 +147,7 @@ fn ramped_hbm_against_newmark(
         &q0,
         &v0,
         &TimeIntegrationSettings {
-            steps_per_period: 2048,
+            steps_per_period,
             max_periods: 400,
             tolerance: 1e-9,
         },
@@ -240,7 +241,7 @@ fn bilinear_contact_harmonic_balance_matches_newmark() {
     for (f_hz, level) in [(7.0, 6.0), (9.0, 3.0)] {
         let w = 2.0 * PI * f_hz;
         // Continue in level from the linear regime to the nonlinear one.
-        let (x, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz);
+        let (x, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz, 2048);
         // The motion must visit all three branches for the test to mean something.
         let mut samples = vec![0.0; sys.harmonics.n_time()];
         sys.harmonics.to_time(x.as_slice(), &mut samples);
@@ -440,43 +441,10 @@ fn rate_dependent_hbm_and_newmark(
         FormulationChoice::Coordinates,
     )
     .unwrap();
-    let mut guess: Option<DVector<f64>> = None;
-    let mut p = None;
-    for i in 1..=6 {
-        let q = sys
-            .solve(w, level * i as f64 / 6.0, guess.as_ref())
-            .unwrap();
-        assert!(q.converged, "{f_hz} Hz: HBM did not converge");
-        guess = Some(q.z.clone());
-        p = Some(q);
-    }
-    let p = p.unwrap();
-    let x = sys.coordinates(&p);
-    let (q0, v0) = initial_conditions(&x, &sys.harmonics, 1, p.omega);
-    let ti = steady_state(
-        &s,
-        &sys.excitation.force,
-        1,
-        p.level,
-        p.omega,
-        &sys.harmonics,
-        &q0,
-        &v0,
-        &TimeIntegrationSettings {
-            steps_per_period: samples,
-            max_periods: 400,
-            tolerance: 1e-9,
-        },
-    )
-    .unwrap();
-    assert!(ti.converged, "Newmark not steady: {:.1e}", ti.change);
+    let (x, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz, samples);
     let mut t = vec![0.0; samples];
     sys.harmonics.to_time(x.as_slice(), &mut t);
-    (
-        amplitude(&x, &sys.harmonics),
-        amplitude(&ti.harmonics, &sys.harmonics),
-        t,
-    )
+    (a_hbm, a_ti, t)
 }
 
 /// A mass on a spring rubbing on a LuGre contact, driven through stick and slip: the harmonic
@@ -586,7 +554,7 @@ fn thin_layer_harmonic_balance_matches_newmark() {
                 FormulationChoice::Coordinates,
             )
             .unwrap();
-            let (_, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz);
+            let (_, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz, 2048);
             assert!(a_hbm > 3.0 * u_yield, "{f_hz} Hz: amplitude {a_hbm}");
             let err = (a_hbm - a_ti).abs() / a_ti;
             eprintln!(
