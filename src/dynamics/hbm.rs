@@ -196,6 +196,40 @@ struct CyclicOperators {
 /// memory (64 MiB: about 1500 unknowns).
 const JACOBIAN_BYTES_ALWAYS_AVAILABLE: u64 = 64 << 20;
 
+/// The balance `R = lin + f̂_nl − level·F̂ − F̂0` on the unknowns (linear forces `lin` and their
+/// frequency derivative `dlin`, element forces `fnl`, excitation `fex` per unit level, static
+/// force `f0`), its scale for the convergence test, and the Jacobian `jac` with the elements'
+/// periodicity.
+#[allow(clippy::too_many_arguments)]
+fn balance(
+    lin: DVector<f64>,
+    dlin: DVector<f64>,
+    fnl: DVector<f64>,
+    fex: DVector<f64>,
+    f0: Option<DVector<f64>>,
+    level: f64,
+    jacobian: DMatrix<f64>,
+    forces: &[aft::ElementHarmonics],
+) -> Evaluation {
+    let mut residual = &lin + &fnl - &fex * level;
+    let mut scale = (&fex * level).norm() + fnl.norm();
+    if let Some(f0) = f0 {
+        residual -= &f0;
+        scale += f0.norm();
+    }
+    let (perr, nonper) = periodicity(forces);
+    Evaluation {
+        residual,
+        jacobian,
+        d_omega: dlin,
+        d_level: -fex,
+        scale,
+        periodicity_error: perr,
+        non_periodic: nonper,
+        element_states: element_states(forces),
+    }
+}
+
 impl<'a> HbmSystem<'a> {
     /// Set up the harmonic-balance problem. The excitation harmonic must be retained; with the
     /// receptance formulation the structure needs a non-singular dynamic stiffness.
@@ -652,12 +686,6 @@ impl<'a> HbmSystem<'a> {
         // Σ_e P_eᵀ f̂_e.
         let fnl = self.stacked_map.transpose() * self.stacked_forces(&forces);
         let fnl = DVector::from_row_slice(fnl.transpose().as_slice());
-        let mut residual = &lin + &fnl - &fex * level;
-        let mut scale = (&fex * level).norm() + fnl.norm();
-        if let Some(f0) = &self.static_force {
-            residual -= f0;
-            scale += f0.norm();
-        }
         let jac = if jacobian {
             let mut j = self.dynamic_stiffness(omega);
             if !self.structure.elements.is_empty() {
@@ -667,17 +695,8 @@ impl<'a> HbmSystem<'a> {
         } else {
             DMatrix::zeros(0, 0)
         };
-        let (perr, nonper) = periodicity(&forces);
-        Evaluation {
-            residual,
-            jacobian: jac,
-            d_omega: dlin,
-            d_level: -fex,
-            scale,
-            periodicity_error: perr,
-            non_periodic: nonper,
-            element_states: element_states(&forces),
-        }
+        let f0 = self.static_force.clone();
+        balance(lin, dlin, fnl, fex, f0, level, jac, &forces)
     }
 
     /// The balance of a cyclic sector on the unknowns `z` (the harmonics of the coordinates off
@@ -706,13 +725,6 @@ impl<'a> HbmSystem<'a> {
         let fnl = c
             .element_expansion
             .tr_mul(&DVector::from_row_slice(fw.transpose().as_slice()));
-        let mut residual = &lin + &fnl - &fex * level;
-        let mut scale = (&fex * level).norm() + fnl.norm();
-        if let Some(f0) = &self.static_force {
-            let f0 = c.expansion.tr_mul(f0);
-            residual -= &f0;
-            scale += f0.norm();
-        }
         let jac = if jacobian {
             let t = &c.expansion;
             let mut j = t.tr_mul(&(self.dynamic_stiffness(omega) * t));
@@ -724,17 +736,8 @@ impl<'a> HbmSystem<'a> {
         } else {
             DMatrix::zeros(0, 0)
         };
-        let (perr, nonper) = periodicity(&forces);
-        Evaluation {
-            residual,
-            jacobian: jac,
-            d_omega: dlin,
-            d_level: -fex,
-            scale,
-            periodicity_error: perr,
-            non_periodic: nonper,
-            element_states: element_states(&forces),
-        }
+        let f0 = self.static_force.as_ref().map(|f| c.expansion.tr_mul(f));
+        balance(lin, dlin, fnl, fex, f0, level, jac, &forces)
     }
 
     /// Harmonics of the coordinates (`n × len`, coordinate-major) of a solution; for a cyclic
