@@ -393,11 +393,6 @@ impl<'a> HbmSystem<'a> {
         Ok(self)
     }
 
-    /// The static force's harmonics (`n × len`), if any ([`HbmSystem::with_static_force`]).
-    pub fn static_force_harmonics(&self) -> Option<&DVector<f64>> {
-        self.static_force.as_ref()
-    }
-
     /// The formulation in use.
     pub fn formulation(&self) -> Formulation {
         self.formulation

@@ -469,6 +469,26 @@ impl LoadedModel {
     }
 }
 
+/// Attach `element` (label `label`, map `map` on this sector's coordinates) to `structure`;
+/// with `next`, its map on the next sector's coordinates, across the boundary of a cyclic sector
+/// — refused with `needs_cyclic()` when the structure is not cyclic.
+fn attach_pair(
+    structure: &mut Structure,
+    label: String,
+    element: std::sync::Arc<dyn crate::element::HystereticElement>,
+    map: DMatrix<f64>,
+    next: Option<DMatrix<f64>>,
+    needs_cyclic: impl FnOnce() -> Error,
+) -> Result<()> {
+    match next {
+        Some(next) if structure.cyclic.is_some() => {
+            structure.attach_across(label, element, map, next)
+        }
+        Some(_) => Err(needs_cyclic()),
+        None => structure.attach(label, element, map),
+    }
+}
+
 /// 1-based line of `key = …` in TOML text (first occurrence), or 0.
 fn key_line(text: &str, key: &str) -> usize {
     text.lines()
@@ -1218,26 +1238,25 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             })?;
             let el = contact::element_for(c.law, e)
                 .map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
-            match next {
-                Some(next) if structure.cyclic.is_some() => {
-                    structure.attach_across(format!("{}", e.id), el, map, next)?
-                }
-                Some(_) => {
-                    return Err(match &where_ {
-                        Error::Parse { path, line, .. } => Error::parse(
-                            path,
-                            *line,
-                            format!(
-                                "element {}: a node of the next sector (`{NEXT_SECTOR}…`) needs \
-                                 a [cyclic] section in the model file",
-                                e.id
-                            ),
+            attach_pair(
+                &mut structure,
+                format!("{}", e.id),
+                el,
+                map,
+                next,
+                || match &where_ {
+                    Error::Parse { path, line, .. } => Error::parse(
+                        path,
+                        *line,
+                        format!(
+                            "element {}: a node of the next sector (`{NEXT_SECTOR}…`) needs a \
+                             [cyclic] section in the model file",
+                            e.id
                         ),
-                        _ => unreachable!(),
-                    })
-                }
-                None => structure.attach(format!("{}", e.id), el, map)?,
-            }
+                    ),
+                    _ => unreachable!(),
+                },
+            )?;
             element_rows.push((c.law, e.clone()));
         }
         inputs.push((format!("contact {} elements", ci + 1), ep));
@@ -1260,26 +1279,25 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         })?;
         let el = j.element().expect("validated by parse");
         let label = format!("joint {}", ji + 1);
-        match next {
-            Some(next) if structure.cyclic.is_some() => structure.attach_across(
-                label,
-                el,
-                map.rows(0, 1).into_owned(),
-                next.rows(0, 1).into_owned(),
-            )?,
-            Some(_) => {
-                return Err(Error::parse(
+        let first_row = |m: DMatrix<f64>| m.rows(0, 1).into_owned();
+        attach_pair(
+            &mut structure,
+            label,
+            el,
+            first_row(map),
+            next.map(first_row),
+            || {
+                Error::parse(
                     path,
                     key_line(&text, "node_a"),
                     format!(
                         "joint {}: a node of the next sector (`{NEXT_SECTOR}…`) needs a [cyclic] \
-                         section in the model file",
+                     section in the model file",
                         ji + 1
                     ),
-                ))
-            }
-            None => structure.attach(label, el, map.rows(0, 1).into_owned())?,
-        }
+                )
+            },
+        )?;
     }
     let dof_err = |key: &str, label: &str| {
         Error::parse(
