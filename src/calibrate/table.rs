@@ -534,6 +534,29 @@ impl CalibrationTable {
         )
     }
 
+    /// Local power-law exponents `[d ln kn″/d ln p, d ln E0″/d ln p]` at `pressure_pa`: those of
+    /// the table segment (pair of adjacent rows) the pressure lies in, the end pair's beyond the
+    /// table (the power law [`Self::interpolate`] continues with), `[0, 0]` for a one-row table.
+    /// The exponents of the element whose stiffnesses follow the load
+    /// ([`crate::element::LoadFollowingContact`]).
+    pub fn load_exponents(&self, pressure_pa: f64) -> [f64; 2] {
+        let rows = &self.rows;
+        let n = rows.len();
+        if n < 2 {
+            return [0.0, 0.0];
+        }
+        let i = rows
+            .partition_point(|r| r.pressure_pa <= pressure_pa)
+            .clamp(1, n - 1);
+        let (lo, hi) = (&rows[i - 1], &rows[i]);
+        let lp = (hi.pressure_pa / lo.pressure_pa).ln();
+        let slope = |f: fn(&CalibrationRow) -> f64| (f(hi) / f(lo)).ln() / lp;
+        [
+            slope(|r| r.element.kn_n_per_m3),
+            slope(|r| r.element.e0_n_per_m3),
+        ]
+    }
+
     /// Parameters at `pressure_pa`: monotone cubic (Fritsch–Carlson) in `ln p` within the range,
     /// the end pair's power law outside it, flagged (see the module documentation).
     pub fn interpolate(&self, pressure_pa: f64) -> Interpolated {

@@ -1655,7 +1655,8 @@ mod tests {
     use super::*;
     use crate::element::ValanisParams;
     use crate::element::{
-        CubicSpring, GaulLenz, Jenkins, JenkinsContact, MicroslipContact, QuadraticSpring,
+        CubicSpring, GaulLenz, Jenkins, JenkinsContact, LoadFollowingContact, MicroslipContact,
+        QuadraticSpring,
     };
 
     #[test]
@@ -1779,6 +1780,17 @@ mod tests {
         let jc = JenkinsContact::new(2e5, 0.6, 1e7, 10.0).unwrap();
         let w = check_jacobian(&jc, &h, &u3, 1e-11);
         assert!(w < 1e-5, "jenkins contact: {w}");
+        // kn(N) and E0(N) following the load (b = 0.7, a = 0.65), in contact and, with a
+        // larger normal motion, separating over part of the cycle (b = 0.3: separation at
+        // un = −N0/((1 − b)·kn0) = −1.4e-6).
+        let lf = LoadFollowingContact::new(v, 1e7, 10.0, 0.7, 0.65).unwrap();
+        let w = check_jacobian(&lf, &h, &u3, 1e-11);
+        assert!(w < 1e-5, "load-following contact: {w}");
+        let mut open = u3.clone();
+        open[2 * len + c1] = 2.5e-6;
+        let lf = LoadFollowingContact::new(v, 1e7, 10.0, 0.3, 0.65).unwrap();
+        let w = check_jacobian(&lf, &h, &open, 1e-11);
+        assert!(w < 1e-5, "load-following contact, separating: {w}");
     }
 
     /// The sensitivities of one-component elements over a recorded period

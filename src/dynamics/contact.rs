@@ -9,7 +9,9 @@
 //! orthogonal to `n`, `t2 = n × t1`.
 
 use crate::core::error::{Error, Result};
-use crate::element::{ContactParams, HystereticElement, JenkinsContact, MicroslipContact};
+use crate::element::{
+    ContactParams, HystereticElement, JenkinsContact, LoadFollowingContact, MicroslipContact,
+};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -37,6 +39,11 @@ pub struct TableElement {
     pub element: ContactParams,
     /// −1 / 0 / +1 as written by `asperity elements` (0 when the column is absent).
     pub out_of_range: i8,
+    /// The element's pressure `pressure_Pa` (Pa), where the table has the column.
+    pub pressure_pa: Option<f64>,
+    /// Exponents `(b, a)` of `kn ∝ N^b` and `E0 ∝ N^a` when the element follows the load
+    /// (`load_following` in the model file; [`LoadFollowingContact`]); `None`: constant.
+    pub load_exponents: Option<[f64; 2]>,
 }
 
 /// Read an element table (CSV written by `asperity elements`; extra columns are ignored).
@@ -67,6 +74,7 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
         col("Et_N_per_m")?,
     ];
     let flag_col = headers.iter().position(|h| h == "out_of_range");
+    let pressure_col = headers.iter().position(|h| h == "pressure_Pa");
     let mut out: Vec<TableElement> = Vec::new();
     let mut seen: HashMap<u64, usize> = HashMap::new();
     for rec in rdr.records() {
@@ -117,6 +125,8 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
                 Some(i) => field(i, "out_of_range")? as i8,
                 None => 0,
             },
+            pressure_pa: pressure_col.map(|i| field(i, "pressure_Pa")).transpose()?,
+            load_exponents: None,
         };
         for (name, v) in [
             ("N0_N", e.n0_n),
@@ -214,12 +224,48 @@ pub fn contact_frame(normal: [f64; 3], tangent: [f64; 3]) -> Result<[[f64; 3]; 3
     Ok([t1, t2, n])
 }
 
-/// The element of `law` for one table row.
+/// The element of `law` for one table row: with load exponents, the Valanis element whose
+/// `kn` and `E0` follow the normal load ([`LoadFollowingContact`]).
 pub fn element_for(law: ContactLaw, e: &TableElement) -> Result<Arc<dyn HystereticElement>> {
-    Ok(match law {
-        ContactLaw::Valanis => Arc::new(MicroslipContact::from_params(&e.element, e.n0_n)?),
-        ContactLaw::Jenkins => Arc::new(JenkinsContact::from_params(&e.element, e.n0_n)?),
+    Ok(match (law, e.load_exponents) {
+        (ContactLaw::Valanis, None) => Arc::new(MicroslipContact::from_params(&e.element, e.n0_n)?),
+        (ContactLaw::Valanis, Some([b, a])) => Arc::new(LoadFollowingContact::new(
+            e.element.valanis()?,
+            e.element.kn_n_per_m,
+            e.n0_n,
+            b,
+            a,
+        )?),
+        (ContactLaw::Jenkins, None) => Arc::new(JenkinsContact::from_params(&e.element, e.n0_n)?),
+        (ContactLaw::Jenkins, Some(_)) => {
+            return Err(Error::param(
+                "load_following",
+                "is a property of the `valanis` law (kn(N), E0(N) of the microslip element)",
+            ))
+        }
     })
+}
+
+/// Exponents `[b, a]` of the load-following element (`kn ∝ N^b`, `E0 ∝ N^a`) of every row of
+/// an element table from the calibration table the elements were interpolated from, at each
+/// element's pressure ([`crate::calibrate::table::CalibrationTable::load_exponents`]; at fixed
+/// area `d ln kn/d ln N = d ln kn″/d ln p`). Errors name the element table's file and line.
+pub fn set_load_exponents(
+    elements: &mut [TableElement],
+    elements_path: &Path,
+    table: &crate::calibrate::table::CalibrationTable,
+) -> Result<()> {
+    for e in elements {
+        let p = e.pressure_pa.ok_or_else(|| {
+            Error::parse(
+                elements_path,
+                e.line,
+                "`load_following` needs the element's `pressure_Pa` column (the table of `asperity elements`)",
+            )
+        })?;
+        e.load_exponents = Some(table.load_exponents(p));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -23,6 +23,7 @@
 //! # pairs = "pairs.csv"         # ... or element_id,node_a,node_b
 //! normal = [0.0, 0.0, 1.0]      # from node_a towards node_b
 //! tangent = [1.0, 0.0, 0.0]
+//! # load_following = "calibration_table.csv"   # valanis: kn(N), E0(N) follow the load
 //!
 //! [[joint]]                     # zero or more joints on one direction each
 //! law = "bilinear"              # bilinear normal contact (element::bilinear)
@@ -121,6 +122,10 @@ pub struct ContactSection {
     pub normal: [f64; 3],
     /// First tangential direction in the structure's axes (orthogonalised against `normal`).
     pub tangent: [f64; 3],
+    /// Calibration table the elements were interpolated from: with it, every element's `kn` and
+    /// `E0` follow its instantaneous normal load (`kn ∝ N^b`, `E0 ∝ N^a`, the table's local
+    /// exponents at the element's pressure; `valanis` law only).
+    pub load_following: Option<PathBuf>,
 }
 
 /// Constitutive law of a `[[joint]]`.
@@ -1035,7 +1040,7 @@ pub fn declare_inputs(out: &mut crate::core::output::OutputSet, model: &Path) ->
 }
 
 /// `(role, path)` of the model file and of every file it names (matrices or modes and shapes,
-/// element tables, node pairs), paths resolved against the model file's directory, without
+/// element tables, node pairs, load-following calibration tables), paths resolved against the model file's directory, without
 /// reading those files: the inputs a command declares before it writes anything.
 pub fn referenced_files(path: &Path) -> Result<Vec<(String, PathBuf)>> {
     crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
@@ -1062,6 +1067,9 @@ pub fn referenced_files(path: &Path) -> Result<Vec<(String, PathBuf)>> {
         ));
         if let Some(p) = &c.pairs {
             files.push((format!("contact {} pairs", ci + 1), base.join(p)));
+        }
+        if let Some(p) = &c.load_following {
+            files.push((format!("contact {} load_following", ci + 1), base.join(p)));
         }
     }
     Ok(files)
@@ -1175,7 +1183,20 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
     let mut element_rows = Vec::new();
     for (ci, c) in file.contact.iter().enumerate() {
         let ep = resolve(&c.elements);
-        let table: Vec<TableElement> = contact::read_element_table(&ep)?;
+        let mut table: Vec<TableElement> = contact::read_element_table(&ep)?;
+        if let Some(lf) = &c.load_following {
+            if c.law != ContactLaw::Valanis {
+                return Err(Error::parse(
+                    path,
+                    key_line(&text, "load_following"),
+                    "`load_following` (kn(N), E0(N)) is a property of the `valanis` law",
+                ));
+            }
+            let lf = resolve(lf);
+            let calibration = crate::calibrate::table::CalibrationTable::read_csv(&lf)?;
+            contact::set_load_exponents(&mut table, &ep, &calibration)?;
+            inputs.push((format!("contact {} load_following", ci + 1), lf));
+        }
         out_of_range += table.iter().filter(|e| e.out_of_range != 0).count();
         let frame = contact_frame(c.normal, c.tangent)?;
         let pairs = match &c.pairs {

@@ -16,8 +16,10 @@ use crate::core::error::Result;
 use crate::element::hysteretic::{ContactStatus, HystereticElement, StepPartials};
 use crate::element::jenkins::{self, JenkinsParams, JENKINS_SLIP_THRESHOLD};
 use crate::element::params::ContactParams;
-use crate::element::unilateral::{recontact_fraction, UnilateralNormal};
-use crate::element::valanis::{self, Direction, ValanisParams, GROSS_SLIP_FRACTION};
+use crate::element::unilateral::{recontact_fraction, PowerLawNormal, UnilateralNormal};
+use crate::element::valanis::{
+    self, Direction, LoadFollowingValanis, ValanisParams, GROSS_SLIP_FRACTION,
+};
 
 /// Index of the normal approach in the local frame `u = (t1, t2, n)`.
 const NORMAL: usize = 2;
@@ -75,7 +77,7 @@ impl MicroslipContact {
             force: j,
             q_ref: 2 + j,
             u: j,
-            normal: Some((NORMAL, self.normal.kn)),
+            normal: Some((NORMAL, [self.normal.kn; 2])),
         }
     }
 }
@@ -139,6 +141,107 @@ impl HystereticElement for MicroslipContact {
             .map(|j| (s[j] - self.valanis.et * (u[j] - s[2 + j])).abs())
             .fold(0.0, f64::max);
         ContactStatus::classify(fz, used, GROSS_SLIP_FRACTION * self.valanis.slip_limit(fz))
+    }
+}
+
+/// The 3-D microslip contact element whose stiffnesses follow the instantaneous normal load
+/// (the element the reference underplatform-damper study proposes): [`MicroslipContact`] with
+/// `kn(N) = kn0·(N/N0)^b` ([`PowerLawNormal`]) and `E0(N) = E0_0·(N/N0)^a`
+/// ([`LoadFollowingValanis`]; `Et/E0`, `k`, `μ` fixed), the exponents those of the calibration
+/// table at the element's pressure (`kn″ ∝ p^b`, `E0″ ∝ p^a`). With `a = b = 0` it is
+/// [`MicroslipContact`]. State `(F_t1, F_t2, q_ref_t1, q_ref_t2)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadFollowingContact {
+    /// Valanis law of each tangential direction, about the preload.
+    pub valanis: LoadFollowingValanis,
+    /// The load-following normal spring.
+    pub normal: PowerLawNormal,
+}
+
+impl LoadFollowingContact {
+    /// Build and validate: the element at the preload `n0` (N) as [`MicroslipContact::new`],
+    /// `kn_exponent` `b` in `[0, 1]`, `e0_exponent` `a` finite.
+    pub fn new(
+        valanis: ValanisParams,
+        kn: f64,
+        n0: f64,
+        kn_exponent: f64,
+        e0_exponent: f64,
+    ) -> Result<Self> {
+        Ok(Self {
+            valanis: LoadFollowingValanis::new(valanis, n0, e0_exponent)?,
+            normal: PowerLawNormal::new(kn, n0, kn_exponent)?,
+        })
+    }
+}
+
+impl HystereticElement for LoadFollowingContact {
+    fn name(&self) -> &'static str {
+        "valanis-load-following"
+    }
+    fn dofs(&self) -> usize {
+        3
+    }
+    fn state_len(&self) -> usize {
+        4
+    }
+    fn virgin_state(&self, s: &mut [f64]) {
+        s.fill(0.0);
+    }
+    fn state_scales(&self, scales: &mut [f64]) {
+        let f = self.force_scale();
+        let e0 = self.valanis.reference.e0;
+        scales.copy_from_slice(&[f, f, f / e0, f / e0]);
+    }
+    fn force_scale(&self) -> f64 {
+        self.valanis.reference.mu * self.normal.n0
+    }
+    fn step(
+        &self,
+        s0: &[f64],
+        u0: &[f64],
+        u1: &[f64],
+        s1: &mut [f64],
+        f1: &mut [f64],
+        mut partials: Option<&mut StepPartials>,
+    ) {
+        let (fz0, k0) = self.normal.trial_load_and_slope(u0[NORMAL]);
+        let (fz1, k1) = self.normal.trial_load_and_slope(u1[NORMAL]);
+        for j in 0..2 {
+            let c = Direction {
+                force: j,
+                q_ref: 2 + j,
+                u: j,
+                normal: Some((NORMAL, [k0, k1])),
+            };
+            valanis::direction_step(
+                &self.valanis,
+                c,
+                s0,
+                u0,
+                u1,
+                fz0,
+                fz1,
+                s1,
+                f1,
+                partials.as_deref_mut(),
+            );
+        }
+        f1[NORMAL] = fz1.max(0.0) - self.normal.n0;
+        if let Some(p) = partials {
+            p.df_du1[NORMAL * 3 + NORMAL] = if fz1 > 0.0 { k1 } else { 0.0 };
+        }
+    }
+    fn status(&self, s: &[f64], u: &[f64], _f: &[f64]) -> ContactStatus {
+        let fz = self.normal.trial_load(u[NORMAL]);
+        if fz <= 0.0 {
+            return ContactStatus::Separated;
+        }
+        let p = self.valanis.at(fz);
+        let used = (0..2)
+            .map(|j| (s[j] - p.et * (u[j] - s[2 + j])).abs())
+            .fold(0.0, f64::max);
+        ContactStatus::classify(fz, used, GROSS_SLIP_FRACTION * p.slip_limit(fz))
     }
 }
 

@@ -15,7 +15,7 @@
 //! | [`hunt_crossley`] | Hunt–Crossley normal contact `k·δⁿ·(1 + χ·δ̇)` with gap, separation and impact; exact `χ(e, v_in)` | [`HuntCrossley`] |
 //! | [`lugre`] | LuGre friction (bristle state, Stribeck curve), exact exponential update at the increment's velocity | [`LuGre`] |
 //! | [`power_law_damper`] | power-law damper `c·|u̇|^p·u̇` | [`PowerLawDamper`] |
-//! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring | [`MicroslipContact`], [`JenkinsContact`] |
+//! | [`contact3d`] | 3-D contact elements: Valanis or Jenkins friction behind a unilateral normal spring; the Valanis element with kn(N), E0(N) | [`MicroslipContact`], [`JenkinsContact`], [`LoadFollowingContact`] |
 //! | [`thin_layer`] | thin-layer interface: elastic–plastic virtual material (Ee, Ep, Sy, smooth transition n; Menegotto–Pinto) | [`ThinLayer`] |
 //! | [`unilateral`] | unilateral normal contact `N = max(0, N0 + kn·un)`, re-contact point | – |
 //! | [`params`] | the contact-element record `(kn, E0, k, μ, Et)` per area and per element | – |
@@ -45,7 +45,7 @@ pub mod valanis;
 
 pub use bilinear::BilinearContact;
 pub use bouc_wen::{BoucWen, BoucWenParams};
-pub use contact3d::{JenkinsContact, MicroslipContact};
+pub use contact3d::{JenkinsContact, LoadFollowingContact, MicroslipContact};
 pub use cubic::CubicSpring;
 pub use gaul_lenz::{GaulLenz, GaulLenzParams};
 pub use hunt_crossley::{HuntCrossley, HuntCrossleyParams};
