@@ -41,6 +41,8 @@ pub struct TableElement {
     pub out_of_range: i8,
     /// The element's pressure `pressure_Pa` (Pa), where the table has the column.
     pub pressure_pa: Option<f64>,
+    /// The element's position `(x_m, y_m)` in the film frame (m), where the table has them.
+    pub position_m: Option<(f64, f64)>,
     /// Exponents `(b, a)` of `kn ∝ N^b` and `E0 ∝ N^a` when the element follows the load
     /// (`load_following` in the model file; [`LoadFollowingContact`]); `None`: constant.
     pub load_exponents: Option<[f64; 2]>,
@@ -75,6 +77,10 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
     ];
     let flag_col = headers.iter().position(|h| h == "out_of_range");
     let pressure_col = headers.iter().position(|h| h == "pressure_Pa");
+    let position_cols = headers
+        .iter()
+        .position(|h| h == "x_m")
+        .zip(headers.iter().position(|h| h == "y_m"));
     let mut out: Vec<TableElement> = Vec::new();
     let mut seen: HashMap<u64, usize> = HashMap::new();
     for rec in rdr.records() {
@@ -127,6 +133,10 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
             },
             pressure_pa: pressure_col.map(|i| field(i, "pressure_Pa")).transpose()?,
             load_exponents: None,
+            position_m: match position_cols {
+                Some((ix, iy)) => Some((field(ix, "x_m")?, field(iy, "y_m")?)),
+                None => None,
+            },
         };
         for (name, v) in [
             ("N0_N", e.n0_n),

@@ -3,10 +3,13 @@
 //! ```toml
 //! [linear]                      # either a lumped model ...
 //! mass = "mass.csv"             # CSV matrices: `# unit: kg` | `# unit: N/m` | `# unit: N*s/m`
-//! damping = "damping.csv"       #   line, a header row of DOF labels `node.x|y|z`, n rows
-//! stiffness = "stiffness.csv"
+//! damping = "damping.csv"       #   line, a header row of DOF labels `node.x|y|z|rx|ry|rz`
+//! stiffness = "stiffness.csv"   #   (rotations in rad), n rows
 //! # modes = "modes.csv"         # ... or a reduced modal model: mode,frequency_Hz,damping_ratio
 //! # shapes = "shapes.csv"       #   node,direction,mode_1_per_sqrt_kg,… (mass-normalised)
+//!
+//! # [nodes]                     # optional: positions (m) of rotating nodes that carry
+//! # damper = [0.0, 0.0, 0.01]   #   contact elements at offset points (`film_origin_m`)
 //!
 //! # [cyclic]                    # optional: the model is one sector of a cyclic structure
 //! # sectors = 24                #   (lumped models); N identical sectors
@@ -23,6 +26,8 @@
 //! # pairs = "pairs.csv"         # ... or element_id,node_a,node_b
 //! normal = [0.0, 0.0, 1.0]      # from node_a towards node_b
 //! tangent = [1.0, 0.0, 0.0]
+//! # film_origin_m = [0.0, 0.0, -0.01]   # elements at their x_m, y_m (film frame: tangent,
+//! #                             #   normal × tangent), moved by their nodes' rotations
 //! # load_following = "calibration_table.csv"   # valanis: kn(N), E0(N) follow the load
 //!
 //! [[joint]]                     # zero or more joints on one direction each
@@ -83,7 +88,7 @@ use crate::dynamics::contact::{self, contact_frame, TableElement};
 use crate::dynamics::hbm::FormulationChoice;
 use crate::dynamics::model::Structure;
 use nalgebra::{DMatrix, DVector};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// `[linear]`: the linear structure, either lumped matrices (`mass`, `damping`, `stiffness`) or a
@@ -122,6 +127,11 @@ pub struct ContactSection {
     pub normal: [f64; 3],
     /// First tangential direction in the structure's axes (orthogonalised against `normal`).
     pub tangent: [f64; 3],
+    /// Position (m, structure axes) of the origin of the element table's `x_m`, `y_m` (the film
+    /// frame), whose axes are `tangent` and `normal × tangent`: every element then acts at its
+    /// own point, moved by the rotations of its nodes (positions in `[nodes]`); without it every
+    /// element acts at its nodes.
+    pub film_origin_m: Option<[f64; 3]>,
     /// Calibration table the elements were interpolated from: with it, every element's `kn` and
     /// `E0` follow its instantaneous normal load (`kn ∝ N^b`, `E0 ∝ N^a`, the table's local
     /// exponents at the element's pressure; `valanis` law only).
@@ -418,6 +428,10 @@ pub struct ModelFile {
     /// The joints (none: no joint law).
     #[serde(default)]
     pub joint: Vec<JointSection>,
+    /// Node positions (m, structure axes): needed for the nodes with rotational DOFs on which a
+    /// contact acts at offset points (`film_origin_m`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub nodes: BTreeMap<String, [f64; 3]>,
     /// A static force (a preload that does not scale with the excitation level; none: none).
     #[serde(default, rename = "static", skip_serializing_if = "Option::is_none")]
     pub static_load: Option<StaticSection>,
@@ -575,7 +589,23 @@ impl ModelFile {
                 ));
             }
         }
+        for (node, x) in &self.nodes {
+            if x.iter().any(|v| !v.is_finite()) {
+                return Err(Error::param(
+                    format!("nodes.{node}"),
+                    "the position must be three finite numbers (m)",
+                ));
+            }
+        }
         for (i, c) in self.contact.iter().enumerate() {
+            if c.film_origin_m
+                .is_some_and(|o| o.iter().any(|v| !v.is_finite()))
+            {
+                return Err(Error::param(
+                    "contact.film_origin_m",
+                    format!("contact {}: must be three finite numbers (m)", i + 1),
+                ));
+            }
             if self.cyclic.is_none() {
                 for (key, node) in [("contact.node_a", &c.node_a), ("contact.node_b", &c.node_b)] {
                     if node.as_deref().is_some_and(|n| n.starts_with(NEXT_SECTOR)) {
@@ -759,14 +789,13 @@ impl ModelFile {
 /// Split `node.x` into `(node, axis)`.
 fn split_dof(label: &str) -> Option<(&str, usize)> {
     let (node, dir) = label.rsplit_once('.')?;
-    let axis = match dir {
-        "x" => 0,
-        "y" => 1,
-        "z" => 2,
-        _ => return None,
-    };
+    let axis = AXES.iter().position(|a| *a == dir)?;
     (!node.is_empty()).then_some((node, axis))
 }
+
+/// The directions of a node's DOFs: translations x, y, z (m) and rotations rx, ry, rz (rad)
+/// about the structure's axes.
+const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
 /// Read a square matrix CSV: a `# unit: <unit>` line naming `unit`, a header of DOF labels,
 /// and one row per DOF.
@@ -795,7 +824,7 @@ pub fn read_matrix(path: &Path, unit: &[&str]) -> Result<(Vec<String>, DMatrix<f
                         return Err(Error::parse(
                             path,
                             line,
-                            format!("header: `{c}` is not a DOF label `node.x|y|z`"),
+                            format!("header: `{c}` is not a DOF label `node.x|y|z|rx|ry|rz`"),
                         ));
                     }
                 }
@@ -945,18 +974,14 @@ fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
     for rec in rdr.records() {
         let (rec, line) = crate::core::input::csv_record(path, rec)?;
         let node = rec.get(0).unwrap_or("").to_string();
-        let axis = match rec.get(1).unwrap_or("") {
-            "x" => 0,
-            "y" => 1,
-            "z" => 2,
-            d => {
-                return Err(Error::parse(
-                    path,
-                    line,
-                    format!("direction `{d}`: expected x, y or z"),
-                ))
-            }
-        };
+        let d = rec.get(1).unwrap_or("");
+        let axis = AXES.iter().position(|a| *a == d).ok_or_else(|| {
+            Error::parse(
+                path,
+                line,
+                format!("direction `{d}`: expected x, y, z, rx, ry or rz"),
+            )
+        })?;
         let mut v = Vec::with_capacity(n_modes);
         for r in 0..n_modes {
             let s = rec.get(r + 2).unwrap_or("");
@@ -977,18 +1002,36 @@ fn read_shapes(path: &Path, n_modes: usize) -> Result<Shapes> {
             return Err(Error::parse(
                 path,
                 line,
-                format!("node {node} direction {} repeated", ["x", "y", "z"][axis]),
+                format!("node {node} direction {} repeated", AXES[axis]),
             ));
         }
     }
     Ok(out)
 }
 
-/// How a node's displacement (x, y, z) depends on the coordinates: three rows of length n.
+/// How a node's displacement (x, y, z) and rotation (rx, ry, rz) depend on the coordinates: six
+/// rows of length n.
 struct Kinematics {
     n: usize,
-    /// node → 3 rows (None for an axis without a DOF / shape: that component is zero).
-    nodes: HashMap<String, [Option<Vec<f64>>; 3]>,
+    /// node → 6 rows (None for an axis without a DOF / shape: that component is zero).
+    nodes: HashMap<String, [Option<Vec<f64>>; 6]>,
+}
+
+/// Where a contact element acts when it does not act at its nodes: its point in the
+/// structure's axes (m) and the positions of the nodes whose rotations move it (`[nodes]`).
+struct ContactPoint<'a> {
+    point: [f64; 3],
+    positions: &'a BTreeMap<String, [f64; 3]>,
+}
+
+/// Why a node pair could not be mapped.
+enum PairError {
+    /// The node is neither in the model nor `ground`.
+    Unknown(String),
+    /// The node rotates and the contact point is offset from it, but its position is not given.
+    NoPosition(String),
+    /// An offset contact point on a node of the next sector.
+    OffsetAcrossSectors(String),
 }
 
 impl Kinematics {
@@ -996,15 +1039,17 @@ impl Kinematics {
         let (node, axis) = split_dof(label)?;
         self.nodes.get(node)?[axis].clone()
     }
-    /// `R·(x_a − x_b)` as a `3 × n` map of this sector's coordinates and, when a node is
-    /// `next:<node>` (of the next sector), a `3 × n` map of the next sector's; `Err(node)` if a
-    /// node is unknown.
+    /// `R·(x_a − x_b)` at the contact point as a `3 × n` map of this sector's coordinates and,
+    /// when a node is `next:<node>` (of the next sector), a `3 × n` map of the next sector's.
+    /// A node's displacement at a point `p` offset from its position `c` is the rigid-body
+    /// motion `u + θ × (p − c)` (its rotations enter only when the point is given).
     fn pair_map(
         &self,
         a: &str,
         b: &str,
         r: &[[f64; 3]; 3],
-    ) -> std::result::Result<(DMatrix<f64>, Option<DMatrix<f64>>), String> {
+        point: Option<&ContactPoint<'_>>,
+    ) -> std::result::Result<(DMatrix<f64>, Option<DMatrix<f64>>), PairError> {
         let mut p = DMatrix::zeros(3, self.n);
         let mut next: Option<DMatrix<f64>> = None;
         for (node, sign) in [(a, 1.0), (b, -1.0)] {
@@ -1015,12 +1060,38 @@ impl Kinematics {
                 Some(name) => (next.get_or_insert_with(|| DMatrix::zeros(3, self.n)), name),
                 None => (&mut p, node),
             };
-            let rows = self.nodes.get(name).ok_or_else(|| node.to_string())?;
-            for (axis, row) in rows.iter().enumerate() {
+            let rows = self
+                .nodes
+                .get(name)
+                .ok_or_else(|| PairError::Unknown(node.to_string()))?;
+            // Global displacement direction of each of the node's six rows at the point.
+            let mut directions = [[0.0; 3]; 6];
+            for (axis, d) in directions.iter_mut().enumerate().take(3) {
+                d[axis] = 1.0;
+            }
+            let rotates = rows[3..].iter().any(Option::is_some);
+            if let (Some(cp), true) = (point, rotates) {
+                if node.starts_with(NEXT_SECTOR) {
+                    return Err(PairError::OffsetAcrossSectors(node.to_string()));
+                }
+                let c = cp
+                    .positions
+                    .get(name)
+                    .ok_or_else(|| PairError::NoPosition(node.to_string()))?;
+                let arm = [cp.point[0] - c[0], cp.point[1] - c[1], cp.point[2] - c[2]];
+                // e_j × arm for a unit rotation about axis j.
+                directions[3] = [0.0, -arm[2], arm[1]];
+                directions[4] = [arm[2], 0.0, -arm[0]];
+                directions[5] = [-arm[1], arm[0], 0.0];
+            }
+            for (row, g) in rows.iter().zip(&directions) {
                 if let Some(row) = row {
                     for c in 0..3 {
-                        for j in 0..self.n {
-                            target[(c, j)] += sign * r[c][axis] * row[j];
+                        let w = sign * (r[c][0] * g[0] + r[c][1] * g[1] + r[c][2] * g[2]);
+                        if w != 0.0 {
+                            for j in 0..self.n {
+                                target[(c, j)] += w * row[j];
+                            }
                         }
                     }
                 }
@@ -1099,7 +1170,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
                 }
             }
             let n = lm.len();
-            let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
+            let mut nodes: HashMap<String, [Option<Vec<f64>>; 6]> = HashMap::new();
             for (i, label) in lm.iter().enumerate() {
                 let (node, axis) = split_dof(label).expect("checked by read_matrix");
                 let mut row = vec![0.0; n];
@@ -1128,7 +1199,7 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             );
             let (f, z) = read_modes(&mp)?;
             let shapes = read_shapes(&sp, f.len())?;
-            let mut nodes: HashMap<String, [Option<Vec<f64>>; 3]> = HashMap::new();
+            let mut nodes: HashMap<String, [Option<Vec<f64>>; 6]> = HashMap::new();
             for ((node, axis), v) in shapes {
                 nodes.entry(node).or_default()[axis] = Some(v);
             }
@@ -1242,21 +1313,52 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
                     _ => unreachable!(),
                 });
             }
-            let (map, next) = kin.pair_map(&a, &b, &frame).map_err(|node| {
-                let what = if structure.is_modal() {
-                    "has no mode shape"
-                } else {
-                    "is not a node of the lumped model"
-                };
-                match &where_ {
-                    Error::Parse { path, line, .. } => Error::parse(
-                        path,
-                        *line,
-                        format!("element {}: contact node `{node}` {what}", e.id),
-                    ),
-                    _ => unreachable!(),
+            let point = match c.film_origin_m {
+                Some(o) => {
+                    let (x, y) = e.position_m.ok_or_else(|| {
+                        Error::parse(
+                            &ep,
+                            e.line,
+                            "`film_origin_m` places every element at its `x_m`, `y_m`: the \
+                             element table needs both columns (the table of `asperity elements`)",
+                        )
+                    })?;
+                    let [t1, t2, _] = frame;
+                    Some(ContactPoint {
+                        point: std::array::from_fn(|i| o[i] + x * t1[i] + y * t2[i]),
+                        positions: &file.nodes,
+                    })
                 }
-            })?;
+                None => None,
+            };
+            let (map, next) = kin
+                .pair_map(&a, &b, &frame, point.as_ref())
+                .map_err(|err| {
+                    let message = match err {
+                        PairError::Unknown(node) => format!(
+                            "contact node `{node}` {}",
+                            if structure.is_modal() {
+                                "has no mode shape"
+                            } else {
+                                "is not a node of the lumped model"
+                            }
+                        ),
+                        PairError::NoPosition(node) => format!(
+                            "contact node `{node}` rotates and the element acts at its own point \
+                             (`film_origin_m`): give the node's position in [nodes]"
+                        ),
+                        PairError::OffsetAcrossSectors(node) => format!(
+                            "contact node `{node}`: an element offset from a rotating node of \
+                             the next sector is not supported (leave out `film_origin_m`)"
+                        ),
+                    };
+                    match &where_ {
+                        Error::Parse { path, line, .. } => {
+                            Error::parse(path, *line, format!("element {}: {message}", e.id))
+                        }
+                        _ => unreachable!(),
+                    }
+                })?;
             let el = contact::element_for(c.law, e)
                 .map_err(|err| Error::parse(&ep, e.line, err.to_string()))?;
             attach_pair(
@@ -1286,18 +1388,23 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
         let norm = j.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
         let d = j.direction.map(|v| v / norm);
         let frame = [d, [0.0; 3], [0.0; 3]];
-        let (map, next) = kin.pair_map(&j.node_a, &j.node_b, &frame).map_err(|node| {
-            let what = if structure.is_modal() {
-                "has no mode shape"
-            } else {
-                "is not a node of the lumped model"
-            };
-            Error::parse(
-                path,
-                key_line(&text, if node == j.node_a { "node_a" } else { "node_b" }),
-                format!("joint {}: node `{node}` {what}", ji + 1),
-            )
-        })?;
+        let (map, next) = kin
+            .pair_map(&j.node_a, &j.node_b, &frame, None)
+            .map_err(|err| {
+                let (PairError::Unknown(node)
+                | PairError::NoPosition(node)
+                | PairError::OffsetAcrossSectors(node)) = err;
+                let what = if structure.is_modal() {
+                    "has no mode shape"
+                } else {
+                    "is not a node of the lumped model"
+                };
+                Error::parse(
+                    path,
+                    key_line(&text, if node == j.node_a { "node_a" } else { "node_b" }),
+                    format!("joint {}: node `{node}` {what}", ji + 1),
+                )
+            })?;
         let el = j.element().expect("validated by parse");
         let label = format!("joint {}", ji + 1);
         let first_row = |m: DMatrix<f64>| m.rows(0, 1).into_owned();

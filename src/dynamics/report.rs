@@ -260,8 +260,8 @@ pub fn summarise(
 }
 
 /// The columns of one level, named as in its CSV: `frequency_Hz`; per response DOF and retained
-/// harmonic `k` the amplitude `<dof>_h<k>_amplitude_m` (m) and phase `<dof>_h<k>_phase_rad` of
-/// `a − i·b` (or `<dof>_h0_mean_m`); then `dissipated_energy_J` (J per cycle, summed over the
+/// harmonic `k` the amplitude `<dof>_h<k>_amplitude_m` (m; `_rad` for a rotation `node.rx|ry|rz`)
+/// and phase `<dof>_h<k>_phase_rad` of `a − i·b` (or `<dof>_h0_mean_m`); then `dissipated_energy_J` (J per cycle, summed over the
 /// elements), the element-averaged `stick_fraction`, `slip_fraction`, `separation_fraction`,
 /// `newton_iterations`, `relative_residual` and `aft_periodicity_error` (the largest relative
 /// periodicity error of an element's AFT state at the point; above the AFT tolerance, 1e-12 by
@@ -289,14 +289,20 @@ pub fn level_columns(
                 .iter()
                 .map(|x| harmonic_of(system, x, row, k))
                 .collect();
+            // Rotational DOFs (`node.rx|ry|rz`) are in radians.
+            let unit = if [".rx", ".ry", ".rz"].iter().any(|r| label.ends_with(r)) {
+                "rad"
+            } else {
+                "m"
+            };
             if k == 0 {
                 cols.push((
-                    format!("{label}_h0_mean_m"),
+                    format!("{label}_h0_mean_{unit}"),
                     h.iter().map(|v| v.0).collect(),
                 ));
             } else {
                 cols.push((
-                    format!("{label}_h{k}_amplitude_m"),
+                    format!("{label}_h{k}_amplitude_{unit}"),
                     h.iter().map(|v| v.0).collect(),
                 ));
                 cols.push((
