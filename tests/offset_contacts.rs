@@ -139,3 +139,80 @@ fn block_rocking_on_offset_contacts_matches_the_hand_written_stiffness() {
     let e = load(&model).unwrap_err().to_string();
     assert!(e.contains("elements.csv:3") && e.contains("[nodes]"), "{e}");
 }
+
+/// Several contact frames on one interface (a node-pair file with each element's own
+/// `normal_*`, `tangent_*`): a block in a V-groove of faces inclined at ±α. With stuck Jenkins
+/// contacts the block's stiffness is, by hand, `k_x = Σ (KN·sin²α + KT·cos²α)`,
+/// `k_z = Σ (KN·cos²α + KT·sin²α)`, uncoupled by symmetry; the harmonic balance's first harmonic
+/// is that receptance within 1e-9. A frame column that is not a number is refused with the line.
+#[test]
+fn v_groove_with_a_frame_per_element_matches_the_hand_written_stiffness() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+    w("mass.csv", &format!("# unit: kg\nb.x,b.z\n{M},0\n0,{M}\n"));
+    w("damping.csv", "# unit: N*s/m\nb.x,b.z\n2.0,0\n0,2.0\n");
+    w("stiffness.csv", "# unit: N/m\nb.x,b.z\n1e5,0\n0,1e5\n");
+    let mut e = String::from(
+        "id,x_m,y_m,area_m2,pressure_Pa,N0_N,kn_N_per_m,E0_N_per_m,k,mu,Et_N_per_m,out_of_range\n",
+    );
+    for i in 1..=4 {
+        e += &format!("{i},0,0,1e-6,1e6,{N0},{KN},{KT},0.5,0.6,0,0\n");
+    }
+    w("elements.csv", &e);
+    let alpha: f64 = 0.5; // rad
+    let (sa, ca) = alpha.sin_cos();
+    // Elements 1, 2 on the left face (normal from the block into the face: (−sin α, 0, −cos α)),
+    // 3, 4 on the right face ((sin α, 0, −cos α)); tangents along each face.
+    let mut pairs = String::from(
+        "element_id,node_a,node_b,normal_x,normal_y,normal_z,tangent_x,tangent_y,tangent_z\n",
+    );
+    for (i, s) in [(1, -1.0), (2, -1.0), (3, 1.0), (4, 1.0)] {
+        pairs += &format!("{i},b,ground,{},0,{},{},0,{}\n", s * sa, -ca, ca, s * sa);
+    }
+    w("pairs.csv", &pairs);
+    let model = dir.path().join("model.toml");
+    std::fs::write(
+        &model,
+        "[linear]\nmass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"\n\n\
+         [[contact]]\nelements = \"elements.csv\"\nlaw = \"jenkins\"\npairs = \"pairs.csv\"\n\
+         normal = [0.0, 0.0, -1.0]\ntangent = [1.0, 0.0, 0.0]\n\n\
+         [excitation]\ndofs = [\"b.x\", \"b.z\"]\nweights = [1.0, 0.5]\nlevels_n = [1.0]\n\n\
+         [response]\ndofs = [\"b.x\"]\n\n\
+         [sweep]\nfrequency_start_hz = 100.0\nfrequency_end_hz = 200.0\nharmonics = 3\nodd_only = false\n",
+    )
+    .unwrap();
+    let loaded = load(&model).unwrap();
+    let sys = HbmSystem::new(
+        &loaded.structure,
+        Harmonics::new(3, false, Some(64)).unwrap(),
+        Excitation {
+            force: loaded.force.clone(),
+            harmonic: 1,
+            force_sin: None,
+        },
+        FormulationChoice::Coordinates,
+    )
+    .unwrap();
+    let kx = 1e5 + 4.0 * (KN * sa * sa + KT * ca * ca);
+    let kz = 1e5 + 4.0 * (KN * ca * ca + KT * sa * sa);
+    for f_hz in [500.0, 1500.0] {
+        let wv = 2.0 * PI * f_hz;
+        let level = 5.0;
+        let p = sys.solve(wv, level, None).unwrap();
+        assert!(p.converged);
+        let xh = sys.coordinates(&p);
+        let (ci, si) = sys.harmonics.index_of(1).unwrap();
+        let n = sys.harmonics.len();
+        for (d, k, f) in [(0, kx, level), (1, kz, 0.5 * level)] {
+            let exact = Complex::new(f, 0.0) / Complex::new(k - M * wv * wv, 2.0 * wv);
+            let got = Complex::new(xh[d * n + ci], -xh[d * n + si]);
+            assert!(
+                (got - exact).norm() < 1e-9 * exact.norm(),
+                "{f_hz} Hz, DOF {d}: {got} vs {exact}"
+            );
+        }
+    }
+    w("pairs.csv", &pairs.replace(&format!("3,b,ground,{sa}"), "3,b,ground,oops"));
+    let e = load(&model).unwrap_err().to_string();
+    assert!(e.contains("pairs.csv:4") && e.contains("normal_x"), "{e}");
+}

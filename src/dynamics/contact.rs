@@ -163,19 +163,56 @@ pub fn read_element_table(path: &Path) -> Result<Vec<TableElement>> {
     Ok(out)
 }
 
-/// Node pairs of the elements: `element_id,node_a,node_b` (`node_b` may be `ground`).
-pub fn read_pairs(path: &Path) -> Result<HashMap<u64, (String, String, usize)>> {
+/// One row of a node-pair file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairRow {
+    /// Node on the first side.
+    pub node_a: String,
+    /// Node on the second side (`ground` allowed).
+    pub node_b: String,
+    /// 1-based line in the file.
+    pub line: usize,
+    /// The element's own contact frame (rows `t1, t2, n`), where the file gives one.
+    pub frame: Option<[[f64; 3]; 3]>,
+}
+
+/// Columns of an element's own contact frame in a node-pair file (all six or none).
+pub const PAIR_FRAME_COLUMNS: [&str; 6] = [
+    "normal_x",
+    "normal_y",
+    "normal_z",
+    "tangent_x",
+    "tangent_y",
+    "tangent_z",
+];
+
+/// Node pairs of the elements: `element_id,node_a,node_b` (`node_b` may be `ground`),
+/// optionally followed by the element's own contact frame `normal_x,normal_y,normal_z,
+/// tangent_x,tangent_y,tangent_z` (structure axes; as `normal` and `tangent` of the model file):
+/// several frames on one interface, e.g. a curved or faceted contact face.
+pub fn read_pairs(path: &Path) -> Result<HashMap<u64, PairRow>> {
     let mut rdr = crate::core::input::csv_reader(path)?;
     let headers = rdr
         .headers()
         .map_err(|e| crate::core::input::csv_error(path, e))?
         .clone();
     let expect = ["element_id", "node_a", "node_b"];
-    if headers.len() < 3 || headers.iter().take(3).ne(expect.iter().copied()) {
+    let with_frame = headers.len() == 9
+        && headers
+            .iter()
+            .skip(3)
+            .eq(PAIR_FRAME_COLUMNS.iter().copied());
+    if headers.len() < 3
+        || headers.iter().take(3).ne(expect.iter().copied())
+        || (headers.len() > 3 && !with_frame)
+    {
         return Err(Error::parse(
             path,
             0,
-            "expected the header `element_id,node_a,node_b`",
+            format!(
+                "expected the header `element_id,node_a,node_b`, optionally followed by `,{}`",
+                PAIR_FRAME_COLUMNS.join(",")
+            ),
         ));
     }
     let mut out = HashMap::new();
@@ -193,10 +230,36 @@ pub fn read_pairs(path: &Path) -> Result<HashMap<u64, (String, String, usize)>> 
         if a.is_empty() || b.is_empty() {
             return Err(Error::parse(path, line, "empty node name"));
         }
-        if out
-            .insert(id, (a.to_string(), b.to_string(), line))
-            .is_some()
-        {
+        let frame = if with_frame {
+            let mut v = [0.0; 6];
+            for (k, name) in PAIR_FRAME_COLUMNS.iter().enumerate() {
+                let s = rec.get(3 + k).unwrap_or("");
+                v[k] = s
+                    .parse()
+                    .ok()
+                    .filter(|x: &f64| x.is_finite())
+                    .ok_or_else(|| {
+                        Error::parse(
+                            path,
+                            line,
+                            format!("`{name}` = `{s}` is not a finite number"),
+                        )
+                    })?;
+            }
+            Some(
+                contact_frame([v[0], v[1], v[2]], [v[3], v[4], v[5]])
+                    .map_err(|e| Error::parse(path, line, e.to_string()))?,
+            )
+        } else {
+            None
+        };
+        let row = PairRow {
+            node_a: a.to_string(),
+            node_b: b.to_string(),
+            line,
+            frame,
+        };
+        if out.insert(id, row).is_some() {
             return Err(Error::parse(
                 path,
                 line,

@@ -1280,21 +1280,27 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             None => None,
         };
         for e in &table {
-            let (a, b, where_) = match &pairs {
+            let (a, b, where_, frame) = match &pairs {
                 Some((pp, map)) => {
-                    let (a, b, line) = map.get(&e.id).ok_or_else(|| {
+                    let row = map.get(&e.id).ok_or_else(|| {
                         Error::parse(
                             &ep,
                             e.line,
                             format!("element {} has no row in {}", e.id, pp.display()),
                         )
                     })?;
-                    (a.clone(), b.clone(), Error::parse(pp, *line, ""))
+                    (
+                        row.node_a.clone(),
+                        row.node_b.clone(),
+                        Error::parse(pp, row.line, ""),
+                        row.frame.unwrap_or(frame),
+                    )
                 }
                 None => (
                     c.node_a.clone().expect("validated"),
                     c.node_b.clone().expect("validated"),
                     Error::parse(&ep, e.line, ""),
+                    frame,
                 ),
             };
             if a == b {
