@@ -137,7 +137,7 @@ fn beam_reduction_is_exact_with_every_mode_and_converges_from_above() {
         "every mode kept: reduced off the full model by {worst:.2e}"
     );
     // Fewer modes: upper bounds on the first four frequencies, decreasing towards the full ones.
-    let mut previous = vec![f64::INFINITY; 4];
+    let mut previous = [f64::INFINITY; 4];
     for modes in [0, 1, 2, 4, 8, 16] {
         let r = reduce(
             &k,
@@ -179,37 +179,161 @@ fn write(path: &Path, text: &str) {
     std::fs::write(path, text).unwrap();
 }
 
+/// The lower triangle (the Matrix Market convention) of a symmetric matrix, in %.17e.
+fn matrix_market(a: &SparseMatrix) -> String {
+    let d = a.to_dense();
+    let mut rows = Vec::new();
+    for j in 0..a.ncols {
+        for i in j..a.nrows {
+            if d[(i, j)] != 0.0 {
+                rows.push(format!("{} {} {:.17e}", i + 1, j + 1, d[(i, j)]));
+            }
+        }
+    }
+    format!(
+        "%%MatrixMarket matrix coordinate real symmetric\n% test\n{} {} {}\n{}\n",
+        a.nrows,
+        a.ncols,
+        rows.len(),
+        rows.join("\n")
+    )
+}
+
+/// DOF map of the beam of `n` elements: node j+1 carries w (z, direction 3) and θ (about y, 5).
+fn beam_dofs(n: usize) -> String {
+    (1..=n)
+        .flat_map(|j| [format!("{}.3", j + 1), format!("{}.5", j + 1)])
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n"
+}
+
+#[test]
+fn model_file_reduces_an_fe_model_and_response_gives_the_static_tip_compliance() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 40;
+    let (k, m) = eb_cantilever(n, EI, RHO_A, LENGTH);
+    write(&dir.path().join("k.mtx"), &matrix_market(&k));
+    write(&dir.path().join("m.mtx"), &matrix_market(&m));
+    write(&dir.path().join("beam.dof"), &beam_dofs(n));
+    let (alpha, beta) = (2.0, 1e-5);
+    let tip = n + 1;
+    let model = dir.path().join("model.toml");
+    write(
+        &model,
+        &format!(
+            "[linear]\nfe_stiffness = \"k.mtx\"\nfe_mass = \"m.mtx\"\nfe_dofs = \"beam.dof\"\n\
+             interface_nodes = [{tip}]\nfixed_interface_modes = 10\n\
+             rayleigh_alpha_per_s = {alpha}\nrayleigh_beta_s = {beta}\n\n\
+             [excitation]\ndofs = [\"n{tip}.z\"]\nlevels_n = [1.0]\n\n\
+             [response]\ndofs = [\"n{tip}.z\"]\n\n\
+             [sweep]\nfrequency_start_hz = 1.0\nfrequency_end_hz = 2.0\npoints = 3\nharmonics = 1\n\
+             odd_only = true\n"
+        ),
+    );
+    let loaded = asperity::dynamics::model_file::load(&model).unwrap();
+    let s = &loaded.structure;
+    assert_eq!(s.labels[..2], [format!("n{tip}.z"), format!("n{tip}.ry")]);
+    assert_eq!(s.labels[2], "cb_mode_1");
+    assert_eq!(s.n(), 12);
+    // Rayleigh damping on the reduced model: modal damping ζ = α/(2ω) + β·ω/2 of mode 1.
+    let (w2, shapes) = undamped_modes(&s.mass, &s.stiffness).unwrap();
+    let w = w2[0].sqrt();
+    let zeta = (shapes[0].transpose() * &s.damping * &shapes[0])[(0, 0)] / (2.0 * w);
+    let expected = alpha / (2.0 * w) + beta * w / 2.0;
+    assert!(
+        (zeta / expected - 1.0).abs() < 1e-10,
+        "ζ {zeta} vs {expected}"
+    );
+    let f1 = w / (2.0 * PI);
+    let eb = eb_frequency_hz(clamped_free_roots(1)[0]);
+    assert!(
+        (f1 / eb - 1.0).abs() < 1e-5,
+        "{f1} Hz vs Euler–Bernoulli {eb} Hz"
+    );
+    // A bad interface node is refused with the DOF map's name.
+    write(
+        &dir.path().join("bad.toml"),
+        &std::fs::read_to_string(&model)
+            .unwrap()
+            .replace(&format!("[{tip}]"), "[1]"),
+    );
+    let e = asperity::dynamics::model_file::load(&dir.path().join("bad.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("beam.dof") && e.contains("node 1"), "{e}");
+
+    // End to end: the tip's response to 1 N at 1–2 Hz (f1 = 52.4 Hz) against the full
+    // (unreduced) beam's harmonic solution `(K − ω²M + iωC)·u = f`, and near the static
+    // compliance L³/(3EI) (dynamic amplification ≈ 1/(1 − (f/f1)²) ≤ 1.0015).
+    let out = dir.path().join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args([
+            "response",
+            model.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("response_level_1.csv")).unwrap();
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|h| h.starts_with(&format!("n{tip}.z_h1_amplitude")))
+        .unwrap_or_else(|| panic!("no amplitude column in {header:?}"));
+    let fcol = header.iter().position(|h| *h == "frequency_Hz").unwrap();
+    let (kd, md) = (k.to_dense(), m.to_dense());
+    let cd = &md * alpha + &kd * beta;
+    let nd = kd.nrows();
+    let full_amplitude = |f: f64| {
+        let w = 2.0 * PI * f;
+        let d = &kd - &md * (w * w);
+        let mut a = nalgebra::DMatrix::zeros(2 * nd, 2 * nd);
+        a.view_mut((0, 0), (nd, nd)).copy_from(&d);
+        a.view_mut((nd, nd), (nd, nd)).copy_from(&d);
+        a.view_mut((0, nd), (nd, nd)).copy_from(&(&cd * -w));
+        a.view_mut((nd, 0), (nd, nd)).copy_from(&(&cd * w));
+        let mut rhs = nalgebra::DVector::zeros(2 * nd);
+        rhs[2 * n - 2] = 1.0;
+        let u = a.lu().solve(&rhs).unwrap();
+        u[2 * n - 2].hypot(u[nd + 2 * n - 2])
+    };
+    let compliance = LENGTH.powi(3) / (3.0 * EI);
+    let mut rows = 0;
+    for l in lines {
+        let cells: Vec<&str> = l.split(',').collect();
+        let a: f64 = cells[col].parse().unwrap();
+        let f: f64 = cells[fcol].parse().unwrap();
+        let full = full_amplitude(f);
+        println!("{f:.3} Hz: tip {a:.6e} m, full model {full:.6e} m, L³/(3EI) {compliance:.6e} m");
+        assert!(
+            (a / full - 1.0).abs() < 1e-6,
+            "{f} Hz: reduced {a} vs full {full}"
+        );
+        assert!(
+            (1.0..1.002).contains(&(a / compliance)),
+            "{f} Hz: {a} vs {compliance}"
+        );
+        rows += 1;
+    }
+    assert!(rows >= 3);
+}
+
 #[test]
 fn matrix_market_files_round_trip_and_errors_name_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     let n = 6;
     let (k, m) = eb_cantilever(n, EI, RHO_A, LENGTH);
-    // Write the lower triangle (the Matrix Market convention) of K and M, in %.17e.
-    let mm = |a: &SparseMatrix| {
-        let d = a.to_dense();
-        let mut rows = Vec::new();
-        for j in 0..a.ncols {
-            for i in j..a.nrows {
-                if d[(i, j)] != 0.0 {
-                    rows.push(format!("{} {} {:.17e}", i + 1, j + 1, d[(i, j)]));
-                }
-            }
-        }
-        format!(
-            "%%MatrixMarket matrix coordinate real symmetric\n% test\n{} {} {}\n{}\n",
-            a.nrows,
-            a.ncols,
-            rows.len(),
-            rows.join("\n")
-        )
-    };
     let (kp, mp, dp) = (
         dir.path().join("k.mtx"),
         dir.path().join("m.mtx"),
         dir.path().join("beam.dof"),
     );
-    write(&kp, &mm(&k));
-    write(&mp, &mm(&m));
+    write(&kp, &matrix_market(&k));
+    write(&mp, &matrix_market(&m));
     let dofs: Vec<String> = (1..=n)
         .flat_map(|j| [format!("{}.3", j + 1), format!("{}.5", j + 1)])
         .collect();
@@ -421,4 +545,45 @@ fn calculix_cantilever_reduced_on_its_tip_matches_ccx_and_euler_bernoulli() {
             );
         }
     }
+
+    // End to end: `asperity response` on the CalculiX export, reduced on the tip face, forced
+    // at a tip node along z with light Rayleigh damping (ζ1 = β·ω1/2 = 1.6e-3): the resonance
+    // peak sits at ccx's first frequency (the damped peak is lower by ζ² ≈ 3e-6; limit 1e-4).
+    let model = dir.path().join("model.toml");
+    let corner = tip[0];
+    std::fs::write(
+        &model,
+        format!(
+            "[linear]\ncalculix = \"cantilever_matrices\"\ninterface_nodes = {tip:?}\n\
+             fixed_interface_modes = 30\nrayleigh_beta_s = 1.0e-5\n\n\
+             [excitation]\ndofs = [\"n{corner}.z\"]\nlevels_n = [1.0]\n\n\
+             [response]\ndofs = [\"n{corner}.z\"]\n\n\
+             [sweep]\nfrequency_start_hz = 45.0\nfrequency_end_hz = 60.0\npoints = 60\n\
+             harmonics = 1\nodd_only = true\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args([
+            "response",
+            model.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The peak as the run locates it (interpolated between the sweep's points).
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("response.json")).unwrap()).unwrap();
+    let f_peak = json["summary"]["levels"][0]["peak_frequency_Hz"]
+        .as_f64()
+        .unwrap();
+    let err = (f_peak - reference[0]).abs() / reference[0];
+    println!(
+        "response peak at {f_peak:.4} Hz, ccx f1 {:.4} Hz, rel {err:.1e}",
+        reference[0]
+    );
+    assert!(err < 1e-4, "peak at {f_peak} Hz vs ccx {} Hz", reference[0]);
 }

@@ -139,6 +139,10 @@ fn symmetric_part(a: &DMatrix<f64>) -> DMatrix<f64> {
     (a + a.transpose()) * 0.5
 }
 
+/// Eigenvalues λ (ascending), mass-normalised shapes Φ (columns), relative eigen-residuals and
+/// iterations of a fixed-interface eigen-solve.
+type Modes = (Vec<f64>, Mat<f64>, Vec<f64>, usize);
+
 /// Fixed-interface modes: the lowest `m` eigenpairs of `K·φ = λ·M·φ` by subspace iteration
 /// with the factorisation `llt` of `K` (shift σ = 0). Returns `(λ, Φ mass-normalised,
 /// residuals, iterations)`.
@@ -147,7 +151,7 @@ fn lowest_modes(
     m: &SparseColMat<usize, f64>,
     llt: &faer::sparse::linalg::solvers::Llt<usize, f64>,
     settings: &ReductionSettings,
-) -> Result<(Vec<f64>, Mat<f64>, Vec<f64>, usize)> {
+) -> Result<Modes> {
     let n = k.nrows();
     let want = settings.modes;
     let p = (2 * want).max(want + 8).min(n);
@@ -253,7 +257,7 @@ fn all_modes_dense(
     k: &SparseColMat<usize, f64>,
     m: &SparseColMat<usize, f64>,
     want: usize,
-) -> Result<(Vec<f64>, Mat<f64>, Vec<f64>, usize)> {
+) -> Result<Modes> {
     let n = k.nrows();
     let dense = |a: &SparseColMat<usize, f64>| {
         let d = a.to_dense();
@@ -324,7 +328,7 @@ pub fn reduce(
             format!("{} modes asked, the interior has {ni} DOFs", settings.modes),
         ));
     }
-    if !(settings.tolerance > 0.0) || settings.max_iterations == 0 {
+    if settings.tolerance.is_nan() || settings.tolerance <= 0.0 || settings.max_iterations == 0 {
         return Err(Error::param(
             "tolerance",
             "tolerance must be > 0 and max_iterations ≥ 1",
