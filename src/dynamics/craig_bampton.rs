@@ -115,6 +115,14 @@ fn split(a: &SparseMatrix, parts: &[Part], nb: usize, ni: usize, name: &str) -> 
     Ok(Blocks { ii, ib, bb })
 }
 
+fn overflow() -> Error {
+    Error::Data(
+        "Craig–Bampton: the matrices overflow (non-finite values in the reduction): check the \
+         units and magnitudes of K and M"
+            .into(),
+    )
+}
+
 /// `A·X` for sparse `A` and dense `X`.
 fn sp_mul(a: &SparseColMat<usize, f64>, x: &Mat<f64>) -> Mat<f64> {
     let mut y = Mat::<f64>::zeros(a.nrows(), x.ncols());
@@ -182,6 +190,9 @@ fn lowest_modes(
         let my = sp_mul(m, &y);
         let kh = symmetric_part(&at_b(&y, &ky));
         let mh = symmetric_part(&at_b(&y, &my));
+        if !kh.iter().chain(mh.iter()).all(|v| v.is_finite()) {
+            return Err(overflow());
+        }
         let em = mh.symmetric_eigen();
         let dmax = em.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
         let keep: Vec<usize> = (0..em.eigenvalues.len())
@@ -264,6 +275,9 @@ fn all_modes_dense(
         DMatrix::from_fn(n, n, |i, j| d[(i, j)])
     };
     let (kd, md) = (dense(k), dense(m));
+    if !kd.iter().chain(md.iter()).all(|v| v.is_finite()) {
+        return Err(overflow());
+    }
     let (lambda, shapes) = crate::dynamics::model::undamped_modes(&md, &kd)
         .map_err(|e| Error::Data(format!("fixed-interface modes (dense): {e}")))?;
     if lambda[0] <= 0.0 {
@@ -299,6 +313,13 @@ pub fn reduce(
         return Err(Error::Data(format!(
             "Craig–Bampton: stiffness {}×{} and mass {}×{} must be square and of one size",
             stiffness.nrows, stiffness.ncols, mass.nrows, mass.ncols
+        )));
+    }
+    if n > stiffness.entries.len() {
+        // Refused before allocating per row: a positive definite K has every diagonal entry.
+        return Err(Error::Data(format!(
+            "Craig–Bampton: stiffness of {n} rows with {} entries: some rows are empty",
+            stiffness.entries.len()
         )));
     }
     let mut parts: Vec<Option<Part>> = vec![None; n];
@@ -355,6 +376,9 @@ pub fn reduce(
     // Static constraint modes Ψ = −K_II⁻¹·K_IB.
     let mut psi = Mat::<f64>::from_fn(ni, nb, |i, j| -k.ib[(i, j)]);
     llt.solve_in_place(psi.as_mut());
+    if !(0..nb).all(|j| psi.col(j).iter().all(|v| v.is_finite())) {
+        return Err(overflow());
+    }
     let (lambda, phi, residuals, iterations) = if settings.modes > 0 {
         lowest_modes(&k.ii, &m.ii, &llt, settings)?
     } else {

@@ -112,6 +112,7 @@ fn parse_err(path: &Path, line: usize, message: impl Into<String>) -> Error {
 }
 
 fn read_text(path: &Path) -> Result<String> {
+    crate::core::limits::check_file_size(path, crate::core::limits::MAX_TEXT_FILE_BYTES)?;
     std::fs::read_to_string(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -233,7 +234,6 @@ pub fn read_matrix_market(path: &Path) -> Result<SparseMatrix> {
                     ));
                 }
                 size = Some((v[0], v[1], v[2]));
-                entries.reserve(if symmetric { 2 * v[2] } else { v[2] });
             }
             Some((nr, nc, _)) => {
                 if tok.len() != 3 {
