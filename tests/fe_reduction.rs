@@ -1,15 +1,17 @@
-//! Craig–Bampton reduction (src/dynamics/craig_bampton.rs) and the FE matrix readers
-//! (src/dynamics/fe_matrices.rs).
+//! Craig–Bampton reduction (src/dynamics/craig_bampton.rs), the FE matrix readers
+//! (src/dynamics/fe_matrices.rs) and FE models in the model file of `asperity response`.
 //!
 //! - Closed form, no FE code: an Euler–Bernoulli cantilever of Hermite-cubic beam elements built
 //!   here. Its full eigen-solve matches the clamped–free beam's closed form to 1e-5 (40
-//!   elements; the error falls as h⁴; Rayleigh 1877;
-//!   roots of `cos β·cosh β = −1`); the reduced model with every interior mode kept reproduces
-//!   the full model's frequencies to 1e-8, and with fewer modes its frequencies are upper bounds
-//!   that converge monotonically (Rayleigh–Ritz).
+//!   elements, error falling as h⁴; roots of `cos β·cosh β = −1`, Rayleigh 1877); the reduced
+//!   model with every interior mode kept reproduces the full model's frequencies to 1e-8, and
+//!   with fewer modes its frequencies are upper bounds that converge monotonically
+//!   (Rayleigh–Ritz). Through the model file (Matrix Market) and `asperity response`, the tip's
+//!   response below resonance equals the full model's harmonic solution (1e-6).
 //! - CalculiX: the cantilever of scripts/fe (gmsh mesh, 20-node hexahedra) exported by ccx, read,
 //!   reduced on its tip face, against ccx's own `*FREQUENCY` solution of the same mesh (0.1 %)
-//!   and Euler–Bernoulli (1 % for the first three bending frequencies, slenderness L/h = 40).
+//!   and Euler–Bernoulli (1 % for the first three bending frequencies, slenderness L/h = 40);
+//!   `asperity response` on it puts the resonance peak at ccx's first frequency (1e-4).
 //!   Skipped when `gmsh` or `ccx` is missing, unless `ASPERITY_REQUIRE_DATA=1` (CI).
 
 use asperity::dynamics::craig_bampton::{reduce, ReductionSettings};
