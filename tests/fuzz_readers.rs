@@ -303,6 +303,35 @@ fn targets() -> Vec<Target> {
             },
         },
         Target {
+            name: "FE matrix (Matrix Market)",
+            file_name: "k.mtx",
+            seeds: vec![b"%%MatrixMarket matrix coordinate real symmetric\n% K\n3 3 5\n1 1 2.0\n2 1 -1.0\n2 2 2.0\n3 2 -1.0\n3 3 1.0\n".to_vec()],
+            extra: vec![],
+            read: |p| {
+                if let Ok(k) = asperity::dynamics::fe_matrices::read_matrix_market(p) {
+                    if k.nrows == k.ncols && (2..=64).contains(&k.nrows) {
+                        let m = asperity::dynamics::fe_matrices::SparseMatrix {
+                            nrows: k.nrows,
+                            ncols: k.ncols,
+                            entries: (0..k.nrows).map(|i| (i, i, 1.0)).collect(),
+                        };
+                        let _ = asperity::dynamics::craig_bampton::reduce(&k, &m, &[0], &Default::default());
+                    }
+                }
+            },
+        },
+        Target {
+            name: "FE DOF map (CalculiX .dof)",
+            file_name: "job.dof",
+            seeds: vec![b"5.1\n5.2\n5.3\n6.1\n6.2\n6.3\n".to_vec()],
+            extra: vec![],
+            read: |p| {
+                if let Ok(d) = asperity::dynamics::fe_matrices::read_dof_map(p) {
+                    let _ = asperity::dynamics::fe_matrices::read_calculix_matrix(p, d.len());
+                }
+            },
+        },
+        Target {
             name: "calibration config (TOML)",
             file_name: "c.toml",
             seeds: vec![file("calib/reference.toml")],

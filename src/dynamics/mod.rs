@@ -4,7 +4,8 @@
 //! Data flow, one module per concept:
 //!
 //! ```text
-//! model (linear part: lumped M, C, K or a reduced modal model; elements on node pairs)
+//! fe_matrices (K, M exported by an FE code) ──► craig_bampton (interface DOFs + modes)
+//!   ──► model (linear part: lumped M, C, K or a reduced modal model; elements on node pairs)
 //!   ──► cyclic (one sector of a cyclic structure: travelling-wave boundary conditions)
 //!   ──► crate::element (the laws, as time-discrete hysteretic elements)
 //!   ──► aft (harmonics ⇄ time, periodic state)
@@ -23,7 +24,9 @@ pub mod aft;
 pub mod condensation;
 pub mod contact;
 pub mod continuation;
+pub mod craig_bampton;
 pub mod cyclic;
+pub mod fe_matrices;
 pub mod hbm;
 pub mod loops;
 pub mod model;

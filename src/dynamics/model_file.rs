@@ -7,6 +7,13 @@
 //! stiffness = "stiffness.csv"   #   (rotations in rad), n rows
 //! # modes = "modes.csv"         # ... or a reduced modal model: mode,frequency_Hz,damping_ratio
 //! # shapes = "shapes.csv"       #   node,direction,mode_1_per_sqrt_kg,… (mass-normalised)
+//! # calculix = "fe/beam"        # ... or an FE model, Craig–Bampton reduced on load: a CalculiX
+//! #                             #   export fe/beam.sti, .mas, .dof (or fe_stiffness, fe_mass:
+//! #                             #   Matrix Market, with fe_dofs: node.direction per row)
+//! # interface_nodes = [5, 6]    #   FE nodes kept (all their DOFs), named n5, n6 below
+//! # fixed_interface_modes = 20  #   fixed-interface normal modes kept
+//! # rayleigh_alpha_per_s = 0.0  #   damping C = α·M + β·K (defaults 0)
+//! # rayleigh_beta_s = 1.0e-6
 //!
 //! # [nodes]                     # optional: positions (m) of rotating nodes that carry
 //! # damper = [0.0, 0.0, 0.01]   #   contact elements at offset points (`film_origin_m`)
@@ -106,6 +113,34 @@ pub struct LinearSection {
     pub modes: Option<PathBuf>,
     /// Mass-normalised mode shapes CSV: `node,direction,mode_1_per_sqrt_kg,…` (with `modes`).
     pub shapes: Option<PathBuf>,
+    /// FE model from a CalculiX matrix export: the job's path without extension (`<job>.sti`,
+    /// `<job>.mas`, `<job>.dof`), reduced by Craig–Bampton.
+    pub calculix: Option<PathBuf>,
+    /// FE model in Matrix Market files: stiffness (N/m), with `fe_mass` and `fe_dofs`.
+    pub fe_stiffness: Option<PathBuf>,
+    /// FE mass matrix, Matrix Market (kg).
+    pub fe_mass: Option<PathBuf>,
+    /// DOF map of the Matrix Market matrices: one `node.direction` line per row.
+    pub fe_dofs: Option<PathBuf>,
+    /// FE nodes kept by the reduction (all their DOFs): the nodes of contacts, excitation and
+    /// response, named `n<node>` in the rest of the model file.
+    pub interface_nodes: Option<Vec<u64>>,
+    /// Fixed-interface normal modes kept by the reduction.
+    pub fixed_interface_modes: Option<usize>,
+    /// Rayleigh damping of the FE model `C = α·M + β·K`: α (1/s; default 0).
+    pub rayleigh_alpha_per_s: Option<f64>,
+    /// Rayleigh damping β (s; default 0).
+    pub rayleigh_beta_s: Option<f64>,
+}
+
+impl LinearSection {
+    /// Is the structure an FE model to be reduced (`calculix` or Matrix Market files)?
+    pub fn is_fe(&self) -> bool {
+        self.calculix.is_some()
+            || self.fe_stiffness.is_some()
+            || self.fe_mass.is_some()
+            || self.fe_dofs.is_some()
+    }
 }
 
 /// `[[contact]]`: one element table and how its elements attach to the structure.
@@ -544,13 +579,60 @@ impl ModelFile {
         let l = &self.linear;
         let lumped = l.mass.is_some() || l.damping.is_some() || l.stiffness.is_some();
         let modal = l.modes.is_some() || l.shapes.is_some();
-        if lumped == modal
+        let fe = l.is_fe();
+        if usize::from(lumped) + usize::from(modal) + usize::from(fe) != 1
             || (lumped && (l.mass.is_none() || l.damping.is_none() || l.stiffness.is_none()))
             || (modal && (l.modes.is_none() || l.shapes.is_none()))
         {
             return Err(Error::param(
                 "linear.mass",
-                "give either mass, damping and stiffness (lumped) or modes and shapes (modal)",
+                "give either mass, damping and stiffness (lumped), modes and shapes (modal), or \
+                 an FE model (calculix, or fe_stiffness, fe_mass and fe_dofs)",
+            ));
+        }
+        if fe {
+            let mm = l.fe_stiffness.is_some() || l.fe_mass.is_some() || l.fe_dofs.is_some();
+            if l.calculix.is_some() == mm
+                || (mm && (l.fe_stiffness.is_none() || l.fe_mass.is_none() || l.fe_dofs.is_none()))
+            {
+                return Err(Error::param(
+                    "linear.calculix",
+                    "give either calculix (a CalculiX job) or fe_stiffness, fe_mass and fe_dofs \
+                     (Matrix Market)",
+                ));
+            }
+            if l.interface_nodes.as_ref().is_none_or(|v| v.is_empty()) {
+                return Err(Error::param(
+                    "linear.interface_nodes",
+                    "an FE model needs the interface nodes kept by the reduction",
+                ));
+            }
+            if l.fixed_interface_modes.is_none() {
+                return Err(Error::param(
+                    "linear.fixed_interface_modes",
+                    "an FE model needs the number of fixed-interface modes kept",
+                ));
+            }
+            for (key, v) in [
+                ("rayleigh_alpha_per_s", l.rayleigh_alpha_per_s),
+                ("rayleigh_beta_s", l.rayleigh_beta_s),
+            ] {
+                if v.is_some_and(|v| !(v >= 0.0 && v.is_finite())) {
+                    return Err(Error::param(
+                        format!("linear.{key}"),
+                        "must be finite and ≥ 0",
+                    ));
+                }
+            }
+        } else if l.interface_nodes.is_some()
+            || l.fixed_interface_modes.is_some()
+            || l.rayleigh_alpha_per_s.is_some()
+            || l.rayleigh_beta_s.is_some()
+        {
+            return Err(Error::param(
+                "linear.interface_nodes",
+                "interface_nodes, fixed_interface_modes and rayleigh_* belong to an FE model \
+                 (calculix or fe_stiffness)",
             ));
         }
         if let Some(c) = &self.cyclic {
@@ -796,6 +878,86 @@ fn split_dof(label: &str) -> Option<(&str, usize)> {
 /// The directions of a node's DOFs: translations x, y, z (m) and rotations rx, ry, rz (rad)
 /// about the structure's axes.
 const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+
+/// A reduced FE model: the structure, its node kinematics and the files read (role, path).
+type ReducedFe = (Structure, Kinematics, Vec<(String, PathBuf)>);
+
+/// The FE model of `[linear]` read, Craig–Bampton reduced on its interface nodes
+/// ([`crate::dynamics::craig_bampton`]) and damped by `C = α·M_r + β·K_r` (Rayleigh damping
+/// is preserved by the reduction: `Tᵀ·(α·M + β·K)·T`). The reduced coordinates are labelled
+/// `n<node>.x|y|z` (`.rx|ry|rz` for rotations) and `cb_mode_<j>`.
+fn reduce_fe_model(l: &LinearSection, base: &Path) -> Result<ReducedFe> {
+    use crate::dynamics::craig_bampton::{reduce, ReductionSettings};
+    use crate::dynamics::fe_matrices::{calculix_paths, read_calculix, read_matrix_market_pair};
+    let (fe, files, origin) = if let Some(job) = &l.calculix {
+        let job = base.join(job);
+        let [sti, mas, dof] = calculix_paths(&job);
+        let files = vec![
+            ("CalculiX stiffness".to_string(), sti),
+            ("CalculiX mass".to_string(), mas),
+            ("CalculiX DOF map".to_string(), dof.clone()),
+        ];
+        (read_calculix(&job)?, files, dof)
+    } else {
+        let (k, m, d) = (
+            base.join(l.fe_stiffness.as_ref().expect("validated")),
+            base.join(l.fe_mass.as_ref().expect("validated")),
+            base.join(l.fe_dofs.as_ref().expect("validated")),
+        );
+        let fe = read_matrix_market_pair(&k, &m, &d)?;
+        let files = vec![
+            ("FE stiffness".to_string(), k),
+            ("FE mass".to_string(), m),
+            ("FE DOF map".to_string(), d.clone()),
+        ];
+        (fe, files, d)
+    };
+    let nodes = l.interface_nodes.as_deref().expect("validated");
+    let boundary = fe
+        .rows_of_nodes(nodes)
+        .map_err(|e| Error::parse(&origin, 0, format!("`linear.interface_nodes`: {e}")))?;
+    let settings = ReductionSettings {
+        modes: l.fixed_interface_modes.expect("validated"),
+        ..Default::default()
+    };
+    let r = reduce(&fe.stiffness, &fe.mass, &boundary, &settings).map_err(|e| match e {
+        Error::InvalidParameter { name, message } => Error::param(
+            if name == "modes" {
+                "linear.fixed_interface_modes".to_string()
+            } else {
+                format!("linear.{name}")
+            },
+            message,
+        ),
+        o => o,
+    })?;
+    let nb = boundary.len();
+    let n = r.stiffness.nrows();
+    let mut labels = Vec::with_capacity(n);
+    let mut kin_nodes: HashMap<String, [Option<Vec<f64>>; 6]> = HashMap::new();
+    for (i, &row) in boundary.iter().enumerate() {
+        let d = fe.dofs[row];
+        let node = format!("n{}", d.node);
+        let axis = usize::from(d.direction) - 1;
+        labels.push(format!("{node}.{}", AXES[axis]));
+        let mut unit = vec![0.0; n];
+        unit[i] = 1.0;
+        kin_nodes.entry(node).or_default()[axis] = Some(unit);
+    }
+    labels.extend((1..=n - nb).map(|j| format!("cb_mode_{j}")));
+    let damping = &r.mass * l.rayleigh_alpha_per_s.unwrap_or(0.0)
+        + &r.stiffness * l.rayleigh_beta_s.unwrap_or(0.0);
+    let s = Structure::lumped(labels, r.mass, damping, r.stiffness)
+        .map_err(|e| Error::parse(&origin, 0, format!("the reduced model: {e}")))?;
+    Ok((
+        s,
+        Kinematics {
+            n,
+            nodes: kin_nodes,
+        },
+        files,
+    ))
+}
 
 /// Read a square matrix CSV: a `# unit: <unit>` line naming `unit`, a header of DOF labels,
 /// and one row per DOF.
@@ -1131,6 +1293,21 @@ pub fn referenced_files(path: &Path) -> Result<Vec<(String, PathBuf)>> {
             files.push((format!("{role} matrix"), base.join(p)));
         }
     }
+    if let Some(job) = &l.calculix {
+        let [sti, mas, dof] = crate::dynamics::fe_matrices::calculix_paths(&base.join(job));
+        files.push(("CalculiX stiffness".into(), sti));
+        files.push(("CalculiX mass".into(), mas));
+        files.push(("CalculiX DOF map".into(), dof));
+    }
+    for (role, p) in [
+        ("FE stiffness", &l.fe_stiffness),
+        ("FE mass", &l.fe_mass),
+        ("FE DOF map", &l.fe_dofs),
+    ] {
+        if let Some(p) = p {
+            files.push((role.to_string(), base.join(p)));
+        }
+    }
     for (ci, c) in file.contact.iter().enumerate() {
         files.push((
             format!("contact {} elements", ci + 1),
@@ -1192,6 +1369,10 @@ pub fn load(path: &Path) -> Result<LoadedModel> {
             inputs.push(("damping".into(), cp));
             inputs.push(("stiffness".into(), kp));
             (s, Kinematics { n, nodes })
+        } else if l.is_fe() {
+            let (s, kin, files) = reduce_fe_model(l, base)?;
+            inputs.extend(files);
+            (s, kin)
         } else {
             let (mp, sp) = (
                 resolve(l.modes.as_ref().expect("validated")),
