@@ -401,13 +401,14 @@ fn lugre_steady_sliding_is_the_stribeck_curve() {
     }
 }
 
-/// The oscillator `m·ẍ + c·ẋ + k·x + f(x) = level·cos ωt` with the rate-dependent element
-/// `joint(sample_rate)` against ground, solved by the harmonic balance (`harmonics`, `samples`
-/// per period, continued in level from a sixth of it) and by Newmark's average-acceleration
-/// integration with `samples` steps per period (the element's velocity then comes from the same
-/// sample interval); the first-harmonic amplitudes `(HBM, Newmark)` and the HBM samples.
+/// The oscillator `m·ẍ + c·ẋ + k·x + f(x, ẋ) = level·cos ωt` with the rate-dependent element
+/// `joint` against ground, solved by the harmonic balance (`harmonics`, `samples` per period,
+/// continued in level from a sixth of it; the element reads the harmonics' exact velocity) and
+/// by Newmark's average-acceleration integration with `samples` steps per period (the element
+/// reads the scheme's velocity); the first-harmonic amplitudes `(HBM, Newmark)` and the HBM
+/// samples. The same element serves every frequency: it has no sample rate of its own.
 fn rate_dependent_hbm_and_newmark(
-    joint: impl Fn(f64) -> Arc<dyn asperity::element::HystereticElement>,
+    joint: Arc<dyn asperity::element::HystereticElement>,
     f_hz: f64,
     level: f64,
     harmonics: usize,
@@ -423,12 +424,8 @@ fn rate_dependent_hbm_and_newmark(
         DMatrix::from_element(1, 1, k),
     )
     .unwrap();
-    s.attach(
-        "joint",
-        joint(w * samples as f64 / (2.0 * PI)),
-        DMatrix::from_element(1, 1, 1.0),
-    )
-    .unwrap();
+    s.attach("joint", joint, DMatrix::from_element(1, 1, 1.0))
+        .unwrap();
     let h = Harmonics::new(harmonics, false, Some(samples)).unwrap();
     let sys = HbmSystem::new(
         &s,
@@ -447,25 +444,17 @@ fn rate_dependent_hbm_and_newmark(
     (a_hbm, a_ti, t)
 }
 
-/// A mass on a spring rubbing on a LuGre contact, driven through stick and slip: the harmonic
-/// balance (H = 25, 1024 samples) and Newmark's average-acceleration integration (1024 steps per
-/// period, the element's velocity from the same sample interval) agree on the first harmonic
-/// within 1e-4.
+/// A mass on a spring rubbing on a LuGre contact, driven through stick and slip at two
+/// frequencies with the same element: the harmonic balance (H = 25, 1024 samples, exact
+/// velocities and increment durations) and Newmark's average-acceleration integration (1024
+/// steps per period, the scheme's velocities) agree on the first harmonic within 1e-4.
 #[test]
 fn lugre_harmonic_balance_matches_newmark() {
+    let joint: Arc<dyn asperity::element::HystereticElement> = Arc::new(LuGre {
+        params: lugre_params(),
+    });
     for (f_hz, level) in [(7.0, 6.0), (12.0, 8.0)] {
-        let (a_hbm, a_ti, _) = rate_dependent_hbm_and_newmark(
-            |rate| {
-                Arc::new(LuGre {
-                    params: lugre_params(),
-                    sample_rate: rate,
-                })
-            },
-            f_hz,
-            level,
-            25,
-            1024,
-        );
+        let (a_hbm, a_ti, _) = rate_dependent_hbm_and_newmark(joint.clone(), f_hz, level, 25, 1024);
         // Gross sliding for part of the cycle: the amplitude is many presliding lengths Fs/σ0.
         let presliding = 1.5 / lugre_params().sigma0;
         assert!(a_hbm > 5.0 * presliding, "{f_hz} Hz: amplitude {a_hbm}");
@@ -475,32 +464,26 @@ fn lugre_harmonic_balance_matches_newmark() {
     }
 }
 
-/// A mass on a spring striking a Hunt–Crossley stop across a gap (a vibro-impact oscillator):
-/// the harmonic balance and Newmark agree on the first harmonic within 1e-4, with the stop
-/// closing and opening every cycle.
+/// A mass on a spring striking a Hunt–Crossley stop across a gap (a vibro-impact oscillator)
+/// at two frequencies with the same element: the harmonic balance (exact approach rates) and
+/// Newmark (the scheme's) agree on the first harmonic within 1e-4, with the stop closing and
+/// opening every cycle.
 #[test]
 fn hunt_crossley_harmonic_balance_matches_newmark() {
     use asperity::element::HuntCrossley;
     let gap = 1e-3;
     let chi = damping_factor(0.7, 0.05).unwrap();
+    let joint: Arc<dyn asperity::element::HystereticElement> = Arc::new(HuntCrossley {
+        params: HuntCrossleyParams {
+            stiffness: 2e5,
+            exponent: 1.5,
+            damping_factor: chi,
+            gap,
+        },
+    });
     for (f_hz, level) in [(7.0, 5.0), (12.0, 4.0)] {
-        let (a_hbm, a_ti, x) = rate_dependent_hbm_and_newmark(
-            |rate| {
-                Arc::new(HuntCrossley {
-                    params: HuntCrossleyParams {
-                        stiffness: 2e5,
-                        exponent: 1.5,
-                        damping_factor: chi,
-                        gap,
-                    },
-                    sample_rate: rate,
-                })
-            },
-            f_hz,
-            level,
-            HC_HARMONICS,
-            2048,
-        );
+        let (a_hbm, a_ti, x) =
+            rate_dependent_hbm_and_newmark(joint.clone(), f_hz, level, HC_HARMONICS, 2048);
         let hi = x.iter().fold(f64::MIN, |a, &b| a.max(b));
         assert!(hi > gap * 1.05, "{f_hz} Hz: the stop is not struck ({hi})");
         let err = (a_hbm - a_ti).abs() / a_ti;
@@ -611,7 +594,7 @@ fn thin_layer_cycle_is_periodic_whichever_way_it_reaches_the_first_sample() {
         let mut u = vec![0.0; h.len()];
         u[1] = a * phase.sin();
         u[2] = a * phase.cos();
-        let r = evaluate(&l, &h, &u, false, &AftSettings::default());
+        let r = evaluate(&l, &h, &u, 1.0, false, &AftSettings::default());
         assert!(
             r.periodic && r.periodicity_error < 1e-12,
             "phase {phase}: error {:.2e} after {} periods",

@@ -950,7 +950,12 @@ fn run_sensitive_rate<'a>(
     let mut s = arena.alloc_slice_copy(p.s0);
     let mut s1 = zeros(arena, m);
     let f1 = zeros(arena, d);
-    let (ua, ub, va, vb) = (zeros(arena, d), zeros(arena, d), zeros(arena, d), zeros(arena, d));
+    let (ua, ub, va, vb) = (
+        zeros(arena, d),
+        zeros(arena, d),
+        zeros(arena, d),
+        zeros(arena, d),
+    );
     // Phase-derivative synthesis rows of the step's two samples, scaled by ω.
     let (wa, wb) = (zeros(arena, len), zeros(arena, len));
     let no_state = zeros(arena, m.max(d) * m);
@@ -1737,10 +1742,7 @@ fn element_jacobian(
             let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
             if with_omega {
                 // T_ω = ∂f_i/∂ω + ∂f_i/∂s0·ds0/dω, analysed into the harmonics.
-                let t_omega = row[nu + m]
-                    + (0..m)
-                        .map(|k| row[nu + k] * ds0_omega[k])
-                        .sum::<f64>();
+                let t_omega = row[nu + m] + (0..m).map(|k| row[nu + k] * ds0_omega[k]).sum::<f64>();
                 for hc in 0..len {
                     d_omega[c * len + hc] += harmonics.analysis[hc * n + i] * t_omega;
                 }
@@ -1818,8 +1820,7 @@ pub fn cycle_summary(
 ) -> ElementCycle {
     let (m, d, n) = (element.state_len(), element.dofs(), harmonics.n_time());
     with_workspace(m, d, |arena, part| {
-        let mut cycle =
-            periodic_cycle(element, harmonics, u, omega, None, settings, arena, part);
+        let mut cycle = periodic_cycle(element, harmonics, u, omega, None, settings, arena, part);
         let mut counts = [0usize; 3];
         run_plain(element, n, &mut cycle.period, arena, |_, s, uu, f| {
             let k = match element.status(s, uu, f) {
@@ -1880,7 +1881,15 @@ mod tests {
         for a in [1.0, 3.0] {
             let forces = |n| {
                 let h = Harmonics::new(3, true, Some(n)).unwrap();
-                evaluate(&gl, &h, &[0.0, a, 0.0, 0.0], W, false, &AftSettings::default()).forces
+                evaluate(
+                    &gl,
+                    &h,
+                    &[0.0, a, 0.0, 0.0],
+                    W,
+                    false,
+                    &AftSettings::default(),
+                )
+                .forces
             };
             let (coarse, fine) = (forces(64), forces(4096));
             for c in 0..2 {
@@ -2082,7 +2091,10 @@ mod tests {
             [("hunt-crossley", &hc, 1e-4), ("lugre", &lugre, 4e-5)];
         for (name, el, a) in cases {
             let u = shape(a);
-            for omega in [2.0 * std::f64::consts::PI * 20.0, 2.0 * std::f64::consts::PI * 90.0] {
+            for omega in [
+                2.0 * std::f64::consts::PI * 20.0,
+                2.0 * std::f64::consts::PI * 90.0,
+            ] {
                 let r = evaluate(el, &h, &u, omega, true, &s);
                 assert!(r.periodic, "{name}: not periodic {}", r.periodicity_error);
                 assert_eq!(r.d_omega.len(), len, "{name}");

@@ -340,16 +340,9 @@ mod tests {
                 v0: &[0.0],
                 v1: &[v1],
             };
-            let w = check_rate_partials(
-                &el,
-                &[z0],
-                &[u0],
-                &[u1],
-                kin,
-                (1e-11, 1e-6, 1e-8),
-                &[1e-11],
-            )
-            .unwrap();
+            let w =
+                check_rate_partials(&el, &[z0], &[u0], &[u1], kin, (1e-11, 1e-6, 1e-8), &[1e-11])
+                    .unwrap();
             // The Δt column goes through the Stribeck decay exp(−(v̄/vs)²) far out in its
             // tail: central differences resolve it to about 1e-6 of the column.
             assert!(w < 1e-5, "{z0}, {u0} → {u1} at {v1}: {w}");
@@ -376,7 +369,11 @@ mod tests {
                 f = r.force;
             }
             assert!((one.z1 - z).abs() < 1e-15, "{v}: {} vs {z}", one.z1);
-            assert!((one.force - f).abs() < 1e-9 * f.abs(), "{v}: {} vs {f}", one.force);
+            assert!(
+                (one.force - f).abs() < 1e-9 * f.abs(),
+                "{v}: {} vs {f}",
+                one.force
+            );
         }
         let qs = p.increment(1e-6, 3e-6, f64::INFINITY, 0.0);
         let slow = p.increment(1e-6, 3e-6, 1e9, 0.0);
