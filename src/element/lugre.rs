@@ -147,8 +147,14 @@ impl LuGreParams {
         let a = self.sigma0 * du.abs() / g;
         let e = (-a).exp();
         let z_inf = s * g / self.sigma0;
-        let z1 = z_inf + (z0 - z_inf) * e;
-        let dz_ddu_at_v = -(z0 - z_inf) * e * self.sigma0 * s / g;
+        // z1 = z∞ + (z0 − z∞)·e^{−a}, written as a change of z0 through `expm1`: in presliding
+        // (a ≪ 1) the other form loses the increment to the rounding of z∞ = ±g/σ0.
+        let z1 = z0 - (z_inf - z0) * (-a).exp_m1();
+        // At Δu = 0 the update is continuous with one-sided slopes `1 ∓ σ0·z0/g`; the
+        // derivatives take the forward one (at rest the bristles load like a spring σ0, the
+        // harmonic balance's start from zero needs that tangent).
+        let sd = if du < 0.0 { -1.0 } else { 1.0 };
+        let dz_ddu_at_v = -(z0 - sd * g / self.sigma0) * e * self.sigma0 * sd / g;
         let dz_dvbar = (1.0 - e) * s * dg / self.sigma0
             + (z0 - z_inf) * e * self.sigma0 * du.abs() * dg / (g * g);
         let (dz_ddu, dz_ddt) = if dt.is_finite() {
