@@ -43,9 +43,29 @@
 //! `u(θ*)` and on from there (`Reversal`). Every sub-step is then monotone in the reversing
 //! component, and the state at every sample exact (Jenkins: exactly; Valanis: to the rounding
 //! of its closed-form branch). Elements without state (springs, the difference-quotient damper
-//! of an identification) and rate-dependent elements, which read their velocity from a whole
-//! sample interval (LuGre, [`HystereticElement::rate_dependent`]), are stepped from sample to
-//! sample.
+//! of an identification) and rate-dependent elements (below) are stepped from sample to sample.
+//!
+//! # Rate-dependent elements
+//!
+//! A rate-dependent law ([`HystereticElement::rate_dependent`]: LuGre friction, Hunt–Crossley
+//! impact) reads the velocity, which the harmonics give exactly at every sample,
+//! `v_c(θ_i) = ω·Σ_k k·(−a_k·sin kθ_i + b_k·cos kθ_i)` (the phase derivative of the synthesis
+//! times `ω`, the fundamental angular frequency the evaluation is given), and the real duration
+//! of an increment, `Δt = 2π/(ω·N)`. Each increment from sample `i` to `i + 1` is
+//! [`HystereticElement::step_at_rate`] with these kinematics ([`crate::element::Kinematics`]):
+//! Hunt–Crossley takes its force at the sample's exact approach rate, LuGre integrates its
+//! bristles over the real `Δt` and takes its force at the end velocity. The static loadings
+//! before the period (to the mean, to the first sample) are quasi-static (the plain step). A
+//! rate-dependent element's state depends on its whole path, which the increments follow at the
+//! exact velocities: no reversals are located for it.
+//!
+//! Its forces depend on the frequency at fixed displacement harmonics. The chain rule of the
+//! Jacobian gains the velocity partials ([`crate::element::RatePartials`]): `∂v_i/∂X = ω·E'_i`
+//! for the harmonics' columns (`E'_i` the phase derivative of the synthesis row), and a
+//! frequency column driven by `∂v_i/∂ω = v_i/ω` and `∂Δt/∂ω = −Δt/ω`; with the start state's
+//! `ds0/dω = (I − Φ)⁺·∂s_N/∂ω` it gives `∂f̂/∂ω` ([`ElementHarmonics::d_omega`]), which the
+//! harmonic balance adds to the frequency column of its Jacobian. Both are checked against
+//! finite differences in the tests below.
 //!
 //! What remains is the quadrature of the force's harmonics from its samples. The force is
 //! continuous with a continuous slope at a reversal (`u' = 0` there) but its curvature jumps,
