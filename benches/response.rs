@@ -410,6 +410,7 @@ fn costs(sys: &HbmSystem<'_>, s: &Structure, p: &asperity::dynamics::hbm::HbmPoi
             e.element.as_ref(),
             &sys.harmonics,
             &u,
+            w,
             false,
             &settings,
         ));
@@ -419,6 +420,7 @@ fn costs(sys: &HbmSystem<'_>, s: &Structure, p: &asperity::dynamics::hbm::HbmPoi
             e.element.as_ref(),
             &sys.harmonics,
             &u,
+            w,
             true,
             &settings,
         ));
@@ -431,6 +433,7 @@ fn costs(sys: &HbmSystem<'_>, s: &Structure, p: &asperity::dynamics::hbm::HbmPoi
                 e.element.as_ref(),
                 &sys.harmonics,
                 &element_u(e),
+                w,
                 false,
                 &settings,
             )

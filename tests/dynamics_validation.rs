@@ -284,14 +284,21 @@ fn iwan_aft_cycle_dissipates_segalmans_energy() {
     let h = Harmonics::new(3, true, Some(2048)).unwrap();
     for frac in [0.2, 0.5, 0.9] {
         let a = frac * p.phi_max();
-        let c = aft::cycle_summary(&el, &h, &[a, 0.0, 0.0, 0.0], &AftSettings::default());
+        let c = aft::cycle_summary(&el, &h, &[a, 0.0, 0.0, 0.0], 1.0, &AftSettings::default());
         let exact = p.dissipation_per_cycle(a);
         assert!(
             (c.dissipated_energy_j / exact - 1.0).abs() < 0.02,
             "A = {frac} φmax: {} vs {exact}",
             c.dissipated_energy_j
         );
-        let r = aft::evaluate(&el, &h, &[a, 0.0, 0.0, 0.0], false, &AftSettings::default());
+        let r = aft::evaluate(
+            &el,
+            &h,
+            &[a, 0.0, 0.0, 0.0],
+            1.0,
+            false,
+            &AftSettings::default(),
+        );
         let keq = r.forces[0] / a;
         assert!(keq < p.stiffness && keq > p.backbone(a) / a * 0.9, "{keq}");
     }

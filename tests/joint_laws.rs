@@ -309,8 +309,8 @@ fn model_file_joint_attaches_bilinear_and_thin_layer_laws() {
         ),
         (
             "law = \"bilinear\"",
-            "law = \"lugre\"",
-            vec!["model.toml:", "lugre"],
+            "law = \"dahl\"",
+            vec!["model.toml:", "dahl"],
         ),
         (
             "[0.0, 0.0, -2.0]",
@@ -401,13 +401,14 @@ fn lugre_steady_sliding_is_the_stribeck_curve() {
     }
 }
 
-/// The oscillator `m·ẍ + c·ẋ + k·x + f(x) = level·cos ωt` with the rate-dependent element
-/// `joint(sample_rate)` against ground, solved by the harmonic balance (`harmonics`, `samples`
-/// per period, continued in level from a sixth of it) and by Newmark's average-acceleration
-/// integration with `samples` steps per period (the element's velocity then comes from the same
-/// sample interval); the first-harmonic amplitudes `(HBM, Newmark)` and the HBM samples.
+/// The oscillator `m·ẍ + c·ẋ + k·x + f(x, ẋ) = level·cos ωt` with the rate-dependent element
+/// `joint` against ground, solved by the harmonic balance (`harmonics`, `samples` per period,
+/// continued in level from a sixth of it; the element reads the harmonics' exact velocity) and
+/// by Newmark's average-acceleration integration with `samples` steps per period (the element
+/// reads the scheme's velocity); the first-harmonic amplitudes `(HBM, Newmark)` and the HBM
+/// samples. The same element serves every frequency: it has no sample rate of its own.
 fn rate_dependent_hbm_and_newmark(
-    joint: impl Fn(f64) -> Arc<dyn asperity::element::HystereticElement>,
+    joint: Arc<dyn asperity::element::HystereticElement>,
     f_hz: f64,
     level: f64,
     harmonics: usize,
@@ -423,12 +424,8 @@ fn rate_dependent_hbm_and_newmark(
         DMatrix::from_element(1, 1, k),
     )
     .unwrap();
-    s.attach(
-        "joint",
-        joint(w * samples as f64 / (2.0 * PI)),
-        DMatrix::from_element(1, 1, 1.0),
-    )
-    .unwrap();
+    s.attach("joint", joint, DMatrix::from_element(1, 1, 1.0))
+        .unwrap();
     let h = Harmonics::new(harmonics, false, Some(samples)).unwrap();
     let sys = HbmSystem::new(
         &s,
@@ -447,25 +444,17 @@ fn rate_dependent_hbm_and_newmark(
     (a_hbm, a_ti, t)
 }
 
-/// A mass on a spring rubbing on a LuGre contact, driven through stick and slip: the harmonic
-/// balance (H = 25, 1024 samples) and Newmark's average-acceleration integration (1024 steps per
-/// period, the element's velocity from the same sample interval) agree on the first harmonic
-/// within 1e-4.
+/// A mass on a spring rubbing on a LuGre contact, driven through stick and slip at two
+/// frequencies with the same element: the harmonic balance (H = 25, 1024 samples, exact
+/// velocities and increment durations) and Newmark's average-acceleration integration (1024
+/// steps per period, the scheme's velocities) agree on the first harmonic within 1e-4.
 #[test]
 fn lugre_harmonic_balance_matches_newmark() {
+    let joint: Arc<dyn asperity::element::HystereticElement> = Arc::new(LuGre {
+        params: lugre_params(),
+    });
     for (f_hz, level) in [(7.0, 6.0), (12.0, 8.0)] {
-        let (a_hbm, a_ti, _) = rate_dependent_hbm_and_newmark(
-            |rate| {
-                Arc::new(LuGre {
-                    params: lugre_params(),
-                    sample_rate: rate,
-                })
-            },
-            f_hz,
-            level,
-            25,
-            1024,
-        );
+        let (a_hbm, a_ti, _) = rate_dependent_hbm_and_newmark(joint.clone(), f_hz, level, 25, 1024);
         // Gross sliding for part of the cycle: the amplitude is many presliding lengths Fs/σ0.
         let presliding = 1.5 / lugre_params().sigma0;
         assert!(a_hbm > 5.0 * presliding, "{f_hz} Hz: amplitude {a_hbm}");
@@ -475,32 +464,26 @@ fn lugre_harmonic_balance_matches_newmark() {
     }
 }
 
-/// A mass on a spring striking a Hunt–Crossley stop across a gap (a vibro-impact oscillator):
-/// the harmonic balance and Newmark agree on the first harmonic within 1e-4, with the stop
-/// closing and opening every cycle.
+/// A mass on a spring striking a Hunt–Crossley stop across a gap (a vibro-impact oscillator)
+/// at two frequencies with the same element: the harmonic balance (exact approach rates) and
+/// Newmark (the scheme's) agree on the first harmonic within 1e-4, with the stop closing and
+/// opening every cycle.
 #[test]
 fn hunt_crossley_harmonic_balance_matches_newmark() {
     use asperity::element::HuntCrossley;
     let gap = 1e-3;
     let chi = damping_factor(0.7, 0.05).unwrap();
+    let joint: Arc<dyn asperity::element::HystereticElement> = Arc::new(HuntCrossley {
+        params: HuntCrossleyParams {
+            stiffness: 2e5,
+            exponent: 1.5,
+            damping_factor: chi,
+            gap,
+        },
+    });
     for (f_hz, level) in [(7.0, 5.0), (12.0, 4.0)] {
-        let (a_hbm, a_ti, x) = rate_dependent_hbm_and_newmark(
-            |rate| {
-                Arc::new(HuntCrossley {
-                    params: HuntCrossleyParams {
-                        stiffness: 2e5,
-                        exponent: 1.5,
-                        damping_factor: chi,
-                        gap,
-                    },
-                    sample_rate: rate,
-                })
-            },
-            f_hz,
-            level,
-            HC_HARMONICS,
-            2048,
-        );
+        let (a_hbm, a_ti, x) =
+            rate_dependent_hbm_and_newmark(joint.clone(), f_hz, level, HC_HARMONICS, 2048);
         let hi = x.iter().fold(f64::MIN, |a, &b| a.max(b));
         assert!(hi > gap * 1.05, "{f_hz} Hz: the stop is not struck ({hi})");
         let err = (a_hbm - a_ti).abs() / a_ti;
@@ -611,7 +594,7 @@ fn thin_layer_cycle_is_periodic_whichever_way_it_reaches_the_first_sample() {
         let mut u = vec![0.0; h.len()];
         u[1] = a * phase.sin();
         u[2] = a * phase.cos();
-        let r = evaluate(&l, &h, &u, false, &AftSettings::default());
+        let r = evaluate(&l, &h, &u, 1.0, false, &AftSettings::default());
         assert!(
             r.periodic && r.periodicity_error < 1e-12,
             "phase {phase}: error {:.2e} after {} periods",
@@ -669,4 +652,418 @@ fn response_sweeps_a_model_with_joints() {
         .and_then(|s| s.parse().ok())
         .unwrap();
     assert!(sep > 0.05, "{line}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rate-dependent joints: exact velocities in closed forms, the frequency column, the model file.
+
+/// A Hunt–Crossley contact with `n = 1` that never opens, driven by `u = δ0 + a·cos θ +
+/// b·sin θ` (θ = ωt): `F = k·(δ0 + x)·(1 + χ·ẋ)` is a trigonometric polynomial of degree 2,
+/// `kδ0 + k·x + kχδ0·ẋ + kχ·x·ẋ` with `x·ẋ = ω·(ab·cos 2θ − (a² − b²)/2·sin 2θ)`, which the AFT
+/// transforms exactly: its force harmonics and their frequency derivative equal the closed form
+/// to 1e-12 of `k·a`, at two frequencies with the same element (a velocity from a fixed sample
+/// rate would be right at one frequency at most, and lag half a sample there).
+#[test]
+fn hunt_crossley_linear_contact_forces_are_the_closed_form_at_any_frequency() {
+    use asperity::dynamics::aft::{evaluate, AftSettings};
+    use asperity::element::HuntCrossley;
+    let (k, chi) = (3e5, 0.8);
+    let el = HuntCrossley {
+        params: HuntCrossleyParams {
+            stiffness: k,
+            exponent: 1.0,
+            damping_factor: chi,
+            gap: 0.0,
+        },
+    };
+    let h = Harmonics::new(4, false, Some(32)).unwrap();
+    let (c1, s1) = h.index_of(1).unwrap();
+    let (c2, s2) = h.index_of(2).unwrap();
+    let (d0, a, b): (f64, f64, f64) = (2e-3, 6e-4, -5e-4);
+    let mut u = vec![0.0; h.len()];
+    u[0] = d0;
+    u[c1] = a;
+    u[s1] = b;
+    for f_hz in [3.0, 40.0] {
+        let w = 2.0 * PI * f_hz;
+        // In contact throughout, and 1 + χ·ẋ > 0.
+        assert!(chi * w * a.hypot(b) < 1.0);
+        let r = evaluate(&el, &h, &u, w, true, &AftSettings::default());
+        let mut exact = vec![0.0; h.len()];
+        exact[0] = k * d0;
+        exact[c1] = k * a + k * chi * d0 * w * b;
+        exact[s1] = k * b - k * chi * d0 * w * a;
+        exact[c2] = k * chi * w * a * b;
+        exact[s2] = -k * chi * w * (a * a - b * b) / 2.0;
+        let mut d_exact = vec![0.0; h.len()];
+        d_exact[c1] = k * chi * d0 * b;
+        d_exact[s1] = -k * chi * d0 * a;
+        d_exact[c2] = k * chi * a * b;
+        d_exact[s2] = -k * chi * (a * a - b * b) / 2.0;
+        let scale = k * a;
+        let err = r
+            .forces
+            .iter()
+            .zip(&exact)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale));
+        let err_w = r
+            .d_omega
+            .iter()
+            .zip(&d_exact)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() * w / scale));
+        eprintln!("Hunt–Crossley n = 1 at {f_hz} Hz: forces {err:.1e}, ∂/∂ω {err_w:.1e}");
+        assert!(
+            err < 1e-12 && err_w < 1e-12,
+            "{f_hz} Hz: {err:.2e}, {err_w:.2e}"
+        );
+    }
+}
+
+/// At vanishing amplitude a LuGre contact is the linear spring–damper `σ0·u + (σ1 + σ2)·u̇`
+/// (`ż = u̇ − σ0·|u̇|·z/g` with `z ~ u`: the bristle term is smaller by `σ0·|u|/Fs`). A mass on
+/// a spring rubbing on it, at an amplitude of 1e-14 m (`σ0·|u|/Fs ≈ 1e-10`), solved by the
+/// harmonic balance, is the closed-form receptance of `m·ẍ + (c + σ1 + σ2)·ẋ + (k + σ0)·x`
+/// within 1e-8, below and above resonance, with the same element.
+#[test]
+fn lugre_at_vanishing_amplitude_is_the_linear_spring_damper() {
+    let p = lugre_params();
+    let joint: Arc<dyn asperity::element::HystereticElement> = Arc::new(LuGre { params: p });
+    let k = k_lin();
+    let c = 2.0 * ZETA * (k * M).sqrt();
+    let mut s = Structure::lumped(
+        vec!["x".into()],
+        DMatrix::from_element(1, 1, M),
+        DMatrix::from_element(1, 1, c),
+        DMatrix::from_element(1, 1, k),
+    )
+    .unwrap();
+    s.attach("joint", joint, DMatrix::from_element(1, 1, 1.0))
+        .unwrap();
+    let mut sys = HbmSystem::new(
+        &s,
+        Harmonics::new(3, false, Some(64)).unwrap(),
+        Excitation {
+            force: DVector::from_element(1, 1.0),
+            harmonic: 1,
+            force_sin: None,
+        },
+        FormulationChoice::Coordinates,
+    )
+    .unwrap();
+    sys.newton.tolerance = 1e-10;
+    let (kt, ct) = (k + p.sigma0, c + p.sigma1 + p.sigma2);
+    let wn = (kt / M).sqrt();
+    let (ci, si) = sys.harmonics.index_of(1).unwrap();
+    for ratio in [0.6, 1.0, 1.7] {
+        let w = ratio * wn;
+        let (re, im) = (kt - M * w * w, w * ct);
+        let z2 = re * re + im * im;
+        let level = 1e-14 * z2.sqrt();
+        // x = Re(X·e^{iωt}), X = F/(re + i·im): a = Re X, b = −Im X.
+        let (a, b) = (level * re / z2, level * im / z2);
+        let point = sys.solve(w, level, None).unwrap();
+        let x = sys.coordinates(&point);
+        let err = (x[ci] - a).hypot(x[si] - b) / a.hypot(b);
+        eprintln!("LuGre linear limit at {ratio}·ωn: relative {err:.1e} ({} iterations, residual {:.1e}, periodicity {:.1e})", point.iterations, point.residual, point.periodicity_error);
+        assert!(err < 1e-8, "{ratio}·ωn: {err:.2e}");
+    }
+}
+
+/// The harmonic-balance Jacobian and its frequency column with rate-dependent joints are exact:
+/// two masses with a Hunt–Crossley stop (struck across its gap) and a LuGre contact between
+/// them (in stick–slip), at a point near a solution: `J·δz` and `∂R/∂ω` against central
+/// differences of the residual within 1e-6, in the coordinates and the receptance
+/// formulations.
+#[test]
+fn rate_dependent_joints_give_an_exact_harmonic_balance_jacobian() {
+    use asperity::element::HuntCrossley;
+    let k = k_lin();
+    let mut s = Structure::lumped(
+        vec!["a".into(), "b".into()],
+        DMatrix::from_row_slice(2, 2, &[M, 0.0, 0.0, 0.5 * M]),
+        DMatrix::from_row_slice(2, 2, &[0.6, -0.2, -0.2, 0.4]),
+        DMatrix::from_row_slice(2, 2, &[2.0 * k, -k, -k, 1.5 * k]),
+    )
+    .unwrap();
+    s.attach(
+        "stop",
+        Arc::new(HuntCrossley {
+            params: HuntCrossleyParams {
+                stiffness: 2e5,
+                exponent: 1.5,
+                damping_factor: 0.5,
+                gap: 1e-3,
+            },
+        }),
+        DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+    )
+    .unwrap();
+    s.attach(
+        "rub",
+        Arc::new(LuGre {
+            params: lugre_params(),
+        }),
+        DMatrix::from_row_slice(1, 2, &[1.0, -1.0]),
+    )
+    .unwrap();
+    for choice in [
+        FormulationChoice::Coordinates,
+        FormulationChoice::Receptance,
+    ] {
+        let sys = HbmSystem::new(
+            &s,
+            Harmonics::new(9, false, Some(512)).unwrap(),
+            Excitation {
+                force: DVector::from_row_slice(&[1.0, 0.3]),
+                harmonic: 1,
+                force_sin: None,
+            },
+            choice,
+        )
+        .unwrap();
+        let w = 2.0 * PI * 9.0;
+        let mut guess = None;
+        let mut p = None;
+        for i in 1..=4 {
+            let q = sys.solve(w, 5.0 * i as f64 / 4.0, guess.as_ref()).unwrap();
+            guess = Some(q.z.clone());
+            p = Some(q);
+        }
+        let p = p.unwrap();
+        let z = &p.z * 1.02;
+        let ev = sys.evaluate(&z, w, p.level, true);
+        let dz = DVector::from_fn(z.len(), |i, _| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
+            * (z.amax() * 1e-6);
+        let fd = (sys.evaluate(&(&z + &dz), w, p.level, false).residual
+            - sys.evaluate(&(&z - &dz), w, p.level, false).residual)
+            / 2.0;
+        let exact = &ev.jacobian * &dz;
+        let err = (&fd - &exact).amax() / exact.amax();
+        let dw = w * 1e-6;
+        let fd_w = (sys.evaluate(&z, w + dw, p.level, false).residual
+            - sys.evaluate(&z, w - dw, p.level, false).residual)
+            / (2.0 * dw);
+        let err_w = (&fd_w - &ev.d_omega).amax() / ev.d_omega.amax();
+        // Without the elements' frequency derivative the column would be off by their share.
+        let x = sys.coordinates(&p);
+        let tip = x.rows(0, sys.harmonics.len()).amax();
+        eprintln!(
+            "{:?}: Jacobian {err:.1e}, frequency column {err_w:.1e}, stop amplitude {tip:.2e}",
+            sys.formulation()
+        );
+        assert!(tip > 1e-3, "the stop is not struck: {tip:.2e}");
+        assert!(err < 1e-6, "{:?}: Jacobian {err:.2e}", sys.formulation());
+        assert!(
+            err_w < 1e-6,
+            "{:?}: frequency column {err_w:.2e}",
+            sys.formulation()
+        );
+    }
+}
+
+/// The model file's `hunt-crossley` and `lugre` joints: parameters with their units, the
+/// damping of an impact from a coefficient of restitution (the exact relation), and errors
+/// naming the file, the line and the key.
+#[test]
+fn model_file_joint_attaches_hunt_crossley_and_lugre_laws() {
+    use asperity::dynamics::model_file::load;
+    use asperity::element::{Kinematics, StepPartials};
+    let dir = tempfile::tempdir().unwrap();
+    let w = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+    w("mass.csv", "# unit: kg\ntip.z\n1.0\n");
+    w("damping.csv", "# unit: N*s/m\ntip.z\n1.0\n");
+    w("stiffness.csv", "# unit: N/m\ntip.z\n1e4\n");
+    let head = "[linear]\nmass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"\n\n";
+    let tail = "\n[excitation]\ndofs = [\"tip.z\"]\nlevels_n = [1.0]\n\n[response]\ndofs = [\"tip.z\"]\n\n\
+                [sweep]\nfrequency_start_hz = 10.0\nfrequency_end_hz = 20.0\nharmonics = 3\n";
+    let model = dir.path().join("model.toml");
+    let hc = "[[joint]]\nlaw = \"hunt-crossley\"\nnode_a = \"tip\"\nnode_b = \"ground\"\n\
+              direction = [0.0, 0.0, 1.0]\nk_n_per_m_pow_n = 2e5\nexponent = 1.5\n\
+              static_indentation_m = -1e-3\nrestitution = 0.7\nimpact_velocity_m_per_s = 0.05\n";
+    std::fs::write(&model, format!("{head}{hc}{tail}")).unwrap();
+    let loaded = load(&model).unwrap();
+    let el = &loaded.structure.elements[0].element;
+    assert!(el.rate_dependent());
+    // 0.5 mm past the 1 mm gap, closing at 0.1 m/s.
+    let chi = damping_factor(0.7, 0.05).unwrap();
+    let (mut f, mut p) = ([0.0], StepPartials::new(0, 1));
+    let kin = Kinematics {
+        dt: 1e-4,
+        v0: &[0.1],
+        v1: &[0.1],
+    };
+    el.step_at_rate(&[], &[1.4e-3], &[1.5e-3], kin, &mut [], &mut f, None);
+    let exact = 2e5 * (5e-4f64).powf(1.5) * (1.0 + chi * 0.1);
+    assert!((f[0] - exact).abs() < 1e-12 * exact, "{} vs {exact}", f[0]);
+    el.step(&[], &[1.4e-3], &[1.5e-3], &mut [], &mut f, Some(&mut p));
+    assert!((f[0] - 2e5 * (5e-4f64).powf(1.5)).abs() < 1e-15);
+    // The damping factor given directly is the same joint.
+    let direct = hc.replace(
+        "restitution = 0.7\nimpact_velocity_m_per_s = 0.05\n",
+        &format!("damping_factor_s_per_m = {chi:e}\n"),
+    );
+    std::fs::write(&model, format!("{head}{direct}{tail}")).unwrap();
+    let el2 = load(&model).unwrap().structure.elements[0].element.clone();
+    let mut f2 = [0.0];
+    el2.step_at_rate(&[], &[1.4e-3], &[1.5e-3], kin, &mut [], &mut f2, None);
+    el.step_at_rate(&[], &[1.4e-3], &[1.5e-3], kin, &mut [], &mut f, None);
+    assert!((f2[0] - f[0]).abs() < 1e-12 * f[0]);
+    let lugre = "[[joint]]\nlaw = \"lugre\"\nnode_a = \"tip\"\nnode_b = \"ground\"\n\
+                 direction = [0.0, 0.0, 1.0]\nsigma0_n_per_m = 2e4\nsigma1_n_s_per_m = 5.0\n\
+                 sigma2_n_s_per_m = 0.4\ncoulomb_force_n = 1.0\nstatic_force_n = 1.5\n\
+                 stribeck_velocity_m_per_s = 0.01\n";
+    std::fs::write(&model, format!("{head}{lugre}{tail}")).unwrap();
+    let el = load(&model).unwrap().structure.elements[0].element.clone();
+    assert_eq!(el.name(), "lugre");
+    // Steady sliding at 0.3 m/s reaches the Stribeck curve Fc + (Fs − Fc)·e^{−900} + σ2·v.
+    let (mut z, mut f) = ([0.0], [0.0]);
+    for i in 0..200 {
+        let kin = Kinematics {
+            dt: 1e-3,
+            v0: &[0.3],
+            v1: &[0.3],
+        };
+        let (u0, u1) = (0.3e-3 * i as f64, 0.3e-3 * (i + 1) as f64);
+        let mut z1 = [0.0];
+        el.step_at_rate(&z, &[u0], &[u1], kin, &mut z1, &mut f, None);
+        z = z1;
+    }
+    assert!((f[0] - (1.0 + 0.4 * 0.3)).abs() < 1e-12, "{}", f[0]);
+    for (text, from, to, needles) in [
+        (
+            hc,
+            "exponent = 1.5",
+            "exponent = 0.5",
+            vec!["model.toml:12", "exponent"],
+        ),
+        (
+            hc,
+            "static_indentation_m = -1e-3",
+            "static_indentation_m = 1e-3",
+            vec!["model.toml:13", "static_indentation_m", "bilinear"],
+        ),
+        (
+            hc,
+            "impact_velocity_m_per_s = 0.05\n",
+            "",
+            vec!["model.toml:", "impact_velocity_m_per_s"],
+        ),
+        (
+            hc,
+            "restitution = 0.7\nimpact_velocity_m_per_s = 0.05\n",
+            "",
+            vec!["model.toml:", "damping_factor_s_per_m", "restitution"],
+        ),
+        (
+            hc,
+            "restitution = 0.7\n",
+            "restitution = 0.7\ndamping_factor_s_per_m = 1.0\n",
+            vec!["model.toml:", "not both"],
+        ),
+        (
+            hc,
+            "restitution = 0.7",
+            "restitution = 1.5",
+            vec!["model.toml:14", "restitution"],
+        ),
+        (
+            hc,
+            "exponent = 1.5\n",
+            "exponent = 1.5\nsample_rate = 1e4\n",
+            vec!["model.toml:", "sample_rate"],
+        ),
+        (
+            lugre,
+            "static_force_n = 1.5",
+            "static_force_n = 0.5",
+            vec!["model.toml:15", "static_force_n"],
+        ),
+        (
+            lugre,
+            "sigma0_n_per_m = 2e4\n",
+            "",
+            vec!["model.toml:", "sigma0_n_per_m", "needs"],
+        ),
+        (
+            lugre,
+            "stribeck_velocity_m_per_s = 0.01",
+            "stribeck_velocity_m_per_s = 0.0",
+            vec!["model.toml:16", "stribeck_velocity_m_per_s"],
+        ),
+    ] {
+        let bad = text.replace(from, to);
+        assert_ne!(bad, text);
+        std::fs::write(&model, format!("{head}{bad}{tail}")).unwrap();
+        let e = load(&model).unwrap_err().to_string();
+        for n in needles {
+            assert!(e.contains(n), "{from} → {to}: {e}");
+        }
+    }
+}
+
+/// `asperity response` sweeps a vibro-impact oscillator (a Hunt–Crossley stop across a 1 mm
+/// gap, struck at the higher level: the stop is open for part of every cycle) and a mass
+/// rubbing on a LuGre contact, both to the end without warnings.
+#[test]
+fn response_sweeps_models_with_rate_dependent_joints() {
+    let joints = [
+        (
+            "hunt-crossley",
+            "[[joint]]\nlaw = \"hunt-crossley\"\nnode_a = \"tip\"\nnode_b = \"ground\"\n\
+             direction = [0.0, 0.0, 1.0]\nk_n_per_m_pow_n = 2.0e5\nexponent = 1.5\n\
+             static_indentation_m = -1.0e-3\nrestitution = 0.7\nimpact_velocity_m_per_s = 0.05\n",
+            "[excitation]\ndofs = [\"tip.z\"]\nlevels_n = [1.0, 5.0]\n",
+        ),
+        (
+            "lugre",
+            "[[joint]]\nlaw = \"lugre\"\nnode_a = \"tip\"\nnode_b = \"ground\"\n\
+             direction = [0.0, 0.0, 1.0]\nsigma0_n_per_m = 2.0e4\nsigma1_n_s_per_m = 5.0\n\
+             sigma2_n_s_per_m = 0.4\ncoulomb_force_n = 1.0\nstatic_force_n = 1.5\n\
+             stribeck_velocity_m_per_s = 0.01\n",
+            "[excitation]\ndofs = [\"tip.z\"]\nlevels_n = [2.0, 8.0]\n",
+        ),
+    ];
+    for (name, joint, excitation) in joints {
+        let dir = tempfile::tempdir().unwrap();
+        let w = |f: &str, text: &str| std::fs::write(dir.path().join(f), text).unwrap();
+        w("mass.csv", "# unit: kg\ntip.z\n1.0\n");
+        w("damping.csv", "# unit: N*s/m\ntip.z\n2.5\n");
+        w("stiffness.csv", "# unit: N/m\ntip.z\n3948\n");
+        w(
+            "model.toml",
+            &format!(
+                "[linear]\nmass = \"mass.csv\"\ndamping = \"damping.csv\"\nstiffness = \"stiffness.csv\"\n\n\
+                 {joint}\n{excitation}\n[response]\ndofs = [\"tip.z\"]\n\n\
+                 [sweep]\nfrequency_start_hz = 5.0\nfrequency_end_hz = 25.0\npoints = 60\nharmonics = 15\n"
+            ),
+        );
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
+            .arg("response")
+            .arg(dir.path().join("model.toml"))
+            .arg("--out-dir")
+            .arg(dir.path().join("out"))
+            .output()
+            .unwrap();
+        let err = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        eprintln!("{name}:\n{err}");
+        assert!(out.status.success(), "{name}: {err}");
+        assert!(
+            !err.contains("warning") && !err.contains("INCOMPLETE"),
+            "{name}: {err}"
+        );
+        if name == "hunt-crossley" {
+            let line = err.lines().find(|l| l.starts_with("level 5 N:")).unwrap();
+            let sep: f64 = line
+                .split("separation ")
+                .nth(1)
+                .and_then(|s| s.split(';').next())
+                .and_then(|s| s.parse().ok())
+                .unwrap();
+            assert!(sep > 0.05 && sep < 0.95, "{line}");
+        }
+    }
 }

@@ -43,9 +43,29 @@
 //! `u(θ*)` and on from there (`Reversal`). Every sub-step is then monotone in the reversing
 //! component, and the state at every sample exact (Jenkins: exactly; Valanis: to the rounding
 //! of its closed-form branch). Elements without state (springs, the difference-quotient damper
-//! of an identification) and rate-dependent elements, which read their velocity from a whole
-//! sample interval (LuGre, [`HystereticElement::rate_dependent`]), are stepped from sample to
-//! sample.
+//! of an identification) and rate-dependent elements (below) are stepped from sample to sample.
+//!
+//! # Rate-dependent elements
+//!
+//! A rate-dependent law ([`HystereticElement::rate_dependent`]: LuGre friction, Hunt–Crossley
+//! impact) reads the velocity, which the harmonics give exactly at every sample,
+//! `v_c(θ_i) = ω·Σ_k k·(−a_k·sin kθ_i + b_k·cos kθ_i)` (the phase derivative of the synthesis
+//! times `ω`, the fundamental angular frequency the evaluation is given), and the real duration
+//! of an increment, `Δt = 2π/(ω·N)`. Each increment from sample `i` to `i + 1` is
+//! [`HystereticElement::step_at_rate`] with these kinematics ([`crate::element::Kinematics`]):
+//! Hunt–Crossley takes its force at the sample's exact approach rate, LuGre integrates its
+//! bristles over the real `Δt` and takes its force at the end velocity. The static loadings
+//! before the period (to the mean, to the first sample) are quasi-static (the plain step). A
+//! rate-dependent element's state depends on its whole path, which the increments follow at the
+//! exact velocities: no reversals are located for it.
+//!
+//! Its forces depend on the frequency at fixed displacement harmonics. The chain rule of the
+//! Jacobian gains the velocity partials ([`crate::element::RatePartials`]): `∂v_i/∂X = ω·E'_i`
+//! for the harmonics' columns (`E'_i` the phase derivative of the synthesis row), and a
+//! frequency column driven by `∂v_i/∂ω = v_i/ω` and `∂Δt/∂ω = −Δt/ω`; with the start state's
+//! `ds0/dω = (I − Φ)⁺·∂s_N/∂ω` it gives `∂f̂/∂ω` ([`ElementHarmonics::d_omega`]), which the
+//! harmonic balance adds to the frequency column of its Jacobian. Both are checked against
+//! finite differences in the tests below.
 //!
 //! What remains is the quadrature of the force's harmonics from its samples. The force is
 //! continuous with a continuous slope at a reversal (`u' = 0` there) but its curvature jumps,
@@ -80,7 +100,7 @@
 //! `recorded_sensitivities_equal_the_general_chain_rule`).
 
 use crate::core::error::{Error, Result};
-use crate::element::{ContactStatus, HystereticElement, StepPartials};
+use crate::element::{ContactStatus, HystereticElement, Kinematics, RatePartials, StepPartials};
 use bumpalo::Bump;
 use nalgebra::DMatrix;
 use realfft::RealFftPlanner;
@@ -347,6 +367,11 @@ pub struct ElementHarmonics {
     pub forces: Vec<f64>,
     /// `(d·len) × (d·len)` Jacobian `∂forces/∂u`, row-major (empty when not requested).
     pub jacobian: Vec<f64>,
+    /// `∂forces/∂ω` at fixed displacement harmonics (`d·len`, rad/s → N·s): nonzero for a
+    /// rate-dependent element only, whose velocities `ω·u'(θ)` and increment duration
+    /// `2π/(ω·N)` scale with the frequency (empty when the Jacobian is not requested or the
+    /// element is rate-independent).
+    pub d_omega: Vec<f64>,
     /// The periodic cycle's start state with its displacement harmonics and sensitivity: a
     /// warm start for [`evaluate_from`] at nearby displacements.
     pub warm_start: WarmStart,
@@ -434,6 +459,58 @@ struct Period<'a> {
     s_end: &'a mut [f64],
     /// Velocity reversals between samples, by interval and phase ([`find_reversals`]).
     reversals: &'a [Reversal<'a>],
+    /// The time scale of a rate-dependent element (`None` for a rate-independent one).
+    rate: Option<RateDrive<'a>>,
+}
+
+/// What a rate-dependent element reads besides the displacement samples: the exact velocity at
+/// every sample, `v_c(θ_i) = ω·Σ_k k·(−a_k·sin kθ_i + b_k·cos kθ_i)`, and the duration of an
+/// increment, `Δt = 2π/(ω·N)`.
+#[derive(Clone, Copy)]
+struct RateDrive<'a> {
+    /// Fundamental angular frequency `ω` (rad/s).
+    omega: f64,
+    /// Duration of one sample interval `Δt` (s).
+    dt: f64,
+    /// `d × N` velocity samples (m/s).
+    v: &'a [f64],
+}
+
+impl<'a> RateDrive<'a> {
+    /// The kinematics of the increment from sample `i` to sample `i1` (`d`-sized scratch `va`,
+    /// `vb`).
+    fn kinematics<'b>(
+        &self,
+        n: usize,
+        d: usize,
+        (i, i1): (usize, usize),
+        va: &'b mut [f64],
+        vb: &'b mut [f64],
+    ) -> Kinematics<'b> {
+        sample(self.v, n, d, i, va);
+        sample(self.v, n, d, i1, vb);
+        Kinematics {
+            dt: self.dt,
+            v0: va,
+            v1: vb,
+        }
+    }
+}
+
+/// The phase derivative of a signal's coefficients, `d/dθ (a·cos kθ + b·sin kθ) = k·b·cos kθ −
+/// k·a·sin kθ` (into `dx`, `len`).
+fn differentiate(h: &Harmonics, x: &[f64], dx: &mut [f64]) {
+    let mut j = 0;
+    for &k in h.orders() {
+        if k == 0 {
+            dx[j] = 0.0;
+            j += 1;
+        } else {
+            dx[j] = k as f64 * x[j + 1];
+            dx[j + 1] = -(k as f64) * x[j];
+            j += 2;
+        }
+    }
 }
 
 fn sample(u: &[f64], n: usize, d: usize, i: usize, out: &mut [f64]) {
@@ -529,18 +606,7 @@ fn find_reversals<'a>(
     let v = zeros(arena, d * n);
     let dx = zeros(arena, len);
     for c in 0..d {
-        let x = &u_coeffs[c * len..(c + 1) * len];
-        let mut j = 0;
-        for &k in h.orders() {
-            if k == 0 {
-                dx[j] = 0.0;
-                j += 1;
-            } else {
-                dx[j] = k as f64 * x[j + 1];
-                dx[j + 1] = -(k as f64) * x[j];
-                j += 2;
-            }
-        }
+        differentiate(h, &u_coeffs[c * len..(c + 1) * len], dx);
         h.to_time(dx, &mut v[c * n..(c + 1) * n]);
     }
     let vmax = |c: usize| {
@@ -648,6 +714,7 @@ fn run_plain(
     let f1 = zeros(arena, d);
     let ua = zeros(arena, d);
     let ub = zeros(arena, d);
+    let (va, vb) = (zeros(arena, d), zeros(arena, d));
     let mut next = 0;
     for i in 0..n {
         let i1 = (i + 1) % n;
@@ -660,7 +727,13 @@ fn run_plain(
             next += 1;
         }
         sample(p.u, n, d, i1, ub);
-        el.step(s, ua, ub, s1, f1, None);
+        match &p.rate {
+            Some(rate) => {
+                let kin = rate.kinematics(n, d, (i, i1), va, vb);
+                el.step_at_rate(s, ua, ub, kin, s1, f1, None);
+            }
+            None => el.step(s, ua, ub, s1, f1, None),
+        }
         for c in 0..d {
             p.f[c * n + i1] = f1[c];
         }
@@ -674,7 +747,8 @@ fn run_plain(
 }
 
 /// Sensitivities over one period with respect to `ncol` columns: the first `nu` are the
-/// displacement harmonics (`d × len`, component-major), the last `m` the start state.
+/// displacement harmonics (`d × len`, component-major), the next `m` the start state, and for a
+/// rate-dependent element with the harmonics' columns a last one, the frequency `ω`.
 struct Sensitivity<'a> {
     ncol: usize,
     /// `m × ncol` state sensitivity at the end of the period.
@@ -736,6 +810,9 @@ fn run_sensitive<'a>(
     arena: &'a Bump,
     part: &mut StepPartials,
 ) -> Sensitivity<'a> {
+    if p.rate.is_some() {
+        return run_sensitive_rate(el, h, p, with_u, arena, part);
+    }
     match (el.dofs(), el.state_len()) {
         (1, 0) => run_sensitive_recorded::<0>(el, h, p, with_u, arena, part),
         (1, 1) => run_sensitive_recorded::<1>(el, h, p, with_u, arena, part),
@@ -861,6 +938,152 @@ fn run_sensitive_general<'a>(
         ncol,
         ds_end: ds,
         df,
+    }
+}
+
+/// [`run_sensitive`] for a rate-dependent element, stepped from sample to sample with the
+/// exact velocities ([`RateDrive`]). Besides the displacements, each step reads the velocities
+/// at its ends, `v_i = ω·E'_i·X` (`E'_i` the phase derivative of the synthesis row), and the
+/// duration `Δt = 2π/(ω·N)`: the harmonics' columns gain `ω·(V0·E'_i + V1·E'_{i+1})`, and with
+/// them a last column, the frequency, driven by `∂v_i/∂ω = v_i/ω` and `∂Δt/∂ω = −Δt/ω`
+/// (`V0`, `V1`, `T`: the step's [`RatePartials`] with respect to the start and end velocity
+/// and the duration).
+fn run_sensitive_rate<'a>(
+    el: &dyn HystereticElement,
+    h: &Harmonics,
+    p: &mut Period,
+    with_u: bool,
+    arena: &'a Bump,
+    part: &mut StepPartials,
+) -> Sensitivity<'a> {
+    let rate = p.rate.expect("a rate-dependent element");
+    let (m, d, n, len) = (el.state_len(), el.dofs(), h.n_time(), h.len());
+    let nu = if with_u { d * len } else { 0 };
+    let ncol = nu + m + usize::from(with_u);
+    let mut ds = zeros(arena, m * ncol);
+    for r in 0..m {
+        ds[r * ncol + nu + r] = 1.0;
+    }
+    let mut ds_next = zeros(arena, m * ncol);
+    let df = zeros(arena, if with_u { n * d * ncol } else { 0 });
+    let mut rp = RatePartials::new(m, d);
+    let mut s = arena.alloc_slice_copy(p.s0);
+    let mut s1 = zeros(arena, m);
+    let f1 = zeros(arena, d);
+    let (ua, ub, va, vb) = (
+        zeros(arena, d),
+        zeros(arena, d),
+        zeros(arena, d),
+        zeros(arena, d),
+    );
+    // Phase-derivative synthesis rows of the step's two samples, scaled by ω.
+    let (wa, wb) = (zeros(arena, len), zeros(arena, len));
+    let no_state = zeros(arena, m.max(d) * m);
+    let derivative_row = |i: usize, out: &mut [f64]| {
+        differentiate_row(h, h.synthesis_row(i), out);
+        for o in out.iter_mut() {
+            *o *= rate.omega;
+        }
+    };
+    for i in 0..n {
+        let i1 = (i + 1) % n;
+        sample(p.u, n, d, i, ua);
+        sample(p.u, n, d, i1, ub);
+        let kin = rate.kinematics(n, d, (i, i1), va, vb);
+        part.clear();
+        rp.clear();
+        el.step_at_rate(s, ua, ub, kin, s1, f1, Some((part, &mut rp)));
+        for c in 0..d {
+            p.f[c * n + i1] = f1[c];
+        }
+        let synthesis = with_u.then(|| (h.synthesis_row(i), h.synthesis_row(i1)));
+        if with_u {
+            derivative_row(i, wa);
+            derivative_row(i1, wb);
+        }
+        // The ω column's drive of `rows` outputs: (V0·v_i + V1·v_{i+1} − T·Δt)/ω.
+        let omega_drive = |v0: &[f64], v1: &[f64], t: &[f64], r: usize| -> f64 {
+            let mut w = -t[r] * rate.dt;
+            for c in 0..d {
+                w += v0[r * d + c] * kin.v0[c] + v1[r * d + c] * kin.v1[c];
+            }
+            w / rate.omega
+        };
+        // ds_next = A·ds + B0·E_i + B1·E_{i+1} + ω·(V0·E'_i + V1·E'_{i+1}), and the ω column.
+        ds_next.fill(0.0);
+        chain_rule_rows(
+            m,
+            m,
+            d,
+            ncol,
+            ds,
+            (&part.ds_ds0, &part.ds_du0, &part.ds_du1),
+            synthesis,
+            ds_next,
+        );
+        if with_u {
+            chain_rule_rows(
+                m,
+                m,
+                d,
+                ncol,
+                ds,
+                (no_state, &rp.ds_dv0, &rp.ds_dv1),
+                Some((wa, wb)),
+                ds_next,
+            );
+            for r in 0..m {
+                ds_next[r * ncol + nu + m] += omega_drive(&rp.ds_dv0, &rp.ds_dv1, &rp.ds_ddt, r);
+            }
+            let out = &mut df[i1 * d * ncol..(i1 + 1) * d * ncol];
+            chain_rule_rows(
+                d,
+                m,
+                d,
+                ncol,
+                ds,
+                (&part.df_ds0, &part.df_du0, &part.df_du1),
+                synthesis,
+                out,
+            );
+            chain_rule_rows(
+                d,
+                m,
+                d,
+                ncol,
+                ds,
+                (no_state, &rp.df_dv0, &rp.df_dv1),
+                Some((wa, wb)),
+                out,
+            );
+            for r in 0..d {
+                out[r * ncol + nu + m] += omega_drive(&rp.df_dv0, &rp.df_dv1, &rp.df_ddt, r);
+            }
+        }
+        std::mem::swap(&mut ds, &mut ds_next);
+        std::mem::swap(&mut s, &mut s1);
+    }
+    p.s_end.copy_from_slice(s);
+    Sensitivity {
+        ncol,
+        ds_end: ds,
+        df,
+    }
+}
+
+/// The phase derivative of a synthesis row: `∂/∂θ` of `(cos kθ, sin kθ)` is
+/// `(−k·sin kθ, k·cos kθ)`, so `out[cos] = −k·row[sin]`, `out[sin] = k·row[cos]`.
+fn differentiate_row(h: &Harmonics, row: &[f64], out: &mut [f64]) {
+    let mut j = 0;
+    for &k in h.orders() {
+        if k == 0 {
+            out[j] = 0.0;
+            j += 1;
+        } else {
+            out[j] = -(k as f64) * row[j + 1];
+            out[j + 1] = k as f64 * row[j];
+            j += 2;
+        }
     }
 }
 
@@ -1133,10 +1356,12 @@ struct Cycle<'a> {
     ds_init: &'a [f64],
 }
 
+#[allow(clippy::too_many_arguments)]
 fn periodic_cycle<'a>(
     el: &dyn HystereticElement,
     h: &Harmonics,
     u_coeffs: &[f64],
+    omega: f64,
     warm: Option<&[f64]>,
     settings: &AftSettings,
     arena: &'a Bump,
@@ -1149,6 +1374,7 @@ fn periodic_cycle<'a>(
         s0: zeros(arena, m),
         s_end: zeros(arena, m),
         reversals: &[],
+        rate: None,
     };
     for c in 0..d {
         h.to_time(
@@ -1156,16 +1382,33 @@ fn periodic_cycle<'a>(
             &mut p.u[c * n..(c + 1) * n],
         );
     }
-    // Reversals between samples matter to an element with memory only (a stateless element,
-    // e.g. a spring or the difference-quotient damper of an identification, is stepped from
-    // sample to sample), and to a rate-independent one only (a rate-dependent element reads its
-    // velocity from a whole sample interval).
-    if m > 0 && !el.rate_dependent() {
+    // A rate-dependent element reads the exact velocities of the harmonics and the duration of
+    // a sample interval. Reversals between samples matter to a rate-independent element with
+    // memory only (a stateless element, e.g. a spring or the difference-quotient damper of an
+    // identification, is stepped from sample to sample; a rate-dependent element's state
+    // depends on the whole path, which its increments follow at the exact velocities).
+    if el.rate_dependent() {
+        let v = zeros(arena, d * n);
+        let dx = zeros(arena, len);
+        for c in 0..d {
+            differentiate(h, &u_coeffs[c * len..(c + 1) * len], dx);
+            h.to_time(dx, &mut v[c * n..(c + 1) * n]);
+        }
+        for x in v.iter_mut() {
+            *x *= omega;
+        }
+        p.rate = Some(RateDrive {
+            omega,
+            dt: 2.0 * std::f64::consts::PI / (omega * n as f64),
+            v,
+        });
+    } else if m > 0 {
         p.reversals = find_reversals(h, u_coeffs, d, arena);
     }
     // Virgin element at u = 0 loaded to the mean displacement, then to the first sample (the
     // start of the neutral directions: a slider that never slips keeps the offset of this
-    // loading, independent of where the samples fall).
+    // loading, independent of where the samples fall). Static loadings: a rate-dependent
+    // element takes them quasi-statically (its plain step).
     let virgin = zeros(arena, m);
     el.virgin_state(virgin);
     let zero = zeros(arena, d);
@@ -1381,15 +1624,19 @@ fn projector<'a>(pinv: &[f64], phi: &[f64], m: usize, arena: &'a Bump) -> &'a [f
 }
 
 /// Force harmonics of `element` driven by the displacement harmonics `u` (`d × len`,
-/// component-major), and with `jacobian` their exact derivative (see the module documentation).
+/// component-major) at the fundamental angular frequency `omega` (rad/s), and with `jacobian`
+/// their exact derivatives with respect to `u` and `omega` (see the module documentation). A
+/// rate-independent element does not read `omega`; a rate-dependent one takes its velocities
+/// `ω·u'(θ)` and increment duration `2π/(ω·N)` from it.
 pub fn evaluate(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     u: &[f64],
+    omega: f64,
     jacobian: bool,
     settings: &AftSettings,
 ) -> ElementHarmonics {
-    evaluate_from(element, harmonics, u, None, jacobian, settings)
+    evaluate_from(element, harmonics, u, omega, None, jacobian, settings)
 }
 
 /// [`evaluate`] with the search for the periodic state started from `warm` (e.g.
@@ -1401,6 +1648,7 @@ pub fn evaluate_from(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     u: &[f64],
+    omega: f64,
     warm: Option<&WarmStart>,
     jacobian: bool,
     settings: &AftSettings,
@@ -1417,14 +1665,14 @@ pub fn evaluate_from(
             w.predict(u, s);
             &*s
         });
-        let mut cycle = periodic_cycle(element, harmonics, u, start, settings, arena, part);
-        let (jac, ds0_du) = if jacobian {
+        let mut cycle = periodic_cycle(element, harmonics, u, omega, start, settings, arena, part);
+        let (jac, ds0_du, d_omega) = if jacobian {
             element_jacobian(element, harmonics, &mut cycle, arena, part)
         } else {
             let kept = warm
                 .map(|w| w.ds0_du.clone())
                 .filter(|g| g.len() == m * d * len);
-            (Vec::new(), kept.unwrap_or_default())
+            (Vec::new(), kept.unwrap_or_default(), Vec::new())
         };
         let mut forces = vec![0.0; d * len];
         for c in 0..d {
@@ -1441,6 +1689,7 @@ pub fn evaluate_from(
             },
             forces,
             jacobian: jac,
+            d_omega,
             periods: cycle.periods,
             periodicity_error: cycle.error,
             periodic: cycle.periodic,
@@ -1449,14 +1698,15 @@ pub fn evaluate_from(
 }
 
 /// The exact Jacobian `∂forces/∂u` (`d·len × d·len`, row-major) of the periodic cycle found,
-/// and the sensitivity of its start state `ds0/dU` (`m × d·len`, row-major).
+/// the sensitivity of its start state `ds0/dU` (`m × d·len`, row-major), and for a
+/// rate-dependent element the frequency derivative `∂forces/∂ω` (`d·len`; empty otherwise).
 fn element_jacobian(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     cycle: &mut Cycle,
     arena: &Bump,
     part: &mut StepPartials,
-) -> (Vec<f64>, Vec<f64>) {
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let (m, d, n, len) = (
         element.state_len(),
         element.dofs(),
@@ -1466,8 +1716,12 @@ fn element_jacobian(
     let nu = d * len;
     let sens = run_sensitive(element, harmonics, &mut cycle.period, true, arena, part);
     let ncol = sens.ncol;
-    // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start.
+    // The frequency column of a rate-dependent element (after the start state's).
+    let with_omega = ncol > nu + m;
+    // ds0/dU from (I − Φ)·ds0 = ∂s_N/∂U, neutral directions from the virgin start; ds0/dω from
+    // (I − Φ)·ds0 = ∂s_N/∂ω (the virgin start, loaded statically, does not depend on ω).
     let ds0 = zeros(arena, m * nu);
+    let ds0_omega = zeros(arena, m);
     if m > 0 {
         let phi: &[f64] =
             arena.alloc_slice_fill_with(m * m, |idx| sens.ds_end[(idx / m) * ncol + nu + idx % m]);
@@ -1488,6 +1742,11 @@ fn element_jacobian(
                 }
                 ds0[r * nu + col] = v;
             }
+            if with_omega {
+                ds0_omega[r] = (0..m)
+                    .map(|k| pinv[r * m + k] * sens.ds_end[k * ncol + nu + m])
+                    .sum();
+            }
         }
     }
     // Total force sensitivity per sample, T_c = ∂f_c/∂U + ∂f_c/∂s0·ds0/dU (`N × nu` per
@@ -1496,13 +1755,21 @@ fn element_jacobian(
     // matrix product to pay for its packing; larger ones (a contact element, 3 components × 15
     // harmonics) by one product per component.
     let mut jac = vec![0.0; d * len * nu];
+    let mut d_omega = vec![0.0; if with_omega { d * len } else { 0 }];
     let tc = zeros(arena, n * nu);
     for c in 0..d {
         for i in 0..n {
             let row = &sens.df[(i * d + c) * ncol..(i * d + c + 1) * ncol];
+            if with_omega {
+                // T_ω = ∂f_i/∂ω + ∂f_i/∂s0·ds0/dω, analysed into the harmonics.
+                let t_omega = row[nu + m] + (0..m).map(|k| row[nu + k] * ds0_omega[k]).sum::<f64>();
+                for hc in 0..len {
+                    d_omega[c * len + hc] += harmonics.analysis[hc * n + i] * t_omega;
+                }
+            }
             let t = &mut tc[i * nu..(i + 1) * nu];
             t.copy_from_slice(&row[..nu]);
-            for (k, &dfs) in row[nu..].iter().enumerate() {
+            for (k, &dfs) in row[nu..nu + m].iter().enumerate() {
                 if dfs != 0.0 {
                     for (tv, dv) in t.iter_mut().zip(&ds0[k * nu..(k + 1) * nu]) {
                         *tv += dfs * dv;
@@ -1529,7 +1796,7 @@ fn element_jacobian(
             }
         }
     }
-    (jac, ds0.to_vec())
+    (jac, ds0.to_vec(), d_omega)
 }
 
 /// The periodic cycle's samples of one element: displacement and force per component over one
@@ -1542,16 +1809,18 @@ pub struct ElementSamples {
     pub f: Vec<f64>,
 }
 
-/// The samples of the element's periodic cycle at displacement harmonics `u`.
+/// The samples of the element's periodic cycle at displacement harmonics `u` and fundamental
+/// angular frequency `omega` (rad/s; read by rate-dependent elements only).
 pub fn cycle_samples(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     u: &[f64],
+    omega: f64,
     settings: &AftSettings,
 ) -> ElementSamples {
     let (m, d) = (element.state_len(), element.dofs());
     with_workspace(m, d, |arena, part| {
-        let cycle = periodic_cycle(element, harmonics, u, None, settings, arena, part);
+        let cycle = periodic_cycle(element, harmonics, u, omega, None, settings, arena, part);
         ElementSamples {
             u: cycle.period.u.to_vec(),
             f: cycle.period.f.to_vec(),
@@ -1559,16 +1828,19 @@ pub fn cycle_samples(
     })
 }
 
-/// Dissipated energy and stick/slip/separation fractions of the periodic cycle.
+/// Dissipated energy and stick/slip/separation fractions of the periodic cycle at displacement
+/// harmonics `u` and fundamental angular frequency `omega` (rad/s; read by rate-dependent
+/// elements only).
 pub fn cycle_summary(
     element: &dyn HystereticElement,
     harmonics: &Harmonics,
     u: &[f64],
+    omega: f64,
     settings: &AftSettings,
 ) -> ElementCycle {
     let (m, d, n) = (element.state_len(), element.dofs(), harmonics.n_time());
     with_workspace(m, d, |arena, part| {
-        let mut cycle = periodic_cycle(element, harmonics, u, None, settings, arena, part);
+        let mut cycle = periodic_cycle(element, harmonics, u, omega, None, settings, arena, part);
         let mut counts = [0usize; 3];
         run_plain(element, n, &mut cycle.period, arena, |_, s, uu, f| {
             let k = match element.status(s, uu, f) {
@@ -1629,7 +1901,15 @@ mod tests {
         for a in [1.0, 3.0] {
             let forces = |n| {
                 let h = Harmonics::new(3, true, Some(n)).unwrap();
-                evaluate(&gl, &h, &[0.0, a, 0.0, 0.0], false, &AftSettings::default()).forces
+                evaluate(
+                    &gl,
+                    &h,
+                    &[0.0, a, 0.0, 0.0],
+                    W,
+                    false,
+                    &AftSettings::default(),
+                )
+                .forces
             };
             let (coarse, fine) = (forces(64), forces(4096));
             for c in 0..2 {
@@ -1654,6 +1934,10 @@ mod tests {
 
     use super::*;
     use crate::element::ValanisParams;
+
+    /// The fundamental angular frequency of the tests (rad/s); read by rate-dependent elements
+    /// only.
+    const W: f64 = 2.0 * std::f64::consts::PI * 50.0;
     use crate::element::{
         CubicSpring, GaulLenz, Jenkins, JenkinsContact, LoadFollowingContact, MicroslipContact,
         QuadraticSpring,
@@ -1697,7 +1981,7 @@ mod tests {
     /// Jacobian of the AFT against central finite differences of the whole procedure.
     fn check_jacobian(el: &dyn HystereticElement, h: &Harmonics, u: &[f64], step: f64) -> f64 {
         let s = AftSettings::default();
-        let r = evaluate(el, h, u, true, &s);
+        let r = evaluate(el, h, u, W, true, &s);
         assert!(r.periodic, "not periodic: {}", r.periodicity_error);
         let n = u.len();
         let mut worst: f64 = 0.0;
@@ -1707,8 +1991,8 @@ mod tests {
             let mut dn = u.to_vec();
             up[col] += step;
             dn[col] -= step;
-            let fu = evaluate(el, h, &up, false, &s).forces;
-            let fd = evaluate(el, h, &dn, false, &s).forces;
+            let fu = evaluate(el, h, &up, W, false, &s).forces;
+            let fd = evaluate(el, h, &dn, W, false, &s).forces;
             for row in 0..n {
                 let fdv = (fu[row] - fd[row]) / (2.0 * step);
                 worst = worst.max((fdv - r.jacobian[row * n + col]).abs() / jmax);
@@ -1736,7 +2020,7 @@ mod tests {
         let small: Vec<f64> = u.iter().map(|v| v * 0.1).collect();
         let w = check_jacobian(&j, &h, &small, 1e-11);
         assert!(w < 1e-6, "stuck jenkins: {w}");
-        let r = evaluate(&j, &h, &small, false, &AftSettings::default());
+        let r = evaluate(&j, &h, &small, W, false, &AftSettings::default());
         for (f, x) in r.forces.iter().zip(&small) {
             assert!((f - 1e5 * x).abs() < 1e-9, "{f} vs {}", 1e5 * x);
         }
@@ -1793,6 +2077,97 @@ mod tests {
         assert!(w < 1e-5, "load-following contact, separating: {w}");
     }
 
+    /// Rate-dependent elements: the AFT Jacobian with respect to the displacement harmonics and
+    /// the frequency derivative against central finite differences of the whole procedure, for
+    /// a Hunt–Crossley stop struck across its gap (separating over part of the cycle) and a
+    /// LuGre contact in stick–slip, at two frequencies (the velocities `ω·u'` and the increment
+    /// duration `2π/(ωN)` both move with ω).
+    #[test]
+    fn rate_dependent_aft_jacobian_and_frequency_derivative_match_finite_differences() {
+        use crate::element::{HuntCrossley, HuntCrossleyParams, LuGre, LuGreParams};
+        let h = Harmonics::new(5, false, Some(128)).unwrap();
+        let len = h.len();
+        let (c1, s1) = h.index_of(1).unwrap();
+        let (c2, s2) = h.index_of(2).unwrap();
+        let (c3, _) = h.index_of(3).unwrap();
+        let shape = |a: f64| {
+            let mut u = vec![0.0; len];
+            u[0] = 0.1 * a;
+            u[c1] = a;
+            u[s1] = 0.4 * a;
+            u[c2] = 0.15 * a;
+            u[s2] = -0.1 * a;
+            u[c3] = 0.05 * a;
+            u
+        };
+        let hc = HuntCrossley {
+            params: HuntCrossleyParams {
+                stiffness: 2e7,
+                exponent: 1.5,
+                damping_factor: 0.4,
+                gap: 5e-5,
+            },
+        };
+        let lugre = LuGre {
+            params: LuGreParams {
+                sigma0: 1e5,
+                sigma1: 200.0,
+                sigma2: 0.4,
+                coulomb: 1.0,
+                stiction: 1.5,
+                stribeck_velocity: 0.002,
+            },
+        };
+        let s = AftSettings::default();
+        let cases: [(&str, &dyn HystereticElement, f64); 2] =
+            [("hunt-crossley", &hc, 1e-4), ("lugre", &lugre, 4e-5)];
+        for (name, el, a) in cases {
+            let u = shape(a);
+            for omega in [
+                2.0 * std::f64::consts::PI * 20.0,
+                2.0 * std::f64::consts::PI * 90.0,
+            ] {
+                let r = evaluate(el, &h, &u, omega, true, &s);
+                assert!(r.periodic, "{name}: not periodic {}", r.periodicity_error);
+                assert_eq!(r.d_omega.len(), len, "{name}");
+                let jmax = r.jacobian.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let mut worst: f64 = 0.0;
+                let step = 1e-4 * a;
+                for col in 0..len {
+                    let (mut up, mut dn) = (u.clone(), u.clone());
+                    up[col] += step;
+                    dn[col] -= step;
+                    let fu = evaluate(el, &h, &up, omega, false, &s).forces;
+                    let fd = evaluate(el, &h, &dn, omega, false, &s).forces;
+                    for row in 0..len {
+                        let fdv = (fu[row] - fd[row]) / (2.0 * step);
+                        worst = worst.max((fdv - r.jacobian[row * len + col]).abs() / jmax);
+                    }
+                }
+                // The frequency column, relative to its largest entry.
+                let dw = 1e-5 * omega;
+                let fu = evaluate(el, &h, &u, omega + dw, false, &s).forces;
+                let fd = evaluate(el, &h, &u, omega - dw, false, &s).forces;
+                let dmax = r.d_omega.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(dmax > 0.0, "{name}: no frequency dependence");
+                let mut worst_w: f64 = 0.0;
+                for row in 0..len {
+                    let fdv = (fu[row] - fd[row]) / (2.0 * dw);
+                    worst_w = worst_w.max((fdv - r.d_omega[row]).abs() / dmax);
+                }
+                eprintln!(
+                    "{name} at {:.0} Hz: Jacobian {worst:.1e}, frequency column {worst_w:.1e}",
+                    omega / (2.0 * std::f64::consts::PI)
+                );
+                assert!(worst < 1e-5, "{name}: Jacobian {worst:.2e}");
+                assert!(worst_w < 1e-5, "{name}: frequency column {worst_w:.2e}");
+            }
+            // A rate-independent element has no frequency derivative.
+            let j = Jenkins::new(1e5, 1.0).unwrap();
+            assert!(evaluate(&j, &h, &u, W, true, &s).d_omega.is_empty());
+        }
+    }
+
     /// The sensitivities of one-component elements over a recorded period
     /// ([`run_sensitive_recorded`]) against the general chain rule ([`run_sensitive_general`]):
     /// the same derivatives summed in another order, so equal to 1e-12 of the largest entry,
@@ -1833,7 +2208,7 @@ mod tests {
                 let (m, d) = (el.state_len(), el.dofs());
                 with_workspace(m, d, |arena, part| {
                     let s = AftSettings::default();
-                    let mut cycle = periodic_cycle(el, &h, u, None, &s, arena, part);
+                    let mut cycle = periodic_cycle(el, &h, u, W, None, &s, arena, part);
                     assert!(cycle.periodic, "{name}");
                     let p = &mut cycle.period;
                     for with_u in [false, true] {
@@ -1846,7 +2221,7 @@ mod tests {
                         close(name, "forces", &f, p.f);
                         close(name, "end state", &s_end, p.s_end);
                     }
-                    let (jac, _) = element_jacobian(el, &h, &mut cycle, arena, part);
+                    let (jac, _, _) = element_jacobian(el, &h, &mut cycle, arena, part);
                     assert!(jac.iter().any(|v| *v != 0.0), "{name}");
                 });
             }
@@ -1886,17 +2261,17 @@ mod tests {
             (&linked, &u1),
         ];
         for (el, u) in cases {
-            let cold = evaluate(el, &h, u, true, &s);
+            let cold = evaluate(el, &h, u, W, true, &s);
             let near: Vec<f64> = u.iter().map(|x| x * 1.001).collect();
-            let neighbour = evaluate(el, &h, &near, false, &s).warm_start;
-            let predicted = evaluate(el, &h, &near, true, &s).warm_start;
+            let neighbour = evaluate(el, &h, &near, W, false, &s).warm_start;
+            let predicted = evaluate(el, &h, &near, W, true, &s).warm_start;
             let arbitrary = WarmStart::from_state(
                 &(0..el.state_len())
                     .map(|k| 0.3 * k as f64)
                     .collect::<Vec<_>>(),
             );
             for warm in [&neighbour, &predicted, &arbitrary] {
-                let w = evaluate_from(el, &h, u, Some(warm), true, &s);
+                let w = evaluate_from(el, &h, u, W, Some(warm), true, &s);
                 assert!(w.periodic);
                 let fscale = cold.forces.iter().fold(0.0f64, |a, b| a.max(b.abs()));
                 for (a, b) in w.forces.iter().zip(&cold.forces) {
@@ -1907,7 +2282,7 @@ mod tests {
                     assert!((a - b).abs() < 1e-6 * jscale, "{}: {a} vs {b}", el.name());
                 }
             }
-            let w = evaluate_from(el, &h, u, Some(&neighbour), false, &s);
+            let w = evaluate_from(el, &h, u, W, Some(&neighbour), false, &s);
             // (A fully stuck slider is periodic from any start: one period to find that
             // and reset its neutral force, one to check. A cycle that forgets its start —
             // slip or separation somewhere — takes one more from a warm start, to check that
@@ -1929,7 +2304,7 @@ mod tests {
         let (kt, fs) = (1e5, 1.0);
         let a = 3.0 * fs / kt;
         let j = Jenkins::new(kt, fs).unwrap();
-        let c = cycle_summary(&j, &h, &[a, 0.0], &AftSettings::default());
+        let c = cycle_summary(&j, &h, &[a, 0.0], W, &AftSettings::default());
         let exact = 4.0 * fs * (a - fs / kt);
         assert!((c.dissipated_energy_j - exact).abs() < 1e-4 * exact);
         // Slip while |q − reversal| > 2Fs/kt: fraction (π − φ*)/π with cos φ* = 1 − 2/3.
@@ -2037,7 +2412,7 @@ mod tests {
             .map(|_| {
                 let phi: f64 = rng.random_range(0.0..2.0 * std::f64::consts::PI);
                 let u = [a * phi.cos(), -a * phi.sin()];
-                let r = evaluate(el, &h, &u, false, &AftSettings::default());
+                let r = evaluate(el, &h, &u, W, false, &AftSettings::default());
                 assert!(r.periodic);
                 // f = C cos(θ+φ) + S sin(θ+φ) in the sample frame.
                 let want = [

@@ -95,8 +95,10 @@ impl Receptance {
         let p = stacked(system);
         let nc = p.nrows();
         let u = DMatrix::from_row_slice(nc, len, z.as_slice());
-        let forces = system.element_forces(&u, warm, jacobian);
+        let forces = system.element_forces(&u, self.omega, warm, jacobian);
         let fe = system.stacked_forces(&forces);
+        // ∂f̂/∂ω of rate-dependent elements (zero for the others).
+        let fe_rate = system.stacked_force_rates(&forces);
         let fex = system.excitation_harmonics();
         let fexm = DMatrix::from_row_slice(system.structure.n(), len, fex.as_slice());
         let mut ulin = DMatrix::zeros(nc, len);
@@ -143,7 +145,11 @@ impl Receptance {
             put(&mut dulin, &(&pc * dh_f));
             let fc = to_c(&fe);
             put(&mut gf, &(g * &fc));
-            put(&mut dgf, &(dg * &fc));
+            let mut dgfk = dg * &fc;
+            if let Some(fr) = &fe_rate {
+                dgfk += g * to_c(fr);
+            }
+            put(&mut dgf, &dgfk);
             col += cols;
         }
         let flat = |m: &DMatrix<f64>| DVector::from_row_slice(m.transpose().as_slice());
@@ -247,7 +253,7 @@ impl Receptance {
         let nc = p.nrows();
         let n = system.structure.n();
         let u = DMatrix::from_row_slice(nc, len, z.as_slice());
-        let forces = system.element_forces(&u, None, false);
+        let forces = system.element_forces(&u, self.omega, None, false);
         let fe = system.stacked_forces(&forces);
         let total = DMatrix::from_row_slice(n, len, system.excitation_harmonics().as_slice())
             * level

@@ -449,10 +449,11 @@ impl<'a> HbmSystem<'a> {
     }
 
     /// Force harmonics (and Jacobians) of every element for the element displacements `u`
-    /// (`n_c × len`).
+    /// (`n_c × len`) at the fundamental frequency `omega` (rad/s).
     pub(crate) fn element_forces(
         &self,
         u: &DMatrix<f64>,
+        omega: f64,
         warm: Option<&[aft::WarmStart]>,
         jacobian: bool,
     ) -> Vec<aft::ElementHarmonics> {
@@ -475,6 +476,7 @@ impl<'a> HbmSystem<'a> {
                     e.element.as_ref(),
                     &self.harmonics,
                     &ue,
+                    omega,
                     warm.and_then(|w| w.get(i)),
                     jacobian,
                     &self.aft,
@@ -485,13 +487,38 @@ impl<'a> HbmSystem<'a> {
 
     /// Element force harmonics stacked like the element displacements (`n_c × len`).
     pub(crate) fn stacked_forces(&self, forces: &[aft::ElementHarmonics]) -> DMatrix<f64> {
+        self.stack(forces, |r| &r.forces)
+    }
+
+    /// The elements' frequency derivatives `∂f̂_e/∂ω` stacked like the element displacements
+    /// (`n_c × len`; zero rows for rate-independent elements), or `None` when no element has
+    /// one (rate-independent elements only, or no Jacobian asked for).
+    pub(crate) fn stacked_force_rates(
+        &self,
+        forces: &[aft::ElementHarmonics],
+    ) -> Option<DMatrix<f64>> {
+        forces
+            .iter()
+            .any(|r| !r.d_omega.is_empty())
+            .then(|| self.stack(forces, |r| &r.d_omega))
+    }
+
+    fn stack<'f>(
+        &self,
+        forces: &'f [aft::ElementHarmonics],
+        part: impl Fn(&'f aft::ElementHarmonics) -> &'f [f64],
+    ) -> DMatrix<f64> {
         let len = self.harmonics.len();
         let mut fe = DMatrix::zeros(self.stacked_map.nrows(), len);
         for (e, r) in forces.iter().enumerate() {
+            let v = part(r);
+            if v.is_empty() {
+                continue;
+            }
             let d = self.structure.elements[e].element.dofs();
             for c in 0..d {
                 for h in 0..len {
-                    fe[(self.offsets[e] + c, h)] = r.forces[c * len + h];
+                    fe[(self.offsets[e] + c, h)] = v[c * len + h];
                 }
             }
         }
@@ -675,12 +702,16 @@ impl<'a> HbmSystem<'a> {
         warm: Option<&[aft::WarmStart]>,
     ) -> Evaluation {
         let u = self.element_displacements(q);
-        let forces = self.element_forces(&u, warm, jacobian);
+        let forces = self.element_forces(&u, omega, warm, jacobian);
         let fex = self.excitation_harmonics();
-        let (lin, dlin) = self.linear_forces(q, omega);
-        // Σ_e P_eᵀ f̂_e.
+        let (lin, mut dlin) = self.linear_forces(q, omega);
+        // Σ_e P_eᵀ f̂_e, and Σ_e P_eᵀ ∂f̂_e/∂ω for rate-dependent elements.
         let fnl = self.stacked_map.transpose() * self.stacked_forces(&forces);
         let fnl = DVector::from_row_slice(fnl.transpose().as_slice());
+        if let Some(rates) = self.stacked_force_rates(&forces) {
+            let d = self.stacked_map.transpose() * rates;
+            dlin += DVector::from_row_slice(d.transpose().as_slice());
+        }
         let jac = if jacobian {
             let mut j = self.dynamic_stiffness(omega);
             if !self.structure.elements.is_empty() {
@@ -709,17 +740,23 @@ impl<'a> HbmSystem<'a> {
         let c = self.cyclic.as_ref().expect("cyclic system");
         let len = self.harmonics.len();
         let u = self.element_displacements(z);
-        let forces = self.element_forces(&u, warm, jacobian);
+        let forces = self.element_forces(&u, omega, warm, jacobian);
         let fex = c.expansion.tr_mul(&self.excitation_harmonics());
         let q = &c.expansion * z;
         let (lin, dlin) = self.linear_forces(&q, omega);
-        let (lin, dlin) = (c.expansion.tr_mul(&lin), c.expansion.tr_mul(&dlin));
+        let (lin, mut dlin) = (c.expansion.tr_mul(&lin), c.expansion.tr_mul(&dlin));
         // Σ_e [P_e | P'_e]ᵀ f̂_e on this sector's and the next sector's coordinates, then Aᵀ.
         let fw = self.stacked_map.transpose() * self.stacked_forces(&forces);
         debug_assert_eq!(fw.shape(), (self.width, len));
         let fnl = c
             .element_expansion
             .tr_mul(&DVector::from_row_slice(fw.transpose().as_slice()));
+        if let Some(rates) = self.stacked_force_rates(&forces) {
+            let dw = self.stacked_map.transpose() * rates;
+            dlin += c
+                .element_expansion
+                .tr_mul(&DVector::from_row_slice(dw.transpose().as_slice()));
+        }
         let jac = if jacobian {
             let t = &c.expansion;
             let mut j = t.tr_mul(&(self.dynamic_stiffness(omega) * t));
@@ -783,7 +820,15 @@ impl<'a> HbmSystem<'a> {
             .par_iter()
             .zip(us.par_iter())
             .with_min_len(PARALLEL_MIN_ELEMENTS)
-            .map(|(e, u)| aft::cycle_samples(e.element.as_ref(), &self.harmonics, u, &self.aft))
+            .map(|(e, u)| {
+                aft::cycle_samples(
+                    e.element.as_ref(),
+                    &self.harmonics,
+                    u,
+                    point.omega,
+                    &self.aft,
+                )
+            })
             .collect()
     }
 
@@ -795,7 +840,15 @@ impl<'a> HbmSystem<'a> {
             .par_iter()
             .zip(us.par_iter())
             .with_min_len(PARALLEL_MIN_ELEMENTS)
-            .map(|(e, u)| aft::cycle_summary(e.element.as_ref(), &self.harmonics, u, &self.aft))
+            .map(|(e, u)| {
+                aft::cycle_summary(
+                    e.element.as_ref(),
+                    &self.harmonics,
+                    u,
+                    point.omega,
+                    &self.aft,
+                )
+            })
             .collect()
     }
 
@@ -1196,7 +1249,7 @@ mod tests {
             1e-6 * (((i * 37) % 17) as f64 / 8.0 - 1.0)
         });
         let u = sys.element_displacements(&q);
-        let forces = sys.element_forces(&u, None, true);
+        let forces = sys.element_forces(&u, 1.0, None, true);
         let j = sys.element_jacobian(&forces);
         let nn = modes * len;
         let mut reference = DMatrix::<f64>::zeros(nn, nn);

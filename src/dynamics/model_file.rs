@@ -49,6 +49,12 @@
 //! # law = "thin-layer"          # elastic–plastic virtual layer (element::thin_layer) with
 //! # elastic_modulus_pa, plastic_modulus_pa, yield_stress_pa, transition_exponent, area_m2,
 //! # thickness_m
+//! # law = "hunt-crossley"       # impact k·δⁿ·(1 + χ·δ̇) (element::hunt_crossley) with
+//! # k_n_per_m_pow_n, exponent, static_indentation_m (≤ 0: the gap), and either
+//! # damping_factor_s_per_m or restitution with impact_velocity_m_per_s
+//! # law = "lugre"               # LuGre friction along `direction` (element::lugre) with
+//! # sigma0_n_per_m, sigma1_n_s_per_m, sigma2_n_s_per_m, coulomb_force_n, static_force_n,
+//! # stribeck_velocity_m_per_s
 //!
 //! # [static]                    # optional preload, the same at every level (needs
 //! # dofs = ["damper.z"]         #   odd_only = false: balanced by the response's mean)
@@ -183,6 +189,16 @@ pub enum JointLaw {
     /// [`crate::element::ThinLayer`]: `elastic_modulus_pa`, `plastic_modulus_pa`,
     /// `yield_stress_pa`, `transition_exponent`, `area_m2`, `thickness_m`.
     ThinLayer,
+    /// [`crate::element::HuntCrossley`]: `k_n_per_m_pow_n` (N/mⁿ), `exponent`,
+    /// `static_indentation_m` (≤ 0: the contact is open at the static equilibrium by the gap
+    /// `−static_indentation_m`), and the damping as either `damping_factor_s_per_m` (χ) or
+    /// `restitution` with `impact_velocity_m_per_s` (χ from the exact relation of
+    /// [`crate::element::hunt_crossley::damping_factor`]).
+    HuntCrossley,
+    /// [`crate::element::LuGre`]: `sigma0_n_per_m`, `sigma1_n_s_per_m`, `sigma2_n_s_per_m`,
+    /// `coulomb_force_n`, `static_force_n`, `stribeck_velocity_m_per_s`.
+    #[serde(rename = "lugre")]
+    LuGre,
 }
 
 impl JointLaw {
@@ -191,10 +207,24 @@ impl JointLaw {
         match self {
             JointLaw::Bilinear => "bilinear",
             JointLaw::ThinLayer => "thin-layer",
+            JointLaw::HuntCrossley => "hunt-crossley",
+            JointLaw::LuGre => "lugre",
         }
     }
 
-    /// The parameter keys the law needs (every other parameter key is refused).
+    /// Groups of keys of which the law needs exactly one, whole (besides [`Self::keys`]).
+    fn alternatives(self) -> &'static [&'static [&'static str]] {
+        match self {
+            JointLaw::HuntCrossley => &[
+                &["damping_factor_s_per_m"],
+                &["restitution", "impact_velocity_m_per_s"],
+            ],
+            _ => &[],
+        }
+    }
+
+    /// The parameter keys the law needs (every other parameter key, but those of
+    /// [`Self::alternatives`], is refused).
     fn keys(self) -> &'static [&'static str] {
         match self {
             JointLaw::Bilinear => &[
@@ -210,6 +240,15 @@ impl JointLaw {
                 "transition_exponent",
                 "area_m2",
                 "thickness_m",
+            ],
+            JointLaw::HuntCrossley => &["k_n_per_m_pow_n", "exponent", "static_indentation_m"],
+            JointLaw::LuGre => &[
+                "sigma0_n_per_m",
+                "sigma1_n_s_per_m",
+                "sigma2_n_s_per_m",
+                "coulomb_force_n",
+                "static_force_n",
+                "stribeck_velocity_m_per_s",
             ],
         }
     }
@@ -250,11 +289,33 @@ pub struct JointSection {
     pub area_m2: Option<f64>,
     /// Thin layer: thickness of the layer (m); its strain is the approach over it.
     pub thickness_m: Option<f64>,
+    /// Hunt–Crossley: contact stiffness `k` (N/mⁿ).
+    pub k_n_per_m_pow_n: Option<f64>,
+    /// Hunt–Crossley: exponent `n` (–; 1.5 for Hertz).
+    pub exponent: Option<f64>,
+    /// Hunt–Crossley: damping factor `χ` (s/m).
+    pub damping_factor_s_per_m: Option<f64>,
+    /// Hunt–Crossley: coefficient of restitution `e` (–, in (0, 1]) at `impact_velocity_m_per_s`.
+    pub restitution: Option<f64>,
+    /// Hunt–Crossley: impact velocity the coefficient of restitution holds at (m/s).
+    pub impact_velocity_m_per_s: Option<f64>,
+    /// LuGre: bristle stiffness `σ0` (N/m).
+    pub sigma0_n_per_m: Option<f64>,
+    /// LuGre: bristle damping `σ1` (N·s/m).
+    pub sigma1_n_s_per_m: Option<f64>,
+    /// LuGre: viscous friction `σ2` (N·s/m).
+    pub sigma2_n_s_per_m: Option<f64>,
+    /// LuGre: Coulomb friction force `Fc` (N).
+    pub coulomb_force_n: Option<f64>,
+    /// LuGre: static (stiction) friction force `Fs ≥ Fc` (N).
+    pub static_force_n: Option<f64>,
+    /// LuGre: Stribeck velocity `vs` (m/s).
+    pub stribeck_velocity_m_per_s: Option<f64>,
 }
 
 impl JointSection {
     /// Every parameter key with its value, if given.
-    fn parameters(&self) -> [(&'static str, Option<f64>); 10] {
+    fn parameters(&self) -> [(&'static str, Option<f64>); 21] {
         [
             ("k1_n_per_m", self.k1_n_per_m),
             ("k2_n_per_m", self.k2_n_per_m),
@@ -266,6 +327,17 @@ impl JointSection {
             ("transition_exponent", self.transition_exponent),
             ("area_m2", self.area_m2),
             ("thickness_m", self.thickness_m),
+            ("k_n_per_m_pow_n", self.k_n_per_m_pow_n),
+            ("exponent", self.exponent),
+            ("damping_factor_s_per_m", self.damping_factor_s_per_m),
+            ("restitution", self.restitution),
+            ("impact_velocity_m_per_s", self.impact_velocity_m_per_s),
+            ("sigma0_n_per_m", self.sigma0_n_per_m),
+            ("sigma1_n_s_per_m", self.sigma1_n_s_per_m),
+            ("sigma2_n_s_per_m", self.sigma2_n_s_per_m),
+            ("coulomb_force_n", self.coulomb_force_n),
+            ("static_force_n", self.static_force_n),
+            ("stribeck_velocity_m_per_s", self.stribeck_velocity_m_per_s),
         ]
     }
 
@@ -273,7 +345,52 @@ impl JointSection {
     pub fn element(&self) -> Result<std::sync::Arc<dyn crate::element::HystereticElement>> {
         let needed = self.law.keys();
         let law = self.law.name();
+        let alternatives = self.law.alternatives();
+        let given = |key: &str| {
+            self.parameters()
+                .iter()
+                .any(|(k, v)| *k == key && v.is_some())
+        };
+        if !alternatives.is_empty() {
+            let describe = |g: &[&str]| g.join(" with ");
+            let options = alternatives
+                .iter()
+                .map(|g| format!("`{}`", describe(g)))
+                .collect::<Vec<_>>()
+                .join(" or ");
+            let touched: Vec<&[&str]> = alternatives
+                .iter()
+                .copied()
+                .filter(|g| g.iter().any(|k| given(k)))
+                .collect();
+            match touched.as_slice() {
+                [] => {
+                    return Err(Error::param(
+                        format!("joint.{}", alternatives[0][0]),
+                        format!("the `{law}` law needs {options}"),
+                    ))
+                }
+                [g] => {
+                    if let Some(missing) = g.iter().find(|k| !given(k)) {
+                        return Err(Error::param(
+                            format!("joint.{missing}"),
+                            format!("the `{law}` law needs `{}`", describe(g)),
+                        ));
+                    }
+                }
+                [_, g, ..] => {
+                    let key = g.iter().find(|k| given(k)).expect("touched");
+                    return Err(Error::param(
+                        format!("joint.{key}"),
+                        format!("the `{law}` law takes {options}, not both"),
+                    ));
+                }
+            }
+        }
         for (key, value) in self.parameters() {
+            if alternatives.iter().any(|g| g.contains(&key)) {
+                continue;
+            }
             match (needed.contains(&key), value) {
                 (true, None) => {
                     return Err(Error::param(
@@ -347,6 +464,77 @@ impl JointSection {
                     )
                 })?,
             ),
+            JointLaw::HuntCrossley => {
+                let static_indentation = self.static_indentation_m.expect("checked");
+                if !(static_indentation.is_finite() && static_indentation <= 0.0) {
+                    return Err(Error::param(
+                        "joint.static_indentation_m",
+                        format!(
+                            "a Hunt–Crossley contact is open or just touching at the static \
+                             equilibrium (≤ 0, minus the gap; a preloaded contact is the \
+                             `bilinear` law's), got {static_indentation}"
+                        ),
+                    ));
+                }
+                let damping_factor = match self.damping_factor_s_per_m {
+                    Some(chi) => chi,
+                    None => crate::element::hunt_crossley::damping_factor(
+                        self.restitution.expect("checked"),
+                        self.impact_velocity_m_per_s.expect("checked"),
+                    )
+                    .map_err(|e| {
+                        rename(
+                            e,
+                            &[
+                                ("restitution", "restitution"),
+                                ("impact_velocity", "impact_velocity_m_per_s"),
+                            ],
+                        )
+                    })?,
+                };
+                let params = crate::element::HuntCrossleyParams {
+                    stiffness: self.k_n_per_m_pow_n.expect("checked"),
+                    exponent: self.exponent.expect("checked"),
+                    damping_factor,
+                    gap: -static_indentation,
+                };
+                params.validate().map_err(|e| {
+                    rename(
+                        e,
+                        &[
+                            ("stiffness", "k_n_per_m_pow_n"),
+                            ("exponent", "exponent"),
+                            ("damping_factor", "damping_factor_s_per_m"),
+                            ("gap", "static_indentation_m"),
+                        ],
+                    )
+                })?;
+                std::sync::Arc::new(crate::element::HuntCrossley { params })
+            }
+            JointLaw::LuGre => {
+                let params = crate::element::LuGreParams {
+                    sigma0: self.sigma0_n_per_m.expect("checked"),
+                    sigma1: self.sigma1_n_s_per_m.expect("checked"),
+                    sigma2: self.sigma2_n_s_per_m.expect("checked"),
+                    coulomb: self.coulomb_force_n.expect("checked"),
+                    stiction: self.static_force_n.expect("checked"),
+                    stribeck_velocity: self.stribeck_velocity_m_per_s.expect("checked"),
+                };
+                params.validate().map_err(|e| {
+                    rename(
+                        e,
+                        &[
+                            ("sigma0", "sigma0_n_per_m"),
+                            ("sigma1", "sigma1_n_s_per_m"),
+                            ("sigma2", "sigma2_n_s_per_m"),
+                            ("coulomb", "coulomb_force_n"),
+                            ("stiction", "static_force_n"),
+                            ("stribeck_velocity", "stribeck_velocity_m_per_s"),
+                        ],
+                    )
+                })?;
+                std::sync::Arc::new(crate::element::LuGre { params })
+            }
         })
     }
 }

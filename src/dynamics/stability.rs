@@ -19,7 +19,10 @@
 //! ```
 //!
 //! `Δ0` is the harmonic-balance Jacobian at the solution ([`HbmSystem::evaluate`] with the
-//! Jacobian), whose element part is the AFT Jacobian of the element forces. `M` is positive
+//! Jacobian), whose element part is the AFT Jacobian of the element forces. A rate-dependent
+//! element (LuGre, Hunt–Crossley) also reacts to the perturbation's velocity `s·p`; that term
+//! (its tangent damping in `Δ1`) is not included, so for them the exponents are those of the
+//! element's response to `p` at the solution's own phase velocity only (an approximation). `M` is positive
 //! definite, so the problem is linearised to the standard eigenproblem of the companion matrix
 //! in the scaled eigenvalue `σ = s/ω`, with the state `(P, σ·P)`:
 //!

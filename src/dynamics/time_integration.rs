@@ -6,7 +6,11 @@
 //! `M·q̈ + C·q̇ + K·q + Σ_e P_eᵀ·f_e(P_e·q) = level·F·cos(hωt)`. The elements are advanced with
 //! the same time-discrete update as in the AFT (one increment per time step, from the state of
 //! the previous step); each step is solved by Newton's method with the elements' tangents and a
-//! backtracking line search (piecewise-linear stick/slip laws).
+//! backtracking line search (piecewise-linear stick/slip laws). A rate-dependent element
+//! ([`crate::element::HystereticElement::rate_dependent`]) reads the step `Δt` and the
+//! scheme's velocities at both ends of the step, `P·q̇_n` and `P·q̇_{n+1}` with
+//! `q̇_{n+1} = q̇_n + (q̈_n + q̈_{n+1})·Δt/2` (its tangent gains `∂f/∂v1·2/Δt`, the derivative
+//! of that velocity with respect to `q_{n+1}`), as the AFT gives it the harmonics' velocities.
 //!
 //! The run starts from given initial conditions (e.g. a harmonic-balance solution) with the
 //! elements loaded from their virgin state at `q = 0` to the first position (the AFT's
@@ -16,7 +20,7 @@
 use crate::core::error::{Error, Result};
 use crate::dynamics::aft::Harmonics;
 use crate::dynamics::model::Structure;
-use crate::element::StepPartials;
+use crate::element::{Kinematics, RatePartials, StepPartials};
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
 
@@ -182,6 +186,20 @@ pub struct Newmark<'a> {
     dq: Vec<f64>,
     u1: Vec<f64>,
     fe: Vec<f64>,
+    rates: RateScratch,
+}
+
+/// What the rate-dependent elements of a Newmark step read: each element's velocity at the
+/// start of the step, its rate partials, and scratch for the velocities at the end.
+struct RateScratch {
+    /// Element velocities at the start of the step (`P·q̇_n`, per element).
+    v_prev: Vec<Vec<f64>>,
+    /// Rate partials per element.
+    partials: Vec<RatePartials>,
+    /// Coordinate velocities at the end of the step (`n`).
+    vq1: Vec<f64>,
+    /// One element's velocities at the end of the step (largest `d`).
+    ve1: Vec<f64>,
 }
 
 impl<'a> Newmark<'a> {
@@ -259,7 +277,20 @@ impl<'a> Newmark<'a> {
             klin[i] = kr[i] + cr[i] * (2.0 / dt) + mr[i] * (4.0 / (dt * dt));
         }
         let dmax = els.iter().map(|e| e.element.dofs()).max().unwrap_or(0);
+        let rates = RateScratch {
+            v_prev: els
+                .iter()
+                .map(|e| (&e.map * v0).iter().copied().collect())
+                .collect(),
+            partials: els
+                .iter()
+                .map(|e| RatePartials::new(e.element.state_len(), e.element.dofs()))
+                .collect(),
+            vq1: vec![0.0; n],
+            ve1: vec![0.0; dmax],
+        };
         Ok(Self {
+            rates,
             els,
             n,
             dt,
@@ -330,6 +361,7 @@ impl<'a> Newmark<'a> {
             dq,
             u1,
             fe,
+            rates,
             ..
         } = self;
         for j in 0..n {
@@ -376,6 +408,7 @@ impl<'a> Newmark<'a> {
                 partials,
                 u1,
                 fe,
+                rates,
             );
             let r0 = norm(r);
             if r0 <= 1e-12 * scale {
@@ -399,7 +432,7 @@ impl<'a> Newmark<'a> {
                     trial[j] = q1[j] + lambda * dq[j];
                 }
                 residual(
-                    trial, rt, None, &ctx, states, u_prev, new_states, partials, u1, fe,
+                    trial, rt, None, &ctx, states, u_prev, new_states, partials, u1, fe, rates,
                 );
                 if norm(rt) < r0 {
                     q1.copy_from_slice(trial);
@@ -415,7 +448,7 @@ impl<'a> Newmark<'a> {
             }
         }
         residual(
-            q1, r, None, &ctx, states, u_prev, new_states, partials, u1, fe,
+            q1, r, None, &ctx, states, u_prev, new_states, partials, u1, fe, rates,
         );
         if !converged && norm(r) > 1e-8 * scale {
             return Err(Error::NonConvergence {
@@ -436,6 +469,7 @@ impl<'a> Newmark<'a> {
             let d = e.element.dofs();
             for c in 0..d {
                 u_prev[ie][c] = (0..n).map(|j| maps[ie][c * n + j] * q[j]).sum();
+                rates.v_prev[ie][c] = (0..n).map(|j| maps[ie][c * n + j] * v[j]).sum();
             }
         }
         Ok(())
@@ -455,6 +489,7 @@ fn residual(
     partials: &mut [StepPartials],
     u1: &mut [f64],
     fe: &mut [f64],
+    rates: &mut RateScratch,
 ) {
     let n = q1.len();
     let dt = ctx.dt;
@@ -471,26 +506,67 @@ fn residual(
         }
         out[i] = s;
     }
+    if ctx.els.iter().any(|e| e.element.rate_dependent()) {
+        for j in 0..n {
+            let a1 = q1[j] * (4.0 / (dt * dt)) + ctx.base_a[j];
+            rates.vq1[j] = ctx.v[j] + (ctx.a[j] + a1) * (0.5 * dt);
+        }
+    }
     for (ie, e) in ctx.els.iter().enumerate() {
         let d = e.element.dofs();
         let p = &ctx.maps[ie];
         for c in 0..d {
             u1[c] = (0..n).map(|j| p[c * n + j] * q1[j]).sum();
         }
-        let part = if want.is_some() {
-            partials[ie].clear();
-            Some(&mut partials[ie])
+        if e.element.rate_dependent() {
+            let ve1 = &mut rates.ve1[..d];
+            for (c, v) in ve1.iter_mut().enumerate() {
+                *v = (0..n).map(|j| p[c * n + j] * rates.vq1[j]).sum();
+            }
+            let kin = Kinematics {
+                dt,
+                v0: &rates.v_prev[ie],
+                v1: ve1,
+            };
+            let part = if want.is_some() {
+                partials[ie].clear();
+                rates.partials[ie].clear();
+                Some((&mut partials[ie], &mut rates.partials[ie]))
+            } else {
+                None
+            };
+            e.element.step_at_rate(
+                &states[ie],
+                &u_prev[ie],
+                &u1[..d],
+                kin,
+                &mut new_states[ie],
+                &mut fe[..d],
+                part,
+            );
+            if want.is_some() {
+                // ∂v1/∂q1 = (2/Δt)·P: the tangent damping enters the step's stiffness.
+                let (kd, cd) = (&mut partials[ie].df_du1, &rates.partials[ie].df_dv1);
+                for (k, c) in kd.iter_mut().zip(cd) {
+                    *k += c * (2.0 / dt);
+                }
+            }
         } else {
-            None
-        };
-        e.element.step(
-            &states[ie],
-            &u_prev[ie],
-            &u1[..d],
-            &mut new_states[ie],
-            &mut fe[..d],
-            part,
-        );
+            let part = if want.is_some() {
+                partials[ie].clear();
+                Some(&mut partials[ie])
+            } else {
+                None
+            };
+            e.element.step(
+                &states[ie],
+                &u_prev[ie],
+                &u1[..d],
+                &mut new_states[ie],
+                &mut fe[..d],
+                part,
+            );
+        }
         for c in 0..d {
             for i in 0..n {
                 out[i] += p[c * n + i] * fe[c];

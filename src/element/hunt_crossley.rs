@@ -35,7 +35,9 @@
 //! Units: `u`, `g0` in m, `δ̇` in m/s, `F` in N, `k` in N/mⁿ, `χ` in s/m.
 
 use crate::core::error::{Error, Result};
-use crate::element::hysteretic::{ContactStatus, HystereticElement, StepPartials};
+use crate::element::hysteretic::{
+    ContactStatus, HystereticElement, Kinematics, RatePartials, StepPartials,
+};
 
 /// Hunt–Crossley contact parameters (module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -168,15 +170,16 @@ fn bisect(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// A Hunt–Crossley contact on one displacement component as a [`HystereticElement`] at a fixed
-/// sample rate: the approach rate is the backward difference `δ̇ ≈ (u1 − u0)·sample_rate`, as for
-/// [`crate::element::PowerLawDamper`] (first-order: a lag of half a sample).
+/// A Hunt–Crossley contact on one displacement component as a rate-dependent
+/// [`HystereticElement`] without state: the force at the end of an increment is
+/// [`HuntCrossleyParams::force_and_partials`] at the end displacement and the end velocity the
+/// caller gives it (the harmonics' exact velocity in the AFT, the integrator's in a time
+/// integration). Its plain `step` is the quasi-static limit (zero approach rate: the elastic
+/// law `k·δⁿ`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HuntCrossley {
     /// The law's parameters.
     pub params: HuntCrossleyParams,
-    /// Samples per second (`1/Δt`; `ω·N/2π` in the AFT).
-    pub sample_rate: f64,
 }
 
 impl HystereticElement for HuntCrossley {
@@ -200,18 +203,33 @@ impl HystereticElement for HuntCrossley {
     fn step(
         &self,
         _s0: &[f64],
-        u0: &[f64],
+        _u0: &[f64],
         u1: &[f64],
         _s1: &mut [f64],
         f1: &mut [f64],
         partials: Option<&mut StepPartials>,
     ) {
-        let v = (u1[0] - u0[0]) * self.sample_rate;
-        let (f, df_du, df_dv) = self.params.force_and_partials(u1[0], v);
+        let (f, df_du, _) = self.params.force_and_partials(u1[0], 0.0);
         f1[0] = f;
         if let Some(p) = partials {
-            p.df_du1[0] = df_du + df_dv * self.sample_rate;
-            p.df_du0[0] = -df_dv * self.sample_rate;
+            p.df_du1[0] = df_du;
+        }
+    }
+    fn step_at_rate(
+        &self,
+        _s0: &[f64],
+        _u0: &[f64],
+        u1: &[f64],
+        kin: Kinematics<'_>,
+        _s1: &mut [f64],
+        f1: &mut [f64],
+        partials: Option<(&mut StepPartials, &mut RatePartials)>,
+    ) {
+        let (f, df_du, df_dv) = self.params.force_and_partials(u1[0], kin.v1[0]);
+        f1[0] = f;
+        if let Some((p, rp)) = partials {
+            p.df_du1[0] = df_du;
+            rp.df_dv1[0] = df_dv;
         }
     }
     fn status(&self, _s: &[f64], u: &[f64], f: &[f64]) -> ContactStatus {
@@ -226,7 +244,7 @@ impl HystereticElement for HuntCrossley {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::element::hysteretic::check_partials;
+    use crate::element::hysteretic::{check_partials, check_rate_partials};
 
     fn law(n: f64, chi: f64, gap: f64) -> HuntCrossleyParams {
         HuntCrossleyParams {
@@ -242,12 +260,19 @@ mod tests {
         for n in [1.0, 1.5, 2.2] {
             let e = HuntCrossley {
                 params: law(n, 0.3, 1e-5),
-                sample_rate: 1e4,
             };
             // Closing, opening (damping reduces the force), both in contact.
-            for (u0, u1) in [(3e-5, 3.4e-5), (4e-5, 3.7e-5)] {
-                let w = check_partials(&e, &[], &[u0], &[u1], 1e-10, &[]).unwrap();
+            for (u0, u1, v1) in [(3e-5, 3.4e-5, 0.4), (4e-5, 3.7e-5, -0.3)] {
+                let kin = Kinematics {
+                    dt: 1e-4,
+                    v0: &[0.1],
+                    v1: &[v1],
+                };
+                let w = check_rate_partials(&e, &[], &[u0], &[u1], kin, (1e-10, 1e-6, 1e-9), &[])
+                    .unwrap();
                 assert!(w < 1e-6, "n = {n}, {u0} → {u1}: {w}");
+                let w = check_partials(&e, &[], &[u0], &[u1], 1e-10, &[]).unwrap();
+                assert!(w < 1e-6, "quasi-static n = {n}, {u0} → {u1}: {w}");
             }
         }
     }

@@ -19,6 +19,14 @@
 //!   ([`HystereticElement::virgin_state`]) and forces are changes from the static preload (a
 //!   contact with preload `N0` returns `N(t) − N0` in its normal component; the preload itself
 //!   is balanced by the static loads that produced it).
+//! * A rate-dependent law (friction with a Stribeck curve, impact damping) reads the increment's
+//!   kinematics besides its end displacements: its duration `Δt` and the velocities `v0`, `v1`
+//!   at both ends ([`Kinematics`]), exact where the caller knows them (the harmonics in the AFT,
+//!   the integrator's velocities in a time integration). It says so with
+//!   [`HystereticElement::rate_dependent`] and implements [`HystereticElement::step_at_rate`],
+//!   with the partial derivatives with respect to the kinematics in [`RatePartials`]; its plain
+//!   [`HystereticElement::step`] is its quasi-static limit (zero velocity). Rate-independent
+//!   laws implement `step` only.
 //! * To add a law, write one file with its parameters, its pure update and its implementation
 //!   of [`HystereticElement`] (or [`MemorylessSpring`] for an elastic law), and check its
 //!   derivatives against finite differences with [`check_partials`] in that file's tests.
@@ -131,6 +139,67 @@ impl StepPartials {
     }
 }
 
+/// The kinematics of one increment that a rate-dependent law reads besides its end
+/// displacements: the duration `Δt` (s) and the velocities at the start and the end (`d`
+/// components each, m/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kinematics<'a> {
+    /// Duration of the increment `Δt` (s), > 0.
+    pub dt: f64,
+    /// Velocity at the start of the increment (`d`, m/s).
+    pub v0: &'a [f64],
+    /// Velocity at the end of the increment (`d`, m/s).
+    pub v1: &'a [f64],
+}
+
+/// Partial derivatives of a rate-dependent increment with respect to its kinematics
+/// ([`Kinematics`]), row-major (`ds_dv0`, `ds_dv1` are `m × d`, `df_dv0`, `df_dv1` are `d × d`,
+/// `ds_ddt` has `m` and `df_ddt` `d` entries). They complete the [`StepPartials`] of the same
+/// increment; entries an element leaves untouched are zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RatePartials {
+    /// `∂s1/∂v0` (`m × d`).
+    pub ds_dv0: Vec<f64>,
+    /// `∂s1/∂v1` (`m × d`).
+    pub ds_dv1: Vec<f64>,
+    /// `∂s1/∂Δt` (`m`).
+    pub ds_ddt: Vec<f64>,
+    /// `∂f1/∂v0` (`d × d`).
+    pub df_dv0: Vec<f64>,
+    /// `∂f1/∂v1` (`d × d`): the element's tangent damping at the end of the increment.
+    pub df_dv1: Vec<f64>,
+    /// `∂f1/∂Δt` (`d`).
+    pub df_ddt: Vec<f64>,
+}
+
+impl RatePartials {
+    /// Zero partials for an element with `m` states and `d` displacement components.
+    pub fn new(m: usize, d: usize) -> Self {
+        Self {
+            ds_dv0: vec![0.0; m * d],
+            ds_dv1: vec![0.0; m * d],
+            ds_ddt: vec![0.0; m],
+            df_dv0: vec![0.0; d * d],
+            df_dv1: vec![0.0; d * d],
+            df_ddt: vec![0.0; d],
+        }
+    }
+
+    /// Reset every entry to zero.
+    pub fn clear(&mut self) {
+        for v in [
+            &mut self.ds_dv0,
+            &mut self.ds_dv1,
+            &mut self.ds_ddt,
+            &mut self.df_dv0,
+            &mut self.df_dv1,
+            &mut self.df_ddt,
+        ] {
+            v.fill(0.0);
+        }
+    }
+}
+
 /// An element with memory, advanced from sample to sample (rate-independent unless it says
 /// otherwise, [`HystereticElement::rate_dependent`]).
 pub trait HystereticElement: Send + Sync + std::fmt::Debug {
@@ -160,12 +229,31 @@ pub trait HystereticElement: Send + Sync + std::fmt::Debug {
     );
     /// Contact status at a sample with state `s`, displacement `u` and force `f`.
     fn status(&self, s: &[f64], u: &[f64], f: &[f64]) -> ContactStatus;
-    /// Whether the step reads a velocity from the increment, `(u1 − u0)·sample_rate` (a
-    /// rate-dependent law at a fixed sample rate, e.g. LuGre or Hunt–Crossley): such an element
-    /// is stepped from sample to sample only, never to a reversal between samples (an increment
-    /// shorter than a sample would give it a wrong velocity). Rate-independent by default.
+    /// Whether the law reads the increment's kinematics ([`Self::step_at_rate`]), e.g. LuGre or
+    /// Hunt–Crossley. Such an element is driven through `step_at_rate` with the exact velocities
+    /// by the AFT and the time integration, from sample to sample (a rate-dependent law has no
+    /// velocity reversals to locate: its state depends on the whole path). Rate-independent by
+    /// default.
     fn rate_dependent(&self) -> bool {
         false
+    }
+    /// One increment of a rate-dependent law over the kinematics `kin` (duration and end
+    /// velocities), with its [`StepPartials`] and, in the second buffer, its [`RatePartials`]
+    /// (both cleared by the caller). The default, for rate-independent laws, is [`Self::step`]
+    /// (the kinematics do not enter; the rate partials stay zero).
+    #[allow(clippy::too_many_arguments)]
+    fn step_at_rate(
+        &self,
+        s0: &[f64],
+        u0: &[f64],
+        u1: &[f64],
+        kin: Kinematics<'_>,
+        s1: &mut [f64],
+        f1: &mut [f64],
+        partials: Option<(&mut StepPartials, &mut RatePartials)>,
+    ) {
+        let _ = kin;
+        self.step(s0, u0, u1, s1, f1, partials.map(|(p, _)| p));
     }
 }
 
@@ -296,6 +384,134 @@ pub fn check_partials(
             .chain(&an_all)
             .fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
         for (a, b) in fd_all.iter().zip(&an_all) {
+            worst = worst.max((a - b).abs() / colmax);
+        }
+    }
+    Ok(worst)
+}
+
+/// Largest deviation between a rate-dependent element's analytic partials of
+/// [`HystereticElement::step_at_rate`] and central finite differences, relative to the largest
+/// entry of each column, over the columns `s0` (steps `s_steps`), `u0`, `u1` (`u_step`), `v0`,
+/// `v1` (`v_step`) and `Δt` (`dt_step`). The rate-dependent counterpart of [`check_partials`].
+#[allow(clippy::too_many_arguments)]
+pub fn check_rate_partials(
+    element: &dyn HystereticElement,
+    s0: &[f64],
+    u0: &[f64],
+    u1: &[f64],
+    kin: Kinematics<'_>,
+    steps: (f64, f64, f64),
+    s_steps: &[f64],
+) -> Result<f64> {
+    let (m, d) = (element.state_len(), element.dofs());
+    if s0.len() != m || u0.len() != d || u1.len() != d || kin.v0.len() != d || kin.v1.len() != d {
+        return Err(Error::param(
+            "s0",
+            "state, displacement or velocity length mismatch",
+        ));
+    }
+    let (u_step, v_step, dt_step) = steps;
+    let mut p = StepPartials::new(m, d);
+    let mut rp = RatePartials::new(m, d);
+    let mut s1 = vec![0.0; m];
+    let mut f1 = vec![0.0; d];
+    element.step_at_rate(s0, u0, u1, kin, &mut s1, &mut f1, Some((&mut p, &mut rp)));
+    // Input vector: s0 (m), u0 (d), u1 (d), v0 (d), v1 (d), dt (1).
+    let x: Vec<f64> = s0
+        .iter()
+        .chain(u0)
+        .chain(u1)
+        .chain(kin.v0)
+        .chain(kin.v1)
+        .copied()
+        .chain([kin.dt])
+        .collect();
+    let eval = |x: &[f64]| {
+        let mut s1 = vec![0.0; m];
+        let mut f1 = vec![0.0; d];
+        let k = Kinematics {
+            dt: x[m + 4 * d],
+            v0: &x[m + 2 * d..m + 3 * d],
+            v1: &x[m + 3 * d..m + 4 * d],
+        };
+        element.step_at_rate(
+            &x[..m],
+            &x[m..m + d],
+            &x[m + d..m + 2 * d],
+            k,
+            &mut s1,
+            &mut f1,
+            None,
+        );
+        (s1, f1)
+    };
+    let mut worst: f64 = 0.0;
+    for col in 0..x.len() {
+        let h = if col < m {
+            s_steps[col]
+        } else if col < m + 2 * d {
+            u_step
+        } else if col < m + 4 * d {
+            v_step
+        } else {
+            dt_step
+        };
+        let perturb = |sign: f64| {
+            let mut y = x.clone();
+            y[col] += sign * h;
+            eval(&y)
+        };
+        let (sp, fp) = perturb(1.0);
+        let (sm, fm) = perturb(-1.0);
+        let fd: Vec<f64> = sp
+            .iter()
+            .zip(&sm)
+            .chain(fp.iter().zip(&fm))
+            .map(|(a, b)| (a - b) / (2.0 * h))
+            .collect();
+        let (sv, fv): (Vec<f64>, Vec<f64>) = if col < m {
+            (
+                (0..m).map(|r| p.ds_ds0[r * m + col]).collect(),
+                (0..d).map(|r| p.df_ds0[r * m + col]).collect(),
+            )
+        } else if col < m + d {
+            let c = col - m;
+            (
+                (0..m).map(|r| p.ds_du0[r * d + c]).collect(),
+                (0..d).map(|r| p.df_du0[r * d + c]).collect(),
+            )
+        } else if col < m + 2 * d {
+            let c = col - m - d;
+            (
+                (0..m).map(|r| p.ds_du1[r * d + c]).collect(),
+                (0..d).map(|r| p.df_du1[r * d + c]).collect(),
+            )
+        } else if col < m + 3 * d {
+            let c = col - m - 2 * d;
+            (
+                (0..m).map(|r| rp.ds_dv0[r * d + c]).collect(),
+                (0..d).map(|r| rp.df_dv0[r * d + c]).collect(),
+            )
+        } else if col < m + 4 * d {
+            let c = col - m - 3 * d;
+            (
+                (0..m).map(|r| rp.ds_dv1[r * d + c]).collect(),
+                (0..d).map(|r| rp.df_dv1[r * d + c]).collect(),
+            )
+        } else {
+            (rp.ds_ddt.clone(), rp.df_ddt.clone())
+        };
+        let an: Vec<f64> = sv.into_iter().chain(fv).collect();
+        // A column below what central differences resolve (rounding of the outputs over the
+        // step, e.g. a Stribeck term far in its tail) is compared at that resolution.
+        let outputs = s1.iter().chain(&f1).fold(0.0f64, |a, b| a.max(b.abs()));
+        let resolution = 1e4 * f64::EPSILON * outputs / h;
+        let colmax = fd
+            .iter()
+            .chain(&an)
+            .fold(resolution.max(f64::MIN_POSITIVE), |a, b| a.max(b.abs()));
+        for (a, b) in fd.iter().zip(&an) {
             worst = worst.max((a - b).abs() / colmax);
         }
     }

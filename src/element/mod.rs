@@ -3,7 +3,7 @@
 //!
 //! | file | law | implements [`HystereticElement`] as |
 //! |---|---|---|
-//! | [`hysteretic`] | the interface: state, step with exact partial derivatives, status; [`check_partials`] | – |
+//! | [`hysteretic`] | the interface: state, step with exact partial derivatives, status, the kinematics of rate-dependent laws; [`check_partials`], [`check_rate_partials`] | – |
 //! | [`valanis`] | Valanis microslip, time-varying normal load (implicit Euler, frozen-load, reference integrators) | (through [`gaul_lenz`] and [`contact3d`]) |
 //! | [`gaul_lenz`] | Valanis with a constant stick limit `σ0` | [`GaulLenz`] |
 //! | [`jenkins`] | spring + Coulomb slider (1-D, and 2-D with a circular limit) | [`Jenkins`] |
@@ -50,7 +50,8 @@ pub use cubic::CubicSpring;
 pub use gaul_lenz::{GaulLenz, GaulLenzParams};
 pub use hunt_crossley::{HuntCrossley, HuntCrossleyParams};
 pub use hysteretic::{
-    check_partials, ContactStatus, HystereticElement, MemorylessSpring, StepPartials,
+    check_partials, check_rate_partials, ContactStatus, HystereticElement, Kinematics,
+    MemorylessSpring, RatePartials, StepPartials,
 };
 pub use iwan::{IwanElement, IwanParams};
 pub use jenkins::{Jenkins, JenkinsParams};

@@ -18,7 +18,9 @@ pub fn sine_power_cycle_integral(n: f64) -> f64 {
 /// [`HystereticElement`] (`p = 1`: the velocity-squared damper of air drag): the velocity is the
 /// backward difference of the displacement samples, `u̇ ≈ (u1 − u0)·ω·N/2π` (a lag of half a
 /// sample, `π/N` rad of the fundamental, e.g. 0.05 rad at `N = 64`, which turns 0.1 % of the
-/// damping force into stiffness).
+/// damping force into stiffness). Built for one frequency (an identification's), it is to the
+/// solvers a memoryless function of the increment's end points, not a law that reads the
+/// kinematics ([`HystereticElement::rate_dependent`] is false).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PowerLawDamper {
     /// `c` (N·(s/m)^{p+1}).
@@ -46,9 +48,6 @@ impl HystereticElement for PowerLawDamper {
     }
     fn state_len(&self) -> usize {
         0
-    }
-    fn rate_dependent(&self) -> bool {
-        true
     }
     fn virgin_state(&self, _s: &mut [f64]) {}
     fn state_scales(&self, _scales: &mut [f64]) {}

@@ -776,10 +776,12 @@ impl Model {
         let ph = self.physical();
         let h = Harmonics::new(1, true, Some(1024))?;
         let joint = self.joint(self.preload_factor(mean_force_n))?;
+        // The joint laws of an identification are rate-independent: the frequency is not read.
         let r = aft::evaluate(
             joint.as_ref(),
             &h,
             &[a, 0.0],
+            ph.omega_s,
             false,
             &AftSettings::default(),
         );
