@@ -212,7 +212,10 @@ fn v_groove_with_a_frame_per_element_matches_the_hand_written_stiffness() {
             );
         }
     }
-    w("pairs.csv", &pairs.replace(&format!("3,b,ground,{sa}"), "3,b,ground,oops"));
+    w(
+        "pairs.csv",
+        &pairs.replace(&format!("3,b,ground,{sa}"), "3,b,ground,oops"),
+    );
     let e = load(&model).unwrap_err().to_string();
     assert!(e.contains("pairs.csv:4") && e.contains("normal_x"), "{e}");
 }
