@@ -84,10 +84,10 @@ fn hunt_crossley_restitution_by_time_integration_matches_the_exact_relation() {
 use asperity::dynamics::aft::Harmonics;
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use asperity::dynamics::model::Structure;
-use asperity::dynamics::time_integration::{
-    initial_conditions, steady_state, TimeIntegrationSettings,
-};
+#[path = "support/hbm_newmark.rs"]
+mod hbm_newmark;
 use asperity::element::BilinearContact;
+use hbm_newmark::{amplitude, ramped_hbm_against_newmark};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -114,59 +114,6 @@ fn oscillator(joint: BilinearContact, harmonics: usize, samples: usize) -> (Stru
         .unwrap();
     (s, Harmonics::new(harmonics, false, Some(samples)).unwrap())
 }
-/// The HBM point at `level` reached by a ramp in six steps from the linear regime, and the
-/// Newmark steady state (`steps_per_period`) started from it: `(coordinates, HBM first-
-/// harmonic amplitude, Newmark's)`.
-fn ramped_hbm_against_newmark(
-    sys: &HbmSystem<'_>,
-    w: f64,
-    level: f64,
-    f_hz: f64,
-    steps_per_period: usize,
-) -> (DVector<f64>, f64, f64) {
-    let mut guess: Option<DVector<f64>> = None;
-    let mut p = None;
-    for i in 1..=6 {
-        let q = sys
-            .solve(w, level * i as f64 / 6.0, guess.as_ref())
-            .unwrap();
-        assert!(q.converged, "{f_hz} Hz: HBM did not converge");
-        guess = Some(q.z.clone());
-        p = Some(q);
-    }
-    let p = p.unwrap();
-    let x = sys.coordinates(&p);
-    let (q0, v0) = initial_conditions(&x, &sys.harmonics, 1, p.omega);
-    let ti = steady_state(
-        sys.structure,
-        &sys.excitation.force,
-        1,
-        p.level,
-        p.omega,
-        &sys.harmonics,
-        &q0,
-        &v0,
-        &TimeIntegrationSettings {
-            steps_per_period,
-            max_periods: 400,
-            tolerance: 1e-9,
-        },
-    )
-    .unwrap();
-    assert!(ti.converged, "Newmark not steady: {:.1e}", ti.change);
-    let (a_hbm, a_ti) = (
-        amplitude(&x, &sys.harmonics),
-        amplitude(&ti.harmonics, &sys.harmonics),
-    );
-    (x, a_hbm, a_ti)
-}
-
-/// First-harmonic amplitude of the single coordinate.
-fn amplitude(x: &DVector<f64>, h: &Harmonics) -> f64 {
-    let (ci, si) = h.index_of(1).unwrap();
-    x[ci].hypot(x[si])
-}
-
 /// Where the contact stays on one branch the oscillator is linear with stiffness `k + k1`: the
 /// harmonic balance gives the closed-form receptance to rounding (1e-10), whether or not the
 /// motion crosses the threshold of a law with `k2 = k1`, and no other harmonic.
@@ -241,7 +188,8 @@ fn bilinear_contact_harmonic_balance_matches_newmark() {
     for (f_hz, level) in [(7.0, 6.0), (9.0, 3.0)] {
         let w = 2.0 * PI * f_hz;
         // Continue in level from the linear regime to the nonlinear one.
-        let (x, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz, 2048);
+        let (x, a_hbm, a_ti) =
+            ramped_hbm_against_newmark(&sys, w, level, &format!("{f_hz} Hz"), 2048);
         // The motion must visit all three branches for the test to mean something.
         let mut samples = vec![0.0; sys.harmonics.n_time()];
         sys.harmonics.to_time(x.as_slice(), &mut samples);
@@ -438,7 +386,8 @@ fn rate_dependent_hbm_and_newmark(
         FormulationChoice::Coordinates,
     )
     .unwrap();
-    let (x, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz, samples);
+    let (x, a_hbm, a_ti) =
+        ramped_hbm_against_newmark(&sys, w, level, &format!("{f_hz} Hz"), samples);
     let mut t = vec![0.0; samples];
     sys.harmonics.to_time(x.as_slice(), &mut t);
     (a_hbm, a_ti, t)
@@ -537,7 +486,8 @@ fn thin_layer_harmonic_balance_matches_newmark() {
                 FormulationChoice::Coordinates,
             )
             .unwrap();
-            let (_, a_hbm, a_ti) = ramped_hbm_against_newmark(&sys, w, level, f_hz, 2048);
+            let (_, a_hbm, a_ti) =
+                ramped_hbm_against_newmark(&sys, w, level, &format!("{f_hz} Hz"), 2048);
             assert!(a_hbm > 3.0 * u_yield, "{f_hz} Hz: amplitude {a_hbm}");
             let err = (a_hbm - a_ti).abs() / a_ti;
             eprintln!(

@@ -5,10 +5,10 @@
 use asperity::dynamics::aft::Harmonics;
 use asperity::dynamics::hbm::{Excitation, FormulationChoice, HbmSystem};
 use asperity::dynamics::model::Structure;
-use asperity::dynamics::time_integration::{
-    initial_conditions, steady_state, TimeIntegrationSettings,
-};
+#[path = "support/hbm_newmark.rs"]
+mod hbm_newmark;
 use asperity::element::{HystereticElement, LoadFollowingContact, MicroslipContact, ValanisParams};
+use hbm_newmark::ramped_hbm_against_newmark;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -56,41 +56,9 @@ fn hbm_and_newmark(structure: &Structure, f_hz: f64, level: f64, samples: usize)
     )
     .unwrap();
     let w = 2.0 * PI * f_hz;
-    let mut guess: Option<DVector<f64>> = None;
-    let mut p = None;
-    for i in 1..=6 {
-        let q = sys
-            .solve(w, level * i as f64 / 6.0, guess.as_ref())
-            .unwrap();
-        assert!(q.converged, "{f_hz} Hz: HBM did not converge");
-        guess = Some(q.z.clone());
-        p = Some(q);
-    }
-    let p = p.unwrap();
-    let x = sys.coordinates(&p);
-    let (q0, v0) = initial_conditions(&x, &sys.harmonics, 2, p.omega);
-    let ti = steady_state(
-        structure,
-        &sys.excitation.force,
-        1,
-        p.level,
-        p.omega,
-        &sys.harmonics,
-        &q0,
-        &v0,
-        &TimeIntegrationSettings {
-            steps_per_period: samples,
-            max_periods: 400,
-            tolerance: 1e-10,
-        },
-    )
-    .unwrap();
-    assert!(ti.converged, "Newmark not steady: {:.1e}", ti.change);
-    let amp = |v: &DVector<f64>| {
-        let (c, s) = sys.harmonics.index_of(1).unwrap();
-        v[c].hypot(v[s])
-    };
-    (amp(&x), amp(&ti.harmonics))
+    let (_, a_hbm, a_ti) =
+        ramped_hbm_against_newmark(&sys, w, level, &format!("{f_hz} Hz"), samples);
+    (a_hbm, a_ti)
 }
 
 /// Harmonic balance against Newmark on the block with `kn ∝ N^0.75`, `E0 ∝ N^0.7` (the
