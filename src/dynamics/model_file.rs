@@ -1067,6 +1067,15 @@ fn split_dof(label: &str) -> Option<(&str, usize)> {
 /// about the structure's axes.
 const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
+/// Unit of a DOF's displacement by its label: `rad` for a rotation `node.rx|ry|rz`, `m`
+/// otherwise (a translation, or a modal coordinate's label).
+pub fn dof_unit(label: &str) -> &'static str {
+    match split_dof(label) {
+        Some((_, axis)) if axis >= 3 => "rad",
+        _ => "m",
+    }
+}
+
 /// A reduced FE model: the structure, its node kinematics and the files read (role, path).
 type ReducedFe = (Structure, Kinematics, Vec<(String, PathBuf)>);
 

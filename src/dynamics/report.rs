@@ -289,12 +289,7 @@ pub fn level_columns(
                 .iter()
                 .map(|x| harmonic_of(system, x, row, k))
                 .collect();
-            // Rotational DOFs (`node.rx|ry|rz`) are in radians.
-            let unit = if [".rx", ".ry", ".rz"].iter().any(|r| label.ends_with(r)) {
-                "rad"
-            } else {
-                "m"
-            };
+            let unit = crate::dynamics::model_file::dof_unit(label);
             if k == 0 {
                 cols.push((
                     format!("{label}_h0_mean_{unit}"),
